@@ -1,0 +1,114 @@
+"""The ``savant`` command.
+
+``savant run [overrides]`` is Hydra's main (all Hydra flags work: ``-m``, ``--cfg job``,
+``--help``, ``hydra.run.dir=…``, ``-cd DIR``); ``savant report DIR`` redraws a run's
+plots from its ``savant.h5``; ``savant --version``; ``savant --help``.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from rich.console import Console
+
+from savant_cli import __version__
+from savant_cli.errors import ConfigError
+
+USAGE = """\
+usage: savant <command> [arguments]
+
+commands:
+  run [overrides]     fly the configured study (Hydra: -m for sweeps, --cfg job to
+                      print the config, --help for the config groups)
+  report RUN_DIR      redraw the plots and console summary of a finished run
+  --version           print the version
+  --help              this text
+
+examples:
+  savant run
+  savant run winds=none sim.plant_rate_hz=400
+  savant run -m winds=none,ksc_mean_annual
+  savant report outputs/2026-11-23/10-00-00_nominal
+"""
+
+
+_task_started = False
+
+
+def _hydra_task(cfg) -> int:
+    """Body of ``savant run``: validate, then hand over to the study."""
+    global _task_started
+    _task_started = True
+    from hydra.core.hydra_config import HydraConfig
+    from hydra.types import RunMode
+
+    from savant_cli.config import validate
+    from savant_cli.studies import get_study
+
+    console = Console(stderr=True)
+    hc = HydraConfig.get()
+    out_dir = Path(hc.runtime.output_dir)
+    multirun = hc.mode == RunMode.MULTIRUN
+    try:
+        typed = validate(cfg)
+        code = get_study(typed.study.name).run(typed, cfg, out_dir)
+    except ConfigError as exc:
+        console.print(f"[bold red]configuration error[/]: {exc}")
+        code = ConfigError.exit_code
+    if code and not multirun:
+        raise SystemExit(code)
+    return code
+
+
+def _run_hydra(argv: list[str]) -> None:
+    import hydra
+
+    from savant_cli.paths import shipped_config_dir
+
+    main = hydra.main(config_path=str(shipped_config_dir()), config_name="config", version_base="1.3")(_hydra_task)
+    sys.argv = ["savant run", *argv]
+    try:
+        main()
+    except SystemExit as exc:
+        # Hydra reports its own composition errors (unknown group option, override of an
+        # unknown key, bad override syntax) with exit status 1 before our task runs: those
+        # are configuration errors, status 2.
+        if exc.code == 1 and not _task_started:
+            raise SystemExit(ConfigError.exit_code) from None
+        raise
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of the ``savant`` console script."""
+    args = list(sys.argv[1:] if argv is None else argv)
+    console = Console()
+    if not args or args[0] in ("-h", "--help", "help"):
+        console.print(USAGE, highlight=False, markup=False)
+        return 0
+    if args[0] in ("-V", "--version", "version"):
+        console.print(f"savant {__version__}", highlight=False)
+        return 0
+    cmd, rest = args[0], args[1:]
+    if cmd == "run":
+        _run_hydra(rest)
+        return 0
+    if cmd == "report":
+        if len(rest) != 1:
+            Console(stderr=True).print("usage: savant report RUN_DIR")
+            return 2
+        from savant_cli.report import report
+
+        try:
+            paths = report(Path(rest[0]))
+        except (FileNotFoundError, OSError) as exc:
+            Console(stderr=True).print(f"[bold red]error[/]: {exc}")
+            return 2
+        console.print(f"{len(paths)} plots written to {Path(rest[0]) / 'plots'}")
+        return 0
+    Console(stderr=True).print(f"unknown command {cmd!r}\n\n{USAGE}", markup=False)
+    return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

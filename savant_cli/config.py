@@ -1,0 +1,384 @@
+"""Configuration schema (structured dataclasses registered in Hydra's ConfigStore) and
+physical validation.
+
+Hydra composes the YAML tree in ``conf/``; :func:`validate` then merges the result onto
+the schema, which refuses unknown keys and wrong types, and checks physical sense
+(rates that divide each other, positive frequencies, blending weights summing to 1 …).
+Every refusal is a :class:`savant_cli.errors.ConfigError` naming the key, the value and
+what is allowed; the command line turns it into exit status 2.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from hydra.core.config_store import ConfigStore
+from omegaconf import DictConfig, ListConfig, OmegaConf
+from omegaconf.errors import OmegaConfBaseException
+
+from savant_cli.errors import ConfigError
+
+# --------------------------------------------------------------------------- schema
+
+
+@dataclass
+class SimConfig:
+    plant_rate_hz: float = 200.0
+    sensor_rate_hz: float = 200.0
+    fcs_rate_hz: float = 50.0
+    guidance_rate_hz: float = 1.0
+    log_rate_hz: float = 50.0
+    max_time_s: float = 800.0
+    chunk_s: float = 10.0
+    progress: bool = True
+    max_body_rate_deg_s: float = 60.0
+
+
+@dataclass
+class EnvironmentConfig:
+    gravity_order: int = 4
+    aero: bool = True
+    thrust: bool = True
+
+
+@dataclass
+class OutputConfig:
+    hdf5: bool = True
+    plots: bool = True
+
+
+@dataclass
+class PhaseConfig:
+    name: str = "ascent"
+    stop_at: str = "cutoff"
+
+
+@dataclass
+class StudyConfig:
+    name: str = "nominal"
+
+
+@dataclass
+class WindProfile:
+    altitude_m: list[float] = field(default_factory=list)
+    north_mps: list[float] = field(default_factory=list)
+    east_mps: list[float] = field(default_factory=list)
+
+
+@dataclass
+class WindsConfig:
+    name: str = "none"
+    enabled: bool = False
+    scale: float = 1.0
+    profile: WindProfile = field(default_factory=WindProfile)
+
+
+@dataclass
+class ActuatorStage:
+    loop_gain_rad_s: float = 25.0
+    natural_frequency_hz: float = 12.0
+    damping: float = 0.6
+    rate_limit_deg_s: float = 10.0
+
+
+@dataclass
+class ActuatorConfig:
+    name: str = "third_order"
+    first_stage: ActuatorStage = field(default_factory=ActuatorStage)
+    upper_stage: ActuatorStage = field(default_factory=ActuatorStage)
+
+
+@dataclass
+class RateGyroConfig:
+    natural_frequency_hz: float = 25.0
+    damping: float = 0.7
+
+
+@dataclass
+class SensorsConfig:
+    name: str = "ares_i_gyros"
+    rate_gyro: RateGyroConfig = field(default_factory=RateGyroConfig)
+
+
+@dataclass
+class FilterSection:
+    b: list[float] = field(default_factory=list)
+    a: list[float] = field(default_factory=list)
+
+
+@dataclass
+class FilterSet:
+    rate: list[FilterSection] = field(default_factory=list)
+    integrated_rate: list[FilterSection] = field(default_factory=list)
+    roll: list[FilterSection] = field(default_factory=list)
+
+
+@dataclass
+class FilterSets:
+    stack: FilterSet = field(default_factory=FilterSet)
+    upper: FilterSet = field(default_factory=FilterSet)
+
+
+@dataclass
+class Blending:
+    stack: list[float] = field(default_factory=list)
+    upper: list[float] = field(default_factory=list)
+
+
+@dataclass
+class AxisGains:
+    kp: list[float] = field(default_factory=list)
+    ki: list[float] = field(default_factory=list)
+    kd: list[float] = field(default_factory=list)
+    kir: list[float] = field(default_factory=list)
+
+
+@dataclass
+class GainTable:
+    schedule: str = "altitude_m"
+    breakpoints: list[float] = field(default_factory=list)
+    pitch: AxisGains = field(default_factory=AxisGains)
+    yaw: AxisGains = field(default_factory=AxisGains)
+
+
+@dataclass
+class GainTables:
+    stack: GainTable = field(default_factory=GainTable)
+    coast: GainTable = field(default_factory=GainTable)
+    upper: GainTable = field(default_factory=GainTable)
+
+
+@dataclass
+class RollControl:
+    attitude_deadband_deg: float = 1.0
+    rate_deadband_deg_s: float = 1.0
+    lead_time_s: float = 1.0
+
+
+@dataclass
+class ControllerConfig:
+    name: str = "msfc_pid"
+    blending: Blending = field(default_factory=Blending)
+    flex_filters: FilterSets = field(default_factory=FilterSets)
+    gains: GainTables = field(default_factory=GainTables)
+    roll: RollControl = field(default_factory=RollControl)
+
+
+@dataclass
+class LaunchSite:
+    latitude_deg: float = 28.627
+    longitude_deg: float = -80.621
+    base_altitude_m: float = 0.0
+    pad_heading_deg: float = 0.0
+
+
+@dataclass
+class OrbitTarget:
+    perigee_altitude_km: float = 56.0
+    apogee_altitude_km: float = 185.0
+    inclination_deg: float = 51.6
+    cutoff_altitude_km: float = 130.0
+
+
+@dataclass
+class SmootherConfig:
+    damping: float = 0.8
+    natural_frequency_rad_s: float = 1.0
+
+
+@dataclass
+class GuidanceConfig:
+    name: str = ""
+    command_file: str = ""
+    launch_site: LaunchSite = field(default_factory=LaunchSite)
+    target: OrbitTarget = field(default_factory=OrbitTarget)
+    smoother: SmootherConfig = field(default_factory=SmootherConfig)
+    generator: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass
+class SavantConfig:
+    vehicle: Any = None  # validated by savant_cli.vehicle.load_vehicle (tables and keys)
+    phase: PhaseConfig = field(default_factory=PhaseConfig)
+    actuator: ActuatorConfig = field(default_factory=ActuatorConfig)
+    winds: WindsConfig = field(default_factory=WindsConfig)
+    controller: ControllerConfig = field(default_factory=ControllerConfig)
+    guidance: GuidanceConfig = field(default_factory=GuidanceConfig)
+    sensors: SensorsConfig = field(default_factory=SensorsConfig)
+    study: StudyConfig = field(default_factory=StudyConfig)
+    sim: SimConfig = field(default_factory=SimConfig)
+    environment: EnvironmentConfig = field(default_factory=EnvironmentConfig)
+    output: OutputConfig = field(default_factory=OutputConfig)
+
+
+def register_schema() -> None:
+    """Put the schema in Hydra's ConfigStore as ``savant_schema`` (for `--info` and
+    for users' own configs that want to extend it)."""
+    ConfigStore.instance().store(name="savant_schema", node=SavantConfig)
+
+
+register_schema()
+
+# ------------------------------------------------------------------------ validation
+
+
+def _strict_merge(cfg: DictConfig) -> DictConfig:
+    """Merge ``cfg`` onto the schema; unknown keys and wrong types raise ConfigError."""
+    schema = OmegaConf.structured(SavantConfig)
+    plain = OmegaConf.to_container(cfg, resolve=True)
+    plain.pop("hydra", None)
+    try:
+        merged = OmegaConf.merge(schema, plain)
+    except OmegaConfBaseException as exc:
+        key = getattr(exc, "full_key", None) or "?"
+        value = getattr(exc, "value", None)
+        msg = str(exc).splitlines()[0]
+        if "not in struct" in msg or "Key '" in msg and "not in" in msg:
+            allowed = "unknown key; see `savant run --cfg job` for the known keys"
+        else:
+            allowed = msg
+        raise ConfigError(key, value, allowed) from None
+    return merged
+
+
+def _positive(key: str, value: float) -> None:
+    if not (value > 0.0 and np.isfinite(value)):
+        raise ConfigError(key, value, "must be a positive finite number")
+
+
+def _non_negative(key: str, value: float) -> None:
+    if not (value >= 0.0 and np.isfinite(value)):
+        raise ConfigError(key, value, "must be zero or positive")
+
+
+def _one_of(key: str, value: Any, allowed: tuple) -> None:
+    if value not in allowed:
+        raise ConfigError(key, value, f"must be one of {', '.join(map(str, allowed))}")
+
+
+def _increasing(key: str, values: list[float]) -> None:
+    arr = np.asarray(values, dtype=float)
+    if arr.size < 2 or not np.all(np.diff(arr) > 0.0):
+        raise ConfigError(key, list(values), "must be a strictly increasing list of at least 2 numbers")
+
+
+def _check_rates(sim: SimConfig) -> None:
+    for name in ("plant_rate_hz", "sensor_rate_hz", "fcs_rate_hz", "guidance_rate_hz", "log_rate_hz"):
+        _positive(f"sim.{name}", getattr(sim, name))
+    for name in ("sensor_rate_hz", "fcs_rate_hz", "guidance_rate_hz", "log_rate_hz"):
+        ratio = sim.plant_rate_hz / getattr(sim, name)
+        if abs(ratio - round(ratio)) > 1e-9 or round(ratio) < 1:
+            raise ConfigError(f"sim.{name}", getattr(sim, name),
+                              f"must divide sim.plant_rate_hz = {sim.plant_rate_hz} into a whole number of steps")
+    _positive("sim.max_time_s", sim.max_time_s)
+    _positive("sim.chunk_s", sim.chunk_s)
+    _positive("sim.max_body_rate_deg_s", sim.max_body_rate_deg_s)
+
+
+def _check_controller(c: ControllerConfig) -> None:
+    for name in ("stack", "upper"):
+        weights = list(getattr(c.blending, name))
+        key = f"controller.blending.{name}"
+        if len(weights) != 3:
+            raise ConfigError(key, weights, "must list 3 weights: upper-stage gyro, IMU, first-stage gyro")
+        if any(w < 0 for w in weights) or abs(sum(weights) - 1.0) > 1e-9:
+            raise ConfigError(key, weights, "weights must be non-negative and sum to 1")
+        fs = getattr(c.flex_filters, name)
+        for path in ("rate", "integrated_rate", "roll"):
+            sections = getattr(fs, path)
+            key = f"controller.flex_filters.{name}.{path}"
+            if len(sections) != 2:
+                raise ConfigError(key, len(sections), "must hold exactly 2 fourth-order sections")
+            for i, sec in enumerate(sections):
+                for coef in ("b", "a"):
+                    vals = list(getattr(sec, coef))
+                    if len(vals) != 5:
+                        raise ConfigError(f"{key}[{i}].{coef}", vals, "must hold 5 coefficients (4th order)")
+                if sec.a[0] == 0.0:
+                    raise ConfigError(f"{key}[{i}].a", list(sec.a), "a[0] must be non-zero")
+                roots = np.roots(np.asarray(sec.a, float) / sec.a[0])
+                if np.any(np.abs(roots) >= 1.0):
+                    raise ConfigError(f"{key}[{i}].a", list(sec.a), "filter must be stable (poles inside the unit circle)")
+    for name, sched in (("stack", "altitude_m"), ("coast", "velocity_mps"), ("upper", "velocity_mps")):
+        table = getattr(c.gains, name)
+        key = f"controller.gains.{name}"
+        _one_of(f"{key}.schedule", table.schedule, (sched,))
+        _increasing(f"{key}.breakpoints", list(table.breakpoints))
+        n = len(table.breakpoints)
+        for axis in ("pitch", "yaw"):
+            for g in ("kp", "ki", "kd", "kir"):
+                vals = list(getattr(getattr(table, axis), g))
+                if len(vals) != n:
+                    raise ConfigError(f"{key}.{axis}.{g}", vals, f"must have one value per breakpoint ({n})")
+    _non_negative("controller.roll.attitude_deadband_deg", c.roll.attitude_deadband_deg)
+    _non_negative("controller.roll.rate_deadband_deg_s", c.roll.rate_deadband_deg_s)
+    _non_negative("controller.roll.lead_time_s", c.roll.lead_time_s)
+
+
+def _check_physics(cfg: SavantConfig) -> None:
+    _check_rates(cfg.sim)
+    _one_of("environment.gravity_order", cfg.environment.gravity_order, (0, 2, 3, 4))
+    _one_of("phase.stop_at", cfg.phase.stop_at, ("cutoff", "separation"))
+    for stage in ("first_stage", "upper_stage"):
+        a = getattr(cfg.actuator, stage)
+        for name in ("loop_gain_rad_s", "natural_frequency_hz", "damping", "rate_limit_deg_s"):
+            _positive(f"actuator.{stage}.{name}", getattr(a, name))
+    _positive("sensors.rate_gyro.natural_frequency_hz", cfg.sensors.rate_gyro.natural_frequency_hz)
+    _positive("sensors.rate_gyro.damping", cfg.sensors.rate_gyro.damping)
+    nyquist = 0.5 * cfg.sim.sensor_rate_hz
+    if cfg.sensors.rate_gyro.natural_frequency_hz >= nyquist:
+        raise ConfigError("sensors.rate_gyro.natural_frequency_hz", cfg.sensors.rate_gyro.natural_frequency_hz,
+                          f"must be below the sensor Nyquist frequency {nyquist} Hz")
+    w = cfg.winds
+    _non_negative("winds.scale", w.scale)
+    if w.enabled:
+        _increasing("winds.profile.altitude_m", list(w.profile.altitude_m))
+        n = len(w.profile.altitude_m)
+        for comp in ("north_mps", "east_mps"):
+            vals = list(getattr(w.profile, comp))
+            if len(vals) != n:
+                raise ConfigError(f"winds.profile.{comp}", vals, f"must have one value per altitude ({n})")
+    _check_controller(cfg.controller)
+    g = cfg.guidance
+    if not g.command_file:
+        raise ConfigError("guidance.command_file", g.command_file, "must name a guidance command file (CSV or HDF5)")
+    ls = g.launch_site
+    if not -90.0 <= ls.latitude_deg <= 90.0:
+        raise ConfigError("guidance.launch_site.latitude_deg", ls.latitude_deg, "must be within [-90, 90]")
+    if not -180.0 <= ls.longitude_deg <= 360.0:
+        raise ConfigError("guidance.launch_site.longitude_deg", ls.longitude_deg, "must be within [-180, 360]")
+    t = g.target
+    _positive("guidance.target.perigee_altitude_km", t.perigee_altitude_km)
+    if t.apogee_altitude_km < t.perigee_altitude_km:
+        raise ConfigError("guidance.target.apogee_altitude_km", t.apogee_altitude_km,
+                          f"must be at least the perigee altitude ({t.perigee_altitude_km} km)")
+    _positive("guidance.smoother.damping", g.smoother.damping)
+    _positive("guidance.smoother.natural_frequency_rad_s", g.smoother.natural_frequency_rad_s)
+
+
+def validate(cfg: DictConfig) -> SavantConfig:
+    """Merge a composed config onto the schema and check it.
+
+    Returns
+    -------
+    SavantConfig
+        A typed (OmegaConf structured) view of the validated config.
+
+    Raises
+    ------
+    ConfigError
+        Naming the key, the value and what is allowed.
+    """
+    merged = _strict_merge(cfg)
+    typed = OmegaConf.to_object(merged)
+    _check_physics(typed)
+    return typed
+
+
+def as_plain(value: Any) -> Any:
+    """Plain Python containers from OmegaConf nodes (pass-through otherwise)."""
+    if isinstance(value, (DictConfig, ListConfig)):
+        return OmegaConf.to_container(value, resolve=True)
+    return value

@@ -1,0 +1,190 @@
+"""Design the default gain schedule of ``conf/controller/msfc_pid.yaml``.
+
+Along the reference ascent of :mod:`savant_cli.datagen.guidance_commands`, the rigid
+pitch-plane model θ̈ = μα·α + μc·δ gives, at each schedule breakpoint,
+
+* μc = T·l_c / I  (thrust, gimbal-to-CG arm, pitch inertia), 1/s²;
+* μα = ∂M_cg/∂α / I from the vehicle's aerodynamic tables (positive: unstable), 1/s².
+
+A PD pole placement at natural frequency ω and damping ζ gives Kp = (ω² + μα)/μc and
+Kd = 2ζω/μc; the integral gain is Ki = ω_i·Kp with ω_i = ``integral_ratio``·ω. The
+attitude feedback Kp is shared between the navigation attitude error (1 − ``kir_share``)
+and the integrated-rate path (``kir_share``), whose sum is the designed stiffness.
+
+Run ``python -m savant_cli.datagen.fcs_gains`` to rewrite the controller YAML.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+
+from savant_cli import constants as C
+from savant_cli.datagen import flex_filters
+from savant_cli.datagen.guidance_commands import _compose, solve
+from savant_cli.models import earth
+from savant_cli.models.atmosphere import atmosphere
+from savant_cli.models.interp import locate, trilinear
+from savant_cli.sim.layout import CONFIG_STACK, CONFIG_UPPER
+from savant_cli.sim.plant import mass_properties
+
+DESIGN = {
+    "stack": {"omega": 1.3, "zeta": 0.7},
+    "upper": {"omega": 1.0, "zeta": 0.7},
+    "integral_ratio": 0.15,
+    "kir_share": 0.2,
+    "stack_altitudes_m": [0, 1000, 3000, 6000, 9000, 12000, 15000, 20000, 30000, 40000, 50000, 60000],
+    "upper_speeds_mps": [1500, 2000, 2500, 3000, 4000, 5000, 6000, 7000, 8000],
+}
+
+
+def pitch_coefficients(ref, t: float, y: np.ndarray, config: int) -> tuple[float, float]:
+    """μα and μc (1/s²) of the rigid pitch plane at reference time ``t``."""
+    tb = ref.tb
+    v = ref.vehicle
+    prop = y[6] if config == CONFIG_STACK else y[7] + y[8]
+    _, cg, inertia = mass_properties(tb, config, max(prop, 0.0))
+    iyy = inertia[1, 1]
+    r, vel = y[0:3], y[3:6]
+    c_i2e = earth.dcm_eci_to_ecef(t, C.OMEGA_EARTH)
+    _, _, alt = earth.ecef_to_geodetic(c_i2e @ r, C.WGS84_A, C.WGS84_E2)
+    _, pres, rho, sos = atmosphere(alt, tb.atm_alt, tb.atm_lnp, tb.atm_lnrho)
+    vv = np.linalg.norm(earth.velocity_relative_eci(r, vel, C.OMEGA_EARTH))
+    qbar = 0.5 * rho * vv * vv
+    ref_row = tb.aero_ref[config]
+    arm = -(ref_row[4] - cg[0])  # body-X arm of the MRP from the CG (structure X is aft)
+
+    def m_cg(alpha):
+        im, wm = locate(tb.aero_mach, tb.aero_mach.size, vv / sos)
+        ia, wa = locate(tb.aero_alpha, tb.aero_alpha.size, alpha)
+        ib, wb = locate(tb.aero_beta, tb.aero_beta.size, 0.0)
+        cn = trilinear(tb.aero_coef[config, 2], im, wm, ia, wa, ib, wb)
+        cm = trilinear(tb.aero_coef[config, 4], im, wm, ia, wa, ib, wb)
+        # M_y about CG = qS l Cm + (r_mrp × F)_y with F_z = −qS CN
+        return qbar * ref_row[0] * (ref_row[2] * cm + arm * cn)
+
+    da = np.radians(1.0)
+    mu_alpha = (m_cg(da) - m_cg(-da)) / (2 * da) / iyy
+    if config == CONFIG_STACK:
+        f_vac = np.interp(t, tb.fs_time, tb.fs_thrust)
+        thrust = f_vac - pres * v.first_stage.nozzle_exit_area_m2
+        gimbal_x = v.first_stage.gimbal_m[0]
+    else:
+        thrust = v.upper_stage.thrust_vac_N - pres * v.upper_stage.nozzle_exit_area_m2
+        gimbal_x = v.upper_stage.gimbal_m[0]
+    mu_c = thrust * (gimbal_x - cg[0]) / iyy
+    return float(mu_alpha), float(mu_c)
+
+
+def design(cfg, vehicle) -> dict:
+    """Gain tables for the stack (vs altitude) and the upper stage (vs relative speed)."""
+    ref, sols, turn, azimuth, steer, sol = solve(cfg, vehicle, verbose=False)
+    # dense reference history
+    ts, ys = [], []
+    for s in (*sols, sol):
+        tt = np.linspace(s.t[0], s.t[-1], 400)
+        ts.append(tt)
+        ys.append(s.sol(tt).T)
+    t = np.concatenate(ts)
+    y = np.concatenate(ys)
+    alt = np.array([earth.ecef_to_geodetic(earth.dcm_eci_to_ecef(ti, C.OMEGA_EARTH) @ yi[0:3], C.WGS84_A, C.WGS84_E2)[2]
+                    for ti, yi in zip(t, y)])
+    vrel = np.array([np.linalg.norm(earth.velocity_relative_eci(yi[0:3], yi[3:6], C.OMEGA_EARTH)) for yi in y])
+    tables = {}
+    for name, axis_vals, sel, var, config in (
+        ("stack", DESIGN["stack_altitudes_m"], t < ref.t_sep - 2.0, alt, CONFIG_STACK),
+        ("upper", DESIGN["upper_speeds_mps"], t > ref.t_ign + 5.0, vrel, CONFIG_UPPER),
+    ):
+        d = DESIGN[name]
+        w, z = d["omega"], d["zeta"]
+        kp, kd, ki, kir, mus = [], [], [], [], []
+        for val in axis_vals:
+            i = int(np.argmin(np.abs(np.where(sel, var, np.inf) - val)))
+            mu_a, mu_c = pitch_coefficients(ref, t[i], y[i], config)
+            k_att = (w * w + max(mu_a, 0.0)) / mu_c
+            kp.append(k_att * (1.0 - DESIGN["kir_share"]))
+            kir.append(k_att * DESIGN["kir_share"])
+            kd.append(2.0 * z * w / mu_c)
+            ki.append(DESIGN["integral_ratio"] * w * k_att)
+            mus.append((t[i], mu_a, mu_c))
+        tables[name] = {"breakpoints": list(map(float, axis_vals)), "kp": kp, "ki": ki, "kd": kd, "kir": kir,
+                        "design_points": mus}
+    return tables
+
+
+def _fmt(vals) -> str:
+    return "[" + ", ".join(f"{v:.4g}" for v in vals) + "]"
+
+
+def controller_yaml(tables: dict) -> str:
+    """The whole msfc_pid controller YAML text."""
+    lines = [
+        "# MSFC-like gain-scheduled PID pitch/yaw control with flex filters and rate blending,",
+        "# and phase-plane roll control (source paper III.F). Generated by",
+        "# `python -m savant_cli.datagen.fcs_gains` (gains) and savant_cli.datagen.flex_filters",
+        "# (filters); see those modules for the design rules. Units: Kp and Kir rad/rad,",
+        "# Ki 1/s, Kd s.",
+        "name: msfc_pid",
+        "blending:            # weights of [upper-stage gyro, IMU, first-stage gyro]; sum to 1",
+        "  stack: [0.8, 0.0, 0.2]",
+        "  upper: [1.0, 0.0, 0.0]",
+        "flex_filters:        # two 4th-order discrete sections in series per path, at 50 Hz",
+    ]
+    for name, spec in flex_filters.DESIGN.items():
+        sections = flex_filters.design_set(spec["lowpass_hz"], spec["notch_hz"], spec["notch_q"])
+        lines.append(f"  {name}:")
+        for path in ("rate", "integrated_rate", "roll"):
+            lines.append(f"    {path}:")
+            for s in sections:
+                lines.append(f"      - b: [{', '.join(f'{v:.12g}' for v in s['b'])}]")
+                lines.append(f"        a: [{', '.join(f'{v:.12g}' for v in s['a'])}]")
+    lines.append("gains:")
+    for name, schedule, src in (("stack", "altitude_m", "stack"), ("coast", "velocity_mps", "upper"),
+                                ("upper", "velocity_mps", "upper")):
+        tb = tables[src]
+        lines.append(f"  {name}:")
+        if name == "coast":
+            lines.append("    # no thrust in the coast: the gimbal commands have no authority; the")
+            lines.append("    # upper-stage schedule is kept so the J-2X starts from continuous commands")
+        lines.append(f"    schedule: {schedule}")
+        lines.append(f"    breakpoints: {_fmt(tb['breakpoints'])}")
+        lines.append("    pitch:")
+        for g in ("kp", "ki", "kd", "kir"):
+            lines.append(f"      {g}: {_fmt(tb[g])}")
+        lines.append("    yaw: ${.pitch}")
+        if name != "coast":
+            lines.append("    # design points (t s, mu_alpha 1/s^2, mu_c 1/s^2): " +
+                         "; ".join(f"{a:.0f} {b:.3f} {c:.3f}" for a, b, c in tb["design_points"]))
+    lines += [
+        "roll:                # phase plane of roll error vs roll-rate error",
+        "  attitude_deadband_deg: 1.0",
+        "  rate_deadband_deg_s: 1.0",
+        "  lead_time_s: 2.0",
+        "",
+    ]
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("overrides", nargs="*")
+    ap.add_argument("--out", type=Path, default=None)
+    args = ap.parse_args(argv)
+    from savant_cli.io.atomic import write_text_atomic
+    from savant_cli.paths import resolve_data_path, shipped_config_dir
+    from savant_cli.vehicle import load_vehicle
+
+    cfg = _compose(args.overrides)
+    vdir = resolve_data_path("vehicle.data_dir", "vehicle", cfg.vehicle["data_dir"], [shipped_config_dir()], must_be_dir=True)
+    vehicle = load_vehicle(cfg.vehicle, vdir)
+    text = controller_yaml(design(cfg, vehicle))
+    out = args.out or shipped_config_dir() / "controller" / "msfc_pid.yaml"
+    write_text_atomic(out, text)
+    print(text)
+    print(f"wrote {out}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,78 @@
+"""Read and write guidance command files (CSV or HDF5).
+
+A command file holds, at (typically) 1 Hz, the inertial-to-commanded-body attitude as a
+quaternion ``q_c2i`` (commanded body → ECI, Hamilton, scalar first; ECI X through
+Greenwich at liftoff) and the commanded body rate (commanded-body axes).
+
+CSV columns: ``time_s, q_w, q_x, q_y, q_z, rate_x_rad_s, rate_y_rad_s, rate_z_rad_s``
+(``rate_*_deg_s`` also accepted). HDF5: datasets ``time_s`` (n), ``quaternion`` (n, 4),
+``rate_rad_s`` (n, 3).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+from savant_cli.errors import ConfigError
+from savant_cli.io.atomic import atomic_path
+from savant_cli.sim.engine import GuidanceTable
+
+CSV_COLUMNS = ("time_s", "q_w", "q_x", "q_y", "q_z", "rate_x_rad_s", "rate_y_rad_s", "rate_z_rad_s")
+
+
+def _check(key: str, time: np.ndarray, quat: np.ndarray, rate: np.ndarray) -> GuidanceTable:
+    if time.ndim != 1 or time.size < 2:
+        raise ConfigError(f"{key}:time_s", time.shape, "needs at least 2 command samples")
+    if not np.all(np.diff(time) > 0):
+        bad = int(np.argmin(np.diff(time) > 0))
+        raise ConfigError(f"{key}:time_s", float(time[bad + 1]), "time must be strictly increasing")
+    if not (np.all(np.isfinite(quat)) and np.all(np.isfinite(rate))):
+        raise ConfigError(key, "non-finite value", "all commands must be finite numbers")
+    norms = np.linalg.norm(quat, axis=1)
+    if np.any(np.abs(norms - 1.0) > 1e-3):
+        i = int(np.argmax(np.abs(norms - 1.0)))
+        raise ConfigError(f"{key}:q", float(norms[i]), f"quaternions must have unit norm (row {i})")
+    quat = quat / norms[:, None]
+    return GuidanceTable(time=np.ascontiguousarray(time, float), quat=np.ascontiguousarray(quat, float),
+                         rate=np.ascontiguousarray(rate, float))
+
+
+def read_guidance(path: Path, key: str = "guidance.command_file") -> GuidanceTable:
+    """Load a command file, refusing malformed content with a ConfigError."""
+    path = Path(path)
+    if path.suffix.lower() in (".h5", ".hdf5"):
+        try:
+            with h5py.File(path, "r") as f:
+                return _check(key, f["time_s"][()], f["quaternion"][()], f["rate_rad_s"][()])
+        except (OSError, KeyError) as exc:
+            raise ConfigError(key, str(path), f"unreadable HDF5 command file ({exc}); needs time_s, quaternion, rate_rad_s") from None
+    try:
+        data = np.genfromtxt(path, delimiter=",", names=True, comments="#", dtype=float)
+    except (OSError, ValueError) as exc:
+        raise ConfigError(key, str(path), f"unreadable CSV command file ({exc})") from None
+    names = data.dtype.names or ()
+    deg = all(f"rate_{a}_deg_s" in names for a in "xyz")
+    need = CSV_COLUMNS[:5] + (tuple(f"rate_{a}_deg_s" for a in "xyz") if deg else CSV_COLUMNS[5:])
+    missing = [c for c in need if c not in names]
+    if missing:
+        raise ConfigError(key, str(path), f"missing columns {missing}; expected {list(CSV_COLUMNS)}")
+    data = np.atleast_1d(data)
+    quat = np.column_stack([data[c] for c in need[1:5]])
+    rate = np.column_stack([data[c] for c in need[5:8]])
+    if deg:
+        rate = np.radians(rate)
+    return _check(key, np.asarray(data["time_s"], float), quat, rate)
+
+
+def write_guidance_csv(path: Path, time: np.ndarray, quat: np.ndarray, rate: np.ndarray, header: str = "") -> None:
+    """Write a command file in the CSV layout above (atomically)."""
+    table = np.column_stack([time, quat, rate])
+    comment = "".join(f"# {line}\n" for line in header.splitlines())
+    with atomic_path(Path(path)) as tmp:
+        with open(tmp, "w") as f:
+            f.write(comment)
+            f.write(",".join(CSV_COLUMNS) + "\n")
+            np.savetxt(f, table, delimiter=",", fmt="%.12g")

@@ -1,0 +1,177 @@
+"""Flight control system of the source paper (§III.F), run at 50 Hz.
+
+Pitch and yaw (same architecture, uncoupled):
+
+    δ_c = −[ Kp·e + Ki·∫e dt + Kd·F₂F₁(ω_blend − ω_c) + Kir·F₂F₁(∫(ω_gyro − ω_c) dt) ]
+
+* ``e`` is the attitude error angle from the error quaternion between the smoothed
+  command and the sensed attitude (positive when the body is rotated positively past the
+  command);
+* ``ω_blend`` blends the rate gyros (upper-stage gyro, IMU, first-stage gyro) with
+  configured weights summing to 1;
+* ``F₁``, ``F₂`` are the two fourth-order discrete flex filters in series (coefficients
+  switch at separation);
+* ``∫(ω_gyro − ω_c)`` is the integrated sensed rate of the stage's own gyro (first stage
+  on the stack, upper stage after separation), its own flex-filtered path added to the
+  PID output;
+* gains come from tables whose independent variable is altitude on the integrated stack
+  and Earth-relative speed in coast and upper-stage flight.
+
+Roll uses a phase plane of the flex-filtered roll error and rate error with attitude and
+rate deadbands, commanding +1 / 0 / −1 jet torque.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+from savant_cli.models import quaternion as qt
+from savant_cli.models.interp import locate, rows
+from savant_cli.sim.layout import (
+    D_CMD_P, D_CMD_RCS, D_CMD_Y, D_ERR, D_FILT, D_GAINS, D_GYRO_Y, D_INT_ATT, D_INT_RATE,
+    D_QS, D_RATE_CMD_B, D_RATE_ERR, D_ROLL_FILT, D_VS,
+)
+
+# flight-control phases (also the gain-table index)
+FCS_STACK = 0
+FCS_COAST = 1
+FCS_UPPER = 2
+
+# gyro order in blending vectors and in d[D_GYRO_Y]
+GYRO_UPPER = 0
+GYRO_IMU = 1
+GYRO_FIRST = 2
+
+
+class FcsTables(NamedTuple):
+    """Numeric flight-control data, SI.
+
+    ``filters[s, path, section, 0|1, :]`` holds ``b`` / ``a`` (a₀ = 1) of the fourth-order
+    section ``section`` of path ``path`` (0 rate, 1 integrated rate) of filter set ``s``
+    (0 integrated stack, 1 upper stage). ``roll_filters[s, section, 0|1, :]`` likewise.
+    ``gain_axis[phase, :gain_len[phase]]`` is altitude (m, stack) or relative speed (m/s);
+    ``gain_data[phase, i, :]`` = Kp, Ki, Kd, Kir for pitch then for yaw.
+    """
+
+    filters: np.ndarray  # (2, 2, 2, 2, 5)
+    roll_filters: np.ndarray  # (2, 2, 2, 5)
+    blend: np.ndarray  # (2, 3) weights (upper gyro, IMU, first gyro) per filter set
+    gain_axis: np.ndarray  # (3, n)
+    gain_data: np.ndarray  # (3, n, 8)
+    gain_len: np.ndarray  # (3,) int64
+    roll: np.ndarray  # (3,): attitude deadband rad, rate deadband rad/s, lead time s
+
+
+@njit(cache=True)
+def df2t(state: np.ndarray, k: int, b: np.ndarray, a: np.ndarray, x: float) -> float:
+    """One sample of a 4th-order IIR section (direct form II transposed, a₀ = 1).
+
+    ``state[k:k+4]`` holds the delay line; evaluated as :func:`scipy.signal.lfilter` does.
+    """
+    y = b[0] * x + state[k]
+    state[k] = b[1] * x - a[1] * y + state[k + 1]
+    state[k + 1] = b[2] * x - a[2] * y + state[k + 2]
+    state[k + 2] = b[3] * x - a[3] * y + state[k + 3]
+    state[k + 3] = b[4] * x - a[4] * y
+    return y
+
+
+@njit(cache=True)
+def filter_pair(state: np.ndarray, k: int, coef: np.ndarray, x: float) -> float:
+    """Two fourth-order sections in series; ``coef`` is (2, 2, 5)."""
+    y = df2t(state, k, coef[0, 0], coef[0, 1], x)
+    return df2t(state, k + 4, coef[1, 0], coef[1, 1], y)
+
+
+@njit(cache=True)
+def roll_phase_plane(err: float, rate_err: float, att_db: float, rate_db: float,
+                     lead_s: float) -> float:
+    """Jet command from the roll phase plane.
+
+    Rate limits dominate: ``rate_err > rate_db`` → −1, ``< −rate_db`` → +1. Otherwise the
+    switching function ``σ = err + lead_s·rate_err`` is compared with the attitude
+    deadband: ``σ > att_db`` → −1, ``σ < −att_db`` → +1, else 0 (drift).
+    """
+    if rate_err > rate_db:
+        return -1.0
+    if rate_err < -rate_db:
+        return 1.0
+    sigma = err + lead_s * rate_err
+    if sigma > att_db:
+        return -1.0
+    if sigma < -att_db:
+        return 1.0
+    return 0.0
+
+
+@njit(cache=True)
+def fcs_step(d: np.ndarray, q_nav: np.ndarray, phase: int, schedule_var: float,
+             dt: float, ft: FcsTables) -> None:
+    """One 50 Hz flight-control cycle; reads sensors and smoother from ``d`` and writes
+    the gimbal and jet commands back into ``d``.
+
+    Parameters
+    ----------
+    d : ndarray
+        Discrete state (see :mod:`savant_cli.sim.layout`).
+    q_nav : ndarray (4,)
+        Sensed attitude q_b2i from the navigation unit.
+    phase : int
+        FCS_STACK, FCS_COAST or FCS_UPPER.
+    schedule_var : float
+        Altitude (m) on the stack, Earth-relative speed (m/s) afterwards.
+    dt : float
+        Control period, s.
+    """
+    fset = 0 if phase == FCS_STACK else 1
+    # error quaternion: rotation from the smoothed command to the body
+    q_err = qt.qmul(qt.qconj(d[D_QS:D_QS + 4]), q_nav)
+    if q_err[0] < 0.0:
+        q_err = -q_err
+    err = 2.0 * q_err[1:4]
+    # rate command expressed in body axes
+    rate_cmd = qt.rotate_inverse(q_err, d[D_VS:D_VS + 3])
+    blend = np.zeros(3)
+    for g in range(3):
+        wgt = ft.blend[fset, g]
+        for ax in range(3):
+            blend[ax] += wgt * d[D_GYRO_Y + 3 * g + ax]
+    rate_err = blend - rate_cmd
+    own = GYRO_FIRST if phase == FCS_STACK else GYRO_UPPER
+
+    n = ft.gain_len[phase]
+    i, w = locate(ft.gain_axis[phase], n, schedule_var)
+    gains = rows(ft.gain_data[phase], i, w)
+
+    cmds = np.zeros(2)
+    for c in range(2):  # 0 pitch (body y), 1 yaw (body z)
+        ax = c + 1
+        d[D_INT_ATT + c] += err[ax] * dt
+        d[D_INT_RATE + c] += (d[D_GYRO_Y + 3 * own + ax] - rate_cmd[ax]) * dt
+        base = D_FILT + c * 16
+        rate_f = filter_pair(d, base, ft.filters[fset, 0], rate_err[ax])
+        irate_f = filter_pair(d, base + 8, ft.filters[fset, 1], d[D_INT_RATE + c])
+        kp, ki, kd, kir = gains[4 * c], gains[4 * c + 1], gains[4 * c + 2], gains[4 * c + 3]
+        cmds[c] = -(kp * err[ax] + ki * d[D_INT_ATT + c] + kd * rate_f + kir * irate_f)
+    d[D_CMD_P] = cmds[0]
+    d[D_CMD_Y] = cmds[1]
+
+    roll_rate_f = filter_pair(d, D_ROLL_FILT, ft.roll_filters[fset], rate_err[0])
+    d[D_CMD_RCS] = roll_phase_plane(err[0], roll_rate_f, ft.roll[0], ft.roll[1], ft.roll[2])
+
+    d[D_ERR:D_ERR + 3] = err
+    d[D_RATE_ERR:D_RATE_ERR + 3] = rate_err
+    d[D_RATE_CMD_B:D_RATE_CMD_B + 3] = rate_cmd
+    d[D_GAINS:D_GAINS + 8] = gains
+
+
+@njit(cache=True)
+def reset_phase(d: np.ndarray) -> None:
+    """Clear integrators and filter memories at a flight-control phase change."""
+    d[D_INT_ATT:D_INT_ATT + 2] = 0.0
+    d[D_INT_RATE:D_INT_RATE + 2] = 0.0
+    d[D_FILT:D_FILT + 32] = 0.0
+    d[D_ROLL_FILT:D_ROLL_FILT + 8] = 0.0

@@ -1,0 +1,52 @@
+"""Table look-ups for the compiled hot path.
+
+``np.interp`` serves single 1-D columns. Where one breakpoint search feeds many columns
+(mass properties) or three axes (aerodynamic coefficients), these kernels find the cell
+once and blend, because no library offers a multi-column or trilinear look-up callable
+from numba-compiled code. Outside a table the value is held at the end point (clamped),
+which is the usual convention for flight-simulation data tables.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True)
+def locate(axis: np.ndarray, n: int, x: float) -> tuple[int, float]:
+    """Cell index ``i`` and weight ``w`` with ``x ≈ (1-w)·axis[i] + w·axis[i+1]``.
+
+    Parameters
+    ----------
+    axis : ndarray
+        Strictly increasing breakpoints; only the first ``n`` are used.
+    n : int
+        Number of valid breakpoints (≥ 2).
+    x : float
+        Query point; clamped to ``[axis[0], axis[n-1]]``.
+    """
+    if x <= axis[0]:
+        return 0, 0.0
+    if x >= axis[n - 1]:
+        return n - 2, 1.0
+    i = np.searchsorted(axis[:n], x, side="right") - 1
+    return i, (x - axis[i]) / (axis[i + 1] - axis[i])
+
+
+@njit(cache=True)
+def rows(table: np.ndarray, i: int, w: float) -> np.ndarray:
+    """Blend rows ``i`` and ``i+1`` of a 2-D table with weight ``w``."""
+    return (1.0 - w) * table[i] + w * table[i + 1]
+
+
+@njit(cache=True)
+def trilinear(grid: np.ndarray, i: int, wi: float, j: int, wj: float, k: int, wk: float) -> float:
+    """Trilinear blend of ``grid[i:i+2, j:j+2, k:k+2]`` with cell weights."""
+    c00 = grid[i, j, k] * (1.0 - wi) + grid[i + 1, j, k] * wi
+    c01 = grid[i, j, k + 1] * (1.0 - wi) + grid[i + 1, j, k + 1] * wi
+    c10 = grid[i, j + 1, k] * (1.0 - wi) + grid[i + 1, j + 1, k] * wi
+    c11 = grid[i, j + 1, k + 1] * (1.0 - wi) + grid[i + 1, j + 1, k + 1] * wi
+    c0 = c00 * (1.0 - wj) + c10 * wj
+    c1 = c01 * (1.0 - wj) + c11 * wj
+    return c0 * (1.0 - wk) + c1 * wk

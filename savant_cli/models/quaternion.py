@@ -1,0 +1,172 @@
+"""Hamilton quaternion algebra, scalar first ``[w, x, y, z]``.
+
+Convention (see docs/architecture.md): an attitude quaternion ``q_b2i`` rotates body
+vectors into the inertial frame, ``v_i = q ⊗ v_b ⊗ q*``; its direction-cosine matrix
+``dcm(q)`` is body→inertial, and the kinematics are ``q̇ = ½ q ⊗ [0, ω_body]``.
+All functions are compiled with numba and allocate only their small results.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True)
+def qmul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Hamilton product ``a ⊗ b``."""
+    out = np.empty(4)
+    out[0] = a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3]
+    out[1] = a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2]
+    out[2] = a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1]
+    out[3] = a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0]
+    return out
+
+
+@njit(cache=True)
+def qconj(q: np.ndarray) -> np.ndarray:
+    """Conjugate (the inverse of a unit quaternion)."""
+    out = np.empty(4)
+    out[0] = q[0]
+    out[1] = -q[1]
+    out[2] = -q[2]
+    out[3] = -q[3]
+    return out
+
+
+@njit(cache=True)
+def qnormalize(q: np.ndarray) -> np.ndarray:
+    """Unit quaternion in the same direction, with a non-negative scalar part."""
+    n = np.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
+    s = 1.0 / n if q[0] >= 0.0 else -1.0 / n
+    out = np.empty(4)
+    for i in range(4):
+        out[i] = q[i] * s
+    return out
+
+
+@njit(cache=True)
+def dcm(q: np.ndarray) -> np.ndarray:
+    """Direction-cosine matrix of ``q``: ``v_i = dcm(q) @ v_b`` for ``q = q_b2i``."""
+    w, x, y, z = q[0], q[1], q[2], q[3]
+    m = np.empty((3, 3))
+    m[0, 0] = 1.0 - 2.0 * (y * y + z * z)
+    m[0, 1] = 2.0 * (x * y - w * z)
+    m[0, 2] = 2.0 * (x * z + w * y)
+    m[1, 0] = 2.0 * (x * y + w * z)
+    m[1, 1] = 1.0 - 2.0 * (x * x + z * z)
+    m[1, 2] = 2.0 * (y * z - w * x)
+    m[2, 0] = 2.0 * (x * z - w * y)
+    m[2, 1] = 2.0 * (y * z + w * x)
+    m[2, 2] = 1.0 - 2.0 * (x * x + y * y)
+    return m
+
+
+@njit(cache=True)
+def from_dcm(m: np.ndarray) -> np.ndarray:
+    """Quaternion of a body→inertial direction-cosine matrix (Shepperd's method)."""
+    tr = m[0, 0] + m[1, 1] + m[2, 2]
+    q = np.empty(4)
+    if tr > 0.0:
+        s = 2.0 * np.sqrt(1.0 + tr)
+        q[0] = 0.25 * s
+        q[1] = (m[2, 1] - m[1, 2]) / s
+        q[2] = (m[0, 2] - m[2, 0]) / s
+        q[3] = (m[1, 0] - m[0, 1]) / s
+    elif m[0, 0] > m[1, 1] and m[0, 0] > m[2, 2]:
+        s = 2.0 * np.sqrt(1.0 + m[0, 0] - m[1, 1] - m[2, 2])
+        q[0] = (m[2, 1] - m[1, 2]) / s
+        q[1] = 0.25 * s
+        q[2] = (m[0, 1] + m[1, 0]) / s
+        q[3] = (m[0, 2] + m[2, 0]) / s
+    elif m[1, 1] > m[2, 2]:
+        s = 2.0 * np.sqrt(1.0 + m[1, 1] - m[0, 0] - m[2, 2])
+        q[0] = (m[0, 2] - m[2, 0]) / s
+        q[1] = (m[0, 1] + m[1, 0]) / s
+        q[2] = 0.25 * s
+        q[3] = (m[1, 2] + m[2, 1]) / s
+    else:
+        s = 2.0 * np.sqrt(1.0 + m[2, 2] - m[0, 0] - m[1, 1])
+        q[0] = (m[1, 0] - m[0, 1]) / s
+        q[1] = (m[0, 2] + m[2, 0]) / s
+        q[2] = (m[1, 2] + m[2, 1]) / s
+        q[3] = 0.25 * s
+    return qnormalize(q)
+
+
+@njit(cache=True)
+def rotate(q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """``q ⊗ v ⊗ q*``: body components → inertial components for ``q = q_b2i``."""
+    return dcm(q) @ v
+
+
+@njit(cache=True)
+def rotate_inverse(q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """``q* ⊗ v ⊗ q``: inertial components → body components for ``q = q_b2i``."""
+    return dcm(q).T @ v
+
+
+@njit(cache=True)
+def from_rotation_vector(phi: np.ndarray) -> np.ndarray:
+    """Quaternion of a rotation by ``|phi|`` rad about ``phi/|phi|`` (exact exponential map)."""
+    ang = np.sqrt(phi[0] * phi[0] + phi[1] * phi[1] + phi[2] * phi[2])
+    q = np.empty(4)
+    if ang < 1e-12:
+        # second-order series keeps the small-rotation limit exact to round-off
+        q[0] = 1.0 - ang * ang / 8.0
+        q[1] = 0.5 * phi[0]
+        q[2] = 0.5 * phi[1]
+        q[3] = 0.5 * phi[2]
+        return q
+    s = np.sin(0.5 * ang) / ang
+    q[0] = np.cos(0.5 * ang)
+    q[1] = phi[0] * s
+    q[2] = phi[1] * s
+    q[3] = phi[2] * s
+    return q
+
+
+@njit(cache=True)
+def to_rotation_vector(q: np.ndarray) -> np.ndarray:
+    """Rotation vector (rad) of ``q``, the shortest rotation (angle ≤ π)."""
+    w = q[0]
+    v = q[1:4].copy()
+    if w < 0.0:
+        w = -w
+        v = -v
+    s = np.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
+    if s < 1e-12:
+        return 2.0 * v
+    ang = 2.0 * np.arctan2(s, w)
+    return v * (ang / s)
+
+
+@njit(cache=True)
+def derivative(q: np.ndarray, omega_body: np.ndarray) -> np.ndarray:
+    """``q̇ = ½ q ⊗ [0, ω]`` with ω the body angular rate (rad/s, body axes)."""
+    out = np.empty(4)
+    wx, wy, wz = omega_body[0], omega_body[1], omega_body[2]
+    out[0] = 0.5 * (-q[1] * wx - q[2] * wy - q[3] * wz)
+    out[1] = 0.5 * (q[0] * wx + q[2] * wz - q[3] * wy)
+    out[2] = 0.5 * (q[0] * wy - q[1] * wz + q[3] * wx)
+    out[3] = 0.5 * (q[0] * wz + q[1] * wy - q[2] * wx)
+    return out
+
+
+def euler_321(m_b2ref: np.ndarray) -> np.ndarray:
+    """Roll, pitch, yaw (rad; 3-2-1 sequence) of body axes relative to a reference frame.
+
+    Parameters
+    ----------
+    m_b2ref : ndarray, shape (n, 3, 3)
+        Body→reference direction-cosine matrices.
+
+    Returns
+    -------
+    ndarray, shape (n, 3)
+        ``[roll, pitch, yaw]`` in rad (pitch in [-π/2, π/2]).
+    """
+    roll = np.arctan2(m_b2ref[:, 2, 1], m_b2ref[:, 2, 2])
+    pitch = -np.arcsin(np.clip(m_b2ref[:, 2, 0], -1.0, 1.0))
+    yaw = np.arctan2(m_b2ref[:, 1, 0], m_b2ref[:, 0, 0])
+    return np.stack([roll, pitch, yaw], axis=1)

@@ -1,0 +1,1 @@
+"""savant_cli.sim"""

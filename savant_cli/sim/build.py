@@ -1,0 +1,276 @@
+"""Assemble the numeric model of one run from a validated config and the vehicle data:
+scalar parameters, plant and flight-software tables, multi-rate schedule, event
+schedule and the initial state on the pad.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from savant_cli import constants as C
+from savant_cli.config import SavantConfig
+from savant_cli.models import earth, quaternion as qt
+from savant_cli.models.atmosphere import upper_atmosphere_table
+from savant_cli.models.fcs import FcsTables
+from savant_cli.models.sensors import gyro_discrete, gyro_steady_state
+from savant_cli.sim import engine as E
+from savant_cli.sim import layout as L
+from savant_cli.sim.engine import GuidanceTable, GyroModel, Rates
+from savant_cli.sim.plant import PlantTables
+from savant_cli.vehicle import Vehicle
+
+CONFIG_NAMES = ("stack", "upper_les", "upper")
+
+
+@dataclass
+class SimModel:
+    """Everything the compiled engine needs for one run (all SI)."""
+
+    p: np.ndarray
+    tables: PlantTables
+    fcs: FcsTables
+    gyro: GyroModel
+    guidance: GuidanceTable
+    rates: Rates
+    sched: np.ndarray
+    x0: np.ndarray
+    d0: np.ndarray
+    u0: np.ndarray
+    info: dict = field(default_factory=dict)
+
+
+def _stack(arrays: list[np.ndarray], fill: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """Pad 1-D or 2-D arrays along axis 0 to a common length; return (stacked, lengths)."""
+    n = max(a.shape[0] for a in arrays)
+    out = np.full((len(arrays), n) + arrays[0].shape[1:], fill)
+    for i, a in enumerate(arrays):
+        out[i, : a.shape[0]] = a
+        out[i, a.shape[0]:] = a[-1]  # hold the last row (keeps padding monotone/harmless)
+    return np.ascontiguousarray(out), np.array([a.shape[0] for a in arrays], dtype=np.int64)
+
+
+def _common_aero_grid(vehicle: Vehicle):
+    """Resample the three configurations' aero tables onto the union of their axes.
+
+    Multilinear interpolation of a multilinear interpolant at refined nodes reproduces it
+    exactly, and clamping outside a table is the same before and after, so this is
+    lossless; it lets the kernel hold one (3, 6, nM, nA, nB) array.
+    """
+    from scipy.interpolate import RegularGridInterpolator
+
+    aeros = [vehicle.configurations[n].aero for n in CONFIG_NAMES]
+    mach = np.unique(np.concatenate([a.mach for a in aeros]))
+    alpha = np.unique(np.concatenate([a.alpha_rad for a in aeros]))
+    beta = np.unique(np.concatenate([a.beta_rad for a in aeros]))
+    mg, ag, bg = np.meshgrid(mach, alpha, beta, indexing="ij")
+    coef = np.empty((3, 6, mach.size, alpha.size, beta.size))
+    for c, a in enumerate(aeros):
+        pts = np.stack([np.clip(mg, a.mach[0], a.mach[-1]),
+                        np.clip(ag, a.alpha_rad[0], a.alpha_rad[-1]),
+                        np.clip(bg, a.beta_rad[0], a.beta_rad[-1])], axis=-1)
+        for k in range(6):
+            f = RegularGridInterpolator((a.mach, a.alpha_rad, a.beta_rad), a.coeffs[k])
+            coef[c, k] = f(pts)
+    ref = np.array([[a.area_m2, *a.lref_m, *a.mrp_m] for a in aeros])
+    return mach, alpha, beta, np.ascontiguousarray(coef), ref
+
+
+def plant_tables(cfg: SavantConfig, vehicle: Vehicle) -> PlantTables:
+    """Tabular plant data from the vehicle and the winds config."""
+    mach, alpha, beta, coef, ref = _common_aero_grid(vehicle)
+    aeros = [vehicle.configurations[n].aero for n in CONFIG_NAMES]
+    masses = [vehicle.configurations[n].mass for n in CONFIG_NAMES]
+    base_time, base_len = _stack([a.base_time_s for a in aeros])
+    base_force, _ = _stack([a.base_force_N for a in aeros])
+    mass_prop, mass_len = _stack([m.propellant_kg for m in masses])
+    mass_data, _ = _stack([np.column_stack([m.mass_kg, m.cg_m, m.inertia_kgm2]) for m in masses])
+    atm_alt, atm_lnp, atm_lnrho = upper_atmosphere_table()
+    w = cfg.winds.profile
+    if cfg.winds.enabled:
+        wind = [np.asarray(w.altitude_m, float), np.asarray(w.north_mps, float), np.asarray(w.east_mps, float)]
+    else:
+        wind = [np.array([0.0, 1.0]), np.zeros(2), np.zeros(2)]
+    fs, us, rcs = vehicle.first_stage, vehicle.upper_stage, vehicle.rcs
+    f64 = lambda a: np.ascontiguousarray(a, dtype=np.float64)  # noqa: E731
+    return PlantTables(
+        aero_mach=f64(mach), aero_alpha=f64(alpha), aero_beta=f64(beta), aero_coef=coef,
+        aero_ref=f64(ref), base_time=base_time, base_force=base_force, base_len=base_len,
+        mass_prop=mass_prop, mass_data=mass_data, mass_len=mass_len,
+        fs_time=f64(fs.thrust_time_s), fs_thrust=f64(fs.thrust_vac_N),
+        us_start_time=f64(us.startup_time_s), us_start_frac=f64(us.startup_fraction),
+        rcs_alt=f64(rcs.altitude_m), rcs_thrust=f64(rcs.thrust_vac_N),
+        atm_alt=f64(atm_alt), atm_lnp=f64(atm_lnp), atm_lnrho=f64(atm_lnrho),
+        wind_alt=f64(wind[0]), wind_north=f64(wind[1]), wind_east=f64(wind[2]),
+    )
+
+
+def scalar_parameters(cfg: SavantConfig, vehicle: Vehicle) -> np.ndarray:
+    """The scalar parameter vector ``p`` (see :mod:`savant_cli.sim.layout`)."""
+    p = np.zeros(L.N_PARAM)
+    p[L.P_MU] = C.MU_EARTH
+    p[L.P_RE] = C.WGS84_A
+    p[L.P_J2] = C.EGM2008_J2
+    p[L.P_J3] = C.EGM2008_J3
+    p[L.P_J4] = C.EGM2008_J4
+    p[L.P_OMEGA_E] = C.OMEGA_EARTH
+    p[L.P_E2] = C.WGS84_E2
+    p[L.P_WIND_SCALE] = cfg.winds.scale if cfg.winds.enabled else 0.0
+    fs, us, rcs = vehicle.first_stage, vehicle.upper_stage, vehicle.rcs
+    p[L.P_FS_ISP_VAC] = fs.isp_vac_s
+    p[L.P_FS_ISP_SL] = fs.isp_sl_s
+    p[L.P_FS_EXIT_AREA] = fs.nozzle_exit_area_m2
+    p[L.P_FS_THRUST_SCALE] = 1.0
+    p[L.P_US_THRUST] = us.thrust_vac_N
+    p[L.P_US_ISP] = us.isp_vac_s
+    p[L.P_US_MR] = us.mixture_ratio
+    p[L.P_US_EXIT_AREA] = us.nozzle_exit_area_m2
+    p[L.P_FS_GIMBAL_LIMIT] = fs.gimbal_limit_rad
+    p[L.P_US_GIMBAL_LIMIT] = us.gimbal_limit_rad
+    p[L.P_FS_GIMBAL_X:L.P_FS_GIMBAL_X + 3] = fs.gimbal_m
+    p[L.P_US_GIMBAL_X:L.P_US_GIMBAL_X + 3] = us.gimbal_m
+    p[L.P_RCS_EXIT_AREA] = rcs.exit_area_m2
+    p[L.P_RCS_N] = rcs.jets_per_direction
+    p[L.P_RCS_ARM] = rcs.moment_arm_m
+    p[L.P_RCS_RAMP_UP] = rcs.ramp_up_s
+    p[L.P_RCS_RAMP_DOWN] = rcs.ramp_down_s
+    for stage, base in (("first_stage", L.P_ACT_FS_WA), ("upper_stage", L.P_ACT_US_WA)):
+        a = getattr(cfg.actuator, stage)
+        p[base] = a.loop_gain_rad_s
+        p[base + 1] = 2.0 * np.pi * a.natural_frequency_hz
+        p[base + 2] = a.damping
+        p[base + 3] = np.radians(a.rate_limit_deg_s)
+    p[L.P_AERO_ON] = 1.0 if cfg.environment.aero else 0.0
+    p[L.P_THRUST_ON] = 1.0 if cfg.environment.thrust else 0.0
+    p[L.P_GRAVITY_ORDER] = cfg.environment.gravity_order
+    return p
+
+
+def fcs_tables(cfg: SavantConfig) -> FcsTables:
+    """Flight-control data: filters, blending, gain schedules, roll phase plane."""
+    c = cfg.controller
+    filters = np.zeros((2, 2, 2, 2, 5))
+    roll_filters = np.zeros((2, 2, 2, 5))
+    blend = np.zeros((2, 3))
+    for s, name in enumerate(("stack", "upper")):
+        fs = getattr(c.flex_filters, name)
+        for path, sections in enumerate((fs.rate, fs.integrated_rate)):
+            for i, sec in enumerate(sections):
+                a0 = sec.a[0]
+                filters[s, path, i, 0] = np.asarray(sec.b) / a0
+                filters[s, path, i, 1] = np.asarray(sec.a) / a0
+        for i, sec in enumerate(fs.roll):
+            roll_filters[s, i, 0] = np.asarray(sec.b) / sec.a[0]
+            roll_filters[s, i, 1] = np.asarray(sec.a) / sec.a[0]
+        blend[s] = getattr(c.blending, name)
+    axes, data = [], []
+    for name in ("stack", "coast", "upper"):
+        t = getattr(c.gains, name)
+        axes.append(np.asarray(t.breakpoints, float))
+        cols = []
+        for axis in ("pitch", "yaw"):
+            g = getattr(t, axis)
+            cols += [g.kp, g.ki, g.kd, g.kir]
+        data.append(np.asarray(cols, float).T)
+    gain_axis, gain_len = _stack(axes)
+    gain_data, _ = _stack(data)
+    roll = np.array([np.radians(c.roll.attitude_deadband_deg), np.radians(c.roll.rate_deadband_deg_s),
+                     c.roll.lead_time_s])
+    return FcsTables(filters=filters, roll_filters=roll_filters, blend=blend, gain_axis=gain_axis,
+                     gain_data=gain_data, gain_len=gain_len, roll=roll)
+
+
+def rates(cfg: SavantConfig) -> Rates:
+    s = cfg.sim
+    ratio = lambda hz: int(round(s.plant_rate_hz / hz))  # noqa: E731
+    return Rates(dt=1.0 / s.plant_rate_hz, n_sensor=ratio(s.sensor_rate_hz), n_fcs=ratio(s.fcs_rate_hz),
+                 n_guid=ratio(s.guidance_rate_hz), n_log=ratio(s.log_rate_hz))
+
+
+def separation_time(vehicle: Vehicle) -> float:
+    """First time after the thrust peak when first-stage thrust falls below the
+    configured fraction of its peak (s)."""
+    fs = vehicle.first_stage
+    t = np.linspace(fs.thrust_time_s[0], fs.thrust_time_s[-1], 200001)
+    f = np.interp(t, fs.thrust_time_s, fs.thrust_vac_N)
+    ipk = int(np.argmax(f))
+    below = np.nonzero(f[ipk:] < vehicle.events.separation_thrust_fraction * f[ipk])[0]
+    return float(t[ipk + below[0]]) if below.size else float(t[-1])
+
+
+def target_energy(cfg: SavantConfig) -> float:
+    """Specific orbital energy of the target orbit, J/kg (point-mass μ, radii from the
+    WGS84 equatorial radius)."""
+    t = cfg.guidance.target
+    rp = C.WGS84_A + 1e3 * t.perigee_altitude_km
+    ra = C.WGS84_A + 1e3 * t.apogee_altitude_km
+    return -C.MU_EARTH / (rp + ra)
+
+
+def pad_state(cfg: SavantConfig, vehicle: Vehicle) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """CG position (ECI = ECEF at t = 0, m), inertial velocity (m/s) and attitude q_b2i of
+    the vehicle standing on the pad; body X along the geodetic up, body Z toward
+    ``pad_heading_deg`` (clockwise from north)."""
+    ls = cfg.guidance.launch_site
+    lat, lon = np.radians(ls.latitude_deg), np.radians(ls.longitude_deg)
+    stack = vehicle.configurations["stack"].mass
+    cg_station = stack.cg_m[-1, 0]  # full propellant is the last (ascending) row
+    h_cg = ls.base_altitude_m + vehicle.length_m - cg_station
+    r = earth.geodetic_to_ecef(lat, lon, h_cg, C.WGS84_A, C.WGS84_E2)
+    v = np.cross([0.0, 0.0, C.OMEGA_EARTH], r)
+    c_e2n = earth.dcm_ecef_to_ned(lat, lon)
+    north, east, down = c_e2n[0], c_e2n[1], c_e2n[2]
+    psi = np.radians(ls.pad_heading_deg)
+    x_b = -down
+    z_b = np.cos(psi) * north + np.sin(psi) * east
+    y_b = np.cross(z_b, x_b)
+    q = qt.from_dcm(np.column_stack([x_b, y_b, z_b]))
+    return r, v, q
+
+
+def build_model(cfg: SavantConfig, vehicle: Vehicle, guidance: GuidanceTable) -> SimModel:
+    """Numeric model of one run."""
+    p = scalar_parameters(cfg, vehicle)
+    tb = plant_tables(cfg, vehicle)
+    ft = fcs_tables(cfg)
+    rt = rates(cfg)
+    ad, bd, cd, dd = gyro_discrete(cfg.sensors.rate_gyro.natural_frequency_hz,
+                                   cfg.sensors.rate_gyro.damping, rt.dt * rt.n_sensor)
+    gyro = GyroModel(ad=ad, bd=bd, cd=cd, dd=dd)
+
+    r0, v0, q0 = pad_state(cfg, vehicle)
+    w0 = qt.dcm(q0).T @ np.array([0.0, 0.0, C.OMEGA_EARTH])  # Earth rate, body axes
+    x0 = np.zeros(L.N_STATE)
+    x0[L.R:L.R + 3] = r0
+    x0[L.V:L.V + 3] = v0
+    x0[L.Q:L.Q + 4] = q0
+    x0[L.W:L.W + 3] = w0
+    x0[L.MFS] = vehicle.configurations["stack"].mass.propellant_kg[-1]
+    x0[L.MLOX] = vehicle.upper_stage.lox_kg
+    x0[L.MLH2] = vehicle.upper_stage.lh2_kg
+
+    d0 = np.zeros(L.N_DISC)
+    for g in range(3):
+        for ax in range(3):
+            s = L.D_GYRO_X + 6 * g + 2 * ax
+            d0[s:s + 2] = gyro_steady_state(ad, bd, w0[ax])
+            d0[L.D_GYRO_Y + 3 * g + ax] = w0[ax]
+    u0 = np.zeros(L.N_INPUT)
+    u0[L.U_CONFIG] = L.CONFIG_STACK
+    u0[L.U_ENGINE] = L.ENGINE_FIRST
+
+    ev = vehicle.events
+    sched = np.zeros(E.N_SCHED)
+    sched[E.S_T_SEP] = separation_time(vehicle)
+    sched[E.S_T_IGN_DELAY] = ev.ignition_delay_s
+    sched[E.S_T_LES_DELAY] = ev.les_jettison_delay_s
+    sched[E.S_ENERGY_TARGET] = target_energy(cfg)
+    sched[E.S_T_MAX] = cfg.sim.max_time_s
+    sched[E.S_STOP_AT_SEP] = 1.0 if cfg.phase.stop_at == "separation" else 0.0
+    sched[E.S_SMOOTH_ZETA] = cfg.guidance.smoother.damping
+    sched[E.S_SMOOTH_WN] = cfg.guidance.smoother.natural_frequency_rad_s
+    sched[E.S_MAX_RATE] = np.radians(cfg.sim.max_body_rate_deg_s)
+    info = {"separation_time_s": sched[E.S_T_SEP]}
+    return SimModel(p=p, tables=tb, fcs=ft, gyro=gyro, guidance=guidance, rates=rt, sched=sched,
+                    x0=x0, d0=d0, u0=u0, info=info)

@@ -1,0 +1,220 @@
+"""Multi-rate fixed-step simulation engine.
+
+The compiled loop :func:`advance` integrates the plant with RK4 at the plant rate and,
+on step boundaries, runs the discrete parts at their own rates with zero-order hold:
+
+* rate gyros every ``n_sensor`` plant steps (200 Hz by default);
+* command smoother, flight control and roll-jet logic every ``n_fcs`` steps (50 Hz);
+* a new guidance command every ``n_guid`` steps (1 Hz);
+* events (separation, J-2X ignition, LES jettison, cutoff) at the first step boundary at
+  or after their time or condition.
+
+Python calls :func:`advance` in chunks so that a progress bar can be drawn and an
+interrupted or diverged run still returns what it computed.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+from savant_cli.models import earth
+from savant_cli.models.fcs import FCS_COAST, FCS_STACK, FCS_UPPER, FcsTables, fcs_step, reset_phase
+from savant_cli.models.guidance import guidance_sample, smoother_step
+from savant_cli.models.sensors import gyro_step
+from savant_cli.sim.layout import (
+    A_ALT, ACT_P, ACT_Y, CONFIG_UPPER, CONFIG_UPPER_LES, D_CMD_P, D_CMD_RCS, D_CMD_Y,
+    D_GYRO_X, D_GYRO_Y, ENGINE_OFF, ENGINE_UPPER, MFS, MLH2, MLOX, N_AUX, N_STATE,
+    P_E2, P_MU, P_OMEGA_E, P_RE, Q, R, RCS_NEG, RCS_POS, U_CONFIG, U_DPC, U_DYC,
+    U_ENGINE, U_RCS, U_T_IGN, V, W,
+)
+from savant_cli.sim.plant import PlantTables, derivative
+
+# status codes returned by advance()
+RUNNING = 0
+STOP_CUTOFF = 1  # target energy reached
+STOP_DEPLETION = 2  # an upper-stage propellant ran out
+STOP_SEPARATION = 3  # phase ends at separation
+STOP_TIME = 4  # maximum time reached
+DIVERGED_NONFINITE = 10
+DIVERGED_GROUND = 11
+DIVERGED_RATE = 12
+
+# event slots in `events`
+EV_SEPARATION = 0
+EV_IGNITION = 1
+EV_LES = 2
+EV_CUTOFF = 3
+EVENT_NAMES = ("separation", "upper_stage_ignition", "les_jettison", "cutoff")
+
+# scheduled event times and limits in `sched`
+S_T_SEP = 0
+S_T_IGN_DELAY = 1
+S_T_LES_DELAY = 2
+S_ENERGY_TARGET = 3  # specific orbital energy at cutoff, J/kg (point-mass μ)
+S_T_MAX = 4
+S_STOP_AT_SEP = 5  # 1: the phase ends at separation
+S_SMOOTH_ZETA = 6
+S_SMOOTH_WN = 7
+S_MAX_RATE = 8  # divergence threshold on |ω|, rad/s
+N_SCHED = 9
+
+
+class Rates(NamedTuple):
+    """Integer step ratios of the multi-rate schedule (plant steps per sample)."""
+
+    dt: float  # plant step, s
+    n_sensor: int
+    n_fcs: int
+    n_guid: int
+    n_log: int
+
+
+class GyroModel(NamedTuple):
+    ad: np.ndarray  # (2, 2)
+    bd: np.ndarray  # (2,)
+    cd: np.ndarray  # (2,)
+    dd: float
+
+
+class GuidanceTable(NamedTuple):
+    time: np.ndarray  # (n,) s
+    quat: np.ndarray  # (n, 4) q_c2i
+    rate: np.ndarray  # (n, 3) rad/s, commanded-body axes
+
+
+@njit(cache=True)
+def fcs_phase(events: np.ndarray) -> int:
+    if np.isnan(events[EV_SEPARATION]):
+        return FCS_STACK
+    if np.isnan(events[EV_IGNITION]):
+        return FCS_COAST
+    return FCS_UPPER
+
+
+@njit(cache=True)
+def rk4(t: float, x: np.ndarray, u: np.ndarray, dt: float, p: np.ndarray, tb: PlantTables,
+        aux: np.ndarray, scratch: np.ndarray) -> np.ndarray:
+    """One classical Runge–Kutta step; ``aux`` receives diagnostics at ``t``."""
+    k1 = derivative(t, x, u, p, tb, aux)
+    k2 = derivative(t + 0.5 * dt, x + 0.5 * dt * k1, u, p, tb, scratch)
+    k3 = derivative(t + 0.5 * dt, x + 0.5 * dt * k2, u, p, tb, scratch)
+    k4 = derivative(t + dt, x + dt * k3, u, p, tb, scratch)
+    return x + (dt / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+
+
+@njit(cache=True)
+def handle_events(t: float, x: np.ndarray, u: np.ndarray, d: np.ndarray,
+                  events: np.ndarray, sched: np.ndarray) -> int:
+    """Apply time- and condition-triggered events at a step boundary; return a stop code."""
+    if np.isnan(events[EV_SEPARATION]) and t >= sched[S_T_SEP]:
+        events[EV_SEPARATION] = t
+        if sched[S_STOP_AT_SEP] != 0.0:
+            return STOP_SEPARATION
+        u[U_CONFIG] = CONFIG_UPPER_LES
+        u[U_ENGINE] = ENGINE_OFF
+        x[MFS] = 0.0
+        x[ACT_P:ACT_P + 3] = 0.0  # the upper-stage nozzle starts at null
+        x[ACT_Y:ACT_Y + 3] = 0.0
+        reset_phase(d)
+    t_sep = events[EV_SEPARATION]
+    if not np.isnan(t_sep) and np.isnan(events[EV_IGNITION]) and t >= t_sep + sched[S_T_IGN_DELAY]:
+        events[EV_IGNITION] = t
+        u[U_ENGINE] = ENGINE_UPPER
+        u[U_T_IGN] = t
+        reset_phase(d)
+    t_ign = events[EV_IGNITION]
+    if not np.isnan(t_ign) and np.isnan(events[EV_LES]) and t >= t_ign + sched[S_T_LES_DELAY]:
+        events[EV_LES] = t
+        u[U_CONFIG] = CONFIG_UPPER
+    if int(u[U_ENGINE]) == ENGINE_UPPER:
+        if x[MLOX] <= 0.0 or x[MLH2] <= 0.0:
+            events[EV_CUTOFF] = t
+            return STOP_DEPLETION
+    return RUNNING
+
+
+@njit(cache=True)
+def specific_energy(x: np.ndarray, mu: float) -> float:
+    r = np.sqrt(x[R] ** 2 + x[R + 1] ** 2 + x[R + 2] ** 2)
+    v2 = x[V] ** 2 + x[V + 1] ** 2 + x[V + 2] ** 2
+    return 0.5 * v2 - mu / r
+
+
+@njit(cache=True)
+def advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0: int,
+            n_steps: int, rates: Rates, p: np.ndarray, tb: PlantTables, ft: FcsTables,
+            gyro: GyroModel, gt: GuidanceTable, sched: np.ndarray, log: np.ndarray,
+            log_row: int) -> tuple[int, int, int, str]:
+    """Advance the coupled plant and flight software by up to ``n_steps`` plant steps.
+
+    ``x``, ``d``, ``u`` and ``events`` are updated in place; logged rows are written to
+    ``log`` from row ``log_row``. Returns ``(status, steps_done, next_log_row, detail)``.
+    """
+    dt = rates.dt
+    aux = np.zeros(N_AUX)
+    scratch = np.zeros(N_AUX)
+    n_cols = log.shape[1]
+    for j in range(n_steps):
+        k = k0 + j
+        t = k * dt
+        status = handle_events(t, x, u, d, events, sched)
+        if status != RUNNING:
+            return status, j, log_row, ""
+        if int(u[U_ENGINE]) == ENGINE_UPPER and specific_energy(x, p[P_MU]) >= sched[S_ENERGY_TARGET]:
+            events[EV_CUTOFF] = t
+            return STOP_CUTOFF, j, log_row, ""
+        if t > sched[S_T_MAX]:
+            return STOP_TIME, j, log_row, ""
+        phase = fcs_phase(events)
+
+        if k % rates.n_guid == 0:
+            guidance_sample(d, t, gt.time, gt.quat, gt.rate, k == 0)
+        if k % rates.n_sensor == 0:
+            for g in range(3):
+                for ax in range(3):
+                    s = D_GYRO_X + 6 * g + 2 * ax
+                    d[D_GYRO_Y + 3 * g + ax] = gyro_step(
+                        d[s:s + 2], x[W + ax], gyro.ad, gyro.bd, gyro.cd, gyro.dd)
+        if k % rates.n_fcs == 0:
+            dt_fcs = rates.n_fcs * dt
+            smoother_step(d, t, dt_fcs, sched[S_SMOOTH_ZETA], sched[S_SMOOTH_WN])
+            if phase == FCS_STACK:
+                r_ecef = earth.dcm_eci_to_ecef(t, p[P_OMEGA_E]) @ x[R:R + 3]
+                sched_var = earth.ecef_to_geodetic(r_ecef, p[P_RE], p[P_E2])[2]
+            else:
+                v_rel = earth.velocity_relative_eci(x[R:R + 3], x[V:V + 3], p[P_OMEGA_E])
+                sched_var = np.sqrt(v_rel[0] ** 2 + v_rel[1] ** 2 + v_rel[2] ** 2)
+            fcs_step(d, x[Q:Q + 4], phase, sched_var, dt_fcs, ft)
+            u[U_DPC] = d[D_CMD_P]
+            u[U_DYC] = d[D_CMD_Y]
+            u[U_RCS] = d[D_CMD_RCS]
+
+        x_new = rk4(t, x, u, dt, p, tb, aux, scratch)
+        if k % rates.n_log == 0 and log_row < log.shape[0]:
+            row = log[log_row]
+            row[0] = t
+            row[1:1 + N_STATE] = x
+            row[1 + N_STATE:1 + N_STATE + N_AUX] = aux
+            row[1 + N_STATE + N_AUX:n_cols] = d
+            log_row += 1
+
+        # housekeeping: unit quaternion, physical bounds of bounded states
+        x_new[Q:Q + 4] /= np.sqrt(np.sum(x_new[Q:Q + 4] ** 2))
+        for i in (MFS, MLOX, MLH2):
+            if x_new[i] < 0.0:
+                x_new[i] = 0.0
+        for i in (RCS_POS, RCS_NEG):
+            x_new[i] = min(max(x_new[i], 0.0), 1.0)
+        x[:] = x_new
+
+        if not np.all(np.isfinite(x)):
+            return DIVERGED_NONFINITE, j + 1, log_row, "state became non-finite"
+        if aux[A_ALT] < -50.0 and t > 1.0:
+            return DIVERGED_GROUND, j + 1, log_row, "altitude below ground"
+        wmag = np.sqrt(x[W] ** 2 + x[W + 1] ** 2 + x[W + 2] ** 2)
+        if wmag > sched[S_MAX_RATE]:
+            return DIVERGED_RATE, j + 1, log_row, "body rate magnitude beyond limit"
+    return RUNNING, n_steps, log_row, ""

@@ -1,0 +1,199 @@
+"""Drive the compiled engine for one run: chunked calls with a progress bar, stop
+reasons, and conversion of the raw log into named signals with units."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+from savant_cli import constants as C
+from savant_cli.io.record import Signal
+from savant_cli.models import earth, quaternion as qt
+from savant_cli.sim import engine as E
+from savant_cli.sim import layout as L
+from savant_cli.sim.build import SimModel
+
+STOP_MESSAGES = {
+    E.STOP_CUTOFF: "cutoff: target orbital energy reached",
+    E.STOP_DEPLETION: "cutoff: upper-stage propellant depleted before the target",
+    E.STOP_SEPARATION: "end of phase at first-stage separation",
+    E.STOP_TIME: "maximum simulation time reached",
+}
+DIVERGED = (E.DIVERGED_NONFINITE, E.DIVERGED_GROUND, E.DIVERGED_RATE)
+
+
+@dataclass
+class SimResult:
+    """Raw outcome of one run."""
+
+    log: np.ndarray  # (n_rows, n_cols) logged rows: t, x, aux, d
+    x: np.ndarray  # final state
+    d: np.ndarray  # final discrete state
+    events: np.ndarray  # event times (NaN if not reached), see engine.EVENT_NAMES
+    status: str  # complete | diverged | interrupted
+    stop_code: int
+    message: str
+    t_final: float
+    sim_wall_time_s: float  # wall time inside the compiled loop
+
+
+def log_columns() -> int:
+    return 1 + L.N_STATE + L.N_AUX + L.N_DISC
+
+
+def simulate(model: SimModel, progress: bool = True, chunk_s: float = 10.0) -> SimResult:
+    """Fly one run from the model's initial state until a stop condition.
+
+    A diverging run returns normally with ``status = "diverged"`` and the history up to
+    the failure; ``KeyboardInterrupt`` returns ``status = "interrupted"``.
+    """
+    rt = model.rates
+    x = model.x0.copy()
+    d = model.d0.copy()
+    u = model.u0.copy()
+    events = np.full(4, np.nan)
+    t_max = model.sched[E.S_T_MAX]
+    n_total = int(np.ceil(t_max / rt.dt)) + 1
+    n_rows = n_total // rt.n_log + 2
+    log = np.zeros((n_rows, log_columns()))
+    chunk = max(1, int(round(chunk_s / rt.dt)))
+    k = 0
+    row = 0
+    code = E.RUNNING
+    detail = ""
+    wall = 0.0
+    status = "complete"
+    bar = Progress(TextColumn("[bold]flight"), BarColumn(), TextColumn("t = {task.fields[t]:6.1f} s"),
+                   TimeElapsedColumn(), transient=True, disable=not progress)
+    with bar:
+        task = bar.add_task("flight", total=t_max, t=0.0)
+        try:
+            while code == E.RUNNING and k < n_total:
+                t0 = time.perf_counter()
+                code, done, row, detail = E.advance(
+                    x, d, u, events, k, min(chunk, n_total - k), rt, model.p, model.tables,
+                    model.fcs, model.gyro, model.guidance, model.sched, log, row)
+                wall += time.perf_counter() - t0
+                k += done
+                bar.update(task, completed=k * rt.dt, t=k * rt.dt)
+        except KeyboardInterrupt:
+            status = "interrupted"
+            detail = "interrupted by the user"
+    t_final = k * rt.dt
+    if code == E.RUNNING and status == "complete":
+        code = E.STOP_TIME
+    if status == "interrupted":
+        message = f"interrupted at t = {t_final:.2f} s"
+    elif code in DIVERGED:
+        status = "diverged"
+        message = f"diverged at t = {t_final:.3f} s: {detail}"
+    else:
+        message = STOP_MESSAGES.get(code, f"stopped with code {code}")
+    # close the history with the final state (for summaries at cutoff)
+    if row < log.shape[0] and (row == 0 or log[row - 1, 0] < t_final):
+        aux = np.zeros(L.N_AUX)
+        from savant_cli.sim.plant import derivative
+
+        derivative(t_final, x, u, model.p, model.tables, aux)
+        log[row, 0] = t_final
+        log[row, 1:1 + L.N_STATE] = x
+        log[row, 1 + L.N_STATE:1 + L.N_STATE + L.N_AUX] = aux
+        log[row, 1 + L.N_STATE + L.N_AUX:] = d
+        row += 1
+    return SimResult(log=log[:row].copy(), x=x, d=d, events=events, status=status, stop_code=code,
+                     message=message, t_final=t_final, sim_wall_time_s=wall)
+
+
+# ----------------------------------------------------------------- signals from log
+
+
+def _split(log: np.ndarray):
+    t = log[:, 0]
+    x = log[:, 1:1 + L.N_STATE]
+    aux = log[:, 1 + L.N_STATE:1 + L.N_STATE + L.N_AUX]
+    d = log[:, 1 + L.N_STATE + L.N_AUX:]
+    return t, x, aux, d
+
+
+def launch_frame(model: SimModel) -> np.ndarray:
+    """ECI→launch-frame DCM: the pad's north-east-down axes frozen in inertial space at
+    liftoff (the reference of the Euler-angle attitude plots)."""
+    r0 = model.x0[L.R:L.R + 3]
+    lat, lon, _ = earth.ecef_to_geodetic(r0, C.WGS84_A, C.WGS84_E2)
+    return earth.dcm_ecef_to_ned(lat, lon)  # ECI = ECEF at t = 0
+
+
+def _quat_dcms(qs: np.ndarray) -> np.ndarray:
+    return np.stack([qt.dcm(q) for q in qs])
+
+
+def signals(result: SimResult, model: SimModel) -> dict[str, Signal]:
+    """Named time histories with units, frames and column names."""
+    t, x, aux, d = _split(result.log)
+    xyz = ("x", "y", "z")
+    rpy = ("roll", "pitch", "yaw")
+    pq = ("pitch", "yaw")
+    c_launch = launch_frame(model)
+    q = x[:, L.Q:L.Q + 4]
+    qc = d[:, L.D_QS:L.D_QS + 4]
+    euler = qt.euler_321(np.einsum("ij,njk->nik", c_launch, _quat_dcms(q))) if len(t) else np.zeros((0, 3))
+    euler_c = qt.euler_321(np.einsum("ij,njk->nik", c_launch, _quat_dcms(qc))) if len(t) else np.zeros((0, 3))
+    thrust = aux[:, L.A_THRUST]
+    config = np.full(len(t), 0.0)
+    ev = result.events
+    if not np.isnan(ev[E.EV_SEPARATION]):
+        config[t >= ev[E.EV_SEPARATION]] = 1.0
+    if not np.isnan(ev[E.EV_LES]):
+        config[t >= ev[E.EV_LES]] = 2.0
+    s = {
+        "time": Signal(t, "s", "mission time from liftoff"),
+        "position_eci": Signal(x[:, L.R:L.R + 3], "m", "CG position", xyz, "ECI"),
+        "velocity_eci": Signal(x[:, L.V:L.V + 3], "m/s", "CG inertial velocity", xyz, "ECI"),
+        "gravity_eci": Signal(aux[:, L.A_GRAV:L.A_GRAV + 3], "m/s^2", "gravitational acceleration (J2-J4 zonal model)", xyz, "ECI"),
+        "altitude": Signal(aux[:, L.A_ALT], "m", "WGS84 geodetic altitude of the CG"),
+        "latitude": Signal(aux[:, L.A_LAT], "rad", "WGS84 geodetic latitude"),
+        "longitude": Signal(aux[:, L.A_LON], "rad", "longitude (east positive)"),
+        "velocity_relative": Signal(aux[:, L.A_VREL], "m/s", "air-relative speed (Earth-relative minus wind)"),
+        "velocity_earth_relative": Signal(aux[:, L.A_VEARTH], "m/s", "Earth-relative speed, no wind"),
+        "mach": Signal(aux[:, L.A_MACH], "1", "Mach number"),
+        "dynamic_pressure": Signal(aux[:, L.A_QBAR], "Pa", "dynamic pressure"),
+        "density": Signal(aux[:, L.A_RHO], "kg/m^3", "air density (US76)"),
+        "pressure": Signal(aux[:, L.A_PRES], "Pa", "static pressure (US76)"),
+        "temperature": Signal(aux[:, L.A_TEMP], "K", "kinetic temperature (US76)"),
+        "speed_of_sound": Signal(aux[:, L.A_SOS], "m/s", "speed of sound (US76)"),
+        "alpha": Signal(aux[:, L.A_ALPHA], "rad", "angle of attack"),
+        "beta": Signal(aux[:, L.A_BETA], "rad", "sideslip angle"),
+        "body_rate": Signal(x[:, L.W:L.W + 3], "rad/s", "body angular rate relative to ECI", ("p", "q", "r"), "body"),
+        "quaternion": Signal(q, "1", "attitude q_b2i (body to ECI, scalar first)", ("w", "x", "y", "z"), "ECI"),
+        "quaternion_command": Signal(qc, "1", "smoothed guidance command q_c2i (commanded body to ECI)", ("w", "x", "y", "z"), "ECI"),
+        "quaternion_guidance": Signal(d[:, L.D_QG:L.D_QG + 4], "1", "latest raw guidance command q_c2i", ("w", "x", "y", "z"), "ECI"),
+        "rate_command": Signal(d[:, L.D_RATE_CMD_B:L.D_RATE_CMD_B + 3], "rad/s", "smoothed rate command", ("p", "q", "r"), "body"),
+        "attitude_error": Signal(d[:, L.D_ERR:L.D_ERR + 3], "rad", "attitude error from the error quaternion (body rotated past command > 0)", rpy, "body"),
+        "rate_error": Signal(d[:, L.D_RATE_ERR:L.D_RATE_ERR + 3], "rad/s", "blended rate error", ("p", "q", "r"), "body"),
+        "attitude_euler": Signal(euler, "rad", "body attitude, 3-2-1 Euler angles relative to the launch frame (pad NED frozen at liftoff)", rpy, "launch"),
+        "attitude_euler_command": Signal(euler_c, "rad", "smoothed command attitude, 3-2-1 Euler angles relative to the launch frame", rpy, "launch"),
+        "gimbal_angle": Signal(aux[:, [L.A_DP, L.A_DY]], "rad", "engine gimbal angles (limited)", pq, "body"),
+        "gimbal_command": Signal(d[:, [L.D_CMD_P, L.D_CMD_Y]], "rad", "flight-control gimbal commands", pq, "body"),
+        "gimbal_rate": Signal(x[:, [L.ACT_P + 1, L.ACT_Y + 1]], "rad/s", "actuator rates", pq, "body"),
+        "gimbal_acceleration": Signal(x[:, [L.ACT_P + 2, L.ACT_Y + 2]], "rad/s^2", "actuator accelerations", pq, "body"),
+        "rcs_command": Signal(d[:, L.D_CMD_RCS], "1", "roll jet command (+1 positive roll torque, 0, -1)"),
+        "rcs_torque": Signal(aux[:, L.A_RCS_TORQUE], "N*m", "roll-jet torque about body X"),
+        "mass": Signal(aux[:, L.A_MASS], "kg", "vehicle mass"),
+        "propellant_remaining": Signal(x[:, [L.MFS, L.MLOX, L.MLH2]], "kg", "propellant remaining", ("first_stage", "lox", "lh2")),
+        "thrust": Signal(thrust, "N", "engine thrust (vacuum minus back-pressure loss)"),
+        "wind_ned": Signal(aux[:, L.A_WIND_N:L.A_WIND_N + 3], "m/s", "wind velocity", ("north", "east", "down"), "NED"),
+        "cg_structure": Signal(aux[:, L.A_CG:L.A_CG + 3], "m", "CG location", xyz, "structure"),
+        "aero_force": Signal(aux[:, L.A_FAERO:L.A_FAERO + 3], "N", "aerodynamic force incl. base force", xyz, "body"),
+        "aero_moment": Signal(aux[:, L.A_MAERO:L.A_MAERO + 3], "N*m", "aerodynamic moment about the CG", xyz, "body"),
+        "thrust_moment": Signal(aux[:, L.A_MTHRUST:L.A_MTHRUST + 3], "N*m", "thrust moment about the CG", xyz, "body"),
+        "sensed_acceleration": Signal(aux[:, L.A_ACCEL:L.A_ACCEL + 3], "m/s^2", "non-gravitational acceleration", xyz, "body"),
+        "sensed_rate": Signal(d[:, L.D_GYRO_Y:L.D_GYRO_Y + 9], "rad/s", "rate-gyro outputs",
+                              tuple(f"{g}_{a}" for g in ("upper", "imu", "first") for a in ("p", "q", "r")), "body"),
+        "fcs_gains": Signal(d[:, L.D_GAINS:L.D_GAINS + 8], "1", "scheduled gains (Kp rad/rad, Ki 1/s, Kd s, Kir rad/rad)",
+                            ("pitch_kp", "pitch_ki", "pitch_kd", "pitch_kir", "yaw_kp", "yaw_ki", "yaw_kd", "yaw_kir")),
+        "configuration": Signal(config, "1", "0 integrated stack, 1 upper stage with LES, 2 upper stage"),
+    }
+    return s

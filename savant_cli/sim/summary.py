@@ -1,0 +1,85 @@
+"""Scalar results of one run (the keys of ``summary.json``, documented in
+docs/outputs.md)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from savant_cli import constants as C
+from savant_cli.io.record import Signal
+from savant_cli.sim import engine as E
+from savant_cli.sim.run import SimResult
+
+
+def orbit_elements(r_eci: np.ndarray, v_eci: np.ndarray, mu: float = C.MU_EARTH) -> dict[str, float]:
+    """Osculating two-body orbit of an inertial state.
+
+    Apsis altitudes are measured from the WGS84 equatorial radius. Inclination from the
+    angular-momentum vector (ECI Z is the spin axis).
+    """
+    r = np.linalg.norm(r_eci)
+    v = np.linalg.norm(v_eci)
+    h = np.cross(r_eci, v_eci)
+    energy = 0.5 * v * v - mu / r
+    e_vec = np.cross(v_eci, h) / mu - r_eci / r
+    e = float(np.linalg.norm(e_vec))
+    inc = float(np.degrees(np.arccos(np.clip(h[2] / np.linalg.norm(h), -1.0, 1.0))))
+    if energy < 0.0:
+        a = -mu / (2.0 * energy)
+        rp, ra = a * (1.0 - e), a * (1.0 + e)
+    else:
+        a, rp, ra = np.inf, float(np.linalg.norm(h) ** 2 / mu / (1.0 + e)), np.inf
+    return {"semi_major_axis_m": float(a), "eccentricity": e, "inclination_deg": inc,
+            "perigee_altitude_km": (rp - C.WGS84_A) / 1e3, "apogee_altitude_km": (ra - C.WGS84_A) / 1e3}
+
+
+def _event(result: SimResult, slot: int) -> float | None:
+    v = result.events[slot]
+    return None if np.isnan(v) else float(v)
+
+
+def summarize(result: SimResult, sig: dict[str, Signal], process_wall_s: float | None = None) -> dict:
+    """Summary scalars of a run (SI units named in the keys)."""
+    t = sig["time"].data
+    out: dict[str, float | int | str | None] = {"status": result.status, "message": result.message}
+    if t.size == 0:
+        return out
+    qbar = sig["dynamic_pressure"].data
+    i_q = int(np.argmax(qbar))
+    alpha_total = np.degrees(np.arccos(np.clip(np.cos(sig["alpha"].data) * np.cos(sig["beta"].data), -1, 1)))
+    # aerodynamic angles mean little once the air is gone: report them where q > 1 kPa
+    dense = qbar > 1000.0
+    gimbal = np.degrees(np.abs(sig["gimbal_angle"].data))
+    att_err = np.degrees(np.linalg.norm(sig["attitude_error"].data[:, 1:3], axis=1))
+    att_err_roll = np.degrees(np.abs(sig["attitude_error"].data[:, 0]))
+    r_f = sig["position_eci"].data[-1]
+    v_f = sig["velocity_eci"].data[-1]
+    orbit = orbit_elements(r_f, v_f)
+    out.update({
+        "max_dynamic_pressure_Pa": float(qbar[i_q]),
+        "time_max_dynamic_pressure_s": float(t[i_q]),
+        "mach_at_max_dynamic_pressure": float(sig["mach"].data[i_q]),
+        "altitude_at_max_dynamic_pressure_m": float(sig["altitude"].data[i_q]),
+        "max_alpha_deg": float(alpha_total[dense].max()) if dense.any() else 0.0,
+        "max_qalpha_Pa_deg": float(np.max(qbar * alpha_total)),
+        "max_gimbal_deg": float(gimbal.max()),
+        "max_attitude_error_deg": float(att_err.max()),
+        "max_roll_error_deg": float(att_err_roll.max()),
+        "time_separation_s": _event(result, E.EV_SEPARATION),
+        "time_upper_stage_ignition_s": _event(result, E.EV_IGNITION),
+        "time_les_jettison_s": _event(result, E.EV_LES),
+        "time_cutoff_s": _event(result, E.EV_CUTOFF),
+        "final_time_s": float(t[-1]),
+        "cutoff_altitude_m": float(sig["altitude"].data[-1]),
+        "cutoff_inertial_velocity_mps": float(np.linalg.norm(v_f)),
+        "cutoff_mass_kg": float(sig["mass"].data[-1]),
+        "propellant_remaining_kg": float(np.sum(sig["propellant_remaining"].data[-1, 1:])),
+        "perigee_altitude_km": orbit["perigee_altitude_km"],
+        "apogee_altitude_km": orbit["apogee_altitude_km"],
+        "inclination_deg": orbit["inclination_deg"],
+        "sim_wall_time_s": result.sim_wall_time_s,
+        "realtime_factor": float(result.t_final / result.sim_wall_time_s) if result.sim_wall_time_s > 0 else None,
+    })
+    if process_wall_s is not None:
+        out["process_wall_time_s"] = process_wall_s
+    return out
