@@ -1,0 +1,264 @@
+"""Earth rotation, frames (ECI, ECEF, geodetic, NED) and the wind kernel.
+
+Conventions (docs/architecture.md): ECI has Z on the spin axis and X through the
+Greenwich meridian at t = 0; ECEF rotates about Z at ``omega`` (rad/s), so
+``C_ecef←eci(t) = R3(omega t)``. NED is north-east-down at the WGS84 geodetic
+latitude/longitude. Geodetic latitude/longitude are in rad, heights in m above the
+ellipsoid. All functions are compiled with numba and allocate only their small results.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True)
+def dcm_eci_to_ecef(t_s: float, omega: float) -> np.ndarray:
+    """Direction-cosine matrix ECI→ECEF, ``R3(omega t)``.
+
+    Parameters
+    ----------
+    t_s : float
+        Time since the ECI epoch (launch instant), s.
+    omega : float
+        Earth rotation rate, rad/s.
+
+    Returns
+    -------
+    ndarray, shape (3, 3)
+        ``r_ecef = C @ r_eci``.
+    """
+    th = omega * t_s
+    c = np.cos(th)
+    s = np.sin(th)
+    m = np.zeros((3, 3))
+    m[0, 0] = c
+    m[0, 1] = s
+    m[1, 0] = -s
+    m[1, 1] = c
+    m[2, 2] = 1.0
+    return m
+
+
+@njit(cache=True)
+def eci_to_ecef(r_eci: np.ndarray, t_s: float, omega: float) -> np.ndarray:
+    """Rotate a vector from ECI to ECEF axes at time ``t_s`` (s); ``omega`` in rad/s."""
+    th = omega * t_s
+    c = np.cos(th)
+    s = np.sin(th)
+    out = np.empty(3)
+    out[0] = c * r_eci[0] + s * r_eci[1]
+    out[1] = -s * r_eci[0] + c * r_eci[1]
+    out[2] = r_eci[2]
+    return out
+
+
+@njit(cache=True)
+def ecef_to_eci(r_ecef: np.ndarray, t_s: float, omega: float) -> np.ndarray:
+    """Rotate a vector from ECEF to ECI axes at time ``t_s`` (s); ``omega`` in rad/s."""
+    th = omega * t_s
+    c = np.cos(th)
+    s = np.sin(th)
+    out = np.empty(3)
+    out[0] = c * r_ecef[0] - s * r_ecef[1]
+    out[1] = s * r_ecef[0] + c * r_ecef[1]
+    out[2] = r_ecef[2]
+    return out
+
+
+@njit(cache=True)
+def geodetic_to_ecef(lat_rad: float, lon_rad: float, h_m: float, a: float,
+                     e2: float) -> np.ndarray:
+    """ECEF position of a geodetic point.
+
+    Parameters
+    ----------
+    lat_rad, lon_rad : float
+        Geodetic latitude and longitude, rad.
+    h_m : float
+        Height above the ellipsoid, m.
+    a : float
+        Ellipsoid semi-major axis, m.
+    e2 : float
+        First eccentricity squared.
+
+    Returns
+    -------
+    ndarray, shape (3,)
+        Position in ECEF, m.
+    """
+    sl = np.sin(lat_rad)
+    cl = np.cos(lat_rad)
+    n = a / np.sqrt(1.0 - e2 * sl * sl)      # prime-vertical radius of curvature
+    out = np.empty(3)
+    out[0] = (n + h_m) * cl * np.cos(lon_rad)
+    out[1] = (n + h_m) * cl * np.sin(lon_rad)
+    out[2] = (n * (1.0 - e2) + h_m) * sl
+    return out
+
+
+@njit(cache=True)
+def ecef_to_geodetic(r_ecef: np.ndarray, a: float, e2: float) -> tuple[float, float, float]:
+    """Geodetic latitude, longitude and height of an ECEF position.
+
+    Bowring's parametric-latitude iteration, written with ``atan2`` so that it is
+    regular at the poles and on the equator. One iteration already gives < 1e-8 rad;
+    the two used here reach round-off (< 1e-15 rad, < 1e-7 m) for heights from −5 km
+    to 40 000 km at every latitude. The height uses
+    ``h = p cos(lat) + z sin(lat) − a sqrt(1 − e2 sin²(lat))``, which is well
+    conditioned at every latitude.
+
+    Parameters
+    ----------
+    r_ecef : ndarray, shape (3,)
+        Position in ECEF, m (not at the Earth's centre).
+    a : float
+        Ellipsoid semi-major axis, m.
+    e2 : float
+        First eccentricity squared.
+
+    Returns
+    -------
+    lat_rad : float
+        Geodetic latitude, rad, in [−π/2, π/2].
+    lon_rad : float
+        Longitude, rad, in (−π, π].
+    h_m : float
+        Height above the ellipsoid, m.
+    """
+    x, y, z = r_ecef[0], r_ecef[1], r_ecef[2]
+    p = np.sqrt(x * x + y * y)
+    lon = np.arctan2(y, x)
+    sqrt1me2 = np.sqrt(1.0 - e2)              # b / a
+    b = a * sqrt1me2
+    ep2b = e2 / (1.0 - e2) * b                # e'^2 b
+    e2a = e2 * a
+    beta = np.arctan2(z, sqrt1me2 * p)        # parametric latitude, first guess
+    lat = beta
+    for _ in range(2):
+        sb = np.sin(beta)
+        cb = np.cos(beta)
+        lat = np.arctan2(z + ep2b * sb * sb * sb, p - e2a * cb * cb * cb)
+        beta = np.arctan2(sqrt1me2 * np.sin(lat), np.cos(lat))
+    sl = np.sin(lat)
+    h = p * np.cos(lat) + z * sl - a * np.sqrt(1.0 - e2 * sl * sl)
+    return lat, lon, h
+
+
+@njit(cache=True)
+def dcm_ecef_to_ned(lat_rad: float, lon_rad: float) -> np.ndarray:
+    """Direction-cosine matrix ECEF→NED at a geodetic latitude/longitude.
+
+    Parameters
+    ----------
+    lat_rad, lon_rad : float
+        Geodetic latitude and longitude, rad.
+
+    Returns
+    -------
+    ndarray, shape (3, 3)
+        Rows are the north, east and down unit vectors in ECEF axes;
+        ``v_ned = C @ v_ecef``.
+    """
+    sl = np.sin(lat_rad)
+    cl = np.cos(lat_rad)
+    so = np.sin(lon_rad)
+    co = np.cos(lon_rad)
+    m = np.empty((3, 3))
+    m[0, 0] = -sl * co
+    m[0, 1] = -sl * so
+    m[0, 2] = cl
+    m[1, 0] = -so
+    m[1, 1] = co
+    m[1, 2] = 0.0
+    m[2, 0] = -cl * co
+    m[2, 1] = -cl * so
+    m[2, 2] = -sl
+    return m
+
+
+@njit(cache=True)
+def velocity_relative_eci(r_eci: np.ndarray, v_eci: np.ndarray, omega: float) -> np.ndarray:
+    """Earth-relative velocity expressed in ECI axes, ``v − ω ẑ × r``.
+
+    Parameters
+    ----------
+    r_eci : ndarray, shape (3,)
+        Position, m, ECI.
+    v_eci : ndarray, shape (3,)
+        Inertial velocity, m/s, ECI.
+    omega : float
+        Earth rotation rate, rad/s.
+
+    Returns
+    -------
+    ndarray, shape (3,)
+        Velocity relative to the rotating Earth, m/s, in ECI axes.
+    """
+    out = np.empty(3)
+    out[0] = v_eci[0] + omega * r_eci[1]
+    out[1] = v_eci[1] - omega * r_eci[0]
+    out[2] = v_eci[2]
+    return out
+
+
+@njit(cache=True)
+def wind_ned(alt_m: float, table_alt_m: np.ndarray, table_north_mps: np.ndarray,
+             table_east_mps: np.ndarray, scale: float) -> np.ndarray:
+    """Horizontal wind from an altitude table, in NED axes.
+
+    Parameters
+    ----------
+    alt_m : float
+        Geodetic height, m.
+    table_alt_m : ndarray
+        Increasing table altitudes, m.
+    table_north_mps, table_east_mps : ndarray
+        Wind velocity (air moving towards) north and east, m/s, at ``table_alt_m``.
+    scale : float
+        Multiplier applied to the interpolated wind (0 disables, 1 nominal).
+
+    Returns
+    -------
+    ndarray, shape (3,)
+        Wind velocity relative to the Earth, m/s, NED; the down component is 0.
+        Linear interpolation, held constant beyond the table ends.
+    """
+    out = np.empty(3)
+    out[0] = scale * np.interp(alt_m, table_alt_m, table_north_mps)
+    out[1] = scale * np.interp(alt_m, table_alt_m, table_east_mps)
+    out[2] = 0.0
+    return out
+
+
+@njit(cache=True)
+def wind_eci(r_eci: np.ndarray, t_s: float, omega: float, lat: float, lon: float,
+             wind_ned: np.ndarray) -> np.ndarray:
+    """Rotate a NED wind vector into ECI axes.
+
+    Parameters
+    ----------
+    r_eci : ndarray, shape (3,)
+        Vehicle position, m, ECI. Unused (the local frame is fixed by ``lat``/``lon``);
+        kept so the call site documents where the wind applies.
+    t_s : float
+        Time since the ECI epoch, s.
+    omega : float
+        Earth rotation rate, rad/s.
+    lat, lon : float
+        Geodetic latitude and longitude of the vehicle, rad.
+    wind_ned : ndarray, shape (3,)
+        Wind velocity relative to the Earth, m/s, NED.
+
+    Returns
+    -------
+    ndarray, shape (3,)
+        The same wind vector in ECI axes, m/s (a direction change only: add it to the
+        Earth-relative velocity expressed in ECI axes, not to the inertial velocity).
+    """
+    c = dcm_ecef_to_ned(lat, lon)
+    w_ecef = np.empty(3)
+    for i in range(3):                        # C^T @ wind_ned, NED -> ECEF
+        w_ecef[i] = c[0, i] * wind_ned[0] + c[1, i] * wind_ned[1] + c[2, i] * wind_ned[2]
+    return ecef_to_eci(w_ecef, t_s, omega)

@@ -1,0 +1,101 @@
+"""Zonal gravity: point mass plus J2, J3 and J4.
+
+The zonal terms depend only on the distance ``r`` and the coordinate ``z`` along the
+spin axis, so the same expressions hold in ECI and ECEF (both have Z on the spin
+axis); inputs and outputs are in whichever of the two frames the caller uses.
+
+With ``s = z / r`` and the Legendre polynomials ``P2 = (3s² − 1)/2``,
+``P3 = (5s³ − 3s)/2``, ``P4 = (35s⁴ − 30s² + 3)/8``, the potential is
+
+    U = μ/r [1 − J2 (R/r)² P2(s) − J3 (R/r)³ P3(s) − J4 (R/r)⁴ P4(s)],
+
+and the acceleration is its gradient ``a = ∇U`` (Vallado, *Fundamentals of
+Astrodynamics and Applications*, 4th ed., eq. 8-30 and the J2–J4 accelerations).
+Note ``U > 0``: the specific mechanical energy is ``½ v² − U``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True)
+def gravity_zonal(r_eci: np.ndarray, mu: float, re: float, j2: float, j3: float,
+                  j4: float) -> np.ndarray:
+    """Gravitational acceleration of point mass + J2 + J3 + J4.
+
+    Parameters
+    ----------
+    r_eci : ndarray, shape (3,)
+        Position from the Earth's centre, m, in ECI (or ECEF) axes.
+    mu : float
+        Gravitational parameter, m^3/s^2.
+    re : float
+        Reference radius of the harmonics, m.
+    j2, j3, j4 : float
+        Unnormalised zonal coefficients (pass 0 to drop a term).
+
+    Returns
+    -------
+    ndarray, shape (3,)
+        Acceleration, m/s^2, in the same axes as ``r_eci``.
+    """
+    x, y, z = r_eci[0], r_eci[1], r_eci[2]
+    r2 = x * x + y * y + z * z
+    r = np.sqrt(r2)
+    zr2 = z * z / r2                      # (z/r)^2
+    mu_r3 = mu / (r2 * r)
+    out = np.empty(3)
+
+    # point mass
+    kxy = -mu_r3
+    kz = -mu_r3
+    # J2
+    if j2 != 0.0:
+        c2 = -1.5 * j2 * mu_r3 * re * re / r2
+        kxy += c2 * (1.0 - 5.0 * zr2)
+        kz += c2 * (3.0 - 5.0 * zr2)
+    # J3 (its z-term is not proportional to z, kept separately)
+    az_extra = 0.0
+    if j3 != 0.0:
+        c3 = -2.5 * j3 * mu_r3 * re * re * re / (r2 * r2)
+        kxy += c3 * (3.0 * z - 7.0 * z * zr2)
+        az_extra = c3 * (6.0 * z * z - 7.0 * z * z * zr2 - 0.6 * r2)
+    # J4
+    if j4 != 0.0:
+        c4 = 1.875 * j4 * mu_r3 * re * re * re * re / (r2 * r2)
+        kxy += c4 * (1.0 - 14.0 * zr2 + 21.0 * zr2 * zr2)
+        kz += c4 * (5.0 - 70.0 / 3.0 * zr2 + 21.0 * zr2 * zr2)
+
+    out[0] = kxy * x
+    out[1] = kxy * y
+    out[2] = kz * z + az_extra
+    return out
+
+
+@njit(cache=True)
+def gravity_potential(r: np.ndarray, mu: float, re: float, j2: float, j3: float,
+                      j4: float) -> float:
+    """Zonal gravitational potential ``U`` (with ``a = ∇U``, ``U > 0``).
+
+    Parameters
+    ----------
+    r : ndarray, shape (3,)
+        Position from the Earth's centre, m, in ECI or ECEF axes.
+    mu, re, j2, j3, j4 : float
+        As for :func:`gravity_zonal` (m^3/s^2, m, -, -, -).
+
+    Returns
+    -------
+    float
+        Potential, m^2/s^2.
+    """
+    rn = np.sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2])
+    s = r[2] / rn
+    s2 = s * s
+    q = re / rn
+    p2 = 0.5 * (3.0 * s2 - 1.0)
+    p3 = 0.5 * (5.0 * s2 - 3.0) * s
+    p4 = 0.125 * ((35.0 * s2 - 30.0) * s2 + 3.0)
+    return mu / rn * (1.0 - q * q * (j2 * p2 + q * (j3 * p3 + q * j4 * p4)))

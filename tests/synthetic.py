@@ -1,0 +1,58 @@
+"""A small synthetic plant (constant mass properties, no aerodynamics) for tests that
+need the compiled dynamics without a vehicle's data."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from savant_cli import constants as C
+from savant_cli.models.atmosphere import upper_atmosphere_table
+from savant_cli.sim import layout as L
+from savant_cli.sim.plant import PlantTables
+
+
+def tables(mass: float = 1000.0, inertia=(100.0, 400.0, 400.0, 0.0, 0.0, 0.0),
+           cg=(5.0, 0.0, 0.0)) -> PlantTables:
+    """Constant mass properties in all three configurations, zero aerodynamic data."""
+    row = np.array([mass, *cg, *inertia])
+    mass_prop = np.tile(np.array([0.0, 1e6]), (3, 1))
+    mass_data = np.tile(row, (3, 2, 1))
+    ax = np.array([0.0, 1.0])
+    atm_alt, atm_lnp, atm_lnrho = upper_atmosphere_table()
+    return PlantTables(
+        aero_mach=ax, aero_alpha=ax, aero_beta=ax, aero_coef=np.zeros((3, 6, 2, 2, 2)),
+        aero_ref=np.tile(np.array([1.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0]), (3, 1)),
+        base_time=np.tile(ax, (3, 1)), base_force=np.zeros((3, 2)), base_len=np.array([2, 2, 2]),
+        mass_prop=mass_prop, mass_data=mass_data, mass_len=np.array([2, 2, 2]),
+        fs_time=ax, fs_thrust=np.zeros(2), us_start_time=ax, us_start_frac=np.ones(2),
+        rcs_alt=ax, rcs_thrust=np.zeros(2), atm_alt=atm_alt, atm_lnp=atm_lnp, atm_lnrho=atm_lnrho,
+        wind_alt=ax, wind_north=np.zeros(2), wind_east=np.zeros(2),
+    )
+
+
+def parameters(gravity_order: int = 0, aero: bool = False, thrust: bool = False) -> np.ndarray:
+    p = np.zeros(L.N_PARAM)
+    p[L.P_MU] = C.MU_EARTH
+    p[L.P_RE] = C.WGS84_A
+    p[L.P_J2], p[L.P_J3], p[L.P_J4] = C.EGM2008_J2, C.EGM2008_J3, C.EGM2008_J4
+    p[L.P_OMEGA_E] = C.OMEGA_EARTH
+    p[L.P_E2] = C.WGS84_E2
+    p[L.P_FS_ISP_VAC] = p[L.P_FS_ISP_SL] = p[L.P_US_ISP] = 300.0
+    p[L.P_US_MR] = 5.0
+    p[L.P_FS_THRUST_SCALE] = 1.0
+    p[L.P_FS_GIMBAL_LIMIT] = p[L.P_US_GIMBAL_LIMIT] = 0.1
+    p[L.P_FS_GIMBAL_X] = p[L.P_US_GIMBAL_X] = 10.0
+    p[L.P_RCS_RAMP_UP] = p[L.P_RCS_RAMP_DOWN] = 0.05
+    for base in (L.P_ACT_FS_WA, L.P_ACT_US_WA):
+        p[base:base + 4] = [20.0, 60.0, 0.7, 1.0]
+    p[L.P_AERO_ON] = 1.0 if aero else 0.0
+    p[L.P_THRUST_ON] = 1.0 if thrust else 0.0
+    p[L.P_GRAVITY_ORDER] = gravity_order
+    return p
+
+
+def coast_inputs() -> np.ndarray:
+    u = np.zeros(L.N_INPUT)
+    u[L.U_CONFIG] = L.CONFIG_UPPER
+    u[L.U_ENGINE] = L.ENGINE_OFF
+    return u

@@ -1,0 +1,130 @@
+"""Config composition and refusal of bad configs before any computation."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from omegaconf import OmegaConf, open_dict
+
+from savant_cli.config import validate
+from savant_cli.errors import ConfigError
+from savant_cli.paths import shipped_config_dir
+from savant_cli.sim.setup import prepare
+
+
+def test_default_config_composes_and_validates(compose_cfg):
+    cfg = validate(compose_cfg())
+    assert cfg.vehicle["name"] == "ares_i"
+    assert cfg.phase.name == "ascent"
+    assert cfg.study.name == "nominal"
+    assert cfg.actuator.name == "third_order"
+    assert cfg.winds.enabled and cfg.winds.name == "ksc_mean_annual"
+    assert cfg.controller.name == "msfc_pid"
+    assert sum(cfg.controller.blending.stack) == pytest.approx(1.0)
+
+
+def test_group_overrides(compose_cfg):
+    cfg = validate(compose_cfg(["winds=none", "phase=first_stage"]))
+    assert not cfg.winds.enabled
+    assert cfg.phase.stop_at == "separation"
+
+
+def _expect(cfg_raw, key_part):
+    with pytest.raises(ConfigError) as exc:
+        typed = validate(cfg_raw)
+        prepare(typed)
+    assert key_part in exc.value.key, exc.value
+    return exc.value
+
+
+def test_unknown_key_refused(compose_cfg):
+    raw = compose_cfg()
+    with open_dict(raw):
+        raw.sim.plant_rat_hz = 100.0
+    err = _expect(raw, "sim.plant_rat_hz")
+    assert "unknown key" in err.allowed
+
+
+def test_wrong_type_refused(compose_cfg):
+    raw = compose_cfg()
+    with open_dict(raw):
+        raw.sim.max_time_s = "long"
+    _expect(raw, "sim.max_time_s")
+
+
+def test_blending_must_sum_to_one(compose_cfg):
+    err = _expect(compose_cfg(["controller.blending.stack=[0.5,0.0,0.2]"]), "controller.blending.stack")
+    assert "sum to 1" in err.allowed
+
+
+def test_rates_must_divide(compose_cfg):
+    _expect(compose_cfg(["sim.fcs_rate_hz=30"]), "sim.fcs_rate_hz")
+
+
+def test_gain_breakpoints_must_increase(compose_cfg):
+    raw = compose_cfg()
+    bp = list(raw.controller.gains.stack.breakpoints)
+    bp[2], bp[3] = bp[3], bp[2]
+    raw.controller.gains.stack.breakpoints = bp
+    _expect(raw, "controller.gains.stack.breakpoints")
+
+
+def test_negative_actuator_frequency_refused(compose_cfg):
+    _expect(compose_cfg(["actuator.first_stage.natural_frequency_hz=-3"]), "actuator.first_stage.natural_frequency_hz")
+
+
+def test_missing_command_file_refused(compose_cfg):
+    _expect(compose_cfg(["guidance.command_file=nope.csv"]), "guidance.command_file")
+
+
+def _vehicle_copy(tmp_path: Path) -> Path:
+    import shutil
+
+    src = shipped_config_dir() / "vehicle"
+    dst = tmp_path / "vehicle"
+    shutil.copytree(src, dst)
+    return dst
+
+
+def _with_vehicle_dir(compose_cfg, vdir: Path):
+    raw = compose_cfg()
+    raw.vehicle.data_dir = str(vdir)
+    return raw
+
+
+def test_negative_mass_in_table_refused(compose_cfg, tmp_path):
+    vdir = _vehicle_copy(tmp_path) / "ares_i"
+    f = vdir / "mass_stack.csv"
+    lines = f.read_text().splitlines()
+    i = next(k for k, line in enumerate(lines) if line and line[0].isdigit())
+    cells = lines[i].split(",")
+    cells[1] = "-" + cells[1].strip()
+    lines[i] = ",".join(cells)
+    f.write_text("\n".join(lines) + "\n")
+    _expect(_with_vehicle_dir(compose_cfg, vdir), "mass")
+
+
+def test_non_monotonic_table_axis_refused(compose_cfg, tmp_path):
+    vdir = _vehicle_copy(tmp_path) / "ares_i"
+    f = vdir / "first_stage_thrust.csv"
+    lines = f.read_text().splitlines()
+    data = [k for k, line in enumerate(lines) if line and (line[0].isdigit())]
+    lines[data[3]], lines[data[4]] = lines[data[4]], lines[data[3]]
+    f.write_text("\n".join(lines) + "\n")
+    _expect(_with_vehicle_dir(compose_cfg, vdir), "first_stage_thrust")
+
+
+def test_missing_data_file_refused(compose_cfg, tmp_path):
+    vdir = _vehicle_copy(tmp_path) / "ares_i"
+    (vdir / "aero_stack.csv").unlink()
+    _expect(_with_vehicle_dir(compose_cfg, vdir), "aero_stack")
+
+
+def test_malformed_data_file_refused(compose_cfg, tmp_path):
+    vdir = _vehicle_copy(tmp_path) / "ares_i"
+    (vdir / "rcs_thrust.csv").write_text("altitude_m,thrust_vac_N\n0,abc\n1000\n")
+    _expect(_with_vehicle_dir(compose_cfg, vdir), "rcs_thrust")
+
+
+def test_negative_thrust_refused(compose_cfg):
+    _expect(compose_cfg(["vehicle.upper_stage.thrust_vac_N=-1"]), "thrust")
