@@ -1,0 +1,124 @@
+"""The end-of-run summary on the console (the only module of ``savant_cli.io`` that prints)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any
+
+from rich.console import Console
+from rich.table import Table
+from rich.text import Text
+
+#: Key suffix → (unit label, format of a float value). Longest suffixes first.
+UNIT_SUFFIXES: tuple[tuple[str, str, str], ...] = (
+    ("_Pa_deg", "Pa·deg", "{:,.0f}"),
+    ("_mps", "m/s", "{:,.2f}"),
+    ("_deg", "deg", "{:.3f}"),
+    ("_rad", "rad", "{:.5f}"),
+    ("_kPa", "kPa", "{:,.3f}"),
+    ("_Pa", "Pa", "{:,.0f}"),
+    ("_km", "km", "{:,.2f}"),
+    ("_kg", "kg", "{:,.1f}"),
+    ("_m", "m", "{:,.1f}"),
+    ("_s", "s", "{:,.3f}"),
+    ("_N", "N", "{:,.0f}"),
+)
+
+#: Keys shown on the status line instead of in the table.
+_STATUS_KEYS = ("status", "message")
+
+
+def split_unit(key: str) -> tuple[str, str, str | None]:
+    """Split a summary key into a readable name, a unit label and a value format.
+
+    Parameters
+    ----------
+    key : str
+        Summary key such as ``max_dynamic_pressure_Pa``.
+
+    Returns
+    -------
+    name : str
+        Key without its unit suffix, underscores as spaces (``max dynamic pressure``).
+    unit : str
+        Unit label (``Pa``), ``""`` when the key has no recognised suffix.
+    fmt : str or None
+        Format for a float value, None for the generic one.
+    """
+    for suffix, unit, fmt in UNIT_SUFFIXES:
+        if key.endswith(suffix) and len(key) > len(suffix):
+            return key[: -len(suffix)].replace("_", " "), unit, fmt
+    return key.replace("_", " "), "", None
+
+
+def format_value(value: Any, fmt: str | None = None) -> str:
+    """Text of one summary value.
+
+    Parameters
+    ----------
+    value : Any
+        float, int, bool, str or None.
+    fmt : str, optional
+        ``str.format`` pattern for finite floats; 6 significant digits by default.
+
+    Returns
+    -------
+    str
+        ``"—"`` for None, ``"nan"``/``"inf"`` for non-finite numbers, ``"yes"``/``"no"``
+        for booleans.
+    """
+    if value is None:
+        return "—"
+    if isinstance(value, bool):
+        return "yes" if value else "no"
+    if isinstance(value, int):
+        return f"{value:,d}"
+    if isinstance(value, float):
+        if math.isnan(value):
+            return "nan"
+        if math.isinf(value):
+            return "inf" if value > 0 else "-inf"
+        if fmt is None:
+            return f"{value:.6g}"
+        return fmt.format(value)
+    if hasattr(value, "item"):  # numpy scalar
+        return format_value(value.item(), fmt)
+    return str(value)
+
+
+def print_run_summary(record_summary: Mapping[str, Any], status: str, message: str,
+                      console: Console | None = None) -> None:
+    """Print the summary of a run as a table, then a coloured status line.
+
+    Parameters
+    ----------
+    record_summary : mapping
+        The run summary (``RunRecord.summary``); units are taken from the key suffixes
+        (``_Pa``, ``_s``, ``_deg``, ``_m``, ``_km``, ``_mps``, ``_kg`` ...). The
+        ``status`` and ``message`` keys are not repeated in the table.
+    status : str
+        ``"complete"`` (printed in green) or anything else (printed in red).
+    message : str
+        Why the run stopped.
+    console : rich.console.Console, optional
+        Where to print; a new stdout console by default.
+    """
+    console = console if console is not None else Console()
+    table = Table(title="savant run summary", title_justify="left", header_style="bold")
+    table.add_column("quantity")
+    table.add_column("value", justify="right")
+    table.add_column("units")
+    for key, value in record_summary.items():
+        if key in _STATUS_KEYS:
+            continue
+        name, unit, fmt = split_unit(key)
+        table.add_row(name, format_value(value, fmt), unit)
+    console.print(table)
+    ok = status == "complete"
+    line = Text()
+    line.append("status: ", style="bold")
+    line.append(status or "unknown", style="bold green" if ok else "bold red")
+    if message:
+        line.append(f" — {message}", style="green" if ok else "red")
+    console.print(line)

@@ -1,0 +1,274 @@
+"""Ascent time-history figures of one run (the analogues of the paper's Figures 8–14).
+
+Figures are drawn with matplotlib's object-oriented API on the Agg canvas
+(``matplotlib.figure.Figure`` + ``FigureCanvasAgg``): no pyplot, no GUI backend, no
+global state, so plotting works headless and never changes the backend of a caller's
+interactive session. Each figure is written atomically as a 120-dpi PNG.
+
+Figures (file, paper figure, signals):
+
+- ``body_rates.png`` (Fig. 8): ``body_rate`` in deg/s, roll/pitch/yaw
+- ``alpha_beta.png`` (Fig. 9): ``alpha``, ``beta`` in deg
+- ``attitude_tracking.png`` (Fig. 10): ``attitude_euler`` vs ``attitude_euler_command`` (dashed)
+- ``velocity_dynamic_pressure.png`` (Fig. 11): ``velocity_relative`` (m/s), ``dynamic_pressure`` (kPa)
+- ``altitude_mach.png`` (Fig. 12): ``altitude`` (km), ``mach``
+- ``gimbal_angles.png`` (Fig. 13): ``gimbal_angle`` vs ``gimbal_command`` (dashed), deg
+- ``attitude_errors.png`` (Fig. 14): ``attitude_error`` in deg
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+
+from savant_cli.io.atomic import atomic_path
+from savant_cli.io.record import RunRecord, Signal
+
+DPI = 120
+_WIDTH_IN = 8.0
+_PNG_LEVEL = 3  # zlib level of the PNGs: a third of the encoding time of the default 6
+#: Most points drawn per line; longer signals are strided.
+MAX_POINTS = 5000
+
+#: Display names of events on the plots; other events show their own name.
+EVENT_LABELS = {
+    "separation": "separation",
+    "upper_stage_ignition": "ignition",
+    "ignition": "ignition",
+    "les_jettison": "LES jettison",
+    "cutoff": "cutoff",
+}
+
+#: (unit of a signal, unit to plot in) → scale factor.
+_CONVERSIONS = {
+    ("rad", "deg"): 180.0 / np.pi,
+    ("rad/s", "deg/s"): 180.0 / np.pi,
+    ("m", "km"): 1e-3,
+    ("Pa", "kPa"): 1e-3,
+    ("1", ""): 1.0,
+}
+
+
+@dataclass(frozen=True)
+class Line:
+    """One curve: a column of a signal, converted to ``unit``."""
+
+    signal: str
+    column: int | None
+    label: str
+    dashed: bool = False
+
+
+@dataclass(frozen=True)
+class Panel:
+    """One axes: a quantity with its unit; its first line's signal must be present."""
+
+    quantity: str
+    unit: str
+    lines: tuple[Line, ...]
+    wrap_degrees: bool = False  # angles: unwrap ±180° jumps for drawing
+
+
+@dataclass(frozen=True)
+class FigureSpec:
+    """One PNG file."""
+
+    filename: str
+    title: str
+    panels: tuple[Panel, ...]
+
+
+def _rpy_panels(actual: str, command: str | None, unit: str, what: str, wrap: bool = False) -> tuple[Panel, ...]:
+    panels = []
+    for i, axis in enumerate(("roll", "pitch", "yaw")):
+        lines = [Line(actual, i, f"{axis}" if command is None else f"{axis} actual")]
+        if command is not None:
+            lines.append(Line(command, i, f"{axis} commanded", dashed=True))
+        panels.append(Panel(f"{axis} {what}", unit, tuple(lines), wrap_degrees=wrap))
+    return tuple(panels)
+
+
+#: The seven ascent figures, in the paper's order.
+FIGURES: tuple[FigureSpec, ...] = (
+    FigureSpec("body_rates.png", "Body angular rates (cf. Fig. 8)",
+               _rpy_panels("body_rate", None, "deg/s", "rate")),
+    FigureSpec("alpha_beta.png", "Angle of attack and sideslip (cf. Fig. 9)", (
+        Panel("angle of attack α", "deg", (Line("alpha", None, "α"),)),
+        Panel("sideslip β", "deg", (Line("beta", None, "β"),)),
+    )),
+    FigureSpec("attitude_tracking.png", "Attitude command tracking, 3-2-1 Euler angles (cf. Fig. 10)",
+               _rpy_panels("attitude_euler", "attitude_euler_command", "deg", "angle", wrap=True)),
+    FigureSpec("velocity_dynamic_pressure.png", "Relative velocity and dynamic pressure (cf. Fig. 11)", (
+        Panel("air-relative velocity", "m/s", (Line("velocity_relative", None, "velocity"),)),
+        Panel("dynamic pressure", "kPa", (Line("dynamic_pressure", None, "q̄"),)),
+    )),
+    FigureSpec("altitude_mach.png", "Altitude and Mach number (cf. Fig. 12)", (
+        Panel("altitude", "km", (Line("altitude", None, "altitude"),)),
+        Panel("Mach number", "", (Line("mach", None, "Mach"),)),
+    )),
+    FigureSpec("gimbal_angles.png", "Pitch and yaw gimbal angles (cf. Fig. 13)", (
+        Panel("pitch gimbal δp", "deg", (Line("gimbal_angle", 0, "pitch actual"),
+                                          Line("gimbal_command", 0, "pitch commanded", dashed=True))),
+        Panel("yaw gimbal δy", "deg", (Line("gimbal_angle", 1, "yaw actual"),
+                                        Line("gimbal_command", 1, "yaw commanded", dashed=True))),
+    )),
+    FigureSpec("attitude_errors.png", "Attitude errors (cf. Fig. 14)",
+               _rpy_panels("attitude_error", None, "deg", "error")),
+)
+
+
+def _convert(sig: Signal, unit: str) -> tuple[float, str]:
+    """Scale factor from the signal's units to ``unit``, and the unit label to show."""
+    if sig.units == unit:
+        return 1.0, unit
+    factor = _CONVERSIONS.get((sig.units, unit))
+    if factor is None:  # unknown pairing: plot as stored, say so on the axis
+        return 1.0, sig.units
+    return factor, unit
+
+
+def _column(sig: Signal, column: int | None) -> np.ndarray | None:
+    data = np.asarray(sig.data)
+    if column is None:
+        return data if data.ndim == 1 else None
+    if data.ndim != 2 or data.shape[1] <= column:
+        return None
+    return data[:, column]
+
+
+def _stride(n: int) -> slice:
+    step = max(1, -(-n // MAX_POINTS))
+    return slice(None, None, step)
+
+
+def _indices(n: int) -> np.ndarray:
+    """Strided sample indices, always including the last sample."""
+    idx = np.arange(n)[_stride(n)]
+    if n and idx[-1] != n - 1:
+        idx = np.append(idx, n - 1)
+    return idx
+
+
+def _wrap_deg(x: np.ndarray) -> np.ndarray:
+    return (x + 180.0) % 360.0 - 180.0
+
+
+def _event_groups(events: list[tuple[str, float]], t0: float, t1: float) -> list[tuple[float, str]]:
+    """Events inside [t0, t1] as (time, label); events closer than 1.5 % of the span share
+    one label ("separation / ignition")."""
+    inside = sorted((float(t), EVENT_LABELS.get(name, name)) for name, t in events
+                    if np.isfinite(t) and t0 <= t <= t1)
+    gap = 0.015 * max(t1 - t0, 1e-9)
+    groups: list[tuple[float, str]] = []
+    for t, label in inside:
+        if groups and t - groups[-1][0] < gap:
+            groups[-1] = (groups[-1][0], f"{groups[-1][1]} / {label}")
+        else:
+            groups.append((t, label))
+    return groups
+
+
+def _event_lines(ax, events: list[tuple[str, float]], t0: float, t1: float, label: bool) -> None:
+    for name, t in events:
+        if np.isfinite(t) and t0 <= t <= t1:
+            ax.axvline(t, color="0.45", lw=0.7, ls=":", zorder=1)
+    if label:
+        for t, text in _event_groups(events, t0, t1):
+            ax.text(t, 0.97, text, transform=ax.get_xaxis_transform(), rotation=90, fontsize=7,
+                    color="0.3", ha="right", va="top",
+                    bbox={"facecolor": "white", "alpha": 0.75, "edgecolor": "none", "pad": 1.0})
+
+
+def _draw(spec: FigureSpec, record: RunRecord, t: np.ndarray, idx: np.ndarray) -> Figure | None:
+    panels = [p for p in spec.panels if p.lines[0].signal in record.signals
+              and _column(record.signals[p.lines[0].signal], p.lines[0].column) is not None]
+    if not panels:
+        return None
+    # fixed margins in inches instead of a layout engine (which would draw every figure
+    # twice): the figure is 8 in wide, 1.75 in per panel
+    top_in = 0.5 if record.complete else 0.72
+    height = top_in + 0.55 + 1.75 * len(panels)
+    fig = Figure(figsize=(_WIDTH_IN, height), dpi=DPI)
+    FigureCanvasAgg(fig)
+    fig.subplots_adjust(left=0.95 / _WIDTH_IN, right=1.0 - 0.25 / _WIDTH_IN, bottom=0.55 / height,
+                        top=1.0 - top_in / height, hspace=0.15)
+    axes = fig.subplots(len(panels), 1, sharex=True, squeeze=False)[:, 0]
+    tt = t[idx]
+    for k, (ax, panel) in enumerate(zip(axes, panels)):
+        unit_label = panel.unit
+        reference = None
+        for j, line in enumerate(panel.lines):
+            sig = record.signals.get(line.signal)
+            col = None if sig is None else _column(sig, line.column)
+            if col is None:
+                continue
+            factor, unit_label_j = _convert(sig, panel.unit)
+            if j == 0:
+                unit_label = unit_label_j
+            y = col.astype(np.float64, copy=False) * factor
+            if panel.wrap_degrees and unit_label_j == "deg":
+                if reference is None:  # first line: remove ±180° jumps
+                    y = np.degrees(np.unwrap(np.radians(y)))
+                    reference = y
+                else:  # later lines: the branch closest to the first line
+                    y = reference + _wrap_deg(y - reference)
+            ax.plot(tt, y[idx], lw=1.0, ls="--" if line.dashed else "-",
+                    color=f"C{1 if line.dashed else 0}", label=line.label)
+        ax.set_ylabel(f"{panel.quantity} ({unit_label})" if unit_label else f"{panel.quantity} (–)", fontsize=9)
+        ax.grid(True, lw=0.4, alpha=0.6)
+        if len(panel.lines) > 1:
+            ax.legend(loc="best", fontsize=7, framealpha=0.8)
+        _event_lines(ax, record.events, float(t[0]), float(t[-1]), label=(k == 0))
+    axes[-1].set_xlabel("time from liftoff (s)")
+    axes[-1].set_xlim(float(t[0]), float(t[-1]) if t[-1] > t[0] else float(t[0]) + 1.0)
+    if record.complete:
+        fig.suptitle(spec.title, fontsize=11, y=1.0 - 0.2 / height, va="top")
+    else:
+        msg = record.message if len(record.message) <= 90 else record.message[:87] + "..."
+        fig.suptitle(f"{spec.title}\nINCOMPLETE: {msg}", fontsize=11, color="red", y=1.0 - 0.15 / height, va="top")
+    return fig
+
+
+def plot_ascent(record: RunRecord, out_dir: Path) -> list[Path]:
+    """Draw the ascent figures of a run as PNG files.
+
+    Parameters
+    ----------
+    record : RunRecord
+        The run (from the simulation or :func:`savant_cli.io.hdf5.read_run`).
+    out_dir : pathlib.Path
+        Folder for the PNGs (created if missing), normally ``<run_dir>/plots``.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written, in the order of :data:`FIGURES`. A figure whose signals are
+        all missing is skipped silently; a panel whose signal is missing is left out.
+
+    Notes
+    -----
+    Angles are drawn in degrees, rates in deg/s, altitude in km and dynamic pressure in
+    kPa; events (separation, ignition, LES jettison, cutoff) are thin dotted vertical
+    lines on every axes. Lines longer than :data:`MAX_POINTS` samples are strided. When
+    ``record.complete`` is False every title carries ``INCOMPLETE: <message>`` in red.
+    """
+    out_dir = Path(out_dir)
+    time_sig = record.signals.get("time")
+    if time_sig is None or np.ndim(time_sig.data) != 1 or np.size(time_sig.data) == 0:
+        return []
+    t = np.asarray(time_sig.data, dtype=np.float64)
+    idx = _indices(t.size)
+    written: list[Path] = []
+    for spec in FIGURES:
+        fig = _draw(spec, record, t, idx)
+        if fig is None:
+            continue
+        path = out_dir / spec.filename
+        with atomic_path(path) as tmp:
+            fig.savefig(tmp, format="png", dpi=DPI, pil_kwargs={"compress_level": _PNG_LEVEL})
+        written.append(path)
+    return written
