@@ -67,6 +67,7 @@ class Program:
     pitchover_duration_s: float = 15.0
     pitchover_angle_deg: float = 3.0
     alpha_fade_s: float = 8.0
+    steering_blend_s: float = 15.0  # from the coast attitude to linear-tangent steering after ignition
     extend_s: float = 40.0  # commands continue this long past the reference cutoff
 
     @classmethod
@@ -119,17 +120,30 @@ class Reference:
         self.inclination = np.radians(tgt.inclination_deg)
 
     # ----------------------------------------------------------------- attitude
+    def _roll_angles(self, t: float, azimuth: float) -> tuple[float, float]:
+        """Roll-program angle at ``t`` and its final value (rad, about body X)."""
+        delta = np.angle(np.exp(1j * (azimuth - self.pad_heading)))  # shortest roll
+        final = -delta
+        return final * _cosine_ramp(t, self.prog.roll_start_s, self.prog.roll_duration_s), final
+
+    def _residual_roll(self, t: float, azimuth: float) -> np.ndarray:
+        """Body-fixed rotation by the roll still to go (identity once the roll is done)."""
+        roll, final = self._roll_angles(t, azimuth)
+        return Rotation.from_rotvec([roll - final, 0.0, 0.0]).as_matrix()
+
     def launch_attitude(self, t: float, azimuth: float) -> np.ndarray:
-        """Body→ECI DCM of the vertical-rise, roll and pitch-over phases."""
+        """Body→ECI DCM of the vertical-rise, roll and pitch-over phases: the pad attitude
+        turned to the flight azimuth, pitched over by the tilt, then rolled back about
+        the (tilted) body X by the roll still to go — so the roll program and the
+        pitch-over may overlap and the gravity turn continues the same residual roll."""
         x0 = -self.c_e2n[2]  # up
         z0 = np.cos(self.pad_heading) * self.c_e2n[0] + np.sin(self.pad_heading) * self.c_e2n[1]
         c0 = np.column_stack([x0, np.cross(z0, x0), z0])
-        delta = np.angle(np.exp(1j * (azimuth - self.pad_heading)))  # shortest roll
+        _, final = self._roll_angles(t, azimuth)
         pr = self.prog
-        roll = -delta * _cosine_ramp(t, pr.roll_start_s, pr.roll_duration_s)
         tilt = np.radians(pr.pitchover_angle_deg) * _cosine_ramp(t, pr.pitchover_start_s, pr.pitchover_duration_s)
-        rot = Rotation.from_rotvec([roll, 0.0, 0.0]) * Rotation.from_rotvec([0.0, -tilt, 0.0])
-        return c0 @ rot.as_matrix()
+        rot = Rotation.from_rotvec([final, 0.0, 0.0]) * Rotation.from_rotvec([0.0, -tilt, 0.0])
+        return c0 @ rot.as_matrix() @ self._residual_roll(t, azimuth)
 
     @staticmethod
     def _frame_from_x(x_b: np.ndarray, r: np.ndarray) -> np.ndarray:
@@ -144,20 +158,30 @@ class Reference:
         """Commanded body→ECI DCM at time ``t`` and 3-DOF state ``y``."""
         pr = self.prog
         t_turn = pr.pitchover_start_s + pr.pitchover_duration_s
-        if t < t_turn:
+        if t < t_turn or "axis" not in turn:  # the pitch-over leg itself is integrated without turn data
             return self.launch_attitude(t, azimuth)
         r, v = y[0:3], y[3:6]
-        if t < self.t_ign:
+        if t < self.t_ign or "plane_normal" not in turn:
             v_rel = earth.velocity_relative_eci(r, v, C.OMEGA_EARTH)
             v_hat = v_rel / np.linalg.norm(v_rel)
             axis = turn["axis"]
             x_b = Rotation.from_rotvec(axis * turn["alpha0"] * np.exp(-(t - t_turn) / pr.alpha_fade_s)).apply(v_hat)
-            return self._frame_from_x(x_b, r)
+            return self._frame_from_x(x_b, r) @ self._residual_roll(t, azimuth)
         r_hat = r / np.linalg.norm(r)
         h_hat = turn["plane_normal"]
         downrange = np.cross(h_hat, r_hat)
         theta = np.arctan(steer[0] + steer[1] * (t - self.t_ign))
         x_b = np.cos(theta) * downrange + np.sin(theta) * r_hat
+        # continuous command at ignition: rotate from the (inertially held) coast
+        # attitude to the steering direction along a cosine ramp
+        s = _cosine_ramp(t, self.t_ign, pr.steering_blend_s)
+        if s < 1.0:
+            x0 = turn["x_ignition"]
+            axis = np.cross(x0, x_b)
+            sin_a = np.linalg.norm(axis)
+            if sin_a > 1e-12:
+                ang = np.arctan2(sin_a, np.dot(x0, x_b))
+                x_b = Rotation.from_rotvec(axis / sin_a * ang * s).apply(x0)
         return self._frame_from_x(x_b, r)
 
     # ----------------------------------------------------------------- dynamics
@@ -243,6 +267,7 @@ class Reference:
         s2 = solve_ivp(self.rhs, (t_turn, self.t_sep), y, args=(azimuth, (0.0, 0.0), turn), **kw)
         s3 = solve_ivp(self.rhs, (self.t_sep, self.t_ign), s2.y[:, -1], args=(azimuth, (0.0, 0.0), turn), **kw)
         y_ign = s3.y[:, -1]
+        turn["x_ignition"] = self.attitude(self.t_ign, y_ign, azimuth, (0.0, 0.0), turn)[:, 0]
         hvec = np.cross(y_ign[0:3], y_ign[3:6])
         turn["plane_normal"] = hvec / np.linalg.norm(hvec)
         return (s1, s2, s3), turn
@@ -295,7 +320,8 @@ def solve(cfg: SavantConfig, vehicle: Vehicle, verbose: bool = True):
         sol = ref.fly_upper(y_ign, az, res.x, turn)
         return sols, turn, res.x, sol
 
-    for it in range(6):
+    prev = (azimuth, 0.0)
+    for it in range(10):
         sols, turn, steer, sol = upper(azimuth, steer)
         y_cut = sol.y_events[0][0] if sol.t_events[0].size else sol.y[:, -1]
         err = ref.inclination_of(y_cut) - ref.inclination
@@ -305,8 +331,12 @@ def solve(cfg: SavantConfig, vehicle: Vehicle, verbose: bool = True):
                   f"cutoff residual {ref.cutoff_residual(sol)}")
         if abs(err) < np.radians(0.002):
             break
-        # d(inclination)/d(azimuth) ≈ −sin(az_i)·cos(lat)/sin(i) for a launch from latitude lat
-        slope = -np.cos(lat) * np.sin(az_inertial) / np.sin(ref.inclination)
+        if it == 0:
+            # d(inclination)/d(azimuth) ≈ −sin(az_i)·cos(lat)/sin(i) for a launch from latitude lat
+            slope = -np.cos(lat) * np.sin(az_inertial) / np.sin(ref.inclination)
+        else:
+            slope = (err - prev[1]) / (azimuth - prev[0])
+        prev = (azimuth, err)
         azimuth -= err / slope
     return ref, sols, turn, azimuth, steer, sol
 

@@ -50,21 +50,23 @@ def read_guidance(path: Path, key: str = "guidance.command_file") -> GuidanceTab
         except (OSError, KeyError) as exc:
             raise ConfigError(key, str(path), f"unreadable HDF5 command file ({exc}); needs time_s, quaternion, rate_rad_s") from None
     try:
-        data = np.genfromtxt(path, delimiter=",", names=True, comments="#", dtype=float)
+        with open(path) as f:
+            lines = [ln for ln in f if ln.strip() and not ln.lstrip().startswith("#")]
+        names = tuple(h.strip() for h in lines[0].split(",")) if lines else ()
+        table = np.loadtxt(lines[1:], delimiter=",", ndmin=2) if len(lines) > 1 else np.zeros((0, len(names)))
     except (OSError, ValueError) as exc:
         raise ConfigError(key, str(path), f"unreadable CSV command file ({exc})") from None
-    names = data.dtype.names or ()
     deg = all(f"rate_{a}_deg_s" in names for a in "xyz")
     need = CSV_COLUMNS[:5] + (tuple(f"rate_{a}_deg_s" for a in "xyz") if deg else CSV_COLUMNS[5:])
     missing = [c for c in need if c not in names]
-    if missing:
+    if missing or table.shape[1] != len(names):
         raise ConfigError(key, str(path), f"missing columns {missing}; expected {list(CSV_COLUMNS)}")
-    data = np.atleast_1d(data)
-    quat = np.column_stack([data[c] for c in need[1:5]])
-    rate = np.column_stack([data[c] for c in need[5:8]])
+    col = {n: table[:, i] for i, n in enumerate(names)}
+    quat = np.column_stack([col[c] for c in need[1:5]])
+    rate = np.column_stack([col[c] for c in need[5:8]])
     if deg:
         rate = np.radians(rate)
-    return _check(key, np.asarray(data["time_s"], float), quat, rate)
+    return _check(key, col["time_s"], quat, rate)
 
 
 def write_guidance_csv(path: Path, time: np.ndarray, quat: np.ndarray, rate: np.ndarray, header: str = "") -> None:

@@ -52,6 +52,8 @@ import math
 import numpy as np
 from numba import njit
 
+from savant_cli.models.interp import locate
+
 from savant_cli.constants import G0, GAMMA_AIR, M0, P0, R0_US76, R_STAR, T0
 
 # ------------------------------------------------------------------ lower atmosphere
@@ -190,8 +192,9 @@ def us76_upper(alt_m: float, table_alt_m: np.ndarray, table_lnp: np.ndarray,
     """
     z = min(max(alt_m, Z_86), Z_TOP)
     t = upper_temperature(z)[0]
-    p = np.exp(np.interp(z, table_alt_m, table_lnp))
-    rho = np.exp(np.interp(z, table_alt_m, table_lnrho))
+    i, w = locate(table_alt_m, table_alt_m.size, z)
+    p = np.exp((1.0 - w) * table_lnp[i] + w * table_lnp[i + 1])
+    rho = np.exp((1.0 - w) * table_lnrho[i] + w * table_lnrho[i + 1])
     return t, p, rho, np.sqrt(GAMMA_AIR * p / rho)
 
 

@@ -96,13 +96,30 @@ def fcs_phase(events: np.ndarray) -> int:
 
 @njit(cache=True)
 def rk4(t: float, x: np.ndarray, u: np.ndarray, dt: float, p: np.ndarray, tb: PlantTables,
-        aux: np.ndarray, scratch: np.ndarray) -> np.ndarray:
-    """One classical Runge–Kutta step; ``aux`` receives diagnostics at ``t``."""
-    k1 = derivative(t, x, u, p, tb, aux)
-    k2 = derivative(t + 0.5 * dt, x + 0.5 * dt * k1, u, p, tb, scratch)
-    k3 = derivative(t + 0.5 * dt, x + 0.5 * dt * k2, u, p, tb, scratch)
-    k4 = derivative(t + dt, x + dt * k3, u, p, tb, scratch)
-    return x + (dt / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+        aux: np.ndarray, work: np.ndarray) -> None:
+    """One classical Runge–Kutta step of ``x`` in place; ``aux`` receives the diagnostics
+    at ``t``. ``work`` is a (6, N_STATE) scratch array (k1..k4, stage state, aux scratch)."""
+    n = x.size
+    k1, k2, k3, k4, xs = work[0], work[1], work[2], work[3], work[4]
+    scratch = work[5]
+    derivative(t, x, u, p, tb, aux, k1)
+    for i in range(n):
+        xs[i] = x[i] + 0.5 * dt * k1[i]
+    derivative(t + 0.5 * dt, xs, u, p, tb, scratch, k2)
+    for i in range(n):
+        xs[i] = x[i] + 0.5 * dt * k2[i]
+    derivative(t + 0.5 * dt, xs, u, p, tb, scratch, k3)
+    for i in range(n):
+        xs[i] = x[i] + dt * k3[i]
+    derivative(t + dt, xs, u, p, tb, scratch, k4)
+    h6 = dt / 6.0
+    for i in range(n):
+        x[i] += h6 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
+
+
+def work_array() -> np.ndarray:
+    """Scratch space for :func:`rk4` (rows wide enough for the state and the diagnostics)."""
+    return np.zeros((6, max(N_STATE, N_AUX)))
 
 
 @njit(cache=True)
@@ -155,7 +172,7 @@ def advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0:
     """
     dt = rates.dt
     aux = np.zeros(N_AUX)
-    scratch = np.zeros(N_AUX)
+    work = np.zeros((6, max(N_STATE, N_AUX)))
     n_cols = log.shape[1]
     for j in range(n_steps):
         k = k0 + j
@@ -192,23 +209,26 @@ def advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0:
             u[U_DYC] = d[D_CMD_Y]
             u[U_RCS] = d[D_CMD_RCS]
 
-        x_new = rk4(t, x, u, dt, p, tb, aux, scratch)
+        if k % rates.n_log == 0 and log_row < log.shape[0]:
+            x_log = x.copy()
+        rk4(t, x, u, dt, p, tb, aux, work)
         if k % rates.n_log == 0 and log_row < log.shape[0]:
             row = log[log_row]
             row[0] = t
-            row[1:1 + N_STATE] = x
+            row[1:1 + N_STATE] = x_log
             row[1 + N_STATE:1 + N_STATE + N_AUX] = aux
             row[1 + N_STATE + N_AUX:n_cols] = d
             log_row += 1
 
         # housekeeping: unit quaternion, physical bounds of bounded states
-        x_new[Q:Q + 4] /= np.sqrt(np.sum(x_new[Q:Q + 4] ** 2))
+        qn = 1.0 / np.sqrt(x[Q] ** 2 + x[Q + 1] ** 2 + x[Q + 2] ** 2 + x[Q + 3] ** 2)
+        for i in range(Q, Q + 4):
+            x[i] *= qn
         for i in (MFS, MLOX, MLH2):
-            if x_new[i] < 0.0:
-                x_new[i] = 0.0
+            if x[i] < 0.0:
+                x[i] = 0.0
         for i in (RCS_POS, RCS_NEG):
-            x_new[i] = min(max(x_new[i], 0.0), 1.0)
-        x[:] = x_new
+            x[i] = min(max(x[i], 0.0), 1.0)
 
         if not np.all(np.isfinite(x)):
             return DIVERGED_NONFINITE, j + 1, log_row, "state became non-finite"

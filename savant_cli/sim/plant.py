@@ -13,9 +13,9 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from savant_cli.models import earth, gravity, quaternion as qt
+from savant_cli.models import earth, gravity
 from savant_cli.models.atmosphere import atmosphere
-from savant_cli.models.interp import locate, rows, trilinear
+from savant_cli.models.interp import interp1, locate, rows, trilinear
 from savant_cli.sim.layout import (
     A_ACCEL, A_ALPHA, A_ALT, A_BETA, A_CG, A_DP, A_DY, A_FAERO, A_GRAV, A_LAT, A_LON,
     A_MACH, A_MAERO, A_MASS, A_MTHRUST, A_PRES, A_PROP, A_QBAR, A_RCS_TORQUE, A_RHO,
@@ -83,29 +83,19 @@ def mass_properties(tb: PlantTables, config: int, prop_kg: float):
 
 
 @njit(cache=True)
-def structure_to_body(v_s: np.ndarray) -> np.ndarray:
-    """Direction transform structure → body: diag(-1, 1, -1)."""
-    out = np.empty(3)
-    out[0] = -v_s[0]
-    out[1] = v_s[1]
-    out[2] = -v_s[2]
-    return out
-
-
-@njit(cache=True)
-def gimbal_direction(dp: float, dy: float) -> np.ndarray:
-    """Thrust unit vector in body axes for pitch/yaw gimbal angles (rad)."""
-    out = np.empty(3)
-    out[0] = np.cos(dp) * np.cos(dy)
-    out[1] = -np.sin(dy)
-    out[2] = np.sin(dp) * np.cos(dy)
-    return out
-
-
-@njit(cache=True)
-def first_stage_thrust_vac(t: float, p: np.ndarray, tb: PlantTables) -> float:
-    """First-stage vacuum thrust (N) at mission time ``t`` (s)."""
-    return p[P_FS_THRUST_SCALE] * np.interp(t, tb.fs_time, tb.fs_thrust)
+def solve_sym3(a00, a11, a22, a01, a02, a12, b0, b1, b2):
+    """Solve ``A x = b`` for a symmetric positive-definite 3×3 ``A`` by cofactors (the
+    inertia equation of the hot path; a LAPACK call costs more than the whole plant)."""
+    c00 = a11 * a22 - a12 * a12
+    c01 = a02 * a12 - a01 * a22
+    c02 = a01 * a12 - a02 * a11
+    c11 = a00 * a22 - a02 * a02
+    c12 = a01 * a02 - a00 * a12
+    c22 = a00 * a11 - a01 * a01
+    det = a00 * c00 + a01 * c01 + a02 * c02
+    return ((c00 * b0 + c01 * b1 + c02 * b2) / det,
+            (c01 * b0 + c11 * b1 + c12 * b2) / det,
+            (c02 * b0 + c12 * b1 + c22 * b2) / det)
 
 
 @njit(cache=True)
@@ -145,8 +135,8 @@ def jet_ramp(frac: float, on: bool, ramp_up_s: float, ramp_down_s: float) -> flo
 
 @njit(cache=True)
 def derivative(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: PlantTables,
-               aux: np.ndarray) -> np.ndarray:
-    """Time derivative of the continuous state.
+               aux: np.ndarray, xd: np.ndarray) -> None:
+    """Time derivative of the continuous state, written into ``xd``.
 
     Parameters
     ----------
@@ -162,117 +152,187 @@ def derivative(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: PlantT
         Tabular data.
     aux : ndarray (N_AUX,)
         Filled with diagnostics of this evaluation.
+    xd : ndarray (N_STATE,)
+        Output: the state derivative.
+
+    Notes
+    -----
+    Written with scalars rather than small temporary arrays: this function runs four
+    times per plant step, and heap temporaries would dominate its cost.
     """
-    xd = np.zeros(N_STATE)
-    r = x[R:R + 3]
-    v = x[V:V + 3]
-    q = x[Q:Q + 4]
-    w = x[W:W + 3]
     config = int(u[U_CONFIG])
     engine = int(u[U_ENGINE])
     omega_e = p[P_OMEGA_E]
+    rx, ry, rz = x[R], x[R + 1], x[R + 2]
+    vx, vy, vz = x[V], x[V + 1], x[V + 2]
+    q0, q1, q2, q3 = x[Q], x[Q + 1], x[Q + 2], x[Q + 3]
+    wx, wy, wz = x[W], x[W + 1], x[W + 2]
+
+    # body→ECI direction cosines
+    m00 = 1.0 - 2.0 * (q2 * q2 + q3 * q3)
+    m01 = 2.0 * (q1 * q2 - q0 * q3)
+    m02 = 2.0 * (q1 * q3 + q0 * q2)
+    m10 = 2.0 * (q1 * q2 + q0 * q3)
+    m11 = 1.0 - 2.0 * (q1 * q1 + q3 * q3)
+    m12 = 2.0 * (q2 * q3 - q0 * q1)
+    m20 = 2.0 * (q1 * q3 - q0 * q2)
+    m21 = 2.0 * (q2 * q3 + q0 * q1)
+    m22 = 1.0 - 2.0 * (q1 * q1 + q2 * q2)
 
     # ------------------------------------------------------------ environment
-    c_i2e = earth.dcm_eci_to_ecef(t, omega_e)
-    r_ecef = c_i2e @ r
+    th = omega_e * t
+    ct, st = np.cos(th), np.sin(th)
+    r_ecef = np.empty(3)
+    r_ecef[0] = ct * rx + st * ry
+    r_ecef[1] = -st * rx + ct * ry
+    r_ecef[2] = rz
     lat, lon, alt = earth.ecef_to_geodetic(r_ecef, p[P_RE], p[P_E2])
     temp, pres, rho, sos = atmosphere(alt, tb.atm_alt, tb.atm_lnp, tb.atm_lnrho)
     order = p[P_GRAVITY_ORDER]
-    g = gravity.gravity_zonal(r, p[P_MU], p[P_RE], p[P_J2] if order >= 2 else 0.0,
+    g = gravity.gravity_zonal(x[R:R + 3], p[P_MU], p[P_RE], p[P_J2] if order >= 2 else 0.0,
                               p[P_J3] if order >= 3 else 0.0, p[P_J4] if order >= 4 else 0.0)
-    v_earth = earth.velocity_relative_eci(r, v, omega_e)
-    wind_n = np.zeros(3)
-    wind_i = np.zeros(3)
+    # Earth-relative velocity v − ω_E ẑ × r, ECI axes
+    ex = vx + omega_e * ry
+    ey = vy - omega_e * rx
+    ez = vz
+    wn_n = wn_e = 0.0
+    ax_ = ex
+    ay_ = ey
+    az_ = ez
     if p[P_WIND_SCALE] != 0.0:
-        wind_n = earth.wind_ned(alt, tb.wind_alt, tb.wind_north, tb.wind_east, p[P_WIND_SCALE])
-        c_e2n = earth.dcm_ecef_to_ned(lat, lon)
-        wind_i = c_i2e.T @ (c_e2n.T @ wind_n)
-    v_air_i = v_earth - wind_i
-    c_b2i = qt.dcm(q)
-    v_air_b = c_b2i.T @ v_air_i
-    vair = np.sqrt(v_air_b[0] ** 2 + v_air_b[1] ** 2 + v_air_b[2] ** 2)
-    alpha = np.arctan2(v_air_b[2], v_air_b[0])
-    beta = np.arcsin(v_air_b[1] / vair) if vair > 1e-6 else 0.0
+        sc = p[P_WIND_SCALE]
+        wn_n = sc * interp1(tb.wind_alt, tb.wind_north, alt)
+        wn_e = sc * interp1(tb.wind_alt, tb.wind_east, alt)
+        sl, cl = np.sin(lat), np.cos(lat)
+        so, co = np.sin(lon), np.cos(lon)
+        # NED → ECEF (north = (−sl·co, −sl·so, cl), east = (−so, co, 0)), then ECEF → ECI
+        we_x = -sl * co * wn_n - so * wn_e
+        we_y = -sl * so * wn_n + co * wn_e
+        we_z = cl * wn_n
+        ax_ -= ct * we_x - st * we_y
+        ay_ -= st * we_x + ct * we_y
+        az_ -= we_z
+    # air-relative velocity in body axes (R^T v)
+    ub = m00 * ax_ + m10 * ay_ + m20 * az_
+    vb = m01 * ax_ + m11 * ay_ + m21 * az_
+    wb = m02 * ax_ + m12 * ay_ + m22 * az_
+    vair = np.sqrt(ub * ub + vb * vb + wb * wb)
+    alpha = np.arctan2(wb, ub)
+    beta = np.arcsin(vb / vair) if vair > 1e-6 else 0.0
     mach = vair / sos
     qbar = 0.5 * rho * vair * vair
 
     # ------------------------------------------------------- mass properties
-    if config == CONFIG_STACK:
-        prop = x[MFS]
-    else:
-        prop = x[MLOX] + x[MLH2]
-    mass, cg_s, inertia = mass_properties(tb, config, prop)
+    prop = x[MFS] if config == CONFIG_STACK else x[MLOX] + x[MLH2]
+    mtab = tb.mass_data[config]
+    im_, wm_ = locate(tb.mass_prop[config], tb.mass_len[config], prop)
+    a_ = 1.0 - wm_
+    mass = a_ * mtab[im_, 0] + wm_ * mtab[im_ + 1, 0]
+    cgx = a_ * mtab[im_, 1] + wm_ * mtab[im_ + 1, 1]
+    cgy = a_ * mtab[im_, 2] + wm_ * mtab[im_ + 1, 2]
+    cgz = a_ * mtab[im_, 3] + wm_ * mtab[im_ + 1, 3]
+    ixx = a_ * mtab[im_, 4] + wm_ * mtab[im_ + 1, 4]
+    iyy = a_ * mtab[im_, 5] + wm_ * mtab[im_ + 1, 5]
+    izz = a_ * mtab[im_, 6] + wm_ * mtab[im_ + 1, 6]
+    ixy = -(a_ * mtab[im_, 7] + wm_ * mtab[im_ + 1, 7])  # tensor element = −product of inertia
+    ixz = -(a_ * mtab[im_, 8] + wm_ * mtab[im_ + 1, 8])
+    iyz = -(a_ * mtab[im_, 9] + wm_ * mtab[im_ + 1, 9])
 
     # ---------------------------------------------------------- aerodynamics
-    f_aero = np.zeros(3)
-    m_aero = np.zeros(3)
+    fax = fay = faz = 0.0
+    max_ = may = maz = 0.0
     if p[P_AERO_ON] != 0.0 and qbar > 0.0:
         im, wm = locate(tb.aero_mach, tb.aero_mach.size, mach)
         ia, wa = locate(tb.aero_alpha, tb.aero_alpha.size, alpha)
-        ib, wb = locate(tb.aero_beta, tb.aero_beta.size, beta)
-        c = np.empty(6)
-        for k in range(6):
-            c[k] = trilinear(tb.aero_coef[config, k], im, wm, ia, wa, ib, wb)
+        ib, wb2 = locate(tb.aero_beta, tb.aero_beta.size, beta)
+        coef = tb.aero_coef[config]
+        ca = trilinear(coef[0], im, wm, ia, wa, ib, wb2)
+        cy = trilinear(coef[1], im, wm, ia, wa, ib, wb2)
+        cn = trilinear(coef[2], im, wm, ia, wa, ib, wb2)
+        cl = trilinear(coef[3], im, wm, ia, wa, ib, wb2)
+        cm = trilinear(coef[4], im, wm, ia, wa, ib, wb2)
+        cnn = trilinear(coef[5], im, wm, ia, wa, ib, wb2)
         ref = tb.aero_ref[config]
         qs = qbar * ref[0]
         nb = tb.base_len[config]
-        f_base = np.interp(t, tb.base_time[config, :nb], tb.base_force[config, :nb])
-        f_aero[0] = -qs * c[0] + f_base
-        f_aero[1] = qs * c[1]
-        f_aero[2] = -qs * c[2]
-        r_mrp = structure_to_body(ref[4:7] - cg_s)
-        m_aero[0] = qs * ref[1] * c[3]
-        m_aero[1] = qs * ref[2] * c[4]
-        m_aero[2] = qs * ref[3] * c[5]
-        m_aero += np.cross(r_mrp, f_aero)
+        ib_, wb_ = locate(tb.base_time[config], nb, t)
+        f_base = (1.0 - wb_) * tb.base_force[config, ib_] + wb_ * tb.base_force[config, ib_ + 1]
+        fax = -qs * ca + f_base
+        fay = qs * cy
+        faz = -qs * cn
+        # r_cg→mrp in body axes: diag(−1, 1, −1)(mrp − cg)
+        rmx = -(ref[4] - cgx)
+        rmy = ref[5] - cgy
+        rmz = -(ref[6] - cgz)
+        max_ = qs * ref[1] * cl + rmy * faz - rmz * fay
+        may = qs * ref[2] * cm + rmz * fax - rmx * faz
+        maz = qs * ref[3] * cnn + rmx * fay - rmy * fax
 
     # ---------------------------------------------------------------- thrust
     thrust = 0.0
     mdot_fs = 0.0
     mdot_us = 0.0
-    f_thr = np.zeros(3)
-    m_thr = np.zeros(3)
-    dp = 0.0
-    dy = 0.0
     if engine == ENGINE_FIRST:
-        f_vac = first_stage_thrust_vac(t, p, tb)
+        f_vac = p[P_FS_THRUST_SCALE] * interp1(tb.fs_time, tb.fs_thrust, t)
         if x[MFS] > 0.0 and f_vac > 0.0:
             mdot_fs = f_vac / (G0 * p[P_FS_ISP_VAC])
             thrust = max(f_vac - pres * p[P_FS_EXIT_AREA], 0.0)
         lim = p[P_FS_GIMBAL_LIMIT]
-        gimbal_s = p[P_FS_GIMBAL_X:P_FS_GIMBAL_X + 3]
+        g0_ = P_FS_GIMBAL_X
     else:
         if engine == ENGINE_UPPER and x[MLOX] > 0.0 and x[MLH2] > 0.0:
-            frac = np.interp(t - u[U_T_IGN], tb.us_start_time, tb.us_start_frac)
-            f_vac = frac * p[P_US_THRUST]
+            f_vac = interp1(tb.us_start_time, tb.us_start_frac, t - u[U_T_IGN]) * p[P_US_THRUST]
             mdot_us = f_vac / (G0 * p[P_US_ISP])
             thrust = max(f_vac - pres * p[P_US_EXIT_AREA], 0.0)
         lim = p[P_US_GIMBAL_LIMIT]
-        gimbal_s = p[P_US_GIMBAL_X:P_US_GIMBAL_X + 3]
+        g0_ = P_US_GIMBAL_X
     if p[P_THRUST_ON] == 0.0:
         thrust = 0.0
     dp = clip(x[ACT_P], lim)
     dy = clip(x[ACT_Y], lim)
+    ftx = fty = ftz = 0.0
+    mtx = mty = mtz = 0.0
     if thrust > 0.0:
-        f_thr = thrust * gimbal_direction(dp, dy)
-        m_thr = np.cross(structure_to_body(gimbal_s - cg_s), f_thr)
+        cdp, sdp = np.cos(dp), np.sin(dp)
+        cdy, sdy = np.cos(dy), np.sin(dy)
+        ftx = thrust * cdp * cdy
+        fty = -thrust * sdy
+        ftz = thrust * sdp * cdy
+        rgx = -(p[g0_] - cgx)
+        rgy = p[g0_ + 1] - cgy
+        rgz = -(p[g0_ + 2] - cgz)
+        mtx = rgy * ftz - rgz * fty
+        mty = rgz * ftx - rgx * ftz
+        mtz = rgx * fty - rgy * ftx
 
     # ------------------------------------------------------------- roll jets
-    altc = alt if alt > 0.0 else 0.0
-    f_jet = np.interp(altc, tb.rcs_alt, tb.rcs_thrust) - pres * p[P_RCS_EXIT_AREA]
+    f_jet = interp1(tb.rcs_alt, tb.rcs_thrust, alt) - pres * p[P_RCS_EXIT_AREA]
     if f_jet < 0.0:
         f_jet = 0.0
     rcs_torque = (x[RCS_POS] - x[RCS_NEG]) * p[P_RCS_N] * f_jet * p[P_RCS_ARM]
 
     # -------------------------------------------------------- rigid-body EOM
-    f_body = f_aero + f_thr
-    accel_b = f_body / mass
-    xd[R:R + 3] = v
-    xd[V:V + 3] = c_b2i @ accel_b + g
-    xd[Q:Q + 4] = qt.derivative(q, w)
-    moment = m_aero + m_thr
-    moment[0] += rcs_torque
-    xd[W:W + 3] = np.linalg.solve(inertia, moment - np.cross(w, inertia @ w))
+    abx = (fax + ftx) / mass
+    aby = (fay + fty) / mass
+    abz = (faz + ftz) / mass
+    xd[R] = vx
+    xd[R + 1] = vy
+    xd[R + 2] = vz
+    xd[V] = m00 * abx + m01 * aby + m02 * abz + g[0]
+    xd[V + 1] = m10 * abx + m11 * aby + m12 * abz + g[1]
+    xd[V + 2] = m20 * abx + m21 * aby + m22 * abz + g[2]
+    xd[Q] = 0.5 * (-q1 * wx - q2 * wy - q3 * wz)
+    xd[Q + 1] = 0.5 * (q0 * wx + q2 * wz - q3 * wy)
+    xd[Q + 2] = 0.5 * (q0 * wy - q1 * wz + q3 * wx)
+    xd[Q + 3] = 0.5 * (q0 * wz + q1 * wy - q2 * wx)
+    # H = I ω; ω̇ = I⁻¹ (M − ω × H)
+    hx = ixx * wx + ixy * wy + ixz * wz
+    hy = ixy * wx + iyy * wy + iyz * wz
+    hz = ixz * wx + iyz * wy + izz * wz
+    mx = max_ + mtx + rcs_torque - (wy * hz - wz * hy)
+    my = may + mty - (wz * hx - wx * hz)
+    mz = maz + mtz - (wx * hy - wy * hx)
+    xd[W], xd[W + 1], xd[W + 2] = solve_sym3(ixx, iyy, izz, ixy, ixz, iyz, mx, my, mz)
     xd[MFS] = -mdot_fs
     xd[MLOX] = -mdot_us * p[P_US_MR] / (1.0 + p[P_US_MR])
     xd[MLH2] = -mdot_us / (1.0 + p[P_US_MR])
@@ -284,8 +344,6 @@ def derivative(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: PlantT
         wa_, wn_, z_, rl_ = p[P_ACT_US_WA], p[P_ACT_US_WN], p[P_ACT_US_ZETA], p[P_ACT_US_RATE]
     actuator_third_order(x[ACT_P:ACT_P + 3], clip(u[U_DPC], lim), wa_, wn_, z_, rl_, xd, ACT_P)
     actuator_third_order(x[ACT_Y:ACT_Y + 3], clip(u[U_DYC], lim), wa_, wn_, z_, rl_, xd, ACT_Y)
-
-    # ------------------------------------------------------ jet thrust ramps
     xd[RCS_POS] = jet_ramp(x[RCS_POS], u[U_RCS] > 0.5, p[P_RCS_RAMP_UP], p[P_RCS_RAMP_DOWN])
     xd[RCS_NEG] = jet_ramp(x[RCS_NEG], u[U_RCS] < -0.5, p[P_RCS_RAMP_UP], p[P_RCS_RAMP_DOWN])
 
@@ -302,20 +360,31 @@ def derivative(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: PlantT
     aux[A_ALPHA] = alpha
     aux[A_BETA] = beta
     aux[A_VREL] = vair
-    aux[A_WIND_N] = wind_n[0]
-    aux[A_WIND_E] = wind_n[1]
-    aux[A_WIND_D] = wind_n[2]
-    aux[A_GRAV:A_GRAV + 3] = g
+    aux[A_WIND_N] = wn_n
+    aux[A_WIND_E] = wn_e
+    aux[A_WIND_D] = 0.0
+    aux[A_GRAV] = g[0]
+    aux[A_GRAV + 1] = g[1]
+    aux[A_GRAV + 2] = g[2]
     aux[A_THRUST] = thrust
     aux[A_MASS] = mass
-    aux[A_FAERO:A_FAERO + 3] = f_aero
-    aux[A_MAERO:A_MAERO + 3] = m_aero
-    aux[A_MTHRUST:A_MTHRUST + 3] = m_thr
+    aux[A_FAERO] = fax
+    aux[A_FAERO + 1] = fay
+    aux[A_FAERO + 2] = faz
+    aux[A_MAERO] = max_
+    aux[A_MAERO + 1] = may
+    aux[A_MAERO + 2] = maz
+    aux[A_MTHRUST] = mtx
+    aux[A_MTHRUST + 1] = mty
+    aux[A_MTHRUST + 2] = mtz
     aux[A_RCS_TORQUE] = rcs_torque
     aux[A_PROP] = prop
-    aux[A_CG:A_CG + 3] = cg_s
+    aux[A_CG] = cgx
+    aux[A_CG + 1] = cgy
+    aux[A_CG + 2] = cgz
     aux[A_DP] = dp
     aux[A_DY] = dy
-    aux[A_VEARTH] = np.sqrt(v_earth[0] ** 2 + v_earth[1] ** 2 + v_earth[2] ** 2)
-    aux[A_ACCEL:A_ACCEL + 3] = accel_b
-    return xd
+    aux[A_VEARTH] = np.sqrt(ex * ex + ey * ey + ez * ez)
+    aux[A_ACCEL] = abx
+    aux[A_ACCEL + 1] = aby
+    aux[A_ACCEL + 2] = abz

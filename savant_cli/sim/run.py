@@ -97,7 +97,7 @@ def simulate(model: SimModel, progress: bool = True, chunk_s: float = 10.0) -> S
         aux = np.zeros(L.N_AUX)
         from savant_cli.sim.plant import derivative
 
-        derivative(t_final, x, u, model.p, model.tables, aux)
+        derivative(t_final, x, u, model.p, model.tables, aux, np.zeros(L.N_STATE))
         log[row, 0] = t_final
         log[row, 1:1 + L.N_STATE] = x
         log[row, 1 + L.N_STATE:1 + L.N_STATE + L.N_AUX] = aux
