@@ -17,10 +17,11 @@ from savant_cli.errors import ConfigError
 def shipped_config_dir() -> Path:
     """Directory of the config tree installed with the package (``savant_cli.conf``), or
     ``conf/`` beside the package when running from a source checkout."""
-    try:
-        return Path(str(resources.files("savant_cli.conf")))
-    except ModuleNotFoundError:
-        return Path(__file__).resolve().parent.parent / "conf"
+    here = Path(__file__).resolve().parent
+    installed = here / "conf"
+    if (installed / "config.yaml").is_file():
+        return installed
+    return here.parent / "conf"
 
 
 def hydra_search_dirs() -> list[Path]:
@@ -35,7 +36,11 @@ def hydra_search_dirs() -> list[Path]:
                 if src.schema == "file" and src.path:
                     dirs.append(Path(src.path))
                 elif src.schema == "pkg" and src.path:
-                    dirs.append(Path(str(resources.files(src.path))))
+                    pkg = resources.files(src.path)
+                    if hasattr(pkg, "_paths"):  # namespace package (MultiplexedPath)
+                        dirs.extend(Path(str(x)) for x in pkg._paths)
+                    else:
+                        dirs.append(Path(str(pkg)))
     except Exception:  # noqa: BLE001 - any Hydra trouble falls back to the shipped tree
         dirs = []
     shipped = shipped_config_dir()

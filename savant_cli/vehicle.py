@@ -1,10 +1,26 @@
-"""Load a vehicle: its YAML config (``conf/vehicle/<name>.yaml``) and CSV tables, unit
-conversion to SI once, and refusal of bad data before any computation.
+"""Load a vehicle: its YAML config (``conf/vehicle/<name>.yaml``) and CSV tables, convert
+to SI once, and refuse bad data before any computation.
 
-CSV tables have one header row of column names whose suffix states the unit
-(``thrust_vac_N``, ``alpha_deg``, ``cg_x_in``); ``#`` lines are comments. Recognized
-suffixes and their SI factors are in :data:`UNITS`; a column without a unit suffix is
-dimensionless (coefficients, fractions).
+Table format
+------------
+CSV, ``#`` comment lines allowed, one header row of column names, then numbers. A
+column name's suffix after the last ``_`` is its unit when it is one of :data:`UNITS`
+(``thrust_vac_N``, ``alpha_deg``, ``cg_x_in``); the loader converts to SI and checks the
+unit's dimension against the column's. Names without a unit suffix are dimensionless
+(``mach``, ``CA``, ``thrust_fraction``).
+
+Frames and conventions (``docs/architecture.md``)
+------------------------------------------------
+* Locations (CG, moment reference point, gimbals, sensors) are in the structure frame:
+  x aft of the nose tip (a station), y = body y, z = -body z, metres.
+* Inertias are about the CG in body axes; the columns ``ixy, ixz, iyz`` are products of
+  inertia (``Ixy = integral of x y dm``), so the tensor's off-diagonal elements are their
+  negatives.
+* Aerodynamic coefficients are body-axis: force ``q S [-CA, CY, -CN]``, moment about the
+  moment reference point ``q S [l_x Cl, l_y Cm, l_z Cn]``.
+
+Every refusal raises :class:`savant_cli.errors.ConfigError` with the key (``vehicle.<path>``
+or ``<folder>/<file>.csv:<column>``), the offending value and what is allowed.
 """
 
 from __future__ import annotations
@@ -16,46 +32,105 @@ from typing import Any
 
 import numpy as np
 
-from savant_cli import constants as C
 from savant_cli.errors import ConfigError
 
-UNITS = {
-    "m": 1.0, "ft": C.FT, "in": C.IN, "kg": 1.0, "lbm": C.LBM, "slug": C.SLUG, "N": 1.0, "lbf": C.LBF,
-    "s": 1.0, "deg": C.DEG, "rad": 1.0, "kgm2": 1.0, "slugft2": C.SLUG * C.FT**2, "m2": 1.0, "ft2": C.FT**2,
-    "Pa": 1.0, "psf": C.LBF / C.FT**2, "mps": 1.0, "fps": C.FT,
+try:
+    from savant_cli import constants as _C
+
+    _FT, _IN, _LBF, _LBM, _SLUG = _C.FT, _C.IN, _C.LBF, _C.LBM, _C.SLUG
+except (ImportError, AttributeError):  # pragma: no cover - only while constants.py is written
+    _FT, _IN, _LBF, _LBM, _SLUG = 0.3048, 0.0254, 4.4482216152605, 0.45359237, 14.593902937
+
+#: unit suffix -> (dimension, factor to SI)
+UNITS: dict[str, tuple[str, float]] = {
+    "m": ("length", 1.0), "km": ("length", 1000.0), "ft": ("length", _FT), "in": ("length", _IN),
+    "kg": ("mass", 1.0), "lbm": ("mass", _LBM), "slug": ("mass", _SLUG),
+    "N": ("force", 1.0), "kN": ("force", 1e3), "MN": ("force", 1e6), "lbf": ("force", _LBF),
+    "s": ("time", 1.0),
+    "deg": ("angle", np.pi / 180.0), "rad": ("angle", 1.0),
+    "kgm2": ("inertia", 1.0), "slugft2": ("inertia", _SLUG * _FT**2),
+    "m2": ("area", 1.0), "ft2": ("area", _FT**2),
+    "Pa": ("pressure", 1.0), "psf": ("pressure", _LBF / _FT**2),
+    "mps": ("speed", 1.0), "fps": ("speed", _FT),
 }
 AERO_COEFFS = ("CA", "CY", "CN", "Cl", "Cm", "Cn")
 CONFIG_NAMES = ("stack", "upper_les", "upper")
+_INERTIA = ("ixx", "iyy", "izz", "ixy", "ixz", "iyz")
+
+#: table kind -> required columns (base name, dimension); ``None`` = dimensionless
+TABLE_COLUMNS: dict[str, tuple[tuple[str, str | None], ...]] = {
+    "mass": (("propellant_remaining", "mass"), ("mass", "mass"), ("cg_x", "length"), ("cg_y", "length"),
+             ("cg_z", "length")) + tuple((c, "inertia") for c in _INERTIA),
+    "aero": (("mach", None), ("alpha", "angle"), ("beta", "angle")) + tuple((c, None) for c in AERO_COEFFS),
+    "base_force": (("time", "time"), ("base_force", "force")),
+    "first_stage_thrust": (("time", "time"), ("thrust_vac", "force")),
+    "startup": (("time", "time"), ("thrust_fraction", None)),
+    "rcs_thrust": (("altitude", "length"), ("thrust_vac", "force")),
+}
+
+MASS_TOLERANCE_KG = 1.0   # staging consistency of the mass tables
 
 
 # ----------------------------------------------------------------------- data classes
 @dataclass(frozen=True)
 class AeroTable:
-    """Aerodynamic coefficients of one configuration on a (Mach, α, β) grid."""
+    """Aerodynamic coefficients of one configuration on a (Mach, alpha, beta) grid.
+
+    Attributes
+    ----------
+    mach, alpha_rad, beta_rad : numpy.ndarray
+        Strictly increasing grid axes (-, rad, rad).
+    coeffs : numpy.ndarray
+        Shape ``(6, n_mach, n_alpha, n_beta)``: CA, CY, CN, Cl, Cm, Cn (body axes; the
+        moments about the moment reference point).
+    base_time_s, base_force_N : numpy.ndarray
+        Base force along body X (N, negative = drag) vs time from liftoff (s).
+    area_m2 : float
+        Reference area, m^2.
+    lref_m : numpy.ndarray
+        ``(3,)`` reference lengths of the roll, pitch and yaw moments, m.
+    mrp_m : numpy.ndarray
+        ``(3,)`` moment reference point, structure frame, m.
+    """
 
     mach: np.ndarray
     alpha_rad: np.ndarray
     beta_rad: np.ndarray
-    coeffs: np.ndarray  # (6, n_mach, n_alpha, n_beta): CA CY CN Cl Cm Cn (body axes)
+    coeffs: np.ndarray
     base_time_s: np.ndarray
-    base_force_N: np.ndarray  # along body X
+    base_force_N: np.ndarray
     area_m2: float
-    lref_m: np.ndarray  # (3,) roll, pitch, yaw reference lengths
-    mrp_m: np.ndarray  # (3,) moment reference point, structure frame
+    lref_m: np.ndarray
+    mrp_m: np.ndarray
 
 
 @dataclass(frozen=True)
 class MassTable:
-    """Mass properties vs propellant remaining of the burning stage (ascending)."""
+    """Mass properties vs propellant remaining of the configuration's burning stage.
+
+    Attributes
+    ----------
+    propellant_kg : numpy.ndarray
+        ``(n,)`` strictly increasing, from 0 to the full load, kg.
+    mass_kg : numpy.ndarray
+        ``(n,)`` total mass, kg.
+    cg_m : numpy.ndarray
+        ``(n, 3)`` CG in the structure frame, m.
+    inertia_kgm2 : numpy.ndarray
+        ``(n, 6)`` about the CG in body axes: Ixx, Iyy, Izz, Ixy, Ixz, Iyz (products of
+        inertia; the tensor's off-diagonal elements are their negatives), kg m^2.
+    """
 
     propellant_kg: np.ndarray
     mass_kg: np.ndarray
-    cg_m: np.ndarray  # (n, 3) structure frame
-    inertia_kgm2: np.ndarray  # (n, 6) about the CG, body axes: Ixx Iyy Izz Ixy Ixz Iyz
+    cg_m: np.ndarray
+    inertia_kgm2: np.ndarray
 
 
 @dataclass(frozen=True)
 class Configuration:
+    """One flight configuration (``stack``, ``upper_les``, ``upper``)."""
+
     name: str
     aero: AeroTable
     mass: MassTable
@@ -63,7 +138,17 @@ class Configuration:
 
 @dataclass(frozen=True)
 class Engine:
-    """Moving engine/nozzle mass properties about its gimbal (for tail-wags-dog)."""
+    """Moving engine (nozzle) mass properties about its gimbal, for tail-wags-dog.
+
+    Attributes
+    ----------
+    mass_kg : float
+        Moving mass, kg.
+    cg_from_gimbal_m : float
+        Distance from the gimbal aft to the moving mass's CG, m.
+    inertia_about_gimbal_kgm2 : float
+        Transverse moment of inertia about the gimbal, kg m^2.
+    """
 
     mass_kg: float
     cg_from_gimbal_m: float
@@ -72,6 +157,10 @@ class Engine:
 
 @dataclass(frozen=True)
 class FirstStage:
+    """Solid first stage. Thrust is vacuum thrust (N) vs time from liftoff (s); the
+    delivered thrust is ``F_vac - p A_exit``; mass flow ``F_vac / (g0 Isp_vac)``.
+    Gimbal location in the structure frame (m); limit in rad."""
+
     thrust_time_s: np.ndarray
     thrust_vac_N: np.ndarray
     isp_vac_s: float
@@ -86,6 +175,10 @@ class FirstStage:
 
 @dataclass(frozen=True)
 class UpperStage:
+    """J-2X upper stage: rated vacuum thrust (N), Isp (s), LOX/LH2 mixture ratio and
+    loads (kg), start transient (thrust fraction vs time since the ignition command, s),
+    gimbal (structure frame, m; limit rad) and the launch abort system mass (kg)."""
+
     thrust_vac_N: float
     isp_vac_s: float
     mixture_ratio: float
@@ -102,8 +195,12 @@ class UpperStage:
 
 @dataclass(frozen=True)
 class Rcs:
+    """Roll-control jets: vacuum thrust per jet (N) vs altitude (m), exit area (m^2),
+    number of jets per roll direction, moment arm (m), ramp times (s), location
+    (structure frame, m)."""
+
     altitude_m: np.ndarray
-    thrust_vac_N: np.ndarray  # per jet
+    thrust_vac_N: np.ndarray
     exit_area_m2: float
     jets_per_direction: int
     moment_arm_m: float
@@ -114,6 +211,8 @@ class Rcs:
 
 @dataclass(frozen=True)
 class Sensors:
+    """Sensor locations, structure frame, m."""
+
     imu_m: np.ndarray
     rate_gyro_upper_stage_m: np.ndarray
     rate_gyro_first_stage_m: np.ndarray
@@ -121,6 +220,10 @@ class Sensors:
 
 @dataclass(frozen=True)
 class Events:
+    """Staging event parameters: separation when first-stage vacuum thrust falls below
+    ``separation_thrust_fraction`` of its peak; J-2X ignition command
+    ``ignition_delay_s`` later; LES jettison ``les_jettison_delay_s`` after that."""
+
     separation_thrust_fraction: float
     ignition_delay_s: float
     les_jettison_delay_s: float
@@ -128,6 +231,8 @@ class Events:
 
 @dataclass(frozen=True)
 class Vehicle:
+    """A loaded, checked vehicle, all SI."""
+
     name: str
     description: str
     length_m: float
@@ -140,51 +245,56 @@ class Vehicle:
 
 
 # ------------------------------------------------------------------------- key schema
+_VEC3 = "vec3"
 ENGINE_KEYS = {"mass_kg": float, "cg_from_gimbal_m": float, "inertia_about_gimbal_kgm2": float}
 CONFIG_KEYS = {"aero_table": str, "base_force_table": str, "mass_table": str, "reference_area_m2": float,
-               "reference_length_m": list, "moment_reference_m": list}
+               "reference_length_m": _VEC3, "moment_reference_m": _VEC3}
 SCHEMA: dict[str, Any] = {
     "name": str, "description": str, "data_dir": str, "length_m": float,
     "configurations": {n: CONFIG_KEYS for n in CONFIG_NAMES},
     "first_stage": {"thrust_table": str, "isp_vac_s": float, "isp_sl_s": float, "nozzle_exit_area_m2": float,
-                    "propellant_kg": float, "jettison_mass_kg": float, "gimbal_m": list, "gimbal_limit_deg": float,
-                    "engine": ENGINE_KEYS},
-    "upper_stage": {"thrust_vac_N": float, "isp_vac_s": float, "mixture_ratio": float, "nozzle_exit_area_m2": float,
-                    "lox_kg": float, "lh2_kg": float, "startup_table": str, "gimbal_m": list,
-                    "gimbal_limit_deg": float, "les_mass_kg": float, "engine": ENGINE_KEYS},
+                    "propellant_kg": float, "jettison_mass_kg": float, "gimbal_m": _VEC3,
+                    "gimbal_limit_deg": float, "engine": ENGINE_KEYS},
+    "upper_stage": {"thrust_vac_N": float, "isp_vac_s": float, "mixture_ratio": float,
+                    "nozzle_exit_area_m2": float, "lox_kg": float, "lh2_kg": float, "startup_table": str,
+                    "gimbal_m": _VEC3, "gimbal_limit_deg": float, "les_mass_kg": float, "engine": ENGINE_KEYS},
     "rcs": {"thrust_table": str, "exit_area_m2": float, "jets_per_direction": int, "moment_arm_m": float,
-            "ramp_up_s": float, "ramp_down_s": float, "location_m": list},
-    "sensors": {"imu_m": list, "rate_gyro_upper_stage_m": list, "rate_gyro_first_stage_m": list},
+            "ramp_up_s": float, "ramp_down_s": float, "location_m": _VEC3},
+    "sensors": {"imu_m": _VEC3, "rate_gyro_upper_stage_m": _VEC3, "rate_gyro_first_stage_m": _VEC3},
     "events": {"separation_thrust_fraction": float, "ignition_delay_s": float, "les_jettison_delay_s": float},
 }
+_OPTIONAL = {"description"}
+
+
+def _is_number(v: Any) -> bool:
+    return isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool) and bool(np.isfinite(v))
 
 
 def _check_keys(node: Mapping, schema: Mapping, path: str) -> None:
-    """Unknown, missing and mistyped keys of the vehicle YAML."""
+    """Refuse unknown, missing and mistyped keys of the vehicle YAML."""
     for key in node:
         if key not in schema:
             raise ConfigError(f"{path}.{key}", node[key], f"unknown key; allowed: {', '.join(schema)}")
     for key, kind in schema.items():
         full = f"{path}.{key}"
         if key not in node or node[key] is None:
-            if key == "description":
+            if key in _OPTIONAL:
                 continue
             raise ConfigError(full, None, "missing")
         value = node[key]
         if isinstance(kind, Mapping):
             if not isinstance(value, Mapping):
-                raise ConfigError(full, value, "must be a mapping of " + ", ".join(kind))
+                raise ConfigError(full, value, "must be a mapping with keys " + ", ".join(kind))
             _check_keys(value, kind, full)
         elif kind is float:
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or not np.isfinite(value):
+            if not _is_number(value):
                 raise ConfigError(full, value, "must be a finite number")
         elif kind is int:
-            if isinstance(value, bool) or not isinstance(value, int):
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
                 raise ConfigError(full, value, "must be an integer")
-        elif kind is list:
-            if not isinstance(value, (list, tuple)) or len(value) != 3 or not all(
-                    isinstance(v, (int, float)) and not isinstance(v, bool) for v in value):
-                raise ConfigError(full, value, "must be a list of 3 numbers (x, y, z)")
+        elif kind == _VEC3:
+            if not isinstance(value, (list, tuple)) or len(value) != 3 or not all(_is_number(v) for v in value):
+                raise ConfigError(full, value, "must be a list of 3 finite numbers [x, y, z] (structure frame, m)")
         elif kind is str and not isinstance(value, str):
             raise ConfigError(full, value, "must be a string")
 
@@ -196,110 +306,222 @@ def _positive(key: str, value: float, allow_zero: bool = False) -> float:
     return float(value)
 
 
-# ----------------------------------------------------------------------------- tables
-def read_table(path: Path, columns: tuple[str, ...]) -> dict[str, np.ndarray]:
-    """Read a CSV table and return SI columns by their base name (suffix stripped).
+def _vec3(value: Any) -> np.ndarray:
+    return np.ascontiguousarray(np.asarray(value, dtype=np.float64))
 
-    ``columns`` are the required base names (``"thrust_vac"``; coefficients as is).
+
+# ----------------------------------------------------------------------------- tables
+def _table_key(path: Path) -> str:
+    return f"{path.parent.name}/{path.name}"
+
+
+def _split_unit(name: str) -> tuple[str, str | None]:
+    base, sep, unit = name.rpartition("_")
+    if sep and base and unit in UNITS:
+        return base, unit
+    return name, None
+
+
+def read_table(path: Path, kind: str) -> tuple[dict[str, np.ndarray], dict[str, str]]:
+    """Read one CSV table of the given kind (a key of :data:`TABLE_COLUMNS`).
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The CSV file.
+    kind : str
+        Table kind; fixes the required columns and their dimensions.
+
+    Returns
+    -------
+    columns : dict of str to numpy.ndarray
+        SI float64 columns by base name (unit suffix stripped).
+    names : dict of str to str
+        The header's full column name (with its unit suffix) by base name.
+
+    Raises
+    ------
+    ConfigError
+        Missing or unreadable file, missing/duplicate/unknown columns, wrong units,
+        ragged rows, non-numeric or non-finite cells, fewer than 2 rows.
     """
-    key = path.name
+    key = _table_key(path)
     if not path.is_file():
         raise ConfigError(key, str(path), "no such data file")
     try:
-        with open(path) as f:
-            lines = [ln.strip() for ln in f if ln.strip() and not ln.lstrip().startswith("#")]
-    except OSError as exc:
+        text = path.read_text()
+    except (OSError, UnicodeDecodeError) as exc:
         raise ConfigError(key, str(path), f"unreadable ({exc})") from None
-    if len(lines) < 3:
-        raise ConfigError(key, len(lines), "needs a header row and at least 2 data rows")
-    header = [h.strip() for h in lines[0].split(",")]
-    rows = []
-    for i, ln in enumerate(lines[1:], start=2):
-        cells = ln.split(",")
-        if len(cells) != len(header):
-            raise ConfigError(f"{key}:row {i}", ln, f"has {len(cells)} cells, the header has {len(header)}")
-        try:
-            rows.append([float(c) for c in cells])
-        except ValueError:
-            raise ConfigError(f"{key}:row {i}", ln, "cells must be numbers") from None
-    data = np.array(rows)
-    if not np.all(np.isfinite(data)):
-        raise ConfigError(key, "non-finite", "all values must be finite")
-    out: dict[str, np.ndarray] = {}
+    lines = text.splitlines()
+    header_at = next((i for i, ln in enumerate(lines) if ln.strip() and not ln.lstrip().startswith("#")), None)
+    if header_at is None:
+        raise ConfigError(key, "empty", "needs a header row of column names and at least 2 data rows")
+    header = [h.strip() for h in lines[header_at].split(",")]
+    spec = dict(TABLE_COLUMNS[kind])
+    allowed = ", ".join(f"{b}_<{d} unit>" if d else b for b, d in spec.items())
+    columns: dict[str, tuple[int, str | None]] = {}
     for j, name in enumerate(header):
-        base, _, unit = name.rpartition("_")
-        if base and unit in UNITS:
-            out[base] = data[:, j] * UNITS[unit]
-        else:
-            out[name] = data[:, j]
-    for c in columns:
-        if c not in out:
-            raise ConfigError(f"{key}", header, f"missing column {c!r} (with a unit suffix such as _m, _kg, _N, _s, _deg)")
-    return out
+        base, unit = _split_unit(name)
+        if base not in spec:
+            raise ConfigError(f"{key}:{name or '<empty>'}", header, f"unknown column; the columns are {allowed}")
+        if base in columns:
+            raise ConfigError(f"{key}:{name}", header, "duplicate column")
+        dim = spec[base]
+        if dim is None and unit is not None:
+            raise ConfigError(f"{key}:{name}", unit, "dimensionless column: no unit suffix")
+        if dim is not None and (unit is None or UNITS[unit][0] != dim):
+            units = ", ".join(u for u, (d, _) in UNITS.items() if d == dim)
+            raise ConfigError(f"{key}:{name}", unit, f"needs a {dim} unit suffix: one of {units}")
+        columns[base] = (j, unit)
+    for base, dim in spec.items():
+        if base not in columns:
+            raise ConfigError(f"{key}:{base}", header, f"missing column; the columns are {allowed}")
+    body = lines[header_at + 1:]
+    try:
+        data = np.loadtxt(body, delimiter=",", comments="#", ndmin=2, dtype=np.float64)
+    except ValueError:
+        data = None
+    if data is None or (data.size and data.shape[1] != len(header)):
+        for i, ln in enumerate(body, start=header_at + 2):  # locate the culprit for the message
+            s = ln.split("#", 1)[0].strip()
+            if not s:
+                continue
+            cells = s.split(",")
+            if len(cells) != len(header):
+                raise ConfigError(f"{key}:line {i}", ln, f"has {len(cells)} cells; the header has {len(header)}")
+            for c, name in zip(cells, header):
+                try:
+                    float(c)
+                except ValueError:
+                    raise ConfigError(f"{key}:{name}", c.strip(), f"line {i}: cells must be numbers") from None
+        raise ConfigError(key, str(path), "malformed numeric table")
+    if data.shape[0] < 2:
+        raise ConfigError(key, data.shape[0], "needs at least 2 data rows")
+    out: dict[str, np.ndarray] = {}
+    for base, (j, unit) in columns.items():
+        col = data[:, j]
+        if not np.all(np.isfinite(col)):
+            bad = int(np.nonzero(~np.isfinite(col))[0][0])
+            raise ConfigError(f"{key}:{header[j]}", float(col[bad]), "all values must be finite")
+        out[base] = np.ascontiguousarray(col * UNITS[unit][1] if unit else col)
+    return out, {base: header[j] for base, (j, _) in columns.items()}
 
 
 def _increasing(key: str, x: np.ndarray) -> None:
-    if x.size < 2 or not np.all(np.diff(x) > 0):
-        i = int(np.argmin(np.diff(x) > 0)) if x.size >= 2 else 0
-        raise ConfigError(key, float(x[i + 1]) if x.size > i + 1 else x.tolist(),
-                          "table axis must be strictly increasing")
+    d = np.diff(x)
+    if np.any(d <= 0.0):
+        i = int(np.argmax(d <= 0.0))
+        raise ConfigError(key, float(x[i + 1]), f"table axis must be strictly increasing (row {i + 2} "
+                                                f"follows {x[i]:.9g})")
+
+
+def _non_negative(key: str, x: np.ndarray, what: str) -> None:
+    if np.any(x < 0.0):
+        raise ConfigError(key, float(x[np.argmax(x < 0.0)]), f"{what} must not be negative")
 
 
 def _aero(cfg: Mapping, vdir: Path, cname: str) -> AeroTable:
-    t = read_table(vdir / cfg["aero_table"], ("mach", "alpha", "beta") + AERO_COEFFS)
-    key = f"{cfg['aero_table']}"
-    axes = [np.unique(t[a]) for a in ("mach", "alpha", "beta")]
-    n = tuple(a.size for a in axes)
-    if min(n) < 2:
-        raise ConfigError(key, n, "needs at least 2 distinct values of mach, alpha and beta")
-    if len(t["mach"]) != n[0] * n[1] * n[2]:
-        raise ConfigError(key, len(t["mach"]), f"must be a full grid of {n[0]}x{n[1]}x{n[2]} = {np.prod(n)} rows")
-    idx = [np.searchsorted(a, t[c]) for a, c in zip(axes, ("mach", "alpha", "beta"))]
-    flat = np.ravel_multi_index(idx, n)
-    if np.unique(flat).size != flat.size:
-        raise ConfigError(key, "duplicate rows", "each (mach, alpha, beta) must appear exactly once")
-    coeffs = np.empty((6,) + n)
+    path = vdir / cfg["aero_table"]
+    key = _table_key(path)
+    t, tn = read_table(path, "aero")
+    n_rows = t["mach"].size
+    axes, inverse = [], []
+    for c in ("mach", "alpha", "beta"):
+        u, inv = np.unique(t[c], return_inverse=True)
+        if u.size < 2:
+            raise ConfigError(f"{key}:{tn[c]}", u.tolist(), "needs at least 2 distinct values")
+        axes.append(u)
+        inverse.append(inv.ravel())
+    shape = tuple(a.size for a in axes)
+    flat = np.ravel_multi_index(tuple(inverse), shape)
+    counts = np.bincount(flat, minlength=int(np.prod(shape)))
+    if n_rows != counts.size or np.any(counts != 1):
+        missing = int(np.sum(counts == 0))
+        dup = int(np.sum(counts > 1))
+        raise ConfigError(key, f"{n_rows} rows", f"must be a full rectangular grid: every (mach, alpha, beta) "
+                                                 f"combination of {shape[0]}x{shape[1]}x{shape[2]} = {counts.size} "
+                                                 f"exactly once ({missing} missing, {dup} repeated)")
+    if axes[0][0] < 0.0:
+        raise ConfigError(f"{key}:{tn['mach']}", float(axes[0][0]), "Mach must not be negative")
+    for c, a in zip(("alpha", "beta"), axes[1:]):
+        if a[0] < -np.pi / 2 or a[-1] > np.pi / 2:
+            raise ConfigError(f"{key}:{tn[c]}", [float(a[0]), float(a[-1])], "angles must be within ±90 deg")
+    coeffs = np.empty((6, counts.size))
     for k, c in enumerate(AERO_COEFFS):
-        grid = np.empty(np.prod(n))
-        grid[flat] = t[c]
-        coeffs[k] = grid.reshape(n)
-    if np.any(axes[0] < 0):
-        raise ConfigError(f"{key}:mach", float(axes[0][0]), "Mach must be non-negative")
-    b = read_table(vdir / cfg["base_force_table"], ("time", "base_force"))
-    _increasing(f"{cfg['base_force_table']}:time_s", b["time"])
+        coeffs[k, flat] = t[c]
+    bpath = vdir / cfg["base_force_table"]
+    b, bn = read_table(bpath, "base_force")
+    _increasing(f"{_table_key(bpath)}:{bn['time']}", b["time"])
     p = f"vehicle.configurations.{cname}"
     return AeroTable(
-        mach=axes[0], alpha_rad=axes[1], beta_rad=axes[2], coeffs=np.ascontiguousarray(coeffs),
+        mach=axes[0], alpha_rad=axes[1], beta_rad=axes[2],
+        coeffs=np.ascontiguousarray(coeffs.reshape((6,) + shape)),
         base_time_s=b["time"], base_force_N=b["base_force"],
         area_m2=_positive(f"{p}.reference_area_m2", cfg["reference_area_m2"]),
-        lref_m=np.array([_positive(f"{p}.reference_length_m", v) for v in cfg["reference_length_m"]]),
-        mrp_m=np.asarray(cfg["moment_reference_m"], float),
+        lref_m=_vec3([_positive(f"{p}.reference_length_m", v) for v in cfg["reference_length_m"]]),
+        mrp_m=_vec3(cfg["moment_reference_m"]),
     )
 
 
-def _mass(cfg: Mapping, vdir: Path) -> MassTable:
-    name = cfg["mass_table"]
-    cols = ("propellant_remaining", "mass", "cg_x", "cg_y", "cg_z", "ixx", "iyy", "izz", "ixy", "ixz", "iyz")
-    t = read_table(vdir / name, cols)
-    _increasing(f"{name}:propellant_remaining", t["propellant_remaining"])
-    for c in ("propellant_remaining", "mass", "ixx", "iyy", "izz"):
-        bad = np.nonzero(t[c] < 0 if c == "propellant_remaining" else t[c] <= 0)[0]
+def _mass(cfg: Mapping, vdir: Path, length_m: float) -> MassTable:
+    path = vdir / cfg["mass_table"]
+    key = _table_key(path)
+    t, tn = read_table(path, "mass")
+    prop = t["propellant_remaining"]
+    _non_negative(f"{key}:{tn['propellant_remaining']}", prop, "propellant remaining")
+    _increasing(f"{key}:{tn['propellant_remaining']}", prop)
+    for c in ("mass", "ixx", "iyy", "izz"):
+        bad = np.nonzero(t[c] <= 0.0)[0]
         if bad.size:
-            raise ConfigError(f"{name}:{c}", float(t[c][bad[0]]), "mass, propellant and principal inertias must be positive")
-    inertia = np.column_stack([t[c] for c in ("ixx", "iyy", "izz", "ixy", "ixz", "iyz")])
-    for i, row in enumerate(inertia):
-        tensor = np.array([[row[0], -row[3], -row[4]], [-row[3], row[1], -row[5]], [-row[4], -row[5], row[2]]])
-        ev = np.linalg.eigvalsh(tensor)
-        if ev[0] <= 0 or ev[0] + ev[1] < ev[2] * (1 - 1e-9):
-            raise ConfigError(f"{name}:row {i + 1}", row.tolist(),
-                              "inertia tensor must be positive definite and satisfy the triangle inequality")
-    return MassTable(propellant_kg=t["propellant_remaining"], mass_kg=t["mass"],
-                     cg_m=np.column_stack([t["cg_x"], t["cg_y"], t["cg_z"]]),
+            raise ConfigError(f"{key}:{tn[c]}", float(t[c][bad[0]]), "mass and moments of inertia must be positive")
+    below = np.nonzero(t["mass"] < prop)[0]
+    if below.size:
+        raise ConfigError(f"{key}:{tn['mass']}", float(t["mass"][below[0]]),
+                          f"total mass must be at least the propellant remaining ({prop[below[0]]:.1f} kg)")
+    cg = np.column_stack([t["cg_x"], t["cg_y"], t["cg_z"]])
+    out = np.nonzero((cg[:, 0] < 0.0) | (cg[:, 0] > length_m))[0]
+    if out.size:
+        raise ConfigError(f"{key}:{tn['cg_x']}", float(cg[out[0], 0]),
+                          f"CG station must lie on the vehicle, within [0, {length_m:g}] m of the nose tip")
+    inertia = np.column_stack([t[c] for c in _INERTIA])
+    tensor = np.empty((inertia.shape[0], 3, 3))
+    tensor[:, 0, 0], tensor[:, 1, 1], tensor[:, 2, 2] = inertia[:, 0], inertia[:, 1], inertia[:, 2]
+    tensor[:, 0, 1] = tensor[:, 1, 0] = -inertia[:, 3]
+    tensor[:, 0, 2] = tensor[:, 2, 0] = -inertia[:, 4]
+    tensor[:, 1, 2] = tensor[:, 2, 1] = -inertia[:, 5]
+    ev = np.linalg.eigvalsh(tensor)  # ascending principal moments, per row
+    scale = ev[:, 2]
+    bad = np.nonzero((ev[:, 0] <= 1e-12 * scale) | (ev[:, 0] + ev[:, 1] < ev[:, 2] * (1.0 - 1e-9)))[0]
+    if bad.size:
+        i = int(bad[0])
+        raise ConfigError(f"{key}:{tn['ixx']}", inertia[i].tolist(),
+                          f"row {i + 1}: the inertia tensor must be positive definite and its principal moments "
+                          f"must satisfy the triangle inequality (I1 + I2 >= I3); principal moments {ev[i].tolist()}")
+    return MassTable(propellant_kg=prop, mass_kg=t["mass"], cg_m=np.ascontiguousarray(cg),
                      inertia_kgm2=np.ascontiguousarray(inertia))
 
 
 def _engine(node: Mapping, path: str) -> Engine:
     return Engine(**{k: _positive(f"{path}.{k}", node[k]) for k in ENGINE_KEYS})
+
+
+def _gimbal_limit(key: str, deg: float) -> float:
+    if not 0.0 < deg < 90.0:
+        raise ConfigError(key, deg, "must be within (0, 90) deg")
+    return float(np.radians(deg))
+
+
+def _to_plain(vehicle_cfg: Mapping) -> dict:
+    try:
+        from omegaconf import DictConfig, OmegaConf
+
+        if isinstance(vehicle_cfg, DictConfig):
+            return OmegaConf.to_container(vehicle_cfg, resolve=True)  # type: ignore[return-value]
+    except ImportError:  # pragma: no cover
+        pass
+    if not isinstance(vehicle_cfg, Mapping):
+        raise ConfigError("vehicle", vehicle_cfg, "must be a mapping (the vehicle YAML)")
+    return dict(vehicle_cfg)
 
 
 def load_vehicle(vehicle_cfg: Mapping, data_dir: Path) -> Vehicle:
@@ -308,35 +530,44 @@ def load_vehicle(vehicle_cfg: Mapping, data_dir: Path) -> Vehicle:
     Parameters
     ----------
     vehicle_cfg : Mapping
-        The ``vehicle`` config node (DictConfig or dict).
-    data_dir : Path
+        The ``vehicle`` config node (OmegaConf DictConfig or plain dict) of
+        ``conf/vehicle/<name>.yaml``.
+    data_dir : pathlib.Path
         Resolved folder of the vehicle's CSV tables.
+
+    Returns
+    -------
+    Vehicle
+        Frozen dataclasses of float64 contiguous arrays, SI units (angles in rad,
+        locations in the structure frame, inertias about the CG in body axes).
 
     Raises
     ------
     ConfigError
-        For unknown or missing keys, missing or malformed files, non-monotonic axes,
-        non-physical values and inconsistent mass tables.
+        Unknown, missing or mistyped keys; missing or malformed files; non-monotonic
+        table axes; an aero grid that is not full and rectangular; negative mass,
+        inertia, thrust or Isp; an inertia tensor that is not positive definite or
+        violates the triangle inequality; a location that is not 3 numbers; mass tables
+        inconsistent with the propellant loads and the jettisoned masses.
     """
-    try:
-        from omegaconf import DictConfig, OmegaConf
-
-        node = OmegaConf.to_container(vehicle_cfg, resolve=True) if isinstance(vehicle_cfg, DictConfig) else dict(vehicle_cfg)
-    except ImportError:  # pragma: no cover
-        node = dict(vehicle_cfg)
+    node = _to_plain(vehicle_cfg)
     _check_keys(node, SCHEMA, "vehicle")
     vdir = Path(data_dir)
+    length = _positive("vehicle.length_m", node["length_m"])
+
     configs = {}
     for cname in CONFIG_NAMES:
         c = node["configurations"][cname]
-        configs[cname] = Configuration(name=cname, aero=_aero(c, vdir, cname), mass=_mass(c, vdir))
+        configs[cname] = Configuration(name=cname, aero=_aero(c, vdir, cname), mass=_mass(c, vdir, length))
 
-    fs_node = node["first_stage"]
-    ft = read_table(vdir / fs_node["thrust_table"], ("time", "thrust_vac"))
-    _increasing(f"{fs_node['thrust_table']}:time_s", ft["time"])
-    if np.any(ft["thrust_vac"] < 0):
-        raise ConfigError(f"{fs_node['thrust_table']}:thrust_vac", float(ft["thrust_vac"].min()), "thrust must be non-negative")
     p = "vehicle.first_stage"
+    fs_node = node["first_stage"]
+    fpath = vdir / fs_node["thrust_table"]
+    ft, ftn = read_table(fpath, "first_stage_thrust")
+    _increasing(f"{_table_key(fpath)}:{ftn['time']}", ft["time"])
+    _non_negative(f"{_table_key(fpath)}:{ftn['thrust_vac']}", ft["thrust_vac"], "thrust")
+    if ft["thrust_vac"].max() <= 0.0:
+        raise ConfigError(f"{_table_key(fpath)}:{ftn['thrust_vac']}", 0.0, "thrust must be positive somewhere")
     fs = FirstStage(
         thrust_time_s=ft["time"], thrust_vac_N=ft["thrust_vac"],
         isp_vac_s=_positive(f"{p}.isp_vac_s", fs_node["isp_vac_s"]),
@@ -344,14 +575,22 @@ def load_vehicle(vehicle_cfg: Mapping, data_dir: Path) -> Vehicle:
         nozzle_exit_area_m2=_positive(f"{p}.nozzle_exit_area_m2", fs_node["nozzle_exit_area_m2"], True),
         propellant_kg=_positive(f"{p}.propellant_kg", fs_node["propellant_kg"]),
         jettison_mass_kg=_positive(f"{p}.jettison_mass_kg", fs_node["jettison_mass_kg"], True),
-        gimbal_m=np.asarray(fs_node["gimbal_m"], float),
-        gimbal_limit_rad=np.radians(_positive(f"{p}.gimbal_limit_deg", fs_node["gimbal_limit_deg"])),
+        gimbal_m=_vec3(fs_node["gimbal_m"]),
+        gimbal_limit_rad=_gimbal_limit(f"{p}.gimbal_limit_deg", fs_node["gimbal_limit_deg"]),
         engine=_engine(fs_node["engine"], f"{p}.engine"),
     )
-    us_node = node["upper_stage"]
-    st = read_table(vdir / us_node["startup_table"], ("time", "thrust_fraction"))
-    _increasing(f"{us_node['startup_table']}:time_s", st["time"])
+    if fs.isp_sl_s > fs.isp_vac_s:
+        raise ConfigError(f"{p}.isp_sl_s", fs.isp_sl_s, f"must not exceed isp_vac_s ({fs.isp_vac_s})")
+
     p = "vehicle.upper_stage"
+    us_node = node["upper_stage"]
+    spath = vdir / us_node["startup_table"]
+    st, stn = read_table(spath, "startup")
+    _increasing(f"{_table_key(spath)}:{stn['time']}", st["time"])
+    frac = st["thrust_fraction"]
+    if np.any((frac < 0.0) | (frac > 1.0)):
+        raise ConfigError(f"{_table_key(spath)}:thrust_fraction", float(frac[np.argmax((frac < 0) | (frac > 1))]),
+                          "thrust fraction must be within [0, 1]")
     us = UpperStage(
         thrust_vac_N=_positive(f"{p}.thrust_vac_N", us_node["thrust_vac_N"]),
         isp_vac_s=_positive(f"{p}.isp_vac_s", us_node["isp_vac_s"]),
@@ -359,58 +598,77 @@ def load_vehicle(vehicle_cfg: Mapping, data_dir: Path) -> Vehicle:
         nozzle_exit_area_m2=_positive(f"{p}.nozzle_exit_area_m2", us_node["nozzle_exit_area_m2"], True),
         lox_kg=_positive(f"{p}.lox_kg", us_node["lox_kg"]),
         lh2_kg=_positive(f"{p}.lh2_kg", us_node["lh2_kg"]),
-        startup_time_s=st["time"], startup_fraction=st["thrust_fraction"],
-        gimbal_m=np.asarray(us_node["gimbal_m"], float),
-        gimbal_limit_rad=np.radians(_positive(f"{p}.gimbal_limit_deg", us_node["gimbal_limit_deg"])),
+        startup_time_s=st["time"], startup_fraction=frac,
+        gimbal_m=_vec3(us_node["gimbal_m"]),
+        gimbal_limit_rad=_gimbal_limit(f"{p}.gimbal_limit_deg", us_node["gimbal_limit_deg"]),
         les_mass_kg=_positive(f"{p}.les_mass_kg", us_node["les_mass_kg"], True),
         engine=_engine(us_node["engine"], f"{p}.engine"),
     )
-    rn = node["rcs"]
-    rt = read_table(vdir / rn["thrust_table"], ("altitude", "thrust_vac"))
-    _increasing(f"{rn['thrust_table']}:altitude_m", rt["altitude"])
-    if np.any(rt["thrust_vac"] < 0):
-        raise ConfigError(f"{rn['thrust_table']}:thrust_vac", float(rt["thrust_vac"].min()), "thrust must be non-negative")
+
     p = "vehicle.rcs"
+    rn = node["rcs"]
+    rpath = vdir / rn["thrust_table"]
+    rt, rtn = read_table(rpath, "rcs_thrust")
+    _increasing(f"{_table_key(rpath)}:{rtn['altitude']}", rt["altitude"])
+    _non_negative(f"{_table_key(rpath)}:{rtn['thrust_vac']}", rt["thrust_vac"], "thrust")
     rcs = Rcs(altitude_m=rt["altitude"], thrust_vac_N=rt["thrust_vac"],
               exit_area_m2=_positive(f"{p}.exit_area_m2", rn["exit_area_m2"], True),
               jets_per_direction=int(_positive(f"{p}.jets_per_direction", rn["jets_per_direction"])),
               moment_arm_m=_positive(f"{p}.moment_arm_m", rn["moment_arm_m"]),
-              ramp_up_s=_positive(f"{p}.ramp_up_s", rn["ramp_up_s"]),
-              ramp_down_s=_positive(f"{p}.ramp_down_s", rn["ramp_down_s"]),
-              location_m=np.asarray(rn["location_m"], float))
-    sn = node["sensors"]
-    sensors = Sensors(**{k: np.asarray(sn[k], float) for k in SCHEMA["sensors"]})
+              ramp_up_s=_positive(f"{p}.ramp_up_s", rn["ramp_up_s"], True),
+              ramp_down_s=_positive(f"{p}.ramp_down_s", rn["ramp_down_s"], True),
+              location_m=_vec3(rn["location_m"]))
+
+    sensors = Sensors(**{k: _vec3(node["sensors"][k]) for k in SCHEMA["sensors"]})
     en = node["events"]
-    frac = en["separation_thrust_fraction"]
-    if not 0.0 < frac < 1.0:
-        raise ConfigError("vehicle.events.separation_thrust_fraction", frac, "must be between 0 and 1")
-    events = Events(separation_thrust_fraction=float(frac),
+    frac_sep = en["separation_thrust_fraction"]
+    if not 0.0 < frac_sep < 1.0:
+        raise ConfigError("vehicle.events.separation_thrust_fraction", frac_sep, "must be within (0, 1)")
+    events = Events(separation_thrust_fraction=float(frac_sep),
                     ignition_delay_s=_positive("vehicle.events.ignition_delay_s", en["ignition_delay_s"], True),
-                    les_jettison_delay_s=_positive("vehicle.events.les_jettison_delay_s", en["les_jettison_delay_s"], True))
-    vehicle = Vehicle(name=str(node["name"]), description=str(node.get("description") or ""),
-                      length_m=_positive("vehicle.length_m", node["length_m"]), configurations=configs,
-                      first_stage=fs, upper_stage=us, rcs=rcs, sensors=sensors, events=events)
-    _check_consistency(vehicle)
+                    les_jettison_delay_s=_positive("vehicle.events.les_jettison_delay_s",
+                                                   en["les_jettison_delay_s"], True))
+    vehicle = Vehicle(name=str(node["name"]), description=str(node.get("description") or ""), length_m=length,
+                      configurations=configs, first_stage=fs, upper_stage=us, rcs=rcs, sensors=sensors,
+                      events=events)
+    check_consistency(vehicle, {n: node["configurations"][n]["mass_table"] for n in CONFIG_NAMES})
     return vehicle
 
 
-def _check_consistency(v: Vehicle) -> None:
-    """Mass tables agree with the staging masses (within 0.5 % of the smaller mass)."""
+def check_consistency(v: Vehicle, mass_files: Mapping[str, str] | None = None) -> None:
+    """Refuse mass tables that disagree with the loads and the jettisoned masses.
+
+    * every table starts at 0 propellant; the stack's ends at ``first_stage.propellant_kg``,
+      the upper configurations' at ``upper_stage.lox_kg + lh2_kg``;
+    * stack mass at 0 propellant minus ``first_stage.jettison_mass_kg`` equals the
+      upper_les mass at full propellant;
+    * upper_les minus upper mass equals ``upper_stage.les_mass_kg`` at every propellant
+      level (upper_les interpolated at upper's breakpoints; mass is linear in propellant).
+
+    All within :data:`MASS_TOLERANCE_KG`.
+    """
+    files = dict(mass_files or {n: f"mass_{n}.csv" for n in CONFIG_NAMES})
+    tol = MASS_TOLERANCE_KG
     stack, les, up = (v.configurations[n].mass for n in CONFIG_NAMES)
-    full_prop = stack.propellant_kg[-1]
-    if abs(full_prop - v.first_stage.propellant_kg) > 1e-3 * v.first_stage.propellant_kg:
-        raise ConfigError("vehicle.first_stage.propellant_kg", v.first_stage.propellant_kg,
-                          f"must equal the stack mass table's largest propellant_remaining ({full_prop:.1f} kg)")
     us_prop = v.upper_stage.lox_kg + v.upper_stage.lh2_kg
-    if abs(les.propellant_kg[-1] - us_prop) > 1e-3 * us_prop:
-        raise ConfigError("vehicle.upper_stage.lox_kg", v.upper_stage.lox_kg,
-                          f"LOX + LH2 must equal the upper-stage mass table's largest propellant_remaining ({les.propellant_kg[-1]:.1f} kg)")
+    for name, table, full, key in (("stack", stack, v.first_stage.propellant_kg, "vehicle.first_stage.propellant_kg"),
+                                   ("upper_les", les, us_prop, "vehicle.upper_stage.lox_kg + lh2_kg"),
+                                   ("upper", up, us_prop, "vehicle.upper_stage.lox_kg + lh2_kg")):
+        if table.propellant_kg[0] > tol:
+            raise ConfigError(f"{files[name]}:propellant_remaining", float(table.propellant_kg[0]),
+                              "the table must start at 0 propellant remaining")
+        if abs(table.propellant_kg[-1] - full) > tol:
+            raise ConfigError(key, full, f"must equal the largest propellant_remaining of {files[name]} "
+                                         f"({table.propellant_kg[-1]:.1f} kg)")
     after_sep = stack.mass_kg[0] - v.first_stage.jettison_mass_kg
-    if abs(after_sep - les.mass_kg[-1]) > 5e-3 * les.mass_kg[-1]:
+    if abs(after_sep - les.mass_kg[-1]) > tol:
         raise ConfigError("vehicle.first_stage.jettison_mass_kg", v.first_stage.jettison_mass_kg,
-                          f"stack burnout mass {stack.mass_kg[0]:.0f} kg minus the jettison mass must equal the upper "
-                          f"stage's full mass {les.mass_kg[-1]:.0f} kg")
-    les_diff = np.interp(up.propellant_kg, les.propellant_kg, les.mass_kg) - up.mass_kg
-    if np.max(np.abs(les_diff - v.upper_stage.les_mass_kg)) > 5e-3 * v.upper_stage.les_mass_kg + 1.0:
+                          f"stack mass at burnout ({stack.mass_kg[0]:.1f} kg, {files['stack']}) minus the jettison "
+                          f"mass must equal the upper_les mass at full propellant ({les.mass_kg[-1]:.1f} kg, "
+                          f"{files['upper_les']}) within {tol:g} kg")
+    diff = np.interp(up.propellant_kg, les.propellant_kg, les.mass_kg) - up.mass_kg
+    worst = int(np.argmax(np.abs(diff - v.upper_stage.les_mass_kg)))
+    if abs(diff[worst] - v.upper_stage.les_mass_kg) > tol:
         raise ConfigError("vehicle.upper_stage.les_mass_kg", v.upper_stage.les_mass_kg,
-                          "must equal the difference between the upper_les and upper mass tables")
+                          f"must equal upper_les mass minus upper mass at every propellant level within {tol:g} kg; "
+                          f"at {up.propellant_kg[worst]:.1f} kg propellant the difference is {diff[worst]:.1f} kg")

@@ -393,7 +393,8 @@ def aero_table(config: str, lay: Layout = LAYOUT) -> np.ndarray:
 
 
 def separation_time() -> float:
-    """First time after the peak when the thrust falls below the separation fraction (s)."""
+    """First time after the peak when the thrust falls below the separation fraction (s);
+    the same rule as ``savant_cli.sim.build.separation_time``."""
     t = np.linspace(FS_THRUST_TIME_S[0], FS_THRUST_TIME_S[-1], 200001)
     f = np.interp(t, FS_THRUST_TIME_S, FS_THRUST_VAC_MN)
     ipk = int(np.argmax(f))
@@ -409,12 +410,24 @@ def j2x_startup() -> np.ndarray:
     return np.column_stack([t, s * s * (3.0 - 2.0 * s)])
 
 
-def point_mass_ascent(t_end: float = ASCENT_END_S, n: int = 0):
+def point_mass_ascent(t_end: float = ASCENT_END_S) -> tuple[np.ndarray, ...]:
     """Two-dimensional point-mass ascent over a spherical non-rotating Earth.
 
-    Returns times (s), altitude (m), air speed (m/s), Mach, dynamic pressure (Pa) and
-    configuration index (0 stack, 1 upper stage with LES, 2 without) on a 0.5 s grid.
-    State: radius, range angle, radial and tangential velocity, mass.
+    Vertical rise, fixed pitch kick, gravity turn; the first stage drops at the
+    separation time, the J-2X starts after the coast with its start transient.
+
+    Parameters
+    ----------
+    t_end : float
+        Final time from liftoff, s.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        Times (s), altitude (m), air speed (m/s), Mach, dynamic pressure (Pa) and
+        configuration index (0 stack, 1 upper stage with LES, 2 without) on a 0.5 s grid
+        plus the separation instant. Integration state: radius, range angle, radial and
+        tangential velocity, mass.
     """
     from savant_cli.models.atmosphere import us76
 
@@ -544,7 +557,7 @@ def write_all(out: Path, lay: Layout = LAYOUT) -> None:
         _write(out / f"aero_{config}.csv", AERO_HEADER, aero_table(config, lay),
                [src, f"{config}: [E] slender-body stand-in (Atlas SLV-3D CA [P]); body-axis coefficients, "
                      f"moments about the MRP at station {nose:g} m (nose), l_ref {REF_LENGTH_M:g} m, "
-                     f"S_ref {REF_AREA_M2:.2f} m2"], fmt="%.8g")
+                     f"S_ref {REF_AREA_M2:.2f} m2"], fmt="%.10g")
         _write(out / f"base_force_{config}.csv", ["time_s", "base_force_N"], bases[config],
                [src, f"{config}: [E] base force along body X (negative = drag) vs time from liftoff, "
                      "C_pb(M) q A_base along a 2-D point-mass ascent"], fmt="%.6g")

@@ -35,8 +35,12 @@ DESIGN = {
     "upper": {"omega": 1.0, "zeta": 0.7},
     "integral_ratio": 0.15,
     "kir_share": 0.2,
-    "stack_altitudes_m": [0, 1000, 3000, 6000, 9000, 12000, 15000, 20000, 30000, 40000, 50000, 60000],
-    "upper_speeds_mps": [1500, 2000, 2500, 3000, 4000, 5000, 6000, 7000, 8000],
+    "stack_altitudes_m": [0, 1000, 3000, 6000, 9000, 12000, 15000, 20000, 30000, 40000, 50000],
+    "upper_speeds_mps": [2000, 2500, 3000, 4000, 5000, 6000, 7000, 8000],
+    # design window: before the first-stage tail-off (thrust, hence μc, collapses there
+    # and a pole-placement gain would grow without bound) and after the J-2X start
+    "stack_design_end_before_separation_s": 12.0,
+    "upper_design_start_after_ignition_s": 5.0,
 }
 
 
@@ -94,8 +98,10 @@ def design(cfg, vehicle) -> dict:
     vrel = np.array([np.linalg.norm(earth.velocity_relative_eci(yi[0:3], yi[3:6], C.OMEGA_EARTH)) for yi in y])
     tables = {}
     for name, axis_vals, sel, var, config in (
-        ("stack", DESIGN["stack_altitudes_m"], t < ref.t_sep - 2.0, alt, CONFIG_STACK),
-        ("upper", DESIGN["upper_speeds_mps"], t > ref.t_ign + 5.0, vrel, CONFIG_UPPER),
+        ("stack", DESIGN["stack_altitudes_m"], t < ref.t_sep - DESIGN["stack_design_end_before_separation_s"], alt,
+         CONFIG_STACK),
+        ("upper", DESIGN["upper_speeds_mps"], t > ref.t_ign + DESIGN["upper_design_start_after_ignition_s"], vrel,
+         CONFIG_UPPER),
     ):
         d = DESIGN[name]
         w, z = d["omega"], d["zeta"]

@@ -127,7 +127,12 @@ def ecef_to_geodetic(r_ecef: np.ndarray, a: float, e2: float) -> tuple[float, fl
     h_m : float
         Height above the ellipsoid, m.
     """
-    x, y, z = r_ecef[0], r_ecef[1], r_ecef[2]
+    return geodetic_xyz(r_ecef[0], r_ecef[1], r_ecef[2], a, e2)
+
+
+@njit(cache=True)
+def geodetic_xyz(x: float, y: float, z: float, a: float, e2: float) -> tuple[float, float, float]:
+    """:func:`ecef_to_geodetic` on scalar ECEF coordinates (m); no array is created."""
     p = np.sqrt(x * x + y * y)
     lon = np.arctan2(y, x)
     sqrt1me2 = np.sqrt(1.0 - e2)              # b / a

@@ -41,12 +41,22 @@ def gravity_zonal(r_eci: np.ndarray, mu: float, re: float, j2: float, j3: float,
     ndarray, shape (3,)
         Acceleration, m/s^2, in the same axes as ``r_eci``.
     """
-    x, y, z = r_eci[0], r_eci[1], r_eci[2]
+    ax, ay, az = gravity_zonal_xyz(r_eci[0], r_eci[1], r_eci[2], mu, re, j2, j3, j4)
+    out = np.empty(3)
+    out[0] = ax
+    out[1] = ay
+    out[2] = az
+    return out
+
+
+@njit(cache=True)
+def gravity_zonal_xyz(x: float, y: float, z: float, mu: float, re: float, j2: float, j3: float,
+                      j4: float) -> tuple[float, float, float]:
+    """:func:`gravity_zonal` on scalar coordinates (m), returning a tuple (m/s²)."""
     r2 = x * x + y * y + z * z
     r = np.sqrt(r2)
     zr2 = z * z / r2                      # (z/r)^2
     mu_r3 = mu / (r2 * r)
-    out = np.empty(3)
 
     # point mass
     kxy = -mu_r3
@@ -68,10 +78,7 @@ def gravity_zonal(r_eci: np.ndarray, mu: float, re: float, j2: float, j3: float,
         kxy += c4 * (1.0 - 14.0 * zr2 + 21.0 * zr2 * zr2)
         kz += c4 * (5.0 - 70.0 / 3.0 * zr2 + 21.0 * zr2 * zr2)
 
-    out[0] = kxy * x
-    out[1] = kxy * y
-    out[2] = kz * z + az_extra
-    return out
+    return kxy * x, kxy * y, kz * z + az_extra
 
 
 @njit(cache=True)

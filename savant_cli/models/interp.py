@@ -30,14 +30,49 @@ def locate(axis: np.ndarray, n: int, x: float) -> tuple[int, float]:
         return 0, 0.0
     if x >= axis[n - 1]:
         return n - 2, 1.0
-    i = np.searchsorted(axis[:n], x, side="right") - 1
-    return i, (x - axis[i]) / (axis[i + 1] - axis[i])
+    lo, hi = 0, n - 1  # bisection: axis[lo] <= x < axis[hi] (no array view, no allocation)
+    while hi - lo > 1:
+        mid = (lo + hi) >> 1
+        if axis[mid] <= x:
+            lo = mid
+        else:
+            hi = mid
+    return lo, (x - axis[lo]) / (axis[lo + 1] - axis[lo])
 
 
 @njit(cache=True)
 def rows(table: np.ndarray, i: int, w: float) -> np.ndarray:
     """Blend rows ``i`` and ``i+1`` of a 2-D table with weight ``w``."""
     return (1.0 - w) * table[i] + w * table[i + 1]
+
+
+@njit(cache=True)
+def trilinear5(g: np.ndarray, c: int, m: int, i: int, wi: float, j: int, wj: float, k: int, wk: float) -> float:
+    """:func:`trilinear` of ``g[c, m]`` of a 5-D table, indexing in place (no views)."""
+    c00 = g[c, m, i, j, k] * (1.0 - wi) + g[c, m, i + 1, j, k] * wi
+    c01 = g[c, m, i, j, k + 1] * (1.0 - wi) + g[c, m, i + 1, j, k + 1] * wi
+    c10 = g[c, m, i, j + 1, k] * (1.0 - wi) + g[c, m, i + 1, j + 1, k] * wi
+    c11 = g[c, m, i, j + 1, k + 1] * (1.0 - wi) + g[c, m, i + 1, j + 1, k + 1] * wi
+    c0 = c00 * (1.0 - wj) + c10 * wj
+    c1 = c01 * (1.0 - wj) + c11 * wj
+    return c0 * (1.0 - wk) + c1 * wk
+
+
+@njit(cache=True)
+def locate_row(axes: np.ndarray, row: int, n: int, x: float) -> tuple[int, float]:
+    """:func:`locate` on row ``row`` of a 2-D array of padded axes, without a view."""
+    if x <= axes[row, 0]:
+        return 0, 0.0
+    if x >= axes[row, n - 1]:
+        return n - 2, 1.0
+    lo, hi = 0, n - 1
+    while hi - lo > 1:
+        mid = (lo + hi) >> 1
+        if axes[row, mid] <= x:
+            lo = mid
+        else:
+            hi = mid
+    return lo, (x - axes[row, lo]) / (axes[row, lo + 1] - axes[row, lo])
 
 
 @njit(cache=True)

@@ -15,7 +15,7 @@ from numba import njit
 
 from savant_cli.models import earth, gravity
 from savant_cli.models.atmosphere import atmosphere
-from savant_cli.models.interp import interp1, locate, rows, trilinear
+from savant_cli.models.interp import interp1, locate, locate_row, rows, trilinear5
 from savant_cli.sim.layout import (
     A_ACCEL, A_ALPHA, A_ALT, A_BETA, A_CG, A_DP, A_DY, A_FAERO, A_GRAV, A_LAT, A_LON,
     A_MACH, A_MAERO, A_MASS, A_MTHRUST, A_PRES, A_PROP, A_QBAR, A_RCS_TORQUE, A_RHO,
@@ -99,21 +99,21 @@ def solve_sym3(a00, a11, a22, a01, a02, a12, b0, b1, b2):
 
 
 @njit(cache=True)
-def actuator_third_order(xa: np.ndarray, cmd: float, wa: float, wn: float, zeta: float,
-                         rate_limit: float, out: np.ndarray, k: int) -> None:
+def actuator_third_order(x: np.ndarray, k: int, cmd: float, wa: float, wn: float, zeta: float,
+                         rate_limit: float, out: np.ndarray) -> None:
     """Third-order TVC actuator: rate-limited position loop driving a 2nd-order load.
 
-    States ``[δ, δ̇, δ̈]``; ``v = sat(ωa (δc − δ), ±rate_limit)`` is the commanded rate and
+    States ``x[k:k+3] = [δ, δ̇, δ̈]``, derivatives into ``out[k:k+3]``; ``v = sat(ωa (δc − δ), ±rate_limit)`` is the commanded rate and
     ``δ⃛ = ωn² (v − δ̇) − 2 ζ ωn δ̈``. Unsaturated, δ/δc = ωa ωn² / (s(s² + 2ζωn s + ωn²) + ωa ωn²).
     """
-    v = wa * (cmd - xa[0])
+    v = wa * (cmd - x[k])
     if v > rate_limit:
         v = rate_limit
     elif v < -rate_limit:
         v = -rate_limit
-    out[k] = xa[1]
-    out[k + 1] = xa[2]
-    out[k + 2] = wn * wn * (v - xa[1]) - 2.0 * zeta * wn * xa[2]
+    out[k] = x[k + 1]
+    out[k + 1] = x[k + 2]
+    out[k + 2] = wn * wn * (v - x[k + 1]) - 2.0 * zeta * wn * x[k + 2]
 
 
 @njit(cache=True)
@@ -182,15 +182,11 @@ def derivative(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: PlantT
     # ------------------------------------------------------------ environment
     th = omega_e * t
     ct, st = np.cos(th), np.sin(th)
-    r_ecef = np.empty(3)
-    r_ecef[0] = ct * rx + st * ry
-    r_ecef[1] = -st * rx + ct * ry
-    r_ecef[2] = rz
-    lat, lon, alt = earth.ecef_to_geodetic(r_ecef, p[P_RE], p[P_E2])
+    lat, lon, alt = earth.geodetic_xyz(ct * rx + st * ry, -st * rx + ct * ry, rz, p[P_RE], p[P_E2])
     temp, pres, rho, sos = atmosphere(alt, tb.atm_alt, tb.atm_lnp, tb.atm_lnrho)
     order = p[P_GRAVITY_ORDER]
-    g = gravity.gravity_zonal(x[R:R + 3], p[P_MU], p[P_RE], p[P_J2] if order >= 2 else 0.0,
-                              p[P_J3] if order >= 3 else 0.0, p[P_J4] if order >= 4 else 0.0)
+    gx, gy, gz = gravity.gravity_zonal_xyz(rx, ry, rz, p[P_MU], p[P_RE], p[P_J2] if order >= 2 else 0.0,
+                                           p[P_J3] if order >= 3 else 0.0, p[P_J4] if order >= 4 else 0.0)
     # Earth-relative velocity v − ω_E ẑ × r, ECI axes
     ex = vx + omega_e * ry
     ey = vy - omega_e * rx
@@ -224,19 +220,21 @@ def derivative(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: PlantT
 
     # ------------------------------------------------------- mass properties
     prop = x[MFS] if config == CONFIG_STACK else x[MLOX] + x[MLH2]
-    mtab = tb.mass_data[config]
-    im_, wm_ = locate(tb.mass_prop[config], tb.mass_len[config], prop)
+    mt = tb.mass_data
+    c_ = config
+    i0, wm_ = locate_row(tb.mass_prop, c_, tb.mass_len[c_], prop)
+    i1 = i0 + 1
     a_ = 1.0 - wm_
-    mass = a_ * mtab[im_, 0] + wm_ * mtab[im_ + 1, 0]
-    cgx = a_ * mtab[im_, 1] + wm_ * mtab[im_ + 1, 1]
-    cgy = a_ * mtab[im_, 2] + wm_ * mtab[im_ + 1, 2]
-    cgz = a_ * mtab[im_, 3] + wm_ * mtab[im_ + 1, 3]
-    ixx = a_ * mtab[im_, 4] + wm_ * mtab[im_ + 1, 4]
-    iyy = a_ * mtab[im_, 5] + wm_ * mtab[im_ + 1, 5]
-    izz = a_ * mtab[im_, 6] + wm_ * mtab[im_ + 1, 6]
-    ixy = -(a_ * mtab[im_, 7] + wm_ * mtab[im_ + 1, 7])  # tensor element = −product of inertia
-    ixz = -(a_ * mtab[im_, 8] + wm_ * mtab[im_ + 1, 8])
-    iyz = -(a_ * mtab[im_, 9] + wm_ * mtab[im_ + 1, 9])
+    mass = a_ * mt[c_, i0, 0] + wm_ * mt[c_, i1, 0]
+    cgx = a_ * mt[c_, i0, 1] + wm_ * mt[c_, i1, 1]
+    cgy = a_ * mt[c_, i0, 2] + wm_ * mt[c_, i1, 2]
+    cgz = a_ * mt[c_, i0, 3] + wm_ * mt[c_, i1, 3]
+    ixx = a_ * mt[c_, i0, 4] + wm_ * mt[c_, i1, 4]
+    iyy = a_ * mt[c_, i0, 5] + wm_ * mt[c_, i1, 5]
+    izz = a_ * mt[c_, i0, 6] + wm_ * mt[c_, i1, 6]
+    ixy = -(a_ * mt[c_, i0, 7] + wm_ * mt[c_, i1, 7])  # tensor element = −product of inertia
+    ixz = -(a_ * mt[c_, i0, 8] + wm_ * mt[c_, i1, 8])
+    iyz = -(a_ * mt[c_, i0, 9] + wm_ * mt[c_, i1, 9])
 
     # ---------------------------------------------------------- aerodynamics
     fax = fay = faz = 0.0
@@ -245,28 +243,27 @@ def derivative(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: PlantT
         im, wm = locate(tb.aero_mach, tb.aero_mach.size, mach)
         ia, wa = locate(tb.aero_alpha, tb.aero_alpha.size, alpha)
         ib, wb2 = locate(tb.aero_beta, tb.aero_beta.size, beta)
-        coef = tb.aero_coef[config]
-        ca = trilinear(coef[0], im, wm, ia, wa, ib, wb2)
-        cy = trilinear(coef[1], im, wm, ia, wa, ib, wb2)
-        cn = trilinear(coef[2], im, wm, ia, wa, ib, wb2)
-        cl = trilinear(coef[3], im, wm, ia, wa, ib, wb2)
-        cm = trilinear(coef[4], im, wm, ia, wa, ib, wb2)
-        cnn = trilinear(coef[5], im, wm, ia, wa, ib, wb2)
-        ref = tb.aero_ref[config]
-        qs = qbar * ref[0]
-        nb = tb.base_len[config]
-        ib_, wb_ = locate(tb.base_time[config], nb, t)
+        co = tb.aero_coef
+        ca = trilinear5(co, config, 0, im, wm, ia, wa, ib, wb2)
+        cy = trilinear5(co, config, 1, im, wm, ia, wa, ib, wb2)
+        cn = trilinear5(co, config, 2, im, wm, ia, wa, ib, wb2)
+        cl = trilinear5(co, config, 3, im, wm, ia, wa, ib, wb2)
+        cm = trilinear5(co, config, 4, im, wm, ia, wa, ib, wb2)
+        cnn = trilinear5(co, config, 5, im, wm, ia, wa, ib, wb2)
+        rf = tb.aero_ref
+        qs = qbar * rf[config, 0]
+        ib_, wb_ = locate_row(tb.base_time, config, tb.base_len[config], t)
         f_base = (1.0 - wb_) * tb.base_force[config, ib_] + wb_ * tb.base_force[config, ib_ + 1]
         fax = -qs * ca + f_base
         fay = qs * cy
         faz = -qs * cn
         # r_cg→mrp in body axes: diag(−1, 1, −1)(mrp − cg)
-        rmx = -(ref[4] - cgx)
-        rmy = ref[5] - cgy
-        rmz = -(ref[6] - cgz)
-        max_ = qs * ref[1] * cl + rmy * faz - rmz * fay
-        may = qs * ref[2] * cm + rmz * fax - rmx * faz
-        maz = qs * ref[3] * cnn + rmx * fay - rmy * fax
+        rmx = -(rf[config, 4] - cgx)
+        rmy = rf[config, 5] - cgy
+        rmz = -(rf[config, 6] - cgz)
+        max_ = qs * rf[config, 1] * cl + rmy * faz - rmz * fay
+        may = qs * rf[config, 2] * cm + rmz * fax - rmx * faz
+        maz = qs * rf[config, 3] * cnn + rmx * fay - rmy * fax
 
     # ---------------------------------------------------------------- thrust
     thrust = 0.0
@@ -318,9 +315,9 @@ def derivative(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: PlantT
     xd[R] = vx
     xd[R + 1] = vy
     xd[R + 2] = vz
-    xd[V] = m00 * abx + m01 * aby + m02 * abz + g[0]
-    xd[V + 1] = m10 * abx + m11 * aby + m12 * abz + g[1]
-    xd[V + 2] = m20 * abx + m21 * aby + m22 * abz + g[2]
+    xd[V] = m00 * abx + m01 * aby + m02 * abz + gx
+    xd[V + 1] = m10 * abx + m11 * aby + m12 * abz + gy
+    xd[V + 2] = m20 * abx + m21 * aby + m22 * abz + gz
     xd[Q] = 0.5 * (-q1 * wx - q2 * wy - q3 * wz)
     xd[Q + 1] = 0.5 * (q0 * wx + q2 * wz - q3 * wy)
     xd[Q + 2] = 0.5 * (q0 * wy - q1 * wz + q3 * wx)
@@ -342,8 +339,8 @@ def derivative(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: PlantT
         wa_, wn_, z_, rl_ = p[P_ACT_FS_WA], p[P_ACT_FS_WN], p[P_ACT_FS_ZETA], p[P_ACT_FS_RATE]
     else:
         wa_, wn_, z_, rl_ = p[P_ACT_US_WA], p[P_ACT_US_WN], p[P_ACT_US_ZETA], p[P_ACT_US_RATE]
-    actuator_third_order(x[ACT_P:ACT_P + 3], clip(u[U_DPC], lim), wa_, wn_, z_, rl_, xd, ACT_P)
-    actuator_third_order(x[ACT_Y:ACT_Y + 3], clip(u[U_DYC], lim), wa_, wn_, z_, rl_, xd, ACT_Y)
+    actuator_third_order(x, ACT_P, clip(u[U_DPC], lim), wa_, wn_, z_, rl_, xd)
+    actuator_third_order(x, ACT_Y, clip(u[U_DYC], lim), wa_, wn_, z_, rl_, xd)
     xd[RCS_POS] = jet_ramp(x[RCS_POS], u[U_RCS] > 0.5, p[P_RCS_RAMP_UP], p[P_RCS_RAMP_DOWN])
     xd[RCS_NEG] = jet_ramp(x[RCS_NEG], u[U_RCS] < -0.5, p[P_RCS_RAMP_UP], p[P_RCS_RAMP_DOWN])
 
@@ -363,9 +360,9 @@ def derivative(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: PlantT
     aux[A_WIND_N] = wn_n
     aux[A_WIND_E] = wn_e
     aux[A_WIND_D] = 0.0
-    aux[A_GRAV] = g[0]
-    aux[A_GRAV + 1] = g[1]
-    aux[A_GRAV + 2] = g[2]
+    aux[A_GRAV] = gx
+    aux[A_GRAV + 1] = gy
+    aux[A_GRAV + 2] = gz
     aux[A_THRUST] = thrust
     aux[A_MASS] = mass
     aux[A_FAERO] = fax

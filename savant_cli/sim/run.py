@@ -58,7 +58,7 @@ def simulate(model: SimModel, progress: bool = True, chunk_s: float = 10.0) -> S
     t_max = model.sched[E.S_T_MAX]
     n_total = int(np.ceil(t_max / rt.dt)) + 1
     n_rows = n_total // rt.n_log + 2
-    log = np.zeros((n_rows, log_columns()))
+    log = np.empty((n_rows, log_columns()))  # every kept row is fully written
     chunk = max(1, int(round(chunk_s / rt.dt)))
     k = 0
     row = 0

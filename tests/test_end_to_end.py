@@ -1,0 +1,119 @@
+"""End to end through the installed `savant` command: the nominal ascent lands in
+credible ranges, every output is written, a bad config exits 2, a diverging run writes
+its partial history and exits 1, and `savant report` redraws the plots."""
+
+import json
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+
+pytestmark = pytest.mark.slow
+
+
+def savant_cmd() -> list[str]:
+    exe = shutil.which("savant")
+    return [exe] if exe else [sys.executable, "-m", "savant_cli.cli"]
+
+
+def run(args, cwd, timeout=900):
+    return subprocess.run(savant_cmd() + args, cwd=cwd, capture_output=True, text=True, timeout=timeout)
+
+
+@pytest.fixture(scope="module")
+def nominal(tmp_path_factory):
+    out = tmp_path_factory.mktemp("nominal")
+    proc = run(["run", f"hydra.run.dir={out}/run", "sim.progress=false"], cwd=out)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    return out / "run", proc
+
+
+def test_nominal_ascent_is_credible(nominal):
+    run_dir, _ = nominal
+    s = json.loads((run_dir / "summary.json").read_text())
+    assert s["status"] == "complete"
+    assert 30e3 <= s["max_dynamic_pressure_Pa"] <= 50e3
+    assert 45.0 <= s["time_max_dynamic_pressure_s"] <= 75.0
+    assert 120.0 <= s["time_separation_s"] <= 140.0
+    assert s["time_upper_stage_ignition_s"] > s["time_separation_s"]
+    assert s["time_les_jettison_s"] > s["time_upper_stage_ignition_s"]
+    assert 100e3 <= s["cutoff_altitude_m"] <= 200e3
+    assert s["cutoff_inertial_velocity_mps"] >= 7300.0
+    assert s["inclination_deg"] == pytest.approx(51.6, abs=0.3)
+    assert s["perigee_altitude_km"] == pytest.approx(56.0, abs=10.0)
+    assert s["apogee_altitude_km"] == pytest.approx(185.0, abs=10.0)
+    # the flight control keeps the vehicle on its commands
+    assert s["max_attitude_error_deg"] < 3.0
+    assert s["max_gimbal_deg"] < 5.0
+    for key in ("max_alpha_deg", "sim_wall_time_s", "realtime_factor"):
+        assert key in s
+
+
+def test_outputs_are_self_describing(nominal):
+    run_dir, proc = nominal
+    required = ["time", "position_eci", "velocity_eci", "gravity_eci", "altitude", "latitude", "longitude",
+                "velocity_relative", "mach", "dynamic_pressure", "density", "pressure", "temperature",
+                "speed_of_sound", "alpha", "beta", "body_rate", "quaternion", "quaternion_command",
+                "rate_command", "attitude_error", "gimbal_angle", "gimbal_command", "rcs_command", "mass",
+                "propellant_remaining", "thrust", "wind_ned"]
+    with h5py.File(run_dir / "savant.h5", "r") as f:
+        th = f["time_history"]
+        for name in required:
+            assert name in th, name
+            assert th[name].attrs["units"], name
+        assert bool(f.attrs["complete"])
+        assert "vehicle" in f["config"][()].decode()
+        assert f.attrs["savant_version"]
+        t = th["time"][()]
+        assert np.all(np.diff(t) > 0)
+        # the recorded gravity is the zonal model's: about 9.8 m/s^2 at liftoff
+        assert np.linalg.norm(th["gravity_eci"][0]) == pytest.approx(9.79, abs=0.03)
+    pngs = sorted(p.name for p in (run_dir / "plots").glob("*.png"))
+    assert len(pngs) == 7
+    assert (run_dir / ".hydra" / "config.yaml").is_file()
+    assert "perigee" in proc.stdout  # the console summary
+
+
+def test_report_redraws_plots(nominal, tmp_path):
+    run_dir, _ = nominal
+    copy = tmp_path / "copy"
+    shutil.copytree(run_dir, copy)
+    shutil.rmtree(copy / "plots")
+    proc = run(["report", str(copy)], cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert len(list((copy / "plots").glob("*.png"))) == 7
+
+
+def test_bad_config_exits_2_before_computing(tmp_path):
+    for args in (["run", "sim.plant_rat_hz=100"],  # unknown key (Hydra)
+                 ["run", "vehicle=no_such_vehicle"],  # unknown group option (Hydra)
+                 ["run", "controller.blending.stack=[0.5,0.1,0.1]"]):  # physical check (savant)
+        proc = run(args + [f"hydra.run.dir={tmp_path}/bad"], cwd=tmp_path)
+        assert proc.returncode == 2, (args, proc.stdout, proc.stderr)
+        assert not (tmp_path / "bad" / "savant.h5").exists()
+    proc = run(["run", "controller.blending.stack=[0.5,0.1,0.1]", f"hydra.run.dir={tmp_path}/bad"], cwd=tmp_path)
+    assert "controller.blending.stack" in proc.stderr and "sum to 1" in proc.stderr
+
+
+def test_diverging_run_writes_partial_history_and_exits_1(tmp_path):
+    # a body-rate limit below the roll program's rate is a "nonsensical state"
+    proc = run(["run", "sim.max_body_rate_deg_s=1.0", f"hydra.run.dir={tmp_path}/div", "sim.progress=false"],
+               cwd=tmp_path)
+    assert proc.returncode == 1, proc.stdout + proc.stderr
+    s = json.loads((tmp_path / "div" / "summary.json").read_text())
+    assert s["status"] == "diverged"
+    assert "body rate" in s["message"] and "t =" in s["message"]
+    with h5py.File(tmp_path / "div" / "savant.h5", "r") as f:
+        assert not bool(f.attrs["complete"])
+        assert f["time_history/time"].shape[0] > 10
+
+
+def test_version_and_help():
+    proc = subprocess.run(savant_cmd() + ["--version"], capture_output=True, text=True)
+    assert proc.returncode == 0 and proc.stdout.startswith("savant ")
+    proc = subprocess.run(savant_cmd() + ["--help"], capture_output=True, text=True)
+    assert proc.returncode == 0 and "report" in proc.stdout
