@@ -52,7 +52,9 @@ class OutputConfig:
 @dataclass
 class PhaseConfig:
     name: str = "ascent"
+    start: str = "liftoff"  # liftoff | staging (from staging_state_file)
     stop_at: str = "cutoff"
+    staging_state_file: str = ""
 
 
 @dataclass
@@ -321,6 +323,11 @@ def _check_physics(cfg: SavantConfig) -> None:
     _check_rates(cfg.sim)
     _one_of("environment.gravity_order", cfg.environment.gravity_order, (0, 2, 3, 4))
     _one_of("phase.stop_at", cfg.phase.stop_at, ("cutoff", "separation"))
+    _one_of("phase.start", cfg.phase.start, ("liftoff", "staging"))
+    if cfg.phase.start == "staging" and cfg.phase.stop_at == "separation":
+        raise ConfigError("phase.stop_at", cfg.phase.stop_at, "a phase starting at staging must stop at cutoff")
+    if cfg.phase.start == "staging" and not cfg.phase.staging_state_file:
+        raise ConfigError("phase.staging_state_file", "", "must name a staging-state file when phase.start = staging")
     for stage in ("first_stage", "upper_stage"):
         a = getattr(cfg.actuator, stage)
         for name in ("loop_gain_rad_s", "natural_frequency_hz", "damping", "rate_limit_deg_s"):

@@ -128,3 +128,19 @@ def test_malformed_data_file_refused(compose_cfg, tmp_path):
 
 def test_negative_thrust_refused(compose_cfg):
     _expect(compose_cfg(["vehicle.upper_stage.thrust_vac_N=-1"]), "thrust")
+
+
+def test_staging_state_for_another_vehicle_refused(compose_cfg, tmp_path):
+    import json
+
+    src = shipped_config_dir() / "phase" / "ares_i_iss_staging_state.json"
+    doc = json.loads(src.read_text())
+    doc["vehicle"] = "other_vehicle"
+    bad = tmp_path / "staging.json"
+    bad.write_text(json.dumps(doc))
+    err = _expect(compose_cfg(["phase=upper_stage", f"phase.staging_state_file={bad}"]), "phase.staging_state_file")
+    assert "other_vehicle" in err.allowed
+
+
+def test_upper_stage_phase_needs_a_state_file(compose_cfg):
+    _expect(compose_cfg(["phase=upper_stage", "phase.staging_state_file="]), "phase.staging_state_file")

@@ -117,3 +117,34 @@ def test_version_and_help():
     assert proc.returncode == 0 and proc.stdout.startswith("savant ")
     proc = subprocess.run(savant_cmd() + ["--help"], capture_output=True, text=True)
     assert proc.returncode == 0 and "report" in proc.stdout
+
+
+def test_upper_stage_phase_continues_the_ascent_exactly(nominal, tmp_path):
+    """first_stage → staging_state.json → upper_stage reproduces the full ascent's cutoff
+    bit for bit (the state is taken before separation is applied)."""
+    run_dir, _ = nominal
+    proc = run(["run", "phase=first_stage", f"hydra.run.dir={tmp_path}/fs", "sim.progress=false"], cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    fs = json.loads((tmp_path / "fs" / "summary.json").read_text())
+    assert fs["message"].startswith("end of phase at first-stage separation")
+    staging = tmp_path / "fs" / "staging_state.json"
+    proc = run(["run", "phase=upper_stage", f"phase.staging_state_file={staging}", f"hydra.run.dir={tmp_path}/us",
+                "sim.progress=false"], cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    us = json.loads((tmp_path / "us" / "summary.json").read_text())
+    full = json.loads((run_dir / "summary.json").read_text())
+    for key in ("time_cutoff_s", "cutoff_altitude_m", "cutoff_inertial_velocity_mps", "perigee_altitude_km",
+                "apogee_altitude_km", "inclination_deg"):
+        assert us[key] == full[key], key
+    with h5py.File(tmp_path / "us" / "savant.h5", "r") as f:
+        t0 = f["time_history/time"][0]
+    assert 0.0 <= t0 - fs["time_separation_s"] <= 0.02  # first logged sample (50 Hz)
+
+
+def test_shipped_staging_state_flies_to_orbit(tmp_path):
+    proc = run(["run", "phase=upper_stage", f"hydra.run.dir={tmp_path}/us", "sim.progress=false", "output.plots=false"],
+               cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    s = json.loads((tmp_path / "us" / "summary.json").read_text())
+    assert s["inclination_deg"] == pytest.approx(51.6, abs=0.3)
+    assert s["cutoff_inertial_velocity_mps"] >= 7300.0

@@ -38,6 +38,8 @@ class SimModel:
     x0: np.ndarray
     d0: np.ndarray
     u0: np.ndarray
+    k0: int = 0  # first plant step (non-zero when starting from a staging state)
+    events0: np.ndarray = field(default_factory=lambda: np.full(4, np.nan))
     info: dict = field(default_factory=dict)
 
 

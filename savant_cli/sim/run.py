@@ -32,6 +32,8 @@ class SimResult:
     log: np.ndarray  # (n_rows, n_cols) logged rows: t, x, aux, d
     x: np.ndarray  # final state
     d: np.ndarray  # final discrete state
+    u: np.ndarray  # final held inputs
+    k_final: int  # plant step index at the stop
     events: np.ndarray  # event times (NaN if not reached), see engine.EVENT_NAMES
     status: str  # complete | diverged | interrupted
     stop_code: int
@@ -54,13 +56,13 @@ def simulate(model: SimModel, progress: bool = True, chunk_s: float = 10.0) -> S
     x = model.x0.copy()
     d = model.d0.copy()
     u = model.u0.copy()
-    events = np.full(4, np.nan)
+    events = model.events0.copy()
     t_max = model.sched[E.S_T_MAX]
     n_total = int(np.ceil(t_max / rt.dt)) + 1
     n_rows = n_total // rt.n_log + 2
     log = np.empty((n_rows, log_columns()))  # every kept row is fully written
     chunk = max(1, int(round(chunk_s / rt.dt)))
-    k = 0
+    k = model.k0
     row = 0
     code = E.RUNNING
     detail = ""
@@ -69,7 +71,7 @@ def simulate(model: SimModel, progress: bool = True, chunk_s: float = 10.0) -> S
     bar = Progress(TextColumn("[bold]flight"), BarColumn(), TextColumn("t = {task.fields[t]:6.1f} s"),
                    TimeElapsedColumn(), transient=True, disable=not progress)
     with bar:
-        task = bar.add_task("flight", total=t_max, t=0.0)
+        task = bar.add_task("flight", total=t_max, t=k * rt.dt, completed=k * rt.dt)
         try:
             while code == E.RUNNING and k < n_total:
                 t0 = time.perf_counter()
@@ -103,7 +105,7 @@ def simulate(model: SimModel, progress: bool = True, chunk_s: float = 10.0) -> S
         log[row, 1 + L.N_STATE:1 + L.N_STATE + L.N_AUX] = aux
         log[row, 1 + L.N_STATE + L.N_AUX:] = d
         row += 1
-    return SimResult(log=log[:row].copy(), x=x, d=d, events=events, status=status, stop_code=code,
+    return SimResult(log=log[:row].copy(), x=x, d=d, u=u, k_final=k, events=events, status=status, stop_code=code,
                      message=message, t_final=t_final, sim_wall_time_s=wall)
 
 

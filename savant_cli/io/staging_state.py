@@ -1,0 +1,70 @@
+"""Staging-state files: the complete simulation state at first-stage separation, so an
+upper-stage phase (``phase=upper_stage``) can start there without flying the first stage.
+
+A ``phase=first_stage`` run writes ``staging_state.json`` into its output folder. The
+state is taken at the plant step where separation triggers, *before* it is applied, so
+a run resumed from it separates on its first step exactly as the full ascent does.
+
+JSON layout: ``format`` ("savant-staging-state"), ``format_version``, ``vehicle``,
+``guidance``, ``dt_s`` (plant step), ``step`` (plant step index), ``time_s``, ``state``
+(name → value, SI, names of :data:`savant_cli.sim.layout.STATE_NAMES`), ``discrete`` and
+``inputs`` (flight-software state and held inputs, as lists).
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from savant_cli.errors import ConfigError
+from savant_cli.io.atomic import write_json_atomic
+from savant_cli.sim import layout as L
+
+FORMAT = "savant-staging-state"
+FORMAT_VERSION = 1
+
+
+@dataclass(frozen=True)
+class StagingState:
+    vehicle: str
+    guidance: str
+    dt_s: float
+    step: int
+    x: np.ndarray
+    d: np.ndarray
+    u: np.ndarray
+
+
+def write_staging_state(path: Path, state: StagingState) -> None:
+    """Write a staging-state file atomically."""
+    write_json_atomic(path, {
+        "format": FORMAT, "format_version": FORMAT_VERSION, "vehicle": state.vehicle, "guidance": state.guidance,
+        "dt_s": state.dt_s, "step": int(state.step), "time_s": state.step * state.dt_s,
+        "state": dict(zip(L.STATE_NAMES, map(float, state.x))),
+        "discrete": [float(v) for v in state.d], "inputs": [float(v) for v in state.u],
+    })
+
+
+def read_staging_state(path: Path, key: str = "phase.staging_state_file") -> StagingState:
+    """Read and check a staging-state file (ConfigError on anything malformed)."""
+    try:
+        doc = json.loads(Path(path).read_text())
+    except (OSError, ValueError) as exc:
+        raise ConfigError(key, str(path), f"unreadable staging-state file ({exc})") from None
+    if doc.get("format") != FORMAT or doc.get("format_version") != FORMAT_VERSION:
+        raise ConfigError(key, str(path), f"not a {FORMAT} file of version {FORMAT_VERSION}")
+    names = list(doc.get("state", {}))
+    if names != list(L.STATE_NAMES):
+        raise ConfigError(key, str(path), f"state names must be {list(L.STATE_NAMES)}")
+    d = np.asarray(doc["discrete"], float)
+    u = np.asarray(doc["inputs"], float)
+    if d.size != L.N_DISC or u.size != L.N_INPUT:
+        raise ConfigError(key, str(path), f"needs {L.N_DISC} discrete and {L.N_INPUT} input values")
+    x = np.array([doc["state"][n] for n in L.STATE_NAMES], float)
+    if not (np.all(np.isfinite(x)) and np.all(np.isfinite(d)) and np.all(np.isfinite(u))):
+        raise ConfigError(key, str(path), "all values must be finite")
+    return StagingState(vehicle=str(doc["vehicle"]), guidance=str(doc["guidance"]), dt_s=float(doc["dt_s"]),
+                        step=int(doc["step"]), x=x, d=d, u=u)
