@@ -90,6 +90,17 @@ def test_gyro_discretization_matches_continuous_step_at_samples():
     np.testing.assert_allclose(out, y, atol=1e-9)  # ZOH is exact for a held input
 
 
+def test_gyro_zoh_matches_scipy_cont2discrete():
+    fn, zeta, dt = 25.0, 0.7, 0.005
+    wn = 2 * np.pi * fn
+    ad, bd, cd, dd = gyro_discrete(fn, zeta, dt)
+    ref = signal.cont2discrete(signal.tf2ss([wn**2], [1, 2 * zeta * wn, wn**2]), dt, method="zoh")
+    ref_tf = signal.ss2tf(*ref[:4])
+    ours_tf = signal.ss2tf(ad, bd[:, None], cd[None, :], np.array([[dd]]))
+    np.testing.assert_allclose(ours_tf[0], ref_tf[0], atol=1e-12)
+    np.testing.assert_allclose(ours_tf[1], ref_tf[1], atol=1e-12)
+
+
 def test_roll_phase_plane_regions():
     db, rdb, lead = np.radians(1.0), np.radians(0.5), 2.0
     # drift zone around the origin

@@ -54,3 +54,9 @@ def test_euler_321_of_known_rotation():
     roll, pitch, yaw = 0.1, -0.3, 1.2
     m = Rotation.from_euler("ZYX", [yaw, pitch, roll]).as_matrix()
     np.testing.assert_allclose(qt.euler_321(m[None])[0], [roll, pitch, yaw], atol=1e-12)
+
+
+def test_dcm_array_matches_scalar_dcm():
+    rng = np.random.default_rng(3)
+    qs = np.array([_random_unit(rng) for _ in range(10)])
+    np.testing.assert_allclose(qt.dcm_array(qs), np.stack([qt.dcm(q) for q in qs]), atol=1e-14)

@@ -153,6 +153,25 @@ def derivative(q: np.ndarray, omega_body: np.ndarray) -> np.ndarray:
     return out
 
 
+def dcm_array(q: np.ndarray) -> np.ndarray:
+    """:func:`dcm` of many quaternions at once (numpy, for post-processing).
+
+    Parameters
+    ----------
+    q : ndarray, shape (n, 4)
+
+    Returns
+    -------
+    ndarray, shape (n, 3, 3)
+    """
+    w, x, y, z = q[:, 0], q[:, 1], q[:, 2], q[:, 3]
+    return np.stack([
+        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], axis=-1),
+        np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], axis=-1),
+        np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], axis=-1),
+    ], axis=1)
+
+
 def euler_321(m_b2ref: np.ndarray) -> np.ndarray:
     """Roll, pitch, yaw (rad; 3-2-1 sequence) of body axes relative to a reference frame.
 

@@ -128,10 +128,6 @@ def launch_frame(model: SimModel) -> np.ndarray:
     return earth.dcm_ecef_to_ned(lat, lon)  # ECI = ECEF at t = 0
 
 
-def _quat_dcms(qs: np.ndarray) -> np.ndarray:
-    return np.stack([qt.dcm(q) for q in qs])
-
-
 def signals(result: SimResult, model: SimModel) -> dict[str, Signal]:
     """Named time histories with units, frames and column names."""
     t, x, aux, d = _split(result.log)
@@ -141,8 +137,8 @@ def signals(result: SimResult, model: SimModel) -> dict[str, Signal]:
     c_launch = launch_frame(model)
     q = x[:, L.Q:L.Q + 4]
     qc = d[:, L.D_QS:L.D_QS + 4]
-    euler = qt.euler_321(np.einsum("ij,njk->nik", c_launch, _quat_dcms(q))) if len(t) else np.zeros((0, 3))
-    euler_c = qt.euler_321(np.einsum("ij,njk->nik", c_launch, _quat_dcms(qc))) if len(t) else np.zeros((0, 3))
+    euler = qt.euler_321(np.einsum("ij,njk->nik", c_launch, qt.dcm_array(q))) if len(t) else np.zeros((0, 3))
+    euler_c = qt.euler_321(np.einsum("ij,njk->nik", c_launch, qt.dcm_array(qc))) if len(t) else np.zeros((0, 3))
     thrust = aux[:, L.A_THRUST]
     config = np.full(len(t), 0.0)
     ev = result.events
