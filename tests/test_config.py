@@ -144,3 +144,30 @@ def test_staging_state_for_another_vehicle_refused(compose_cfg, tmp_path):
 
 def test_upper_stage_phase_needs_a_state_file(compose_cfg):
     _expect(compose_cfg(["phase=upper_stage", "phase.staging_state_file="]), "phase.staging_state_file")
+
+
+def test_hdf5_command_file_reads_like_csv(tmp_path):
+    import h5py
+
+    from savant_cli.io.guidance_file import read_guidance
+
+    csv = read_guidance(shipped_config_dir() / "guidance" / "ares_i_iss_commands.csv")
+    h5 = tmp_path / "cmd.h5"
+    with h5py.File(h5, "w") as f:
+        f["time_s"] = csv.time
+        f["quaternion"] = csv.quat
+        f["rate_rad_s"] = csv.rate
+    back = read_guidance(h5)
+    np.testing.assert_array_equal(back.time, csv.time)
+    np.testing.assert_allclose(back.quat, csv.quat, rtol=0, atol=1e-15)
+    np.testing.assert_array_equal(back.rate, csv.rate)
+
+
+def test_non_unit_command_quaternion_refused(tmp_path):
+    from savant_cli.io.guidance_file import read_guidance
+
+    bad = tmp_path / "cmd.csv"
+    bad.write_text("time_s,q_w,q_x,q_y,q_z,rate_x_rad_s,rate_y_rad_s,rate_z_rad_s\n0,1,0,0,0,0,0,0\n1,2,0,0,0,0,0,0\n")
+    with pytest.raises(ConfigError) as exc:
+        read_guidance(bad)
+    assert "unit norm" in exc.value.allowed

@@ -148,3 +148,21 @@ def test_shipped_staging_state_flies_to_orbit(tmp_path):
     s = json.loads((tmp_path / "us" / "summary.json").read_text())
     assert s["inclination_deg"] == pytest.approx(51.6, abs=0.3)
     assert s["cutoff_inertial_velocity_mps"] >= 7300.0
+
+
+def test_user_config_dir_layers_over_the_shipped_tree(tmp_path):
+    """`-cd DIR` with only one group file: that group comes from the user, all others from
+    the shipped tree (the search-path plugin)."""
+    (tmp_path / "mine" / "winds").mkdir(parents=True)
+    (tmp_path / "mine" / "winds" / "calm.yaml").write_text(
+        "name: calm\nenabled: true\nscale: 0.5\nprofile:\n  altitude_m: [0, 20000]\n"
+        "  north_mps: [0, 0]\n  east_mps: [2, 10]\n")
+    proc = run(["run", "-cd", str(tmp_path / "mine"), "winds=calm", "phase=first_stage", "output.plots=false",
+                f"hydra.run.dir={tmp_path}/run", "sim.progress=false"], cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    with h5py.File(tmp_path / "run" / "savant.h5", "r") as f:
+        wind = f["time_history/wind_ned"][()]
+        alt = f["time_history/altitude"][()]
+    i = int(np.argmin(np.abs(alt - 10000.0)))
+    # 0.5 x linear 2 -> 10 m/s over 0-20 km: 3 m/s east at 10 km
+    assert wind[i, 1] == pytest.approx(0.5 * (2.0 + 8.0 * alt[i] / 20000.0), rel=1e-6)
