@@ -4,7 +4,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from omegaconf import OmegaConf, open_dict
+from omegaconf import open_dict
 
 from savant_cli.config import validate
 from savant_cli.errors import ConfigError

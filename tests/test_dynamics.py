@@ -4,7 +4,6 @@ import numpy as np
 import pytest
 
 from savant_cli import constants as C
-from savant_cli.models import quaternion as qt
 from savant_cli.sim import layout as L
 from savant_cli.sim.engine import rk4, work_array
 from savant_cli.sim.plant import derivative

@@ -99,7 +99,6 @@ class Reference:
         self.vehicle = vehicle
         self.prog = prog
         self.tb: PlantTables = build.plant_tables(cfg, vehicle)
-        self.p = build.scalar_parameters(cfg, vehicle)
         self.r0, self.v0, self.q0 = build.pad_state(cfg, vehicle)
         ls = cfg.guidance.launch_site
         lat, lon = np.radians(ls.latitude_deg), np.radians(ls.longitude_deg)
@@ -195,7 +194,7 @@ class Reference:
     def rhs(self, t: float, y: np.ndarray, azimuth: float, steer, turn) -> np.ndarray:
         """3-DOF derivative of [r, v, m_fs, m_lox, m_lh2] (ECI, SI)."""
         r, v = y[0:3], y[3:6]
-        tb, p = self.tb, self.p
+        tb = self.tb
         cfg_i = self._config(t)
         prop = y[6] if cfg_i == CONFIG_STACK else y[7] + y[8]
         mass = mass_properties(tb, cfg_i, max(prop, 0.0))[0]
