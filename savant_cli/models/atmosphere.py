@@ -89,7 +89,7 @@ def _layer_bases() -> tuple[tuple[float, ...], tuple[float, ...]]:
 _TM_BASE, _P_BASE = _layer_bases()   # 8 values each; the last is the 84.852 km' top
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def us76(alt_m: float) -> tuple[float, float, float, float]:
     """US76 atmosphere below 86 km from the standard's closed-form equations.
 
@@ -142,7 +142,7 @@ _T10, _T_INF = 360.0, 1000.0
 _LAMBDA = 1.875e-5          # 1/m
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def upper_temperature(alt_m: float) -> tuple[float, float]:
     """US76 kinetic temperature and its gradient, 86–1000 km (eqs. 25–31).
 
@@ -172,7 +172,7 @@ def upper_temperature(alt_m: float) -> tuple[float, float]:
     return _T_INF - e, _LAMBDA * c * c * e
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def us76_upper(alt_m: float, table_alt_m: np.ndarray, table_lnp: np.ndarray,
                table_lnrho: np.ndarray) -> tuple[float, float, float, float]:
     """US76 atmosphere from 86 to 1000 km (table from :func:`upper_atmosphere_table`).
@@ -198,7 +198,7 @@ def us76_upper(alt_m: float, table_alt_m: np.ndarray, table_lnp: np.ndarray,
     return t, p, rho, np.sqrt(GAMMA_AIR * p / rho)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def atmosphere(alt_m: float, upper_alt_m: np.ndarray, upper_lnp: np.ndarray,
                upper_lnrho: np.ndarray) -> tuple[float, float, float, float]:
     """US76 atmosphere, −5 km to 1000 km geometric altitude (clamped outside).
@@ -355,7 +355,7 @@ def upper_atmosphere_table() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
                  for a in _upper_table_cached())
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _profile(alt_m: np.ndarray, upper_alt_m: np.ndarray, upper_lnp: np.ndarray,
              upper_lnrho: np.ndarray) -> np.ndarray:
     out = np.empty((alt_m.size, 4))

@@ -13,7 +13,7 @@ import numpy as np
 from numba import njit
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def dcm_eci_to_ecef(t_s: float, omega: float) -> np.ndarray:
     """Direction-cosine matrix ECI→ECEF, ``R3(omega t)``.
 
@@ -41,7 +41,7 @@ def dcm_eci_to_ecef(t_s: float, omega: float) -> np.ndarray:
     return m
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def eci_to_ecef(r_eci: np.ndarray, t_s: float, omega: float) -> np.ndarray:
     """Rotate a vector from ECI to ECEF axes at time ``t_s`` (s); ``omega`` in rad/s."""
     th = omega * t_s
@@ -54,7 +54,7 @@ def eci_to_ecef(r_eci: np.ndarray, t_s: float, omega: float) -> np.ndarray:
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def ecef_to_eci(r_ecef: np.ndarray, t_s: float, omega: float) -> np.ndarray:
     """Rotate a vector from ECEF to ECI axes at time ``t_s`` (s); ``omega`` in rad/s."""
     th = omega * t_s
@@ -67,7 +67,7 @@ def ecef_to_eci(r_ecef: np.ndarray, t_s: float, omega: float) -> np.ndarray:
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def geodetic_to_ecef(lat_rad: float, lon_rad: float, h_m: float, a: float,
                      e2: float) -> np.ndarray:
     """ECEF position of a geodetic point.
@@ -98,7 +98,7 @@ def geodetic_to_ecef(lat_rad: float, lon_rad: float, h_m: float, a: float,
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def ecef_to_geodetic(r_ecef: np.ndarray, a: float, e2: float) -> tuple[float, float, float]:
     """Geodetic latitude, longitude and height of an ECEF position.
 
@@ -130,7 +130,7 @@ def ecef_to_geodetic(r_ecef: np.ndarray, a: float, e2: float) -> tuple[float, fl
     return geodetic_xyz(r_ecef[0], r_ecef[1], r_ecef[2], a, e2)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def geodetic_xyz(x: float, y: float, z: float, a: float, e2: float) -> tuple[float, float, float]:
     """:func:`ecef_to_geodetic` on scalar ECEF coordinates (m); no array is created."""
     p = np.sqrt(x * x + y * y)
@@ -151,7 +151,7 @@ def geodetic_xyz(x: float, y: float, z: float, a: float, e2: float) -> tuple[flo
     return lat, lon, h
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def dcm_ecef_to_ned(lat_rad: float, lon_rad: float) -> np.ndarray:
     """Direction-cosine matrix ECEF→NED at a geodetic latitude/longitude.
 
@@ -183,7 +183,7 @@ def dcm_ecef_to_ned(lat_rad: float, lon_rad: float) -> np.ndarray:
     return m
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def velocity_relative_eci(r_eci: np.ndarray, v_eci: np.ndarray, omega: float) -> np.ndarray:
     """Earth-relative velocity expressed in ECI axes, ``v − ω ẑ × r``.
 
@@ -208,7 +208,7 @@ def velocity_relative_eci(r_eci: np.ndarray, v_eci: np.ndarray, omega: float) ->
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def wind_ned(alt_m: float, table_alt_m: np.ndarray, table_north_mps: np.ndarray,
              table_east_mps: np.ndarray, scale: float) -> np.ndarray:
     """Horizontal wind from an altitude table, in NED axes.
@@ -237,7 +237,7 @@ def wind_ned(alt_m: float, table_alt_m: np.ndarray, table_north_mps: np.ndarray,
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def wind_eci(r_eci: np.ndarray, t_s: float, omega: float, lat: float, lon: float,
              wind_ned: np.ndarray) -> np.ndarray:
     """Rotate a NED wind vector into ECI axes.

@@ -65,7 +65,7 @@ class FcsTables(NamedTuple):
     roll: np.ndarray  # (3,): attitude deadband rad, rate deadband rad/s, lead time s
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def df2t(state: np.ndarray, k: int, b: np.ndarray, a: np.ndarray, x: float) -> float:
     """One sample of a 4th-order IIR section (direct form II transposed, a₀ = 1).
 
@@ -79,14 +79,14 @@ def df2t(state: np.ndarray, k: int, b: np.ndarray, a: np.ndarray, x: float) -> f
     return y
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def filter_pair(state: np.ndarray, k: int, coef: np.ndarray, x: float) -> float:
     """Two fourth-order sections in series; ``coef`` is (2, 2, 5)."""
     y = df2t(state, k, coef[0, 0], coef[0, 1], x)
     return df2t(state, k + 4, coef[1, 0], coef[1, 1], y)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def roll_phase_plane(err: float, rate_err: float, att_db: float, rate_db: float,
                      lead_s: float) -> float:
     """Jet command from the roll phase plane.
@@ -107,7 +107,7 @@ def roll_phase_plane(err: float, rate_err: float, att_db: float, rate_db: float,
     return 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def fcs_step(d: np.ndarray, q_nav: np.ndarray, phase: int, schedule_var: float,
              dt: float, ft: FcsTables) -> None:
     """One 50 Hz flight-control cycle; reads sensors and smoother from ``d`` and writes
@@ -168,7 +168,7 @@ def fcs_step(d: np.ndarray, q_nav: np.ndarray, phase: int, schedule_var: float,
     d[D_GAINS:D_GAINS + 8] = gains
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def reset_phase(d: np.ndarray) -> None:
     """Clear integrators and filter memories at a flight-control phase change."""
     d[D_INT_ATT:D_INT_ATT + 2] = 0.0

@@ -20,7 +20,7 @@ import numpy as np
 from numba import njit
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def gravity_zonal(r_eci: np.ndarray, mu: float, re: float, j2: float, j3: float,
                   j4: float) -> np.ndarray:
     """Gravitational acceleration of point mass + J2 + J3 + J4.
@@ -49,7 +49,7 @@ def gravity_zonal(r_eci: np.ndarray, mu: float, re: float, j2: float, j3: float,
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def gravity_zonal_xyz(x: float, y: float, z: float, mu: float, re: float, j2: float, j3: float,
                       j4: float) -> tuple[float, float, float]:
     """:func:`gravity_zonal` on scalar coordinates (m), returning a tuple (m/s²)."""
@@ -81,7 +81,7 @@ def gravity_zonal_xyz(x: float, y: float, z: float, mu: float, re: float, j2: fl
     return kxy * x, kxy * y, kz * z + az_extra
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def gravity_potential(r: np.ndarray, mu: float, re: float, j2: float, j3: float,
                       j4: float) -> float:
     """Zonal gravitational potential ``U`` (with ``a = ∇U``, ``U > 0``).

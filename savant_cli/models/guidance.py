@@ -21,7 +21,7 @@ from savant_cli.models import quaternion as qt
 from savant_cli.sim.layout import D_QG, D_QS, D_TG, D_VG, D_VS
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def command_at(t: float, times: np.ndarray, quats: np.ndarray, rates: np.ndarray):
     """Guidance command at time ``t`` by interpolation in a command table.
 
@@ -45,7 +45,7 @@ def command_at(t: float, times: np.ndarray, quats: np.ndarray, rates: np.ndarray
     return qt.qnormalize(q), (1.0 - w) * rates[i] + w * rates[i + 1]
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def guidance_sample(d: np.ndarray, t: float, times: np.ndarray, quats: np.ndarray,
                     rates: np.ndarray, initialize: bool) -> None:
     """Low-rate block: take a new guidance command at time ``t`` into ``d``."""
@@ -58,7 +58,7 @@ def guidance_sample(d: np.ndarray, t: float, times: np.ndarray, quats: np.ndarra
         d[D_VS:D_VS + 3] = rate
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def smoother_step(d: np.ndarray, t: float, dt: float, zeta: float, wn: float) -> None:
     """Advance the smoothed command (``d[D_QS]``, ``d[D_VS]``) from ``t`` by ``dt``."""
     v_eig = d[D_VG:D_VG + 3]

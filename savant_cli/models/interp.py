@@ -13,7 +13,7 @@ import numpy as np
 from numba import njit
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def locate(axis: np.ndarray, n: int, x: float) -> tuple[int, float]:
     """Cell index ``i`` and weight ``w`` with ``x ≈ (1-w)·axis[i] + w·axis[i+1]``.
 
@@ -40,13 +40,13 @@ def locate(axis: np.ndarray, n: int, x: float) -> tuple[int, float]:
     return lo, (x - axis[lo]) / (axis[lo + 1] - axis[lo])
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def rows(table: np.ndarray, i: int, w: float) -> np.ndarray:
     """Blend rows ``i`` and ``i+1`` of a 2-D table with weight ``w``."""
     return (1.0 - w) * table[i] + w * table[i + 1]
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def trilinear5(g: np.ndarray, c: int, m: int, i: int, wi: float, j: int, wj: float, k: int, wk: float) -> float:
     """:func:`trilinear` of ``g[c, m]`` of a 5-D table, indexing in place (no views)."""
     c00 = g[c, m, i, j, k] * (1.0 - wi) + g[c, m, i + 1, j, k] * wi
@@ -58,7 +58,7 @@ def trilinear5(g: np.ndarray, c: int, m: int, i: int, wi: float, j: int, wj: flo
     return c0 * (1.0 - wk) + c1 * wk
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def locate_row(axes: np.ndarray, row: int, n: int, x: float) -> tuple[int, float]:
     """:func:`locate` on row ``row`` of a 2-D array of padded axes, without a view."""
     if x <= axes[row, 0]:
@@ -75,7 +75,7 @@ def locate_row(axes: np.ndarray, row: int, n: int, x: float) -> tuple[int, float
     return lo, (x - axes[row, lo]) / (axes[row, lo + 1] - axes[row, lo])
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def trilinear(grid: np.ndarray, i: int, wi: float, j: int, wj: float, k: int, wk: float) -> float:
     """Trilinear blend of ``grid[i:i+2, j:j+2, k:k+2]`` with cell weights."""
     c00 = grid[i, j, k] * (1.0 - wi) + grid[i + 1, j, k] * wi
@@ -87,7 +87,7 @@ def trilinear(grid: np.ndarray, i: int, wi: float, j: int, wj: float, k: int, wk
     return c0 * (1.0 - wk) + c1 * wk
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def interp1(axis: np.ndarray, values: np.ndarray, x: float) -> float:
     """Linear interpolation of one column, clamped at the ends.
 

@@ -12,7 +12,7 @@ import numpy as np
 from numba import njit
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def qmul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Hamilton product ``a ⊗ b``."""
     out = np.empty(4)
@@ -23,7 +23,7 @@ def qmul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def qconj(q: np.ndarray) -> np.ndarray:
     """Conjugate (the inverse of a unit quaternion)."""
     out = np.empty(4)
@@ -34,7 +34,7 @@ def qconj(q: np.ndarray) -> np.ndarray:
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def qnormalize(q: np.ndarray) -> np.ndarray:
     """Unit quaternion in the same direction, with a non-negative scalar part."""
     n = np.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
@@ -45,7 +45,7 @@ def qnormalize(q: np.ndarray) -> np.ndarray:
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def dcm(q: np.ndarray) -> np.ndarray:
     """Direction-cosine matrix of ``q``: ``v_i = dcm(q) @ v_b`` for ``q = q_b2i``."""
     w, x, y, z = q[0], q[1], q[2], q[3]
@@ -62,7 +62,7 @@ def dcm(q: np.ndarray) -> np.ndarray:
     return m
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def from_dcm(m: np.ndarray) -> np.ndarray:
     """Quaternion of a body→inertial direction-cosine matrix (Shepperd's method)."""
     tr = m[0, 0] + m[1, 1] + m[2, 2]
@@ -94,19 +94,19 @@ def from_dcm(m: np.ndarray) -> np.ndarray:
     return qnormalize(q)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def rotate(q: np.ndarray, v: np.ndarray) -> np.ndarray:
     """``q ⊗ v ⊗ q*``: body components → inertial components for ``q = q_b2i``."""
     return dcm(q) @ v
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def rotate_inverse(q: np.ndarray, v: np.ndarray) -> np.ndarray:
     """``q* ⊗ v ⊗ q``: inertial components → body components for ``q = q_b2i``."""
     return dcm(q).T @ v
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def from_rotation_vector(phi: np.ndarray) -> np.ndarray:
     """Quaternion of a rotation by ``|phi|`` rad about ``phi/|phi|`` (exact exponential map)."""
     ang = np.sqrt(phi[0] * phi[0] + phi[1] * phi[1] + phi[2] * phi[2])
@@ -126,7 +126,7 @@ def from_rotation_vector(phi: np.ndarray) -> np.ndarray:
     return q
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def to_rotation_vector(q: np.ndarray) -> np.ndarray:
     """Rotation vector (rad) of ``q``, the shortest rotation (angle ≤ π)."""
     w = q[0]
@@ -141,7 +141,7 @@ def to_rotation_vector(q: np.ndarray) -> np.ndarray:
     return v * (ang / s)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def derivative(q: np.ndarray, omega_body: np.ndarray) -> np.ndarray:
     """``q̇ = ½ q ⊗ [0, ω]`` with ω the body angular rate (rad/s, body axes)."""
     out = np.empty(4)

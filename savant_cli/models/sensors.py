@@ -38,7 +38,7 @@ def gyro_discrete(natural_frequency_hz: float, damping: float, dt_s: float):
     return np.ascontiguousarray(phi[:2, :2]), np.ascontiguousarray(phi[:2, 2]), c, 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def gyro_step(state: np.ndarray, rate_in: float, ad: np.ndarray, bd: np.ndarray,
               cd: np.ndarray, dd: float) -> float:
     """One sample of one gyro axis: returns the output, advances ``state`` in place."""

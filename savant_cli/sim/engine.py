@@ -85,7 +85,7 @@ class GuidanceTable(NamedTuple):
     rate: np.ndarray  # (n, 3) rad/s, commanded-body axes
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def fcs_phase(events: np.ndarray) -> int:
     if np.isnan(events[EV_SEPARATION]):
         return FCS_STACK
@@ -94,7 +94,7 @@ def fcs_phase(events: np.ndarray) -> int:
     return FCS_UPPER
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def rk4(t: float, x: np.ndarray, u: np.ndarray, dt: float, p: np.ndarray, tb: PlantTables,
         aux: np.ndarray, work: np.ndarray) -> None:
     """One classical Runge–Kutta step of ``x`` in place; ``aux`` receives the diagnostics
@@ -122,7 +122,7 @@ def work_array() -> np.ndarray:
     return np.zeros((6, max(N_STATE, N_AUX)))
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def handle_events(t: float, x: np.ndarray, u: np.ndarray, d: np.ndarray,
                   events: np.ndarray, sched: np.ndarray) -> int:
     """Apply time- and condition-triggered events at a step boundary; return a stop code."""
@@ -153,14 +153,14 @@ def handle_events(t: float, x: np.ndarray, u: np.ndarray, d: np.ndarray,
     return RUNNING
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def specific_energy(x: np.ndarray, mu: float) -> float:
     r = np.sqrt(x[R] ** 2 + x[R + 1] ** 2 + x[R + 2] ** 2)
     v2 = x[V] ** 2 + x[V + 1] ** 2 + x[V + 2] ** 2
     return 0.5 * v2 - mu / r
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0: int,
             n_steps: int, rates: Rates, p: np.ndarray, tb: PlantTables, ft: FcsTables,
             gyro: GyroModel, gt: GuidanceTable, sched: np.ndarray, log: np.ndarray,

@@ -65,7 +65,7 @@ class PlantTables(NamedTuple):
     wind_east: np.ndarray  # m/s
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def mass_properties(tb: PlantTables, config: int, prop_kg: float):
     """Mass (kg), CG (structure, m) and inertia tensor about the CG (body, kg·m²)."""
     n = tb.mass_len[config]
@@ -81,7 +81,7 @@ def mass_properties(tb: PlantTables, config: int, prop_kg: float):
     return row[0], row[1:4].copy(), inertia
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def solve_sym3(a00, a11, a22, a01, a02, a12, b0, b1, b2):
     """Solve ``A x = b`` for a symmetric positive-definite 3×3 ``A`` by cofactors (the
     inertia equation of the hot path; a LAPACK call costs more than the whole plant)."""
@@ -97,7 +97,7 @@ def solve_sym3(a00, a11, a22, a01, a02, a12, b0, b1, b2):
             (c02 * b0 + c12 * b1 + c22 * b2) / det)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def actuator_third_order(x: np.ndarray, k: int, cmd: float, wa: float, wn: float, zeta: float,
                          rate_limit: float, out: np.ndarray) -> None:
     """Third-order TVC actuator: rate-limited position loop driving a 2nd-order load.
@@ -115,7 +115,7 @@ def actuator_third_order(x: np.ndarray, k: int, cmd: float, wa: float, wn: float
     out[k + 2] = wn * wn * (v - x[k + 1]) - 2.0 * zeta * wn * x[k + 2]
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def clip(x: float, lim: float) -> float:
     if x > lim:
         return lim
@@ -124,7 +124,7 @@ def clip(x: float, lim: float) -> float:
     return x
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def jet_ramp(frac: float, on: bool, ramp_up_s: float, ramp_down_s: float) -> float:
     """Rate of the jet thrust fraction: linear ramp up to 1 when open, down to 0 when shut."""
     if on:
@@ -132,7 +132,7 @@ def jet_ramp(frac: float, on: bool, ramp_up_s: float, ramp_down_s: float) -> flo
     return -1.0 / ramp_down_s if frac > 0.0 else 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def derivative(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: PlantTables,
                aux: np.ndarray, xd: np.ndarray) -> None:
     """Time derivative of the continuous state, written into ``xd``.
