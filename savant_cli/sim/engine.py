@@ -230,7 +230,11 @@ def advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0:
         for i in (RCS_POS, RCS_NEG):
             x[i] = min(max(x[i], 0.0), 1.0)
 
-        if not np.all(np.isfinite(x)):
+        finite = True
+        for i in range(x.size):  # no temporary array, this runs every step
+            if not np.isfinite(x[i]):
+                finite = False
+        if not finite:
             return DIVERGED_NONFINITE, j + 1, log_row, "state became non-finite"
         if aux[A_ALT] < -50.0 and t > 1.0:
             return DIVERGED_GROUND, j + 1, log_row, "altitude below ground"
