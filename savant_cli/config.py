@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 from hydra.core.config_store import ConfigStore
-from omegaconf import DictConfig, ListConfig, OmegaConf
+from omegaconf import DictConfig, OmegaConf
 from omegaconf.errors import OmegaConfBaseException
 
 from savant_cli.errors import ConfigError
@@ -383,9 +383,3 @@ def validate(cfg: DictConfig) -> SavantConfig:
     _check_physics(typed)
     return typed
 
-
-def as_plain(value: Any) -> Any:
-    """Plain Python containers from OmegaConf nodes (pass-through otherwise)."""
-    if isinstance(value, (DictConfig, ListConfig)):
-        return OmegaConf.to_container(value, resolve=True)
-    return value

@@ -117,6 +117,7 @@ def rk4(t: float, x: np.ndarray, u: np.ndarray, dt: float, p: np.ndarray, tb: Pl
         x[i] += h6 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
 
 
+@njit(cache=True, error_model="numpy")
 def work_array() -> np.ndarray:
     """Scratch space for :func:`rk4` (rows wide enough for the state and the diagnostics)."""
     return np.zeros((6, max(N_STATE, N_AUX)))
@@ -172,7 +173,7 @@ def advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0:
     """
     dt = rates.dt
     aux = np.zeros(N_AUX)
-    work = np.zeros((6, max(N_STATE, N_AUX)))
+    work = work_array()
     n_cols = log.shape[1]
     for j in range(n_steps):
         k = k0 + j

@@ -15,6 +15,7 @@ from savant_cli.models import earth, quaternion as qt
 from savant_cli.sim import engine as E
 from savant_cli.sim import layout as L
 from savant_cli.sim.build import SimModel
+from savant_cli.sim.plant import derivative
 
 STOP_MESSAGES = {
     E.STOP_CUTOFF: "cutoff: target orbital energy reached",
@@ -97,8 +98,6 @@ def simulate(model: SimModel, progress: bool = True, chunk_s: float = 10.0) -> S
     # close the history with the final state (for summaries at cutoff)
     if row < log.shape[0] and (row == 0 or log[row - 1, 0] < t_final):
         aux = np.zeros(L.N_AUX)
-        from savant_cli.sim.plant import derivative
-
         derivative(t_final, x, u, model.p, model.tables, aux, np.zeros(L.N_STATE))
         log[row, 0] = t_final
         log[row, 1:1 + L.N_STATE] = x
