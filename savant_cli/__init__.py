@@ -11,3 +11,7 @@ try:
     __version__ = version("savant")
 except PackageNotFoundError:  # running from a source tree without installation
     __version__ = "0.0.0+unknown"
+
+from savant_cli import jit_cache as _jit_cache
+
+_jit_cache.configure()

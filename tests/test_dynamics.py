@@ -6,7 +6,7 @@ import pytest
 from savant_cli import constants as C
 from savant_cli.sim import layout as L
 from savant_cli.sim.engine import rk4, work_array
-from savant_cli.sim.plant import derivative
+from savant_cli.sim.plant import derivative, pack_tables
 import synthetic
 
 
@@ -29,7 +29,7 @@ def test_vacuum_coast_conserves_energy_and_angular_momentum(order):
     zonal harmonics its polar component is (the zonal field is axisymmetric)."""
     from savant_cli.models.gravity import gravity_potential
 
-    tb, p, u = synthetic.tables(), synthetic.parameters(gravity_order=order), synthetic.coast_inputs()
+    tb, p, u = pack_tables(synthetic.tables()), synthetic.parameters(gravity_order=order), synthetic.coast_inputs()
     x = _orbit_state()
     aux, work = np.zeros(L.N_AUX), work_array()
     j2, j3, j4 = (C.EGM2008_J2, C.EGM2008_J3, C.EGM2008_J4) if order else (0.0, 0.0, 0.0)
@@ -56,7 +56,7 @@ def test_torque_free_axisymmetric_body_precesses_at_theory_rate():
     """Euler's equations for Ix ≠ It = Iy = Iz: the transverse rate rotates in body axes at
     λ = Ω (It − Ix)/It and the spin Ω and transverse magnitude are constant."""
     ix, it = 100.0, 400.0
-    tb = synthetic.tables(inertia=(ix, it, it, 0.0, 0.0, 0.0))
+    tb = pack_tables(synthetic.tables(inertia=(ix, it, it, 0.0, 0.0, 0.0)))
     p, u = synthetic.parameters(), synthetic.coast_inputs()
     x = _orbit_state()
     spin, trans = 2.0, 0.3
@@ -81,7 +81,7 @@ def test_torque_free_axisymmetric_body_precesses_at_theory_rate():
 def test_gimbal_moment_sign_and_magnitude():
     """δp > 0 gives a nose-up (positive) pitching moment T·l·sin δ for an engine aft of
     the CG; δy > 0 a positive yawing moment (docs/architecture.md)."""
-    tb, u = synthetic.tables(cg=(5.0, 0.0, 0.0)), synthetic.coast_inputs()
+    tb, u = pack_tables(synthetic.tables(cg=(5.0, 0.0, 0.0))), synthetic.coast_inputs()
     p = synthetic.parameters(thrust=True)
     p[L.P_US_THRUST] = 1000.0
     u[L.U_ENGINE] = L.ENGINE_UPPER

@@ -52,7 +52,7 @@ import math
 import numpy as np
 from numba import njit
 
-from savant_cli.models.interp import locate
+from savant_cli.models.interp import locate, locate_at
 
 from savant_cli.constants import G0, GAMMA_AIR, M0, P0, R0_US76, R_STAR, T0
 
@@ -191,11 +191,29 @@ def us76_upper(alt_m: float, table_alt_m: np.ndarray, table_lnp: np.ndarray,
         speed of sound ``sqrt(gamma p / rho)`` (m/s).
     """
     z = min(max(alt_m, Z_86), Z_TOP)
-    t = upper_temperature(z)[0]
     i, w = locate(table_alt_m, table_alt_m.size, z)
-    p = np.exp((1.0 - w) * table_lnp[i] + w * table_lnp[i + 1])
-    rho = np.exp((1.0 - w) * table_lnrho[i] + w * table_lnrho[i + 1])
+    return _upper_cell(z, w, table_lnp[i], table_lnp[i + 1], table_lnrho[i], table_lnrho[i + 1])
+
+
+@njit(cache=True, error_model="numpy")
+def _upper_cell(z: float, w: float, lnp0: float, lnp1: float, lnr0: float, lnr1: float):
+    """Temperature, pressure, density and speed of sound from one table cell (log-linear)."""
+    t = upper_temperature(z)[0]
+    p = np.exp((1.0 - w) * lnp0 + w * lnp1)
+    rho = np.exp((1.0 - w) * lnr0 + w * lnr1)
     return t, p, rho, np.sqrt(GAMMA_AIR * p / rho)
+
+
+@njit(cache=True, error_model="numpy")
+def atmosphere_at(alt_m: float, a: np.ndarray, off_alt: int, off_lnp: int, off_lnrho: int,
+                  n: int) -> tuple[float, float, float, float]:
+    """:func:`atmosphere` with the upper table held in one flat array ``a`` at the given
+    offsets (``n`` rows), as the compiled plant stores it."""
+    if alt_m < Z_86:
+        return us76(alt_m)
+    z = min(max(alt_m, Z_86), Z_TOP)
+    i, w = locate_at(a, off_alt, n, z)
+    return _upper_cell(z, w, a[off_lnp + i], a[off_lnp + i + 1], a[off_lnrho + i], a[off_lnrho + i + 1])
 
 
 @njit(cache=True, error_model="numpy")

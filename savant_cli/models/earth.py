@@ -133,22 +133,50 @@ def ecef_to_geodetic(r_ecef: np.ndarray, a: float, e2: float) -> tuple[float, fl
 @njit(cache=True, error_model="numpy")
 def geodetic_xyz(x: float, y: float, z: float, a: float, e2: float) -> tuple[float, float, float]:
     """:func:`ecef_to_geodetic` on scalar ECEF coordinates (m); no array is created."""
+    lat, lon, h, _, _, _, _ = geodetic_xyz_sc(x, y, z, a, e2)
+    return lat, lon, h
+
+
+@njit(cache=True, error_model="numpy")
+def geodetic_xyz_sc(x: float, y: float, z: float, a: float, e2: float):
+    """Geodetic latitude, longitude (rad), height (m) and their sines and cosines.
+
+    Bowring's iteration on the parametric latitude, written with normalised vectors in
+    place of ``arctan2``/``sin``/``cos`` pairs (the same numbers, a third of the cost on
+    the plant's hot path, which also needs the sines and cosines for the wind rotation).
+
+    Returns
+    -------
+    tuple of float
+        ``(lat, lon, h, sin lat, cos lat, sin lon, cos lon)``.
+    """
     p = np.sqrt(x * x + y * y)
     lon = np.arctan2(y, x)
+    if p > 0.0:
+        slon, clon = y / p, x / p
+    else:
+        slon, clon = 0.0, 1.0
     sqrt1me2 = np.sqrt(1.0 - e2)              # b / a
     b = a * sqrt1me2
     ep2b = e2 / (1.0 - e2) * b                # e'^2 b
     e2a = e2 * a
-    beta = np.arctan2(z, sqrt1me2 * p)        # parametric latitude, first guess
-    lat = beta
+    # parametric latitude β as (sin β, cos β), first guess from the spherical direction
+    yb, xb = z, sqrt1me2 * p
+    nb = np.sqrt(yb * yb + xb * xb)
+    sb, cb = yb / nb, xb / nb
+    num, den = z, p
+    sl, cl = sb, cb
     for _ in range(2):
-        sb = np.sin(beta)
-        cb = np.cos(beta)
-        lat = np.arctan2(z + ep2b * sb * sb * sb, p - e2a * cb * cb * cb)
-        beta = np.arctan2(sqrt1me2 * np.sin(lat), np.cos(lat))
-    sl = np.sin(lat)
-    h = p * np.cos(lat) + z * sl - a * np.sqrt(1.0 - e2 * sl * sl)
-    return lat, lon, h
+        num = z + ep2b * sb * sb * sb
+        den = p - e2a * cb * cb * cb
+        nl = np.sqrt(num * num + den * den)
+        sl, cl = num / nl, den / nl
+        yb, xb = sqrt1me2 * sl, cl
+        nb = np.sqrt(yb * yb + xb * xb)
+        sb, cb = yb / nb, xb / nb
+    lat = np.arctan2(num, den)
+    h = p * cl + z * sl - a * np.sqrt(1.0 - e2 * sl * sl)
+    return lat, lon, h, sl, cl, slon, clon
 
 
 @njit(cache=True, error_model="numpy")

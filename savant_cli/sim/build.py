@@ -18,7 +18,7 @@ from savant_cli.models.sensors import gyro_discrete, gyro_steady_state
 from savant_cli.sim import engine as E
 from savant_cli.sim import layout as L
 from savant_cli.sim.engine import GuidanceTable, GyroModel, Rates
-from savant_cli.sim.plant import PlantTables
+from savant_cli.sim.plant import PlantTables, pack_tables
 from savant_cli.vehicle import Vehicle
 
 CONFIG_NAMES = ("stack", "upper_les", "upper")
@@ -41,6 +41,11 @@ class SimModel:
     k0: int = 0  # first plant step (non-zero when starting from a staging state)
     events0: np.ndarray = field(default_factory=lambda: np.full(4, np.nan))
     info: dict = field(default_factory=dict)
+
+    @property
+    def packed_tables(self) -> np.ndarray:
+        """``tables`` packed into the flat array the compiled plant reads."""
+        return pack_tables(self.tables)
 
 
 def _stack(arrays: list[np.ndarray], fill: float = 0.0) -> tuple[np.ndarray, np.ndarray]:

@@ -30,7 +30,7 @@ from savant_cli.sim.layout import (
     P_E2, P_MU, P_OMEGA_E, P_RE, Q, R, RCS_NEG, RCS_POS, U_CONFIG, U_DPC, U_DYC,
     U_ENGINE, U_RCS, U_T_IGN, V, W,
 )
-from savant_cli.sim.plant import PlantTables, derivative
+from savant_cli.sim.plant import derivative
 
 # status codes returned by advance()
 RUNNING = 0
@@ -95,7 +95,7 @@ def fcs_phase(events: np.ndarray) -> int:
 
 
 @njit(cache=True, error_model="numpy")
-def rk4(t: float, x: np.ndarray, u: np.ndarray, dt: float, p: np.ndarray, tb: PlantTables,
+def rk4(t: float, x: np.ndarray, u: np.ndarray, dt: float, p: np.ndarray, tb: np.ndarray,
         aux: np.ndarray, work: np.ndarray) -> None:
     """One classical Runge–Kutta step of ``x`` in place; ``aux`` receives the diagnostics
     at ``t``. ``work`` is a (6, N_STATE) scratch array (k1..k4, stage state, aux scratch)."""
@@ -163,7 +163,7 @@ def specific_energy(x: np.ndarray, mu: float) -> float:
 
 @njit(cache=True, error_model="numpy")
 def advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0: int,
-            n_steps: int, rates: Rates, p: np.ndarray, tb: PlantTables, ft: FcsTables,
+            n_steps: int, rates: Rates, p: np.ndarray, tb: np.ndarray, ft: FcsTables,
             gyro: GyroModel, gt: GuidanceTable, sched: np.ndarray, log: np.ndarray,
             log_row: int) -> tuple[int, int, int, str]:
     """Advance the coupled plant and flight software by up to ``n_steps`` plant steps.

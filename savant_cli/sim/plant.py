@@ -4,6 +4,11 @@ quaternion attitude, aerodynamics, gravity, gimbaled thrust, roll jets and actua
 ``derivative`` is the one function both the time simulation and (later) the
 linearization call. It also fills ``aux`` with diagnostics (altitude, Mach, α …) so the
 logger reports exactly what the dynamics used.
+
+Tables are built as a :class:`PlantTables` (named arrays, for Python code) and handed to
+the compiled code packed into one flat array by :func:`pack_tables`: numba increments and
+decrements a reference count for every array argument of every call, and two dozen
+arrays made those atomic operations a quarter of the whole run time.
 """
 
 from __future__ import annotations
@@ -14,8 +19,8 @@ import numpy as np
 from numba import njit
 
 from savant_cli.models import earth, gravity
-from savant_cli.models.atmosphere import atmosphere
-from savant_cli.models.interp import interp1, locate, locate_row, rows, trilinear5
+from savant_cli.models.atmosphere import atmosphere_at
+from savant_cli.models.interp import interp1_at, locate, locate_at, rows, trilinear_at
 from savant_cli.sim.layout import (
     A_ACCEL, A_ALPHA, A_ALT, A_BETA, A_CG, A_DP, A_DY, A_FAERO, A_GRAV, A_LAT, A_LON,
     A_MACH, A_MAERO, A_MASS, A_MTHRUST, A_PRES, A_PROP, A_QBAR, A_RCS_TORQUE, A_RHO,
@@ -63,6 +68,38 @@ class PlantTables(NamedTuple):
     wind_alt: np.ndarray  # m
     wind_north: np.ndarray  # m/s
     wind_east: np.ndarray  # m/s
+
+
+# Packed layout: a header of two entries per PlantTables field (offset of the field's
+# C-ordered data in the flat array, element count), then the data. T_* name the fields.
+(T_AERO_MACH, T_AERO_ALPHA, T_AERO_BETA, T_AERO_COEF, T_AERO_REF, T_BASE_TIME, T_BASE_FORCE,
+ T_BASE_LEN, T_MASS_PROP, T_MASS_DATA, T_MASS_LEN, T_FS_TIME, T_FS_THRUST, T_US_START_TIME,
+ T_US_START_FRAC, T_RCS_ALT, T_RCS_THRUST, T_ATM_ALT, T_ATM_LNP, T_ATM_LNRHO, T_WIND_ALT,
+ T_WIND_NORTH, T_WIND_EAST) = range(len(PlantTables._fields))
+N_CONFIG = 3  # stack, upper stage with LES, upper stage
+N_COEF = 6  # CA CY CN Cl Cm Cn
+N_MASS_COLS = 10
+N_AERO_REF = 7
+
+
+def pack_tables(tb: PlantTables) -> np.ndarray:
+    """One flat float64 array holding every table of ``tb`` (see the ``T_*`` layout)."""
+    parts = [np.ascontiguousarray(a, dtype=np.float64).ravel() for a in tb]
+    n_header = 2 * len(parts)
+    out = np.empty(n_header + sum(a.size for a in parts))
+    pos = n_header
+    for f, a in enumerate(parts):
+        out[2 * f] = pos
+        out[2 * f + 1] = a.size
+        out[pos:pos + a.size] = a
+        pos += a.size
+    return out
+
+
+@njit(cache=True, error_model="numpy")
+def tab(tb: np.ndarray, field: int) -> tuple[int, int]:
+    """Offset and element count of a packed field."""
+    return int(tb[2 * field]), int(tb[2 * field + 1])
 
 
 @njit(cache=True, error_model="numpy")
@@ -133,7 +170,7 @@ def jet_ramp(frac: float, on: bool, ramp_up_s: float, ramp_down_s: float) -> flo
 
 
 @njit(cache=True, error_model="numpy")
-def derivative(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: PlantTables,
+def derivative(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarray,
                aux: np.ndarray, xd: np.ndarray) -> None:
     """Time derivative of the continuous state, written into ``xd``.
 
@@ -147,8 +184,8 @@ def derivative(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: PlantT
         Held inputs from the discrete flight software and the event logic.
     p : ndarray (N_PARAM,)
         Scalar parameters.
-    tb : PlantTables
-        Tabular data.
+    tb : ndarray
+        Tabular data packed by :func:`pack_tables`.
     aux : ndarray (N_AUX,)
         Filled with diagnostics of this evaluation.
     xd : ndarray (N_STATE,)
@@ -181,8 +218,10 @@ def derivative(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: PlantT
     # ------------------------------------------------------------ environment
     th = omega_e * t
     ct, st = np.cos(th), np.sin(th)
-    lat, lon, alt = earth.geodetic_xyz(ct * rx + st * ry, -st * rx + ct * ry, rz, p[P_RE], p[P_E2])
-    temp, pres, rho, sos = atmosphere(alt, tb.atm_alt, tb.atm_lnp, tb.atm_lnrho)
+    lat, lon, alt, sl, cl, so, co = earth.geodetic_xyz_sc(ct * rx + st * ry, -st * rx + ct * ry, rz,
+                                                         p[P_RE], p[P_E2])
+    o_atm, n_atm = tab(tb, T_ATM_ALT)
+    temp, pres, rho, sos = atmosphere_at(alt, tb, o_atm, int(tb[2 * T_ATM_LNP]), int(tb[2 * T_ATM_LNRHO]), n_atm)
     order = p[P_GRAVITY_ORDER]
     gx, gy, gz = gravity.gravity_zonal_xyz(rx, ry, rz, p[P_MU], p[P_RE], p[P_J2] if order >= 2 else 0.0,
                                            p[P_J3] if order >= 3 else 0.0, p[P_J4] if order >= 4 else 0.0)
@@ -196,10 +235,12 @@ def derivative(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: PlantT
     az_ = ez
     if p[P_WIND_SCALE] != 0.0:
         sc = p[P_WIND_SCALE]
-        wn_n = sc * interp1(tb.wind_alt, tb.wind_north, alt)
-        wn_e = sc * interp1(tb.wind_alt, tb.wind_east, alt)
-        sl, cl = np.sin(lat), np.cos(lat)
-        so, co = np.sin(lon), np.cos(lon)
+        o_w, n_w = tab(tb, T_WIND_ALT)
+        iw, ww = locate_at(tb, o_w, n_w, alt)
+        o_n = int(tb[2 * T_WIND_NORTH]) + iw
+        o_e = int(tb[2 * T_WIND_EAST]) + iw
+        wn_n = sc * ((1.0 - ww) * tb[o_n] + ww * tb[o_n + 1])
+        wn_e = sc * ((1.0 - ww) * tb[o_e] + ww * tb[o_e + 1])
         # NED → ECEF (north = (−sl·co, −sl·so, cl), east = (−so, co, 0)), then ECEF → ECI
         we_x = -sl * co * wn_n - so * wn_e
         we_y = -sl * so * wn_n + co * wn_e
@@ -219,57 +260,68 @@ def derivative(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: PlantT
 
     # ------------------------------------------------------- mass properties
     prop = x[MFS] if config == CONFIG_STACK else x[MLOX] + x[MLH2]
-    mt = tb.mass_data
-    c_ = config
-    i0, wm_ = locate_row(tb.mass_prop, c_, tb.mass_len[c_], prop)
-    i1 = i0 + 1
+    o_mp, n_mp = tab(tb, T_MASS_PROP)
+    nm = n_mp // N_CONFIG  # padded rows per configuration
+    i0, wm_ = locate_at(tb, o_mp + config * nm, int(tb[int(tb[2 * T_MASS_LEN]) + config]), prop)
+    r0 = int(tb[2 * T_MASS_DATA]) + (config * nm + i0) * N_MASS_COLS
+    r1 = r0 + N_MASS_COLS
     a_ = 1.0 - wm_
-    mass = a_ * mt[c_, i0, 0] + wm_ * mt[c_, i1, 0]
-    cgx = a_ * mt[c_, i0, 1] + wm_ * mt[c_, i1, 1]
-    cgy = a_ * mt[c_, i0, 2] + wm_ * mt[c_, i1, 2]
-    cgz = a_ * mt[c_, i0, 3] + wm_ * mt[c_, i1, 3]
-    ixx = a_ * mt[c_, i0, 4] + wm_ * mt[c_, i1, 4]
-    iyy = a_ * mt[c_, i0, 5] + wm_ * mt[c_, i1, 5]
-    izz = a_ * mt[c_, i0, 6] + wm_ * mt[c_, i1, 6]
-    ixy = -(a_ * mt[c_, i0, 7] + wm_ * mt[c_, i1, 7])  # tensor element = −product of inertia
-    ixz = -(a_ * mt[c_, i0, 8] + wm_ * mt[c_, i1, 8])
-    iyz = -(a_ * mt[c_, i0, 9] + wm_ * mt[c_, i1, 9])
+    mass = a_ * tb[r0] + wm_ * tb[r1]
+    cgx = a_ * tb[r0 + 1] + wm_ * tb[r1 + 1]
+    cgy = a_ * tb[r0 + 2] + wm_ * tb[r1 + 2]
+    cgz = a_ * tb[r0 + 3] + wm_ * tb[r1 + 3]
+    ixx = a_ * tb[r0 + 4] + wm_ * tb[r1 + 4]
+    iyy = a_ * tb[r0 + 5] + wm_ * tb[r1 + 5]
+    izz = a_ * tb[r0 + 6] + wm_ * tb[r1 + 6]
+    ixy = -(a_ * tb[r0 + 7] + wm_ * tb[r1 + 7])  # tensor element = −product of inertia
+    ixz = -(a_ * tb[r0 + 8] + wm_ * tb[r1 + 8])
+    iyz = -(a_ * tb[r0 + 9] + wm_ * tb[r1 + 9])
 
     # ---------------------------------------------------------- aerodynamics
     fax = fay = faz = 0.0
     max_ = may = maz = 0.0
     if p[P_AERO_ON] != 0.0 and qbar > 0.0:
-        im, wm = locate(tb.aero_mach, tb.aero_mach.size, mach)
-        ia, wa = locate(tb.aero_alpha, tb.aero_alpha.size, alpha)
-        ib, wb2 = locate(tb.aero_beta, tb.aero_beta.size, beta)
-        co = tb.aero_coef
-        ca = trilinear5(co, config, 0, im, wm, ia, wa, ib, wb2)
-        cy = trilinear5(co, config, 1, im, wm, ia, wa, ib, wb2)
-        cn = trilinear5(co, config, 2, im, wm, ia, wa, ib, wb2)
-        cl = trilinear5(co, config, 3, im, wm, ia, wa, ib, wb2)
-        cm = trilinear5(co, config, 4, im, wm, ia, wa, ib, wb2)
-        cnn = trilinear5(co, config, 5, im, wm, ia, wa, ib, wb2)
-        rf = tb.aero_ref
-        qs = qbar * rf[config, 0]
-        ib_, wb_ = locate_row(tb.base_time, config, tb.base_len[config], t)
-        f_base = (1.0 - wb_) * tb.base_force[config, ib_] + wb_ * tb.base_force[config, ib_ + 1]
+        o_m, n_m = tab(tb, T_AERO_MACH)
+        o_a, n_a = tab(tb, T_AERO_ALPHA)
+        o_b, n_b = tab(tb, T_AERO_BETA)
+        im, wm = locate_at(tb, o_m, n_m, mach)
+        ia, wa = locate_at(tb, o_a, n_a, alpha)
+        ib, wb2 = locate_at(tb, o_b, n_b, beta)
+        sj = n_b
+        si = n_a * n_b
+        blk = n_m * si  # one coefficient of one configuration
+        base = int(tb[2 * T_AERO_COEF]) + config * N_COEF * blk
+        ca = trilinear_at(tb, base, si, sj, im, wm, ia, wa, ib, wb2)
+        cy = trilinear_at(tb, base + blk, si, sj, im, wm, ia, wa, ib, wb2)
+        cn = trilinear_at(tb, base + 2 * blk, si, sj, im, wm, ia, wa, ib, wb2)
+        c_roll = trilinear_at(tb, base + 3 * blk, si, sj, im, wm, ia, wa, ib, wb2)
+        cm = trilinear_at(tb, base + 4 * blk, si, sj, im, wm, ia, wa, ib, wb2)
+        cnn = trilinear_at(tb, base + 5 * blk, si, sj, im, wm, ia, wa, ib, wb2)
+        rf = int(tb[2 * T_AERO_REF]) + config * N_AERO_REF  # S, lx, ly, lz, MRP xyz
+        qs = qbar * tb[rf]
+        o_bt, n_bt = tab(tb, T_BASE_TIME)
+        nb = n_bt // N_CONFIG
+        ib_, wb_ = locate_at(tb, o_bt + config * nb, int(tb[int(tb[2 * T_BASE_LEN]) + config]), t)
+        o_bf = int(tb[2 * T_BASE_FORCE]) + config * nb + ib_
+        f_base = (1.0 - wb_) * tb[o_bf] + wb_ * tb[o_bf + 1]
         fax = -qs * ca + f_base
         fay = qs * cy
         faz = -qs * cn
         # r_cg→mrp in body axes: diag(−1, 1, −1)(mrp − cg)
-        rmx = -(rf[config, 4] - cgx)
-        rmy = rf[config, 5] - cgy
-        rmz = -(rf[config, 6] - cgz)
-        max_ = qs * rf[config, 1] * cl + rmy * faz - rmz * fay
-        may = qs * rf[config, 2] * cm + rmz * fax - rmx * faz
-        maz = qs * rf[config, 3] * cnn + rmx * fay - rmy * fax
+        rmx = -(tb[rf + 4] - cgx)
+        rmy = tb[rf + 5] - cgy
+        rmz = -(tb[rf + 6] - cgz)
+        max_ = qs * tb[rf + 1] * c_roll + rmy * faz - rmz * fay
+        may = qs * tb[rf + 2] * cm + rmz * fax - rmx * faz
+        maz = qs * tb[rf + 3] * cnn + rmx * fay - rmy * fax
 
     # ---------------------------------------------------------------- thrust
     thrust = 0.0
     mdot_fs = 0.0
     mdot_us = 0.0
     if engine == ENGINE_FIRST:
-        f_vac = p[P_FS_THRUST_SCALE] * interp1(tb.fs_time, tb.fs_thrust, t)
+        o_ft, n_ft = tab(tb, T_FS_TIME)
+        f_vac = p[P_FS_THRUST_SCALE] * interp1_at(tb, o_ft, int(tb[2 * T_FS_THRUST]), n_ft, t)
         if x[MFS] > 0.0 and f_vac > 0.0:
             mdot_fs = f_vac / (G0 * p[P_FS_ISP_VAC])
             thrust = max(f_vac - pres * p[P_FS_EXIT_AREA], 0.0)
@@ -277,7 +329,8 @@ def derivative(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: PlantT
         g0_ = P_FS_GIMBAL_X
     else:
         if engine == ENGINE_UPPER and x[MLOX] > 0.0 and x[MLH2] > 0.0:
-            f_vac = interp1(tb.us_start_time, tb.us_start_frac, t - u[U_T_IGN]) * p[P_US_THRUST]
+            o_st, n_st = tab(tb, T_US_START_TIME)
+            f_vac = interp1_at(tb, o_st, int(tb[2 * T_US_START_FRAC]), n_st, t - u[U_T_IGN]) * p[P_US_THRUST]
             mdot_us = f_vac / (G0 * p[P_US_ISP])
             thrust = max(f_vac - pres * p[P_US_EXIT_AREA], 0.0)
         lim = p[P_US_GIMBAL_LIMIT]
@@ -302,7 +355,8 @@ def derivative(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: PlantT
         mtz = rgx * fty - rgy * ftx
 
     # ------------------------------------------------------------- roll jets
-    f_jet = interp1(tb.rcs_alt, tb.rcs_thrust, alt) - pres * p[P_RCS_EXIT_AREA]
+    o_ra, n_ra = tab(tb, T_RCS_ALT)
+    f_jet = interp1_at(tb, o_ra, int(tb[2 * T_RCS_THRUST]), n_ra, alt) - pres * p[P_RCS_EXIT_AREA]
     if f_jet < 0.0:
         f_jet = 0.0
     rcs_torque = (x[RCS_POS] - x[RCS_NEG]) * p[P_RCS_N] * f_jet * p[P_RCS_ARM]

@@ -62,6 +62,7 @@ def simulate(model: SimModel, progress: bool = True, chunk_s: float = 10.0) -> S
     n_total = int(np.ceil(t_max / rt.dt)) + 1
     n_rows = n_total // rt.n_log + 2
     log = np.empty((n_rows, log_columns()))  # every kept row is fully written
+    tb = model.packed_tables
     chunk = max(1, int(round(chunk_s / rt.dt)))
     k = model.k0
     row = 0
@@ -77,7 +78,7 @@ def simulate(model: SimModel, progress: bool = True, chunk_s: float = 10.0) -> S
             while code == E.RUNNING and k < n_total:
                 t0 = time.perf_counter()
                 code, done, row, detail = E.advance(
-                    x, d, u, events, k, min(chunk, n_total - k), rt, model.p, model.tables,
+                    x, d, u, events, k, min(chunk, n_total - k), rt, model.p, tb,
                     model.fcs, model.gyro, model.guidance, model.sched, log, row)
                 wall += time.perf_counter() - t0
                 k += done
@@ -98,7 +99,7 @@ def simulate(model: SimModel, progress: bool = True, chunk_s: float = 10.0) -> S
     # close the history with the final state (for summaries at cutoff)
     if row < log.shape[0] and (row == 0 or log[row - 1, 0] < t_final):
         aux = np.zeros(L.N_AUX)
-        derivative(t_final, x, u, model.p, model.tables, aux, np.zeros(L.N_STATE))
+        derivative(t_final, x, u, model.p, tb, aux, np.zeros(L.N_STATE))
         log[row, 0] = t_final
         log[row, 1:1 + L.N_STATE] = x
         log[row, 1 + L.N_STATE:1 + L.N_STATE + L.N_AUX] = aux
