@@ -79,17 +79,53 @@ class WindsConfig:
 
 @dataclass
 class ActuatorStage:
+    """One stage's TVC actuator. ``third_order`` uses the first four keys; ``simplex``
+    uses loop gain and rate limit plus the valve and load keys (load inertia is the
+    vehicle's engine inertia about the gimbal)."""
+
     loop_gain_rad_s: float = 25.0
     natural_frequency_hz: float = 12.0
     damping: float = 0.6
     rate_limit_deg_s: float = 10.0
+    valve_frequency_hz: float = 50.0
+    valve_damping: float = 0.7
+    stiffness_Nm_per_rad: float = 2.0e8
+    damping_Nms_per_rad: float = 1.0e5
+    leakage_rad_s_per_Nm: float = 0.0
+    feedback: str = "piston"  # piston (ram LVDT) | nozzle
 
 
 @dataclass
 class ActuatorConfig:
-    name: str = "third_order"
+    name: str = "third_order"  # third_order | simplex
     first_stage: ActuatorStage = field(default_factory=ActuatorStage)
     upper_stage: ActuatorStage = field(default_factory=ActuatorStage)
+
+
+@dataclass
+class FlexConfig:
+    name: str = "off"
+    enabled: bool = False
+    n_modes: int = 4  # retained modes, lowest first
+    damping: float = 0.005  # structural damping ratio of every retained mode
+    damping_per_mode: list[float] = field(default_factory=list)  # overrides `damping` when given
+    switching: str = "separation"  # separation | propellant
+    frequency_scale: float = 1.0
+    shape_scale: float = 1.0
+
+
+@dataclass
+class SloshConfig:
+    name: str = "off"
+    enabled: bool = False
+    frequency_scale: float = 1.0
+    damping_scale: float = 1.0
+
+
+@dataclass
+class TwdConfig:
+    name: str = "off"
+    enabled: bool = False
 
 
 @dataclass
@@ -205,6 +241,9 @@ class SavantConfig:
     vehicle: Any = None  # validated by savant_cli.vehicle.load_vehicle (tables and keys)
     phase: PhaseConfig = field(default_factory=PhaseConfig)
     actuator: ActuatorConfig = field(default_factory=ActuatorConfig)
+    flex: FlexConfig = field(default_factory=FlexConfig)
+    slosh: SloshConfig = field(default_factory=SloshConfig)
+    twd: TwdConfig = field(default_factory=TwdConfig)
     winds: WindsConfig = field(default_factory=WindsConfig)
     controller: ControllerConfig = field(default_factory=ControllerConfig)
     guidance: GuidanceConfig = field(default_factory=GuidanceConfig)
@@ -328,10 +367,37 @@ def _check_physics(cfg: SavantConfig) -> None:
         raise ConfigError("phase.stop_at", cfg.phase.stop_at, "a phase starting at staging must stop at cutoff")
     if cfg.phase.start == "staging" and not cfg.phase.staging_state_file:
         raise ConfigError("phase.staging_state_file", "", "must name a staging-state file when phase.start = staging")
+    _one_of("actuator.name", cfg.actuator.name, ("third_order", "simplex"))
     for stage in ("first_stage", "upper_stage"):
         a = getattr(cfg.actuator, stage)
         for name in ("loop_gain_rad_s", "natural_frequency_hz", "damping", "rate_limit_deg_s"):
             _positive(f"actuator.{stage}.{name}", getattr(a, name))
+        if cfg.actuator.name == "simplex":
+            for name in ("valve_frequency_hz", "valve_damping", "stiffness_Nm_per_rad", "damping_Nms_per_rad"):
+                _positive(f"actuator.{stage}.{name}", getattr(a, name))
+            _non_negative(f"actuator.{stage}.leakage_rad_s_per_Nm", a.leakage_rad_s_per_Nm)
+            _one_of(f"actuator.{stage}.feedback", a.feedback, ("piston", "nozzle"))
+            # the valve is integrated by the plant's RK4: keep it well inside its stability
+            nyq = 0.25 * cfg.sim.plant_rate_hz
+            if a.valve_frequency_hz >= nyq:
+                raise ConfigError(f"actuator.{stage}.valve_frequency_hz", a.valve_frequency_hz,
+                                  f"must be below a quarter of sim.plant_rate_hz ({nyq} Hz) for RK4 stability")
+    f = cfg.flex
+    if f.enabled:
+        if f.n_modes < 1:
+            raise ConfigError("flex.n_modes", f.n_modes, "must be at least 1 when flex is on (flex=off turns it off)")
+        _non_negative("flex.damping", f.damping)
+        for i, z in enumerate(f.damping_per_mode):
+            _non_negative(f"flex.damping_per_mode[{i}]", z)
+        if f.damping_per_mode and len(f.damping_per_mode) < f.n_modes:
+            raise ConfigError("flex.damping_per_mode", list(f.damping_per_mode),
+                              f"must give at least flex.n_modes = {f.n_modes} values, or be empty")
+        _one_of("flex.switching", f.switching, ("separation", "propellant"))
+        _positive("flex.frequency_scale", f.frequency_scale)
+        _non_negative("flex.shape_scale", f.shape_scale)
+    if cfg.slosh.enabled:
+        _positive("slosh.frequency_scale", cfg.slosh.frequency_scale)
+        _non_negative("slosh.damping_scale", cfg.slosh.damping_scale)
     _positive("sensors.rate_gyro.natural_frequency_hz", cfg.sensors.rate_gyro.natural_frequency_hz)
     _positive("sensors.rate_gyro.damping", cfg.sensors.rate_gyro.damping)
     nyquist = 0.5 * cfg.sim.sensor_rate_hz

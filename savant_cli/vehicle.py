@@ -242,6 +242,9 @@ class Vehicle:
     rcs: Rcs
     sensors: Sensors
     events: Events
+    data_dir: Path | None = None
+    flex_spec: dict | None = None  # raw ``flex`` section, loaded by savant_cli.flex_slosh when flex is on
+    slosh_spec: dict | None = None  # raw ``slosh`` section, loaded when slosh is on
 
 
 # ------------------------------------------------------------------------- key schema
@@ -263,7 +266,10 @@ SCHEMA: dict[str, Any] = {
     "sensors": {"imu_m": _VEC3, "rate_gyro_upper_stage_m": _VEC3, "rate_gyro_first_stage_m": _VEC3},
     "events": {"separation_thrust_fraction": float, "ignition_delay_s": float, "les_jettison_delay_s": float},
 }
-_OPTIONAL = {"description"}
+_MAPPING = "mapping"  # a free-form section checked by its own loader (savant_cli.flex_slosh)
+SCHEMA["flex"] = _MAPPING
+SCHEMA["slosh"] = _MAPPING
+_OPTIONAL = {"description", "flex", "slosh"}
 
 
 def _is_number(v: Any) -> bool:
@@ -286,6 +292,9 @@ def _check_keys(node: Mapping, schema: Mapping, path: str) -> None:
             if not isinstance(value, Mapping):
                 raise ConfigError(full, value, "must be a mapping with keys " + ", ".join(kind))
             _check_keys(value, kind, full)
+        elif kind == _MAPPING:
+            if not isinstance(value, Mapping):
+                raise ConfigError(full, value, "must be a mapping")
         elif kind is float:
             if not _is_number(value):
                 raise ConfigError(full, value, "must be a finite number")
@@ -630,7 +639,7 @@ def load_vehicle(vehicle_cfg: Mapping, data_dir: Path) -> Vehicle:
                                                    en["les_jettison_delay_s"], True))
     vehicle = Vehicle(name=str(node["name"]), description=str(node.get("description") or ""), length_m=length,
                       configurations=configs, first_stage=fs, upper_stage=us, rcs=rcs, sensors=sensors,
-                      events=events)
+                      events=events, data_dir=vdir, flex_spec=node.get("flex"), slosh_spec=node.get("slosh"))
     check_consistency(vehicle, {n: node["configurations"][n]["mass_table"] for n in CONFIG_NAMES})
     return vehicle
 

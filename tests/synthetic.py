@@ -27,6 +27,8 @@ def tables(mass: float = 1000.0, inertia=(100.0, 400.0, 400.0, 0.0, 0.0, 0.0),
         fs_time=ax, fs_thrust=np.zeros(2), us_start_time=ax, us_start_frac=np.ones(2),
         rcs_alt=ax, rcs_thrust=np.zeros(2), atm_alt=atm_alt, atm_lnp=atm_lnp, atm_lnrho=atm_lnrho,
         wind_alt=ax, wind_north=np.zeros(2), wind_east=np.zeros(2),
+        flex_freq=np.zeros((4, 1)), flex_zeta=np.zeros(1), flex_shape=np.zeros((4, 1, L.N_POINTS, 6)),
+        slosh_level=np.tile(ax, (2, 1)), slosh_data=np.zeros((2, 2, 4)), slosh_len=np.array([2, 2]),
     )
 
 
@@ -48,6 +50,10 @@ def parameters(gravity_order: int = 0, aero: bool = False, thrust: bool = False)
     p[L.P_AERO_ON] = 1.0 if aero else 0.0
     p[L.P_THRUST_ON] = 1.0 if thrust else 0.0
     p[L.P_GRAVITY_ORDER] = gravity_order
+    p[L.P_VALVE_OFF] = p[L.P_SLOSH_OFF] = p[L.P_FLEX_OFF] = -1.0  # optional blocks absent
+    p[L.P_FS_PROP_FULL] = p[L.P_US_PROP_FULL] = 1.0
+    p[L.P_SLOSH_AREF] = 9.80665
+    p[L.P_SLOSH_FREQ_SCALE] = p[L.P_SLOSH_ZETA_SCALE] = 1.0
     return p
 
 

@@ -13,7 +13,7 @@ from conftest import compose_config
 from savant_cli.config import validate
 from savant_cli.models import quaternion as qt
 from savant_cli.sim import layout as L
-from savant_cli.sim.plant import derivative, pack_tables, T_AERO_COEF, T_WIND_EAST
+from savant_cli.sim.plant import derivative, pack_tables, T_AERO_COEF
 from savant_cli.sim.setup import prepare
 
 
@@ -28,7 +28,8 @@ def test_pack_layout_round_trips_every_table(model):
         off, n = int(flat[2 * f]), int(flat[2 * f + 1])
         assert n == arr.size
         np.testing.assert_array_equal(flat[off:off + n], np.asarray(arr, float).ravel())
-    assert int(flat[2 * T_WIND_EAST]) + int(flat[2 * T_WIND_EAST + 1]) == flat.size
+    last = len(model.tables) - 1
+    assert int(flat[2 * last]) + int(flat[2 * last + 1]) == flat.size
     assert int(flat[2 * T_AERO_COEF + 1]) == model.tables.aero_coef.size
 
 

@@ -22,8 +22,9 @@ EXPECTED = {"body_rates.png", "alpha_beta.png", "attitude_tracking.png", "veloci
 EVENTS = [("separation", 130.0), ("upper_stage_ignition", 131.0), ("les_jettison", 160.0), ("cutoff", 590.0)]
 
 
-def ascent_record(n: int = 30_000, complete: bool = True) -> RunRecord:
-    """All signals the seven figures use, shaped like a real ascent."""
+def ascent_record(n: int = 30_000, complete: bool = True, fidelity: bool = False) -> RunRecord:
+    """All signals the seven figures use, shaped like a real ascent; with ``fidelity``
+    also the flex and slosh signals of their three figures."""
     rng = np.random.default_rng(3)
     t = np.linspace(0.0, 600.0, n)
 
@@ -49,6 +50,14 @@ def ascent_record(n: int = 30_000, complete: bool = True) -> RunRecord:
         "gimbal_command": Signal(walk(2, 1e-4), "rad", "gimbal command", ("pitch", "yaw"), "body"),
         "attitude_error": Signal(walk(3, 1e-5), "rad", "attitude error", rpy, "body"),
     }
+    if fidelity:
+        signals |= {
+            "flex_q": Signal(walk(4, 1e-2), "kg^0.5*m", "modal coordinates", tuple(f"mode_{i + 1}" for i in range(4))),
+            "flex_qdot": Signal(walk(4, 1e-1), "kg^0.5*m/s", "modal velocities", tuple(f"mode_{i + 1}" for i in range(4))),
+            "sensed_rate": Signal(walk(9, 1e-4), "rad/s", "gyros"),
+            "slosh_position": Signal(walk(4, 1e-3), "m", "slosh", ("lox_y", "lox_z", "lh2_y", "lh2_z"), "body"),
+            "slosh_frequency": Signal(0.5 + walk(2, 1e-4), "Hz", "slosh frequency", ("lox", "lh2")),
+        }
     return RunRecord(
         signals=signals, events=list(EVENTS),
         summary={"status": "complete" if complete else "diverged", "max_dynamic_pressure_Pa": 30000.0,
@@ -71,7 +80,7 @@ def test_plot_ascent_writes_seven_pngs(tmp_path: Path) -> None:
     out = tmp_path / "plots"
     paths = plot_ascent(ascent_record(), out)
     _check_pngs(paths, out)
-    assert [p.name for p in paths] == [spec.filename for spec in FIGURES]
+    assert [p.name for p in paths] == [spec.filename for spec in FIGURES if spec.requires is None]
 
 
 def test_missing_signals_are_skipped(tmp_path: Path) -> None:
@@ -92,8 +101,18 @@ def _figure(rec: RunRecord, filename: str):
     return ascent._draw(spec, rec, t, ascent._indices(t.size))
 
 
+def test_fidelity_figures_drawn_only_with_their_signals(tmp_path: Path) -> None:
+    extra = {"flex_modes.png", "gyro_rates.png", "slosh.png"}
+    paths = plot_ascent(ascent_record(n=400, fidelity=True), tmp_path / "a")
+    assert {p.name for p in paths} == EXPECTED | extra
+    fig = ascent._draw(next(s for s in FIGURES if s.filename == "flex_modes.png"), ascent_record(n=400, fidelity=True),
+                       np.linspace(0.0, 600.0, 400), np.arange(400))
+    assert [len(ax.get_lines()) for ax in fig.get_axes()][0] >= 4  # one line per retained mode (+ event lines)
+    assert {p.name for p in plot_ascent(ascent_record(n=400), tmp_path / "b")} == EXPECTED
+
+
 def test_incomplete_title_in_red() -> None:
-    rec = ascent_record(n=300, complete=False)
+    rec = ascent_record(n=300, complete=False, fidelity=True)
     for spec in FIGURES:
         fig = _figure(rec, spec.filename)
         title = fig._suptitle
@@ -104,7 +123,7 @@ def test_incomplete_title_in_red() -> None:
 
 
 def test_axes_units_events_and_conversion() -> None:
-    rec = ascent_record(n=300)
+    rec = ascent_record(n=300, fidelity=True)
     for spec in FIGURES:
         fig = _figure(rec, spec.filename)
         axes = fig.get_axes()

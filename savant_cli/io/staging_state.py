@@ -7,8 +7,9 @@ a run resumed from it separates on its first step exactly as the full ascent doe
 
 JSON layout: ``format`` ("savant-staging-state"), ``format_version``, ``vehicle``,
 ``guidance``, ``dt_s`` (plant step), ``step`` (plant step index), ``time_s``, ``state``
-(name → value, SI, names of :data:`savant_cli.sim.layout.STATE_NAMES`), ``discrete`` and
-``inputs`` (flight-software state and held inputs, as lists).
+(name → value, SI, the names of :meth:`savant_cli.sim.layout.StateLayout.names`: the core
+states plus those of the optional models that were on), ``discrete`` and ``inputs``
+(flight-software state and held inputs, as lists).
 """
 
 from __future__ import annotations
@@ -36,6 +37,7 @@ class StagingState:
     x: np.ndarray
     d: np.ndarray
     u: np.ndarray
+    names: tuple[str, ...] = tuple(L.STATE_NAMES)  # one per element of x
 
 
 def write_staging_state(path: Path, state: StagingState) -> None:
@@ -43,7 +45,7 @@ def write_staging_state(path: Path, state: StagingState) -> None:
     write_json_atomic(path, {
         "format": FORMAT, "format_version": FORMAT_VERSION, "vehicle": state.vehicle, "guidance": state.guidance,
         "dt_s": state.dt_s, "step": int(state.step), "time_s": state.step * state.dt_s,
-        "state": dict(zip(L.STATE_NAMES, map(float, state.x))),
+        "state": dict(zip(state.names, map(float, state.x), strict=True)),
         "discrete": [float(v) for v in state.d], "inputs": [float(v) for v in state.u],
     })
 
@@ -57,14 +59,14 @@ def read_staging_state(path: Path, key: str = "phase.staging_state_file") -> Sta
     if doc.get("format") != FORMAT or doc.get("format_version") != FORMAT_VERSION:
         raise ConfigError(key, str(path), f"not a {FORMAT} file of version {FORMAT_VERSION}")
     names = list(doc.get("state", {}))
-    if names != list(L.STATE_NAMES):
-        raise ConfigError(key, str(path), f"state names must be {list(L.STATE_NAMES)}")
+    if names[:L.N_STATE] != list(L.STATE_NAMES) and names[:L.N_STATE] != list(L.StateLayout(simplex=True).names()[:L.N_STATE]):
+        raise ConfigError(key, str(path), f"the state must start with the core states {list(L.STATE_NAMES)}")
     d = np.asarray(doc["discrete"], float)
     u = np.asarray(doc["inputs"], float)
     if d.size != L.N_DISC or u.size != L.N_INPUT:
         raise ConfigError(key, str(path), f"needs {L.N_DISC} discrete and {L.N_INPUT} input values")
-    x = np.array([doc["state"][n] for n in L.STATE_NAMES], float)
+    x = np.array([doc["state"][n] for n in names], float)
     if not (np.all(np.isfinite(x)) and np.all(np.isfinite(d)) and np.all(np.isfinite(u))):
         raise ConfigError(key, str(path), "all values must be finite")
     return StagingState(vehicle=str(doc["vehicle"]), guidance=str(doc["guidance"]), dt_s=float(doc["dt_s"]),
-                        step=int(doc["step"]), x=x, d=d, u=u)
+                        step=int(doc["step"]), x=x, d=d, u=u, names=tuple(names))

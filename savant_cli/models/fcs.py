@@ -31,7 +31,7 @@ from numba import njit
 from savant_cli.models import quaternion as qt
 from savant_cli.models.interp import locate, rows
 from savant_cli.sim.layout import (
-    D_CMD_P, D_CMD_RCS, D_CMD_Y, D_ERR, D_FILT, D_GAINS, D_GYRO_Y, D_INT_ATT, D_INT_RATE,
+    D_CMD_P, D_CMD_RCS, D_CMD_Y, D_ERR, D_FILT, D_FLEX_NAV, D_GAINS, D_GYRO_Y, D_INT_ATT, D_INT_RATE,
     D_QS, D_RATE_CMD_B, D_RATE_ERR, D_ROLL_FILT, D_VS,
 )
 
@@ -131,7 +131,7 @@ def fcs_step(d: np.ndarray, q_nav: np.ndarray, phase: int, schedule_var: float,
     q_err = qt.qmul(qt.qconj(d[D_QS:D_QS + 4]), q_nav)
     if q_err[0] < 0.0:
         q_err = -q_err
-    err = 2.0 * q_err[1:4]
+    err = 2.0 * q_err[1:4] + d[D_FLEX_NAV:D_FLEX_NAV + 3]  # flex rotation at the nav unit adds
     # rate command expressed in body axes
     rate_cmd = qt.rotate_inverse(q_err, d[D_VS:D_VS + 3])
     blend = np.zeros(3)

@@ -14,6 +14,12 @@ Figures (file, paper figure, signals):
 - ``altitude_mach.png`` (Fig. 12): ``altitude`` (km), ``mach``
 - ``gimbal_angles.png`` (Fig. 13): ``gimbal_angle`` vs ``gimbal_command`` (dashed), deg
 - ``attitude_errors.png`` (Fig. 14): ``attitude_error`` in deg
+
+Drawn when the model is on:
+
+- ``flex_modes.png`` (flex): ``flex_q`` and ``flex_qdot`` of up to 8 modes
+- ``gyro_rates.png`` (flex): pitch and yaw ``sensed_rate`` of each gyro vs the rigid ``body_rate``
+- ``slosh.png`` (slosh): ``slosh_position`` per tank and ``slosh_frequency``
 """
 
 from __future__ import annotations
@@ -50,6 +56,7 @@ _CONVERSIONS = {
     ("m", "km"): 1e-3,
     ("Pa", "kPa"): 1e-3,
     ("1", ""): 1.0,
+    ("Hz", "Hz"): 1.0,
 }
 
 
@@ -80,6 +87,7 @@ class FigureSpec:
     filename: str
     title: str
     panels: tuple[Panel, ...]
+    requires: str | None = None  # drawn only when this signal is in the run
 
 
 def _rpy_panels(actual: str, command: str | None, unit: str, what: str, wrap: bool = False) -> tuple[Panel, ...]:
@@ -118,6 +126,21 @@ FIGURES: tuple[FigureSpec, ...] = (
     )),
     FigureSpec("attitude_errors.png", "Attitude errors (cf. Fig. 14)",
                _rpy_panels("attitude_error", None, "deg", "error")),
+    FigureSpec("flex_modes.png", "Flexible-body modal coordinates", (
+        Panel("modal displacement q", "kg^0.5*m", tuple(Line("flex_q", i, f"mode {i + 1}") for i in range(8))),
+        Panel("modal velocity q̇", "kg^0.5*m/s", tuple(Line("flex_qdot", i, f"mode {i + 1}") for i in range(8))),
+    ), requires="flex_q"),
+    FigureSpec("gyro_rates.png", "Sensed (rigid + flex) vs rigid body rate at each gyro", tuple(
+        Panel(f"{axis} rate", "deg/s", (Line("body_rate", k, "rigid"),
+                                        Line("sensed_rate", 3 * g + k, f"{name} gyro")))
+        for k, axis in ((1, "pitch"), (2, "yaw"))
+        for g, name in ((0, "upper-stage"), (1, "IMU"), (2, "first-stage"))
+    ), requires="flex_q"),
+    FigureSpec("slosh.png", "Propellant slosh", (
+        Panel("LOX slosh mass", "m", (Line("slosh_position", 0, "y"), Line("slosh_position", 1, "z"))),
+        Panel("LH2 slosh mass", "m", (Line("slosh_position", 2, "y"), Line("slosh_position", 3, "z"))),
+        Panel("slosh frequency", "Hz", (Line("slosh_frequency", 0, "LOX"), Line("slosh_frequency", 1, "LH2"))),
+    ), requires="slosh_position"),
 )
 
 
@@ -184,6 +207,8 @@ def _event_lines(ax, events: list[tuple[str, float]], t0: float, t1: float, labe
 
 
 def _draw(spec: FigureSpec, record: RunRecord, t: np.ndarray, idx: np.ndarray) -> Figure | None:
+    if spec.requires is not None and spec.requires not in record.signals:
+        return None
     panels = [p for p in spec.panels if p.lines[0].signal in record.signals
               and _column(record.signals[p.lines[0].signal], p.lines[0].column) is not None]
     if not panels:
@@ -216,12 +241,11 @@ def _draw(spec: FigureSpec, record: RunRecord, t: np.ndarray, idx: np.ndarray) -
                     reference = y
                 else:  # later lines: the branch closest to the first line
                     y = reference + _wrap_deg(y - reference)
-            ax.plot(tt, y[idx], lw=1.0, ls="--" if line.dashed else "-",
-                    color=f"C{1 if line.dashed else 0}", label=line.label)
+            ax.plot(tt, y[idx], lw=1.0, ls="--" if line.dashed else "-", color=f"C{j}", label=line.label)
         ax.set_ylabel(f"{panel.quantity} ({unit_label})" if unit_label else f"{panel.quantity} (–)", fontsize=9)
         ax.grid(True, lw=0.4, alpha=0.6)
-        if len(panel.lines) > 1:
-            ax.legend(loc="best", fontsize=7, framealpha=0.8)
+        if len(ax.get_lines()) > 1:
+            ax.legend(loc="best", fontsize=7, framealpha=0.8, ncol=2 if len(ax.get_lines()) > 4 else 1)
         _event_lines(ax, record.events, float(t[0]), float(t[-1]), label=(k == 0))
     axes[-1].set_xlabel("time from liftoff (s)")
     axes[-1].set_xlim(float(t[0]), float(t[-1]) if t[-1] > t[0] else float(t[0]) + 1.0)

@@ -18,6 +18,7 @@ from savant_cli.models.sensors import gyro_discrete, gyro_steady_state
 from savant_cli.sim import engine as E
 from savant_cli.sim import layout as L
 from savant_cli.sim.engine import GuidanceTable, GyroModel, Rates
+from savant_cli.flex_slosh import load_flex, load_slosh
 from savant_cli.sim.plant import PlantTables, pack_tables
 from savant_cli.vehicle import Vehicle
 
@@ -41,6 +42,7 @@ class SimModel:
     k0: int = 0  # first plant step (non-zero when starting from a staging state)
     events0: np.ndarray = field(default_factory=lambda: np.full(4, np.nan))
     info: dict = field(default_factory=dict)
+    layout: L.StateLayout = field(default_factory=L.StateLayout)
 
     @property
     def packed_tables(self) -> np.ndarray:
@@ -84,8 +86,27 @@ def _common_aero_grid(vehicle: Vehicle):
     return mach, alpha, beta, np.ascontiguousarray(coef), ref
 
 
+def _flex_slosh_tables(cfg: SavantConfig, vehicle: Vehicle) -> dict[str, np.ndarray]:
+    """The flex and slosh fields of :class:`PlantTables` (small placeholders when off)."""
+    out: dict[str, np.ndarray] = {}
+    if cfg.flex.enabled:
+        fx = load_flex(vehicle, cfg.flex, cfg.sim.plant_rate_hz)
+        out.update(flex_freq=fx.frequency_rad_s, flex_zeta=fx.damping, flex_shape=fx.shapes)
+    else:
+        out.update(flex_freq=np.zeros((4, 1)), flex_zeta=np.zeros(1), flex_shape=np.zeros((4, 1, L.N_POINTS, 6)))
+    if cfg.slosh.enabled:
+        sl = load_slosh(vehicle, cfg.slosh)
+        level, n = _stack([t.level_m for t in sl.tanks])
+        data, _ = _stack([np.column_stack([t.frequency_rad_s, t.damping, t.mass_kg, t.height_m]) for t in sl.tanks])
+        out.update(slosh_level=level, slosh_data=data, slosh_len=n)
+    else:
+        out.update(slosh_level=np.tile([0.0, 1.0], (2, 1)), slosh_data=np.zeros((2, 2, 4)),
+                   slosh_len=np.array([2, 2]))
+    return {k: np.ascontiguousarray(v, dtype=np.int64 if k == "slosh_len" else np.float64) for k, v in out.items()}
+
+
 def plant_tables(cfg: SavantConfig, vehicle: Vehicle) -> PlantTables:
-    """Tabular plant data from the vehicle and the winds config."""
+    """Tabular plant data from the vehicle and the winds, flex and slosh configs."""
     mach, alpha, beta, coef, ref = _common_aero_grid(vehicle)
     aeros = [vehicle.configurations[n].aero for n in CONFIG_NAMES]
     masses = [vehicle.configurations[n].mass for n in CONFIG_NAMES]
@@ -110,6 +131,7 @@ def plant_tables(cfg: SavantConfig, vehicle: Vehicle) -> PlantTables:
         rcs_alt=f64(rcs.altitude_m), rcs_thrust=f64(rcs.thrust_vac_N),
         atm_alt=f64(atm_alt), atm_lnp=f64(atm_lnp), atm_lnrho=f64(atm_lnrho),
         wind_alt=f64(wind[0]), wind_north=f64(wind[1]), wind_east=f64(wind[2]),
+        **_flex_slosh_tables(cfg, vehicle),
     )
 
 
@@ -148,6 +170,32 @@ def scalar_parameters(cfg: SavantConfig, vehicle: Vehicle) -> np.ndarray:
         p[base + 1] = 2.0 * np.pi * a.natural_frequency_hz
         p[base + 2] = a.damping
         p[base + 3] = np.radians(a.rate_limit_deg_s)
+    lay = state_layout(cfg)
+    p[L.P_VALVE_OFF] = lay.valve
+    p[L.P_SLOSH_OFF] = lay.slosh_offset
+    p[L.P_FLEX_OFF] = lay.flex
+    p[L.P_N_MODES] = lay.n_modes
+    p[L.P_FLEX_SWITCH] = 1.0 if cfg.flex.switching == "propellant" else 0.0
+    p[L.P_FS_PROP_FULL] = fs.propellant_kg
+    p[L.P_US_PROP_FULL] = us.lox_kg + us.lh2_kg
+    p[L.P_TWD_ON] = 1.0 if cfg.twd.enabled else 0.0
+    for base, eng in ((L.P_FS_ENG_M, fs.engine), (L.P_US_ENG_M, us.engine)):
+        p[base:base + 3] = eng.mass_kg, eng.cg_from_gimbal_m, eng.inertia_about_gimbal_kgm2
+    p[L.P_ACT_KIND] = L.ACT_SIMPLEX if cfg.actuator.name == "simplex" else L.ACT_THIRD_ORDER
+    for stage, base, eng in (("first_stage", L.P_SPX_FS, fs.engine), ("upper_stage", L.P_SPX_US, us.engine)):
+        a = getattr(cfg.actuator, stage)
+        p[base:base + L.N_SPX] = (a.loop_gain_rad_s, 2.0 * np.pi * a.valve_frequency_hz, a.valve_damping,
+                                  np.radians(a.rate_limit_deg_s), a.stiffness_Nm_per_rad, a.damping_Nms_per_rad,
+                                  eng.inertia_about_gimbal_kgm2, a.leakage_rad_s_per_Nm,
+                                  1.0 if a.feedback == "nozzle" else 0.0)
+    p[L.P_SLOSH_AREF] = 1.0
+    p[L.P_SLOSH_FREQ_SCALE] = cfg.slosh.frequency_scale
+    p[L.P_SLOSH_ZETA_SCALE] = cfg.slosh.damping_scale
+    if cfg.slosh.enabled:
+        sl = load_slosh(vehicle, cfg.slosh)
+        p[L.P_SLOSH_AREF] = sl.reference_accel_mps2
+        for j, tank in enumerate(sl.tanks):
+            p[L.P_TANK + 3 * j:L.P_TANK + 3 * j + 3] = tank.radius_m, tank.bottom_station_m, tank.density_kgm3
     p[L.P_AERO_ON] = 1.0 if cfg.environment.aero else 0.0
     p[L.P_THRUST_ON] = 1.0 if cfg.environment.thrust else 0.0
     p[L.P_GRAVITY_ORDER] = cfg.environment.gravity_order
@@ -186,6 +234,12 @@ def fcs_tables(cfg: SavantConfig) -> FcsTables:
                      c.roll.lead_time_s])
     return FcsTables(filters=filters, roll_filters=roll_filters, blend=blend, gain_axis=gain_axis,
                      gain_data=gain_data, gain_len=gain_len, roll=roll)
+
+
+def state_layout(cfg: SavantConfig) -> L.StateLayout:
+    """The continuous-state layout of the models switched on in ``cfg``."""
+    return L.StateLayout(simplex=cfg.actuator.name == "simplex", slosh=cfg.slosh.enabled,
+                         n_modes=cfg.flex.n_modes if cfg.flex.enabled else 0)
 
 
 def rates(cfg: SavantConfig) -> Rates:
@@ -248,7 +302,8 @@ def build_model(cfg: SavantConfig, vehicle: Vehicle, guidance: GuidanceTable) ->
 
     r0, v0, q0 = pad_state(cfg, vehicle)
     w0 = qt.dcm(q0).T @ np.array([0.0, 0.0, C.OMEGA_EARTH])  # Earth rate, body axes
-    x0 = np.zeros(L.N_STATE)
+    layout = state_layout(cfg)
+    x0 = np.zeros(layout.n)
     x0[L.R:L.R + 3] = r0
     x0[L.V:L.V + 3] = v0
     x0[L.Q:L.Q + 4] = q0
@@ -280,4 +335,4 @@ def build_model(cfg: SavantConfig, vehicle: Vehicle, guidance: GuidanceTable) ->
     sched[E.S_MAX_RATE] = np.radians(cfg.sim.max_body_rate_deg_s)
     info = {"separation_time_s": sched[E.S_T_SEP]}
     return SimModel(p=p, tables=tb, fcs=ft, gyro=gyro, guidance=guidance, rates=rt, sched=sched,
-                    x0=x0, d0=d0, u0=u0, info=info)
+                    x0=x0, d0=d0, u0=u0, info=info, layout=layout)

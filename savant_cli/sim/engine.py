@@ -30,7 +30,8 @@ from savant_cli.sim.layout import (
     P_E2, P_MU, P_OMEGA_E, P_RE, Q, R, RCS_NEG, RCS_POS, U_CONFIG, U_DPC, U_DYC,
     U_ENGINE, U_RCS, U_T_IGN, V, W,
 )
-from savant_cli.sim.plant import derivative
+from savant_cli.sim import layout as L
+from savant_cli.sim.plant import derivative, flex_point
 
 # status codes returned by advance()
 RUNNING = 0
@@ -98,7 +99,8 @@ def fcs_phase(events: np.ndarray) -> int:
 def rk4(t: float, x: np.ndarray, u: np.ndarray, dt: float, p: np.ndarray, tb: np.ndarray,
         aux: np.ndarray, work: np.ndarray) -> None:
     """One classical Runge–Kutta step of ``x`` in place; ``aux`` receives the diagnostics
-    at ``t``. ``work`` is a (6, N_STATE) scratch array (k1..k4, stage state, aux scratch)."""
+    at ``t``. ``work`` is a (6, ≥ max(x.size, N_AUX)) scratch array (k1..k4, stage state,
+    aux scratch)."""
     n = x.size
     k1, k2, k3, k4, xs = work[0], work[1], work[2], work[3], work[4]
     scratch = work[5]
@@ -118,14 +120,14 @@ def rk4(t: float, x: np.ndarray, u: np.ndarray, dt: float, p: np.ndarray, tb: np
 
 
 @njit(cache=True, error_model="numpy")
-def work_array() -> np.ndarray:
+def work_array(n_state: int = N_STATE) -> np.ndarray:
     """Scratch space for :func:`rk4` (rows wide enough for the state and the diagnostics)."""
-    return np.zeros((6, max(N_STATE, N_AUX)))
+    return np.zeros((6, max(n_state, N_AUX)))
 
 
 @njit(cache=True, error_model="numpy")
 def handle_events(t: float, x: np.ndarray, u: np.ndarray, d: np.ndarray,
-                  events: np.ndarray, sched: np.ndarray) -> int:
+                  events: np.ndarray, sched: np.ndarray, p: np.ndarray) -> int:
     """Apply time- and condition-triggered events at a step boundary; return a stop code."""
     if np.isnan(events[EV_SEPARATION]) and t >= sched[S_T_SEP]:
         events[EV_SEPARATION] = t
@@ -136,6 +138,12 @@ def handle_events(t: float, x: np.ndarray, u: np.ndarray, d: np.ndarray,
         x[MFS] = 0.0
         x[ACT_P:ACT_P + 3] = 0.0  # the upper-stage nozzle starts at null
         x[ACT_Y:ACT_Y + 3] = 0.0
+        vo = int(p[L.P_VALVE_OFF])
+        if vo >= 0:
+            x[vo:vo + L.N_VALVE] = 0.0
+        fo = int(p[L.P_FLEX_OFF])
+        if fo >= 0:  # new modal set: its modes start at rest (paper: liftoff → ignition set)
+            x[fo:fo + 2 * int(p[L.P_N_MODES])] = 0.0
         reset_phase(d)
     t_sep = events[EV_SEPARATION]
     if not np.isnan(t_sep) and np.isnan(events[EV_IGNITION]) and t >= t_sep + sched[S_T_IGN_DELAY]:
@@ -152,6 +160,21 @@ def handle_events(t: float, x: np.ndarray, u: np.ndarray, d: np.ndarray,
             events[EV_CUTOFF] = t
             return STOP_DEPLETION
     return RUNNING
+
+
+@njit(cache=True, error_model="numpy")
+def slosh_wall(x: np.ndarray, k: int, radius: float) -> None:
+    """Keep a slosh mass ``x[k:k+4] = [y, z, ẏ, ż]`` inside its tank: at the wall it
+    stops (its outward velocity is removed), the paper's only wall interaction."""
+    r = np.sqrt(x[k] ** 2 + x[k + 1] ** 2)
+    if r > radius:
+        ny, nz = x[k] / r, x[k + 1] / r
+        x[k] = radius * ny
+        x[k + 1] = radius * nz
+        vr = x[k + 2] * ny + x[k + 3] * nz
+        if vr > 0.0:
+            x[k + 2] -= vr * ny
+            x[k + 3] -= vr * nz
 
 
 @njit(cache=True, error_model="numpy")
@@ -173,12 +196,15 @@ def advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0:
     """
     dt = rates.dt
     aux = np.zeros(N_AUX)
-    work = work_array()
+    nx = x.size
+    work = work_array(nx)
     n_cols = log.shape[1]
+    flex3 = np.zeros(3)
+    so = int(p[L.P_SLOSH_OFF])
     for j in range(n_steps):
         k = k0 + j
         t = k * dt
-        status = handle_events(t, x, u, d, events, sched)
+        status = handle_events(t, x, u, d, events, sched, p)
         if status != RUNNING:
             return status, j, log_row, ""
         if int(u[U_ENGINE]) == ENGINE_UPPER and specific_energy(x, p[P_MU]) >= sched[S_ENERGY_TARGET]:
@@ -190,12 +216,14 @@ def advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0:
 
         if k % rates.n_guid == 0:
             guidance_sample(d, t, gt.time, gt.quat, gt.rate, k == 0)
+        config = int(u[U_CONFIG])
         if k % rates.n_sensor == 0:
-            for g in range(3):
+            for g in range(3):  # each gyro reads rigid plus flex rate at its node
+                flex_point(x, config, p, tb, L.GYRO_POINTS[g], True, flex3)
                 for ax in range(3):
                     s = D_GYRO_X + 6 * g + 2 * ax
                     d[D_GYRO_Y + 3 * g + ax] = gyro_step(
-                        d[s:s + 2], x[W + ax], gyro.ad, gyro.bd, gyro.cd, gyro.dd)
+                        d[s:s + 2], x[W + ax] + flex3[ax], gyro.ad, gyro.bd, gyro.cd, gyro.dd)
         if k % rates.n_fcs == 0:
             dt_fcs = rates.n_fcs * dt
             smoother_step(d, t, dt_fcs, sched[S_SMOOTH_ZETA], sched[S_SMOOTH_WN])
@@ -205,6 +233,8 @@ def advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0:
             else:
                 v_rel = earth.velocity_relative_eci(x[R:R + 3], x[V:V + 3], p[P_OMEGA_E])
                 sched_var = np.sqrt(v_rel[0] ** 2 + v_rel[1] ** 2 + v_rel[2] ** 2)
+            flex_point(x, config, p, tb, L.PT_IMU, False, flex3)  # flex rotation at the nav unit
+            d[L.D_FLEX_NAV:L.D_FLEX_NAV + 3] = flex3
             fcs_step(d, x[Q:Q + 4], phase, sched_var, dt_fcs, ft)
             u[U_DPC] = d[D_CMD_P]
             u[U_DYC] = d[D_CMD_Y]
@@ -216,9 +246,9 @@ def advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0:
         if k % rates.n_log == 0 and log_row < log.shape[0]:
             row = log[log_row]
             row[0] = t
-            row[1:1 + N_STATE] = x_log
-            row[1 + N_STATE:1 + N_STATE + N_AUX] = aux
-            row[1 + N_STATE + N_AUX:n_cols] = d
+            row[1:1 + nx] = x_log
+            row[1 + nx:1 + nx + N_AUX] = aux
+            row[1 + nx + N_AUX:n_cols] = d
             log_row += 1
 
         # housekeeping: unit quaternion, physical bounds of bounded states
@@ -230,6 +260,9 @@ def advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0:
                 x[i] = 0.0
         for i in (RCS_POS, RCS_NEG):
             x[i] = min(max(x[i], 0.0), 1.0)
+        if so >= 0:
+            for j in range(L.N_TANKS):
+                slosh_wall(x, so + L.N_SLOSH_PER_TANK * j, p[L.P_TANK + 3 * j])
 
         finite = True
         for i in range(x.size):  # no temporary array, this runs every step

@@ -16,11 +16,20 @@ W          rad/s   body angular rate relative to ECI, body axes
 MFS        kg      first-stage propellant remaining
 MLOX       kg      upper-stage LOX remaining
 MLH2       kg      upper-stage LH2 remaining
-ACT_P      rad...  pitch actuator states [δ, δ̇, δ̈]
-ACT_Y      rad...  yaw actuator states [δ, δ̇, δ̈]
+ACT_P      rad...  pitch actuator states: third-order [δ, δ̇, δ̈]; simplex [δ, δ̇, θ_piston]
+ACT_Y      rad...  yaw actuator states, as ACT_P
 RCS_POS    1       thrust fraction of the positive-roll jets (0..1)
 RCS_NEG    1       thrust fraction of the negative-roll jets (0..1)
 =========  ======  ===========================================================
+
+Optional blocks follow the 24 core states, in this order, only when their model is on
+(their offsets are in ``p``, −1 when absent; :class:`StateLayout` builds them):
+
+* simplex power valves: pitch [r, ṙ], yaw [r, ṙ] (valve flow as no-load piston rate, rad/s);
+* slosh: LOX [y, z, ẏ, ż], LH2 [y, z, ẏ, ż] (slosh-mass lateral displacement from the tank
+  centerline, body axes, m and m/s);
+* flex: q₁ … q_N, then q̇₁ … q̇_N (modal coordinates, unit generalized mass in SI:
+  √kg·m and √kg·m/s).
 """
 
 from __future__ import annotations
@@ -37,7 +46,10 @@ ACT_P = 16
 ACT_Y = 19
 RCS_POS = 22
 RCS_NEG = 23
-N_STATE = 24
+N_STATE = 24  # the core (rigid-body) states; optional blocks follow
+N_TANKS = 2  # slosh tanks: 0 LOX, 1 LH2
+N_SLOSH_PER_TANK = 4
+N_VALVE = 4
 
 STATE_NAMES = (
     ["r_eci_x", "r_eci_y", "r_eci_z", "v_eci_x", "v_eci_y", "v_eci_z"]
@@ -46,6 +58,47 @@ STATE_NAMES = (
     + ["dp", "dp_dot", "dp_ddot", "dy", "dy_dot", "dy_ddot"]
     + ["rcs_pos", "rcs_neg"]
 )
+
+
+
+class StateLayout:
+    """Size and offsets of the continuous state for one model set.
+
+    Parameters
+    ----------
+    simplex : bool
+        Simplex actuators (adds the 4 power-valve states).
+    slosh : bool
+        LOX and LH2 slosh (8 states).
+    n_modes : int
+        Retained flexible modes (2 states each).
+    """
+
+    def __init__(self, simplex: bool = False, slosh: bool = False, n_modes: int = 0) -> None:
+        self.simplex, self.slosh, self.n_modes = bool(simplex), bool(slosh), int(n_modes)
+        pos = N_STATE
+        self.valve = pos if simplex else -1
+        pos += N_VALVE if simplex else 0
+        self.slosh_offset = pos if slosh else -1
+        pos += N_TANKS * N_SLOSH_PER_TANK if slosh else 0
+        self.flex = pos if n_modes > 0 else -1
+        pos += 2 * n_modes
+        self.n = pos
+
+    def names(self) -> list[str]:
+        """Names of every state, in order (also the staging-state file's keys)."""
+        names = list(STATE_NAMES)
+        if self.simplex:
+            names[ACT_P + 2] = "dp_piston"
+            names[ACT_Y + 2] = "dy_piston"
+            names += ["valve_p", "valve_p_dot", "valve_y", "valve_y_dot"]
+        if self.slosh:
+            for tank in ("lox", "lh2"):
+                names += [f"slosh_{tank}_y", f"slosh_{tank}_z", f"slosh_{tank}_y_dot", f"slosh_{tank}_z_dot"]
+        names += [f"flex_q{i + 1}" for i in range(self.n_modes)]
+        names += [f"flex_q{i + 1}_dot" for i in range(self.n_modes)]
+        return names
+
 
 # ------------------------------------------------------------------- held inputs u
 U_DPC = 0  # pitch gimbal command, rad
@@ -101,7 +154,32 @@ P_AERO_ON = 37  # 0 disables aerodynamic force and moment
 P_THRUST_ON = 38  # 0 disables thrust
 P_GRAVITY_ORDER = 39  # 0 point mass ... 4 up to J4
 P_FS_ISP_SL = 40
-N_PARAM = 41
+# optional-block offsets in x (−1: block absent) and model switches
+P_VALVE_OFF = 41
+P_SLOSH_OFF = 42
+P_FLEX_OFF = 43
+P_N_MODES = 44
+P_FLEX_SWITCH = 45  # 0: liftoff set on the stack, ignition set after separation; 1: by propellant
+P_FS_PROP_FULL = 46  # kg, for interpolation between modal sets
+P_US_PROP_FULL = 47
+P_TWD_ON = 48
+P_FS_ENG_M = 49  # moving engine/nozzle: mass kg, gimbal→engine-CG m, inertia about gimbal kg m²
+P_FS_ENG_L = 50
+P_FS_ENG_I = 51
+P_US_ENG_M = 52
+P_US_ENG_L = 53
+P_US_ENG_I = 54
+P_SLOSH_AREF = 55  # reference acceleration of the slosh frequency tables, m/s²
+P_TANK = 56  # per tank (LOX, LH2): radius m, bottom station m (structure x), liquid density kg/m³
+P_SLOSH_FREQ_SCALE = 62
+P_SLOSH_ZETA_SCALE = 63
+P_SPX_FS = 64  # simplex parameters of the first stage (N_SPX), then of the upper stage
+N_SPX = 9  # loop gain 1/s, valve ω rad/s, valve ζ, rate limit rad/s, stiffness N m/rad,
+#            damping N m s/rad, load inertia kg m², leakage rad/s per N m, feedback (0 piston, 1 nozzle)
+P_SPX_US = P_SPX_FS + N_SPX
+N_PARAM = P_SPX_US + N_SPX
+ACT_THIRD_ORDER = 0
+ACT_SIMPLEX = 1
 
 # ----------------------------------------------------- per-derivative diagnostics aux
 A_ALT = 0  # geodetic altitude of the CG, m
@@ -132,7 +210,13 @@ A_DP = 34  # effective (limited) gimbal angles, rad
 A_DY = 35
 A_VEARTH = 36  # Earth-relative speed (no wind), m/s
 A_ACCEL = 37  # sensed (non-gravitational) acceleration, body (3)
-N_AUX = 40
+A_TWD = 40  # tail-wags-dog moment about the CG, body (3)
+A_DDP = 43  # gimbal angular acceleration, pitch, yaw, rad/s² (2)
+A_SLOSH_W = 45  # slosh frequency per tank, rad/s (2)
+A_LEVEL = 47  # liquid level per tank, m (2)
+A_SLOSH_F = 49  # slosh force on the vehicle per tank, body (2 x 3)
+A_FLEX_GIMBAL = 55  # flex rotation at the active gimbal, body (3)
+N_AUX = 58
 
 # ------------------------------------------------ discrete (flight software) state d
 # guidance command smoother
@@ -156,4 +240,24 @@ D_CMD_P = 100  # gimbal commands, rad
 D_CMD_Y = 101
 D_CMD_RCS = 102
 D_RATE_CMD_B = 103  # rate command in body axes (3)
-N_DISC = 106
+D_FLEX_NAV = 106  # flex rotation at the navigation unit, body, rad (3), added to the errors
+N_DISC = 109
+
+# ------------------------------------------------------------- flexible-body points
+# Points where the plant and the sensors use mode shapes, and the vehicle YAML key
+# (``flex.nodes.<key>``) of each; a point may average several nodes.
+PT_IMU = 0  # navigation unit (its rotation enters the attitude errors) and IMU gyros
+PT_GYRO_US = 1
+PT_GYRO_FS = 2
+PT_RCS = 3
+PT_GIMBAL_FS = 4
+PT_GIMBAL_US = 5
+PT_SLOSH_LOX = 6
+PT_SLOSH_LH2 = 7
+N_POINTS = 8
+POINT_KEYS = ("imu", "rate_gyro_upper_stage", "rate_gyro_first_stage", "rcs", "gimbal_first_stage",
+              "gimbal_upper_stage", "slosh_lox", "slosh_lh2")
+FIRST_STAGE_POINTS = (PT_GYRO_FS, PT_GIMBAL_FS)  # absent from the upper-stage modal sets
+# modal data sets, in this order in the packed tables
+FLEX_SETS = ("first_stage_liftoff", "first_stage_burnout", "second_stage_ignition", "second_stage_burnout")
+GYRO_POINTS = (PT_GYRO_US, PT_IMU, PT_GYRO_FS)  # in the FCS gyro order: upper, IMU, first

@@ -21,6 +21,7 @@ from numba import njit
 from savant_cli.models import earth, gravity
 from savant_cli.models.atmosphere import atmosphere_at
 from savant_cli.models.interp import interp1_at, locate, locate_at, rows, trilinear_at
+from savant_cli.sim import layout as L
 from savant_cli.sim.layout import (
     A_ACCEL, A_ALPHA, A_ALT, A_BETA, A_CG, A_DP, A_DY, A_FAERO, A_GRAV, A_LAT, A_LON,
     A_MACH, A_MAERO, A_MASS, A_MTHRUST, A_PRES, A_PROP, A_QBAR, A_RCS_TORQUE, A_RHO,
@@ -68,6 +69,12 @@ class PlantTables(NamedTuple):
     wind_alt: np.ndarray  # m
     wind_north: np.ndarray  # m/s
     wind_east: np.ndarray  # m/s
+    flex_freq: np.ndarray  # (4 sets, n_modes) rad/s (layout.FLEX_SETS order)
+    flex_zeta: np.ndarray  # (n_modes,) damping ratio per mode
+    flex_shape: np.ndarray  # (4, n_modes, N_POINTS, 6) body-frame shapes at the points, SI
+    slosh_level: np.ndarray  # (2 tanks, n) liquid level, m (padded)
+    slosh_data: np.ndarray  # (2, n, 4): ω at the reference acceleration rad/s, ζ, mass kg, height m
+    slosh_len: np.ndarray  # (2,) valid rows
 
 
 # Packed layout: a header of two entries per PlantTables field (offset of the field's
@@ -75,11 +82,13 @@ class PlantTables(NamedTuple):
 (T_AERO_MACH, T_AERO_ALPHA, T_AERO_BETA, T_AERO_COEF, T_AERO_REF, T_BASE_TIME, T_BASE_FORCE,
  T_BASE_LEN, T_MASS_PROP, T_MASS_DATA, T_MASS_LEN, T_FS_TIME, T_FS_THRUST, T_US_START_TIME,
  T_US_START_FRAC, T_RCS_ALT, T_RCS_THRUST, T_ATM_ALT, T_ATM_LNP, T_ATM_LNRHO, T_WIND_ALT,
- T_WIND_NORTH, T_WIND_EAST) = range(len(PlantTables._fields))
+ T_WIND_NORTH, T_WIND_EAST, T_FLEX_FREQ, T_FLEX_ZETA, T_FLEX_SHAPE, T_SLOSH_LEVEL, T_SLOSH_DATA,
+ T_SLOSH_LEN) = range(len(PlantTables._fields))
 N_CONFIG = 3  # stack, upper stage with LES, upper stage
 N_COEF = 6  # CA CY CN Cl Cm Cn
 N_MASS_COLS = 10
 N_AERO_REF = 7
+N_SLOSH_COLS = 4
 
 
 def pack_tables(tb: PlantTables) -> np.ndarray:
@@ -150,6 +159,106 @@ def actuator_third_order(x: np.ndarray, k: int, cmd: float, wa: float, wn: float
     out[k] = x[k + 1]
     out[k + 1] = x[k + 2]
     out[k + 2] = wn * wn * (v - x[k + 1]) - 2.0 * zeta * wn * x[k + 2]
+
+
+@njit(cache=True, error_model="numpy")
+def actuator_simplex(x: np.ndarray, k: int, kv: int, cmd: float, p: np.ndarray, sp: int,
+                     out: np.ndarray) -> float:
+    """Simplex TVC actuator: position loop, power valve, hydraulic ram and compliant load.
+
+    States ``x[k:k+3] = [δ, δ̇, θ_p]`` (nozzle angle and rate, ram position as an
+    equivalent gimbal angle) and ``x[kv:kv+2] = [r, ṙ]`` (valve flow expressed as the
+    no-load ram rate). Parameters ``p[sp:sp+N_SPX]``: loop gain K_a (1/s), valve natural
+    frequency ω_v (rad/s) and damping ζ_v, flow saturation (rate limit, rad/s), load
+    stiffness K (N m/rad), load damping C (N m s/rad), load inertia J (kg m², the nozzle
+    about its gimbal), leakage c_l (rad/s per N m), feedback (0 ram LVDT, 1 nozzle angle)::
+
+        v   = sat(K_a (δ_c − δ_fb), ±rate_limit)            position loop, valve stops
+        r̈   = ω_v² (v − r) − 2 ζ_v ω_v ṙ                    power valve
+        θ̇_p = r − c_l K (θ_p − δ)                           ram: flow minus leakage
+        J δ̈ = K (θ_p − δ) − C δ̇                             nozzle on a compliant mount
+
+    With ω_v → ∞, c_l = 0 and nozzle feedback this is exactly the third-order model with
+    ω_a = K_a, ω_n² = K/J, 2ζω_n = C/J. Returns δ̈ (rad/s²).
+    """
+    ka, wv, zv, rl = p[sp], p[sp + 1], p[sp + 2], p[sp + 3]
+    kk, cc, jj, leak = p[sp + 4], p[sp + 5], p[sp + 6], p[sp + 7]
+    d, dd, th = x[k], x[k + 1], x[k + 2]
+    fb = d if p[sp + 8] > 0.5 else th
+    v = ka * (cmd - fb)
+    if v > rl:
+        v = rl
+    elif v < -rl:
+        v = -rl
+    torque = kk * (th - d)
+    ddd = (torque - cc * dd) / jj
+    out[k] = dd
+    out[k + 1] = ddd
+    out[k + 2] = x[kv] - leak * torque
+    out[kv] = x[kv + 1]
+    out[kv + 1] = wv * wv * (v - x[kv]) - 2.0 * zv * wv * x[kv + 1]
+    return ddd
+
+
+@njit(cache=True, error_model="numpy")
+def slosh_tank(tb: np.ndarray, p: np.ndarray, j: int, liquid_kg: float):
+    """Level (m), slosh ω at the reference acceleration (rad/s), ζ, slosh mass (kg) and
+    slosh-mass station (structure x, m) of tank ``j`` holding ``liquid_kg``.
+
+    The level is the flat-bottom cylinder height ``m / (ρ π R²)``; tables are read at it.
+    """
+    radius, bottom, density = p[L.P_TANK + 3 * j], p[L.P_TANK + 3 * j + 1], p[L.P_TANK + 3 * j + 2]
+    level = max(liquid_kg, 0.0) / (density * np.pi * radius * radius)
+    o_l, n_l = tab(tb, T_SLOSH_LEVEL)
+    ns = n_l // L.N_TANKS
+    i, w = locate_at(tb, o_l + j * ns, int(tb[int(tb[2 * T_SLOSH_LEN]) + j]), level)
+    r0 = int(tb[2 * T_SLOSH_DATA]) + (j * ns + i) * N_SLOSH_COLS
+    r1 = r0 + N_SLOSH_COLS
+    a = 1.0 - w
+    w_ref = (a * tb[r0] + w * tb[r1]) * p[L.P_SLOSH_FREQ_SCALE]
+    zeta = (a * tb[r0 + 1] + w * tb[r1 + 1]) * p[L.P_SLOSH_ZETA_SCALE]
+    mass = a * tb[r0 + 2] + w * tb[r1 + 2]
+    height = a * tb[r0 + 3] + w * tb[r1 + 3]
+    return level, w_ref, zeta, mass, bottom - height
+
+
+@njit(cache=True, error_model="numpy")
+def flex_sets(x: np.ndarray, config: int, p: np.ndarray) -> tuple[int, int, float]:
+    """The two modal sets of the current stage and the blend weight toward the second.
+
+    Stack: first-stage liftoff → burnout; upper stage: ignition → burnout. With
+    ``P_FLEX_SWITCH = 0`` (the source paper's assumption) the weight is 0: the liftoff
+    set until separation, the ignition set after. With 1 the weight is the fraction of
+    the stage's propellant burned.
+    """
+    if config == CONFIG_STACK:
+        a, frac = 0, x[MFS] / p[L.P_FS_PROP_FULL]
+    else:
+        a, frac = 2, (x[MLOX] + x[MLH2]) / p[L.P_US_PROP_FULL]
+    if p[L.P_FLEX_SWITCH] == 0.0:
+        return a, a + 1, 0.0
+    return a, a + 1, 1.0 - min(max(frac, 0.0), 1.0)
+
+
+@njit(cache=True, error_model="numpy")
+def flex_point(x: np.ndarray, config: int, p: np.ndarray, tb: np.ndarray, pt: int, rate: bool,
+               out: np.ndarray) -> None:
+    """Flex rotation (``rate`` False, rad) or rotation rate (True, rad/s) at point ``pt``,
+    body axes: ``out[0:3] = Σ_i σ_i(pt) q_i`` (or ``q̇_i``). Zero when flex is off."""
+    out[0] = out[1] = out[2] = 0.0
+    fo = int(p[L.P_FLEX_OFF])
+    if fo < 0:
+        return
+    nm = int(p[L.P_N_MODES])
+    sa, sb, w = flex_sets(x, config, p)
+    o_sh = int(tb[2 * T_FLEX_SHAPE])
+    nd = int(tb[2 * T_FLEX_ZETA + 1])  # modes in the data
+    for i in range(nm):
+        qi = x[fo + nm + i] if rate else x[fo + i]
+        ia = o_sh + ((sa * nd + i) * L.N_POINTS + pt) * 6 + 3
+        ib = o_sh + ((sb * nd + i) * L.N_POINTS + pt) * 6 + 3
+        for c in range(3):
+            out[c] += ((1.0 - w) * tb[ia + c] + w * tb[ib + c]) * qi
 
 
 @njit(cache=True, error_model="numpy")
@@ -276,6 +385,37 @@ def derivative(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.nda
     ixy = -(a_ * tb[r0 + 7] + wm_ * tb[r1 + 7])  # tensor element = −product of inertia
     ixz = -(a_ * tb[r0 + 8] + wm_ * tb[r1 + 8])
     iyz = -(a_ * tb[r0 + 9] + wm_ * tb[r1 + 9])
+    mass_total = mass
+    cgx_t, cgy_t, cgz_t = cgx, cgy, cgz
+
+    # ------------------------------------------------- slosh masses (LOX, LH2)
+    so = int(p[L.P_SLOSH_OFF])
+    lvl0 = lvl1 = ws0 = ws1 = zs0 = zs1 = ms0 = ms1 = xs0 = xs1 = 0.0
+    if so >= 0:
+        lvl0, ws0, zs0, ms0, xs0 = slosh_tank(tb, p, 0, x[MLOX])
+        lvl1, ws1, zs1, ms1, xs1 = slosh_tank(tb, p, 1, x[MLH2])
+        # the rigid part leaves the slosh masses out (they sit on the tank centerlines)
+        m_r = mass - ms0 - ms1
+        cgx_r = (mass * cgx - ms0 * xs0 - ms1 * xs1) / m_r
+        cgy_r = mass * cgy / m_r
+        cgz_r = mass * cgz / m_r
+        for j in range(2):
+            mj, xj = (ms0, xs0) if j == 0 else (ms1, xs1)
+            dx, dy_, dz = -(xj - cgx), -cgy, cgz  # total CG → slosh mass, body axes
+            ixx -= mj * (dy_ * dy_ + dz * dz)
+            iyy -= mj * (dx * dx + dz * dz)
+            izz -= mj * (dx * dx + dy_ * dy_)
+            ixy += mj * dx * dy_
+            ixz += mj * dx * dz
+            iyz += mj * dy_ * dz
+        ex, ey, ez = -(cgx_r - cgx), cgy_r - cgy, -(cgz_r - cgz)  # total → rigid CG, body
+        ixx -= m_r * (ey * ey + ez * ez)
+        iyy -= m_r * (ex * ex + ez * ez)
+        izz -= m_r * (ex * ex + ey * ey)
+        ixy += m_r * ex * ey
+        ixz += m_r * ex * ez
+        iyz += m_r * ey * ez
+        mass, cgx, cgy, cgz = m_r, cgx_r, cgy_r, cgz_r
 
     # ---------------------------------------------------------- aerodynamics
     fax = fay = faz = 0.0
@@ -315,6 +455,55 @@ def derivative(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.nda
         may = qs * tb[rf + 2] * cm + rmz * fax - rmx * faz
         maz = qs * tb[rf + 3] * cnn + rmx * fay - rmy * fax
 
+    # ------------------------------------------------------------- actuators
+    if engine == ENGINE_FIRST:
+        lim = p[P_FS_GIMBAL_LIMIT]
+        g0_ = P_FS_GIMBAL_X
+        e0_ = L.P_FS_ENG_M
+        sp = L.P_SPX_FS
+        wa_, wn_, z_, rl_ = p[P_ACT_FS_WA], p[P_ACT_FS_WN], p[P_ACT_FS_ZETA], p[P_ACT_FS_RATE]
+        pg = L.PT_GIMBAL_FS
+    else:
+        lim = p[P_US_GIMBAL_LIMIT]
+        g0_ = P_US_GIMBAL_X
+        e0_ = L.P_US_ENG_M
+        sp = L.P_SPX_US
+        wa_, wn_, z_, rl_ = p[P_ACT_US_WA], p[P_ACT_US_WN], p[P_ACT_US_ZETA], p[P_ACT_US_RATE]
+        pg = L.PT_GIMBAL_US
+    if int(p[L.P_ACT_KIND]) == L.ACT_SIMPLEX:
+        vo = int(p[L.P_VALVE_OFF])
+        ddp = actuator_simplex(x, ACT_P, vo, clip(u[U_DPC], lim), p, sp, xd)
+        ddy = actuator_simplex(x, ACT_Y, vo + 2, clip(u[U_DYC], lim), p, sp, xd)
+    else:
+        actuator_third_order(x, ACT_P, clip(u[U_DPC], lim), wa_, wn_, z_, rl_, xd)
+        actuator_third_order(x, ACT_Y, clip(u[U_DYC], lim), wa_, wn_, z_, rl_, xd)
+        ddp, ddy = x[ACT_P + 2], x[ACT_Y + 2]
+    if abs(x[ACT_P]) >= lim:  # held at the stop: no nozzle acceleration
+        ddp = 0.0
+    if abs(x[ACT_Y]) >= lim:
+        ddy = 0.0
+    xd[RCS_POS] = jet_ramp(x[RCS_POS], u[U_RCS] > 0.5, p[P_RCS_RAMP_UP], p[P_RCS_RAMP_DOWN])
+    xd[RCS_NEG] = jet_ramp(x[RCS_NEG], u[U_RCS] < -0.5, p[P_RCS_RAMP_UP], p[P_RCS_RAMP_DOWN])
+
+    # ------------------------------------------- flex rotation at the active gimbal
+    fo = int(p[L.P_FLEX_OFF])
+    nmod = int(p[L.P_N_MODES])
+    sa = sb = 0
+    wset = 0.0
+    o_sh = nd = 0
+    tgx = tgy = tgz = 0.0
+    if fo >= 0:
+        sa, sb, wset = flex_sets(x, config, p)
+        o_sh = int(tb[2 * T_FLEX_SHAPE])
+        nd = int(tb[2 * T_FLEX_ZETA + 1])
+        for i in range(nmod):
+            ia = o_sh + ((sa * nd + i) * L.N_POINTS + pg) * 6 + 3
+            ib = o_sh + ((sb * nd + i) * L.N_POINTS + pg) * 6 + 3
+            qi = x[fo + i]
+            tgx += ((1.0 - wset) * tb[ia] + wset * tb[ib]) * qi
+            tgy += ((1.0 - wset) * tb[ia + 1] + wset * tb[ib + 1]) * qi
+            tgz += ((1.0 - wset) * tb[ia + 2] + wset * tb[ib + 2]) * qi
+
     # ---------------------------------------------------------------- thrust
     thrust = 0.0
     mdot_fs = 0.0
@@ -325,34 +514,50 @@ def derivative(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.nda
         if x[MFS] > 0.0 and f_vac > 0.0:
             mdot_fs = f_vac / (G0 * p[P_FS_ISP_VAC])
             thrust = max(f_vac - pres * p[P_FS_EXIT_AREA], 0.0)
-        lim = p[P_FS_GIMBAL_LIMIT]
-        g0_ = P_FS_GIMBAL_X
-    else:
-        if engine == ENGINE_UPPER and x[MLOX] > 0.0 and x[MLH2] > 0.0:
-            o_st, n_st = tab(tb, T_US_START_TIME)
-            f_vac = interp1_at(tb, o_st, int(tb[2 * T_US_START_FRAC]), n_st, t - u[U_T_IGN]) * p[P_US_THRUST]
-            mdot_us = f_vac / (G0 * p[P_US_ISP])
-            thrust = max(f_vac - pres * p[P_US_EXIT_AREA], 0.0)
-        lim = p[P_US_GIMBAL_LIMIT]
-        g0_ = P_US_GIMBAL_X
+    elif engine == ENGINE_UPPER and x[MLOX] > 0.0 and x[MLH2] > 0.0:
+        o_st, n_st = tab(tb, T_US_START_TIME)
+        f_vac = interp1_at(tb, o_st, int(tb[2 * T_US_START_FRAC]), n_st, t - u[U_T_IGN]) * p[P_US_THRUST]
+        mdot_us = f_vac / (G0 * p[P_US_ISP])
+        thrust = max(f_vac - pres * p[P_US_EXIT_AREA], 0.0)
     if p[P_THRUST_ON] == 0.0:
         thrust = 0.0
     dp = clip(x[ACT_P], lim)
     dy = clip(x[ACT_Y], lim)
+    # r_cg→gimbal, body axes
+    rgx = -(p[g0_] - cgx)
+    rgy = p[g0_ + 1] - cgy
+    rgz = -(p[g0_ + 2] - cgz)
     ftx = fty = ftz = 0.0
     mtx = mty = mtz = 0.0
     if thrust > 0.0:
-        cdp, sdp = np.cos(dp), np.sin(dp)
-        cdy, sdy = np.cos(dy), np.sin(dy)
+        # the nozzle turns with the structure's flex rotation at the gimbal (follower thrust)
+        dpe, dye = dp - tgy, dy - tgz
+        cdp, sdp = np.cos(dpe), np.sin(dpe)
+        cdy, sdy = np.cos(dye), np.sin(dye)
         ftx = thrust * cdp * cdy
         fty = -thrust * sdy
         ftz = thrust * sdp * cdy
-        rgx = -(p[g0_] - cgx)
-        rgy = p[g0_ + 1] - cgy
-        rgz = -(p[g0_ + 2] - cgz)
         mtx = rgy * ftz - rgz * fty
         mty = rgz * ftx - rgx * ftz
         mtz = rgx * fty - rgy * ftx
+
+    # ------------------------------------------------ tail-wags-dog (engine inertia)
+    # Reaction of the nozzle's angular acceleration on the vehicle at the gimbal: force
+    # m_R l_R δ̈ and torque I_R δ̈ (source paper's assumptions: small angles, only the
+    # angular-acceleration terms). About the CG: (I_R + m_R l_R l_c) δ̈ for an on-axis
+    # gimbal. The translational effect of the force is neglected, as in the paper.
+    fwx = fwy = fwz = 0.0
+    twy = twz = 0.0
+    mwx = mwy = mwz = 0.0
+    if p[L.P_TWD_ON] != 0.0:
+        m_l = p[e0_] * p[e0_ + 1]
+        fwy = -m_l * ddy
+        fwz = m_l * ddp
+        twy = p[e0_ + 2] * ddp
+        twz = p[e0_ + 2] * ddy
+        mwx = rgy * fwz - rgz * fwy
+        mwy = rgz * fwx - rgx * fwz + twy
+        mwz = rgx * fwy - rgy * fwx + twz
 
     # ------------------------------------------------------------- roll jets
     o_ra, n_ra = tab(tb, T_RCS_ALT)
@@ -361,10 +566,40 @@ def derivative(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.nda
         f_jet = 0.0
     rcs_torque = (x[RCS_POS] - x[RCS_NEG]) * p[P_RCS_N] * f_jet * p[P_RCS_ARM]
 
+    # ------------------------------------------------------------ slosh forces
+    fex, fey, fez = fax + ftx, fay + fty, faz + ftz  # external, non-gravitational
+    fsx0 = fsy0 = fsz0 = fsx1 = fsy1 = fsz1 = 0.0
+    msx = msy = msz = 0.0
+    w_s0 = w_s1 = 0.0
+    if so >= 0:
+        f_mag = np.sqrt(fex * fex + fey * fey + fez * fez) / mass_total
+        a_ratio = np.sqrt(f_mag / p[L.P_SLOSH_AREF])  # ω ∝ √a
+        w_s0 = ws0 * a_ratio
+        w_s1 = ws1 * a_ratio
+        fx_spec = fex / mass_total  # axial specific force; the masses ride axially with the tank
+        for j in range(2):
+            k = so + 4 * j
+            mj, wj, zj, xj = (ms0, w_s0, zs0, xs0) if j == 0 else (ms1, w_s1, zs1, xs1)
+            # force of the slosh mass on the tank: spring and damper laterally, its axial inertia
+            fy_ = mj * (wj * wj * x[k] + 2.0 * zj * wj * x[k + 2])
+            fz_ = mj * (wj * wj * x[k + 1] + 2.0 * zj * wj * x[k + 3])
+            fx_ = -mj * fx_spec
+            rx_, ry_, rz_ = -(xj - cgx), x[k] - cgy, x[k + 1] + cgz  # rigid CG → slosh mass, body
+            msx += ry_ * fz_ - rz_ * fy_
+            msy += rz_ * fx_ - rx_ * fz_
+            msz += rx_ * fy_ - ry_ * fx_
+            if j == 0:
+                fsx0, fsy0, fsz0 = fx_, fy_, fz_
+            else:
+                fsx1, fsy1, fsz1 = fx_, fy_, fz_
+
     # -------------------------------------------------------- rigid-body EOM
-    abx = (fax + ftx) / mass
-    aby = (fay + fty) / mass
-    abz = (faz + ftz) / mass
+    fbx = fex + fsx0 + fsx1
+    fby = fey + fsy0 + fsy1
+    fbz = fez + fsz0 + fsz1
+    abx = fbx / mass
+    aby = fby / mass
+    abz = fbz / mass
     xd[R] = vx
     xd[R + 1] = vy
     xd[R + 2] = vz
@@ -379,23 +614,70 @@ def derivative(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.nda
     hx = ixx * wx + ixy * wy + ixz * wz
     hy = ixy * wx + iyy * wy + iyz * wz
     hz = ixz * wx + iyz * wy + izz * wz
-    mx = max_ + mtx + rcs_torque - (wy * hz - wz * hy)
-    my = may + mty - (wz * hx - wx * hz)
-    mz = maz + mtz - (wx * hy - wy * hx)
-    xd[W], xd[W + 1], xd[W + 2] = solve_sym3(ixx, iyy, izz, ixy, ixz, iyz, mx, my, mz)
+    mx = max_ + mtx + mwx + msx + rcs_torque - (wy * hz - wz * hy)
+    my = may + mty + mwy + msy - (wz * hx - wx * hz)
+    mz = maz + mtz + mwz + msz - (wx * hy - wy * hx)
+    alx, aly, alz = solve_sym3(ixx, iyy, izz, ixy, ixz, iyz, mx, my, mz)
+    xd[W], xd[W + 1], xd[W + 2] = alx, aly, alz
     xd[MFS] = -mdot_fs
     xd[MLOX] = -mdot_us * p[P_US_MR] / (1.0 + p[P_US_MR])
     xd[MLH2] = -mdot_us / (1.0 + p[P_US_MR])
 
-    # ------------------------------------------------------------- actuators
-    if engine == ENGINE_FIRST:
-        wa_, wn_, z_, rl_ = p[P_ACT_FS_WA], p[P_ACT_FS_WN], p[P_ACT_FS_ZETA], p[P_ACT_FS_RATE]
-    else:
-        wa_, wn_, z_, rl_ = p[P_ACT_US_WA], p[P_ACT_US_WN], p[P_ACT_US_ZETA], p[P_ACT_US_RATE]
-    actuator_third_order(x, ACT_P, clip(u[U_DPC], lim), wa_, wn_, z_, rl_, xd)
-    actuator_third_order(x, ACT_Y, clip(u[U_DYC], lim), wa_, wn_, z_, rl_, xd)
-    xd[RCS_POS] = jet_ramp(x[RCS_POS], u[U_RCS] > 0.5, p[P_RCS_RAMP_UP], p[P_RCS_RAMP_DOWN])
-    xd[RCS_NEG] = jet_ramp(x[RCS_NEG], u[U_RCS] < -0.5, p[P_RCS_RAMP_UP], p[P_RCS_RAMP_DOWN])
+    # ------------------------------------------------- slosh-mass accelerations
+    if so >= 0:
+        for j in range(2):
+            k = so + 4 * j
+            wj, zj, xj = (w_s0, zs0, xs0) if j == 0 else (w_s1, zs1, xs1)
+            rx_, ry_, rz_ = -(xj - cgx), x[k] - cgy, x[k + 1] + cgz
+            vy_, vz_ = x[k + 2], x[k + 3]
+            # specific force of the point of the rigid body where the mass sits, plus Coriolis:
+            # f + α × r + ω × (ω × r) + 2 ω × v_rel   (lateral components)
+            wdr = wx * rx_ + wy * ry_ + wz * rz_
+            w2 = wx * wx + wy * wy + wz * wz
+            ay_ = aby + (alz * rx_ - alx * rz_) + (wy * wdr - w2 * ry_) + 2.0 * (-wx * vz_)
+            az_ = abz + (alx * ry_ - aly * rx_) + (wz * wdr - w2 * rz_) + 2.0 * (wx * vy_)
+            xd[k] = vy_
+            xd[k + 1] = vz_
+            xd[k + 2] = -2.0 * zj * wj * vy_ - wj * wj * x[k] - ay_
+            xd[k + 3] = -2.0 * zj * wj * vz_ - wj * wj * x[k + 1] - az_
+
+    # ------------------------------------------------------ modal equations
+    if fo >= 0:
+        o_fz = int(tb[2 * T_FLEX_ZETA])
+        o_ff = int(tb[2 * T_FLEX_FREQ])
+        for i in range(nmod):
+            wi = (1.0 - wset) * tb[o_ff + sa * nd + i] + wset * tb[o_ff + sb * nd + i]
+            base_a = o_sh + (sa * nd + i) * L.N_POINTS * 6
+            base_b = o_sh + (sb * nd + i) * L.N_POINTS * 6
+            # generalized force Σ φ·F + σ·M over the loaded points
+            gen = 0.0
+            for pt in range(L.N_POINTS):
+                if pt == pg:
+                    f0, f1, f2 = ftx + fwx, fty + fwy, ftz + fwz
+                    m0, m1, m2 = 0.0, twy, twz
+                elif pt == L.PT_RCS:
+                    f0 = f1 = f2 = 0.0
+                    m0, m1, m2 = rcs_torque, 0.0, 0.0
+                elif pt == L.PT_SLOSH_LOX:
+                    f0, f1, f2 = fsx0, fsy0, fsz0
+                    m0 = m1 = m2 = 0.0
+                elif pt == L.PT_SLOSH_LH2:
+                    f0, f1, f2 = fsx1, fsy1, fsz1
+                    m0 = m1 = m2 = 0.0
+                else:
+                    continue
+                ia = base_a + pt * 6
+                ib = base_b + pt * 6
+                gen += (((1.0 - wset) * tb[ia] + wset * tb[ib]) * f0
+                        + ((1.0 - wset) * tb[ia + 1] + wset * tb[ib + 1]) * f1
+                        + ((1.0 - wset) * tb[ia + 2] + wset * tb[ib + 2]) * f2
+                        + ((1.0 - wset) * tb[ia + 3] + wset * tb[ib + 3]) * m0
+                        + ((1.0 - wset) * tb[ia + 4] + wset * tb[ib + 4]) * m1
+                        + ((1.0 - wset) * tb[ia + 5] + wset * tb[ib + 5]) * m2)
+            qi = x[fo + i]
+            qdi = x[fo + nmod + i]
+            xd[fo + i] = qdi
+            xd[fo + nmod + i] = gen - 2.0 * tb[o_fz + i] * wi * qdi - wi * wi * qi
 
     # ------------------------------------------------------------ diagnostics
     aux[A_ALT] = alt
@@ -417,7 +699,7 @@ def derivative(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.nda
     aux[A_GRAV + 1] = gy
     aux[A_GRAV + 2] = gz
     aux[A_THRUST] = thrust
-    aux[A_MASS] = mass
+    aux[A_MASS] = mass_total
     aux[A_FAERO] = fax
     aux[A_FAERO + 1] = fay
     aux[A_FAERO + 2] = faz
@@ -429,12 +711,30 @@ def derivative(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.nda
     aux[A_MTHRUST + 2] = mtz
     aux[A_RCS_TORQUE] = rcs_torque
     aux[A_PROP] = prop
-    aux[A_CG] = cgx
-    aux[A_CG + 1] = cgy
-    aux[A_CG + 2] = cgz
+    aux[A_CG] = cgx_t
+    aux[A_CG + 1] = cgy_t
+    aux[A_CG + 2] = cgz_t
     aux[A_DP] = dp
     aux[A_DY] = dy
     aux[A_VEARTH] = np.sqrt(ex * ex + ey * ey + ez * ez)
     aux[A_ACCEL] = abx
     aux[A_ACCEL + 1] = aby
     aux[A_ACCEL + 2] = abz
+    aux[L.A_TWD] = mwx
+    aux[L.A_TWD + 1] = mwy
+    aux[L.A_TWD + 2] = mwz
+    aux[L.A_DDP] = ddp
+    aux[L.A_DDP + 1] = ddy
+    aux[L.A_SLOSH_W] = w_s0
+    aux[L.A_SLOSH_W + 1] = w_s1
+    aux[L.A_LEVEL] = lvl0
+    aux[L.A_LEVEL + 1] = lvl1
+    aux[L.A_SLOSH_F] = fsx0
+    aux[L.A_SLOSH_F + 1] = fsy0
+    aux[L.A_SLOSH_F + 2] = fsz0
+    aux[L.A_SLOSH_F + 3] = fsx1
+    aux[L.A_SLOSH_F + 4] = fsy1
+    aux[L.A_SLOSH_F + 5] = fsz1
+    aux[L.A_FLEX_GIMBAL] = tgx
+    aux[L.A_FLEX_GIMBAL + 1] = tgy
+    aux[L.A_FLEX_GIMBAL + 2] = tgz

@@ -43,8 +43,9 @@ class SimResult:
     sim_wall_time_s: float  # wall time inside the compiled loop
 
 
-def log_columns() -> int:
-    return 1 + L.N_STATE + L.N_AUX + L.N_DISC
+def log_columns(n_state: int) -> int:
+    """Columns of a log row: time, the state, the diagnostics, the discrete state."""
+    return 1 + n_state + L.N_AUX + L.N_DISC
 
 
 def simulate(model: SimModel, progress: bool = True, chunk_s: float = 10.0) -> SimResult:
@@ -61,7 +62,8 @@ def simulate(model: SimModel, progress: bool = True, chunk_s: float = 10.0) -> S
     t_max = model.sched[E.S_T_MAX]
     n_total = int(np.ceil(t_max / rt.dt)) + 1
     n_rows = n_total // rt.n_log + 2
-    log = np.empty((n_rows, log_columns()))  # every kept row is fully written
+    nx = x.size
+    log = np.empty((n_rows, log_columns(nx)))  # every kept row is fully written
     tb = model.packed_tables
     chunk = max(1, int(round(chunk_s / rt.dt)))
     k = model.k0
@@ -99,11 +101,11 @@ def simulate(model: SimModel, progress: bool = True, chunk_s: float = 10.0) -> S
     # close the history with the final state (for summaries at cutoff)
     if row < log.shape[0] and (row == 0 or log[row - 1, 0] < t_final):
         aux = np.zeros(L.N_AUX)
-        derivative(t_final, x, u, model.p, tb, aux, np.zeros(L.N_STATE))
+        derivative(t_final, x, u, model.p, tb, aux, np.zeros(nx))
         log[row, 0] = t_final
-        log[row, 1:1 + L.N_STATE] = x
-        log[row, 1 + L.N_STATE:1 + L.N_STATE + L.N_AUX] = aux
-        log[row, 1 + L.N_STATE + L.N_AUX:] = d
+        log[row, 1:1 + nx] = x
+        log[row, 1 + nx:1 + nx + L.N_AUX] = aux
+        log[row, 1 + nx + L.N_AUX:] = d
         row += 1
     return SimResult(log=log[:row].copy(), x=x, d=d, u=u, k_final=k, events=events, status=status, stop_code=code,
                      message=message, t_final=t_final, sim_wall_time_s=wall)
@@ -112,11 +114,11 @@ def simulate(model: SimModel, progress: bool = True, chunk_s: float = 10.0) -> S
 # ----------------------------------------------------------------- signals from log
 
 
-def _split(log: np.ndarray):
+def _split(log: np.ndarray, nx: int):
     t = log[:, 0]
-    x = log[:, 1:1 + L.N_STATE]
-    aux = log[:, 1 + L.N_STATE:1 + L.N_STATE + L.N_AUX]
-    d = log[:, 1 + L.N_STATE + L.N_AUX:]
+    x = log[:, 1:1 + nx]
+    aux = log[:, 1 + nx:1 + nx + L.N_AUX]
+    d = log[:, 1 + nx + L.N_AUX:]
     return t, x, aux, d
 
 
@@ -130,7 +132,8 @@ def launch_frame(model: SimModel) -> np.ndarray:
 
 def signals(result: SimResult, model: SimModel) -> dict[str, Signal]:
     """Named time histories with units, frames and column names."""
-    t, x, aux, d = _split(result.log)
+    lay = model.layout
+    t, x, aux, d = _split(result.log, lay.n)
     xyz = ("x", "y", "z")
     rpy = ("roll", "pitch", "yaw")
     pq = ("pitch", "yaw")
@@ -175,8 +178,11 @@ def signals(result: SimResult, model: SimModel) -> dict[str, Signal]:
         "attitude_euler_command": Signal(euler_c, "rad", "smoothed command attitude, 3-2-1 Euler angles relative to the launch frame", rpy, "launch"),
         "gimbal_angle": Signal(aux[:, [L.A_DP, L.A_DY]], "rad", "engine gimbal angles (limited)", pq, "body"),
         "gimbal_command": Signal(d[:, [L.D_CMD_P, L.D_CMD_Y]], "rad", "flight-control gimbal commands", pq, "body"),
-        "gimbal_rate": Signal(x[:, [L.ACT_P + 1, L.ACT_Y + 1]], "rad/s", "actuator rates", pq, "body"),
-        "gimbal_acceleration": Signal(x[:, [L.ACT_P + 2, L.ACT_Y + 2]], "rad/s^2", "actuator accelerations", pq, "body"),
+        "gimbal_rate": Signal(x[:, [L.ACT_P + 1, L.ACT_Y + 1]], "rad/s", "nozzle angular rates", pq, "body"),
+        "gimbal_acceleration": Signal(aux[:, L.A_DDP:L.A_DDP + 2], "rad/s^2", "nozzle angular accelerations "
+                                      "(zero while held at a gimbal stop)", pq, "body"),
+        "twd_moment": Signal(aux[:, L.A_TWD:L.A_TWD + 3], "N*m", "engine-inertia (tail-wags-dog) moment about the CG "
+                             "(zero with twd=off)", xyz, "body"),
         "rcs_command": Signal(d[:, L.D_CMD_RCS], "1", "roll jet command (+1 positive roll torque, 0, -1)"),
         "rcs_torque": Signal(aux[:, L.A_RCS_TORQUE], "N*m", "roll-jet torque about body X"),
         "mass": Signal(aux[:, L.A_MASS], "kg", "vehicle mass"),
@@ -188,10 +194,38 @@ def signals(result: SimResult, model: SimModel) -> dict[str, Signal]:
         "aero_moment": Signal(aux[:, L.A_MAERO:L.A_MAERO + 3], "N*m", "aerodynamic moment about the CG", xyz, "body"),
         "thrust_moment": Signal(aux[:, L.A_MTHRUST:L.A_MTHRUST + 3], "N*m", "thrust moment about the CG", xyz, "body"),
         "sensed_acceleration": Signal(aux[:, L.A_ACCEL:L.A_ACCEL + 3], "m/s^2", "non-gravitational acceleration", xyz, "body"),
-        "sensed_rate": Signal(d[:, L.D_GYRO_Y:L.D_GYRO_Y + 9], "rad/s", "rate-gyro outputs",
+        "sensed_rate": Signal(d[:, L.D_GYRO_Y:L.D_GYRO_Y + 9], "rad/s", "rate-gyro outputs (rigid plus flex rate "
+                              "at each gyro's node, through the gyro dynamics)",
                               tuple(f"{g}_{a}" for g in ("upper", "imu", "first") for a in ("p", "q", "r")), "body"),
+        "flex_navigation_rotation": Signal(d[:, L.D_FLEX_NAV:L.D_FLEX_NAV + 3], "rad",
+                                           "flex rotation at the navigation unit, added to the attitude errors", rpy, "body"),
         "fcs_gains": Signal(d[:, L.D_GAINS:L.D_GAINS + 8], "1", "scheduled gains (Kp rad/rad, Ki 1/s, Kd s, Kir rad/rad)",
                             ("pitch_kp", "pitch_ki", "pitch_kd", "pitch_kir", "yaw_kp", "yaw_ki", "yaw_kd", "yaw_kir")),
         "configuration": Signal(config, "1", "0 integrated stack, 1 upper stage with LES, 2 upper stage"),
     }
+    if lay.simplex:
+        s["actuator_ram_position"] = Signal(x[:, [L.ACT_P + 2, L.ACT_Y + 2]], "rad",
+                                            "simplex ram position as an equivalent gimbal angle", pq, "body")
+        s["actuator_valve_flow"] = Signal(x[:, [lay.valve, lay.valve + 2]], "rad/s",
+                                          "simplex power-valve flow as no-load ram rate", pq, "body")
+    if lay.slosh:
+        so = lay.slosh_offset
+        yz = ("lox_y", "lox_z", "lh2_y", "lh2_z")
+        s["slosh_position"] = Signal(x[:, [so, so + 1, so + 4, so + 5]], "m",
+                                     "slosh-mass displacement from the tank centerline", yz, "body")
+        s["slosh_velocity"] = Signal(x[:, [so + 2, so + 3, so + 6, so + 7]], "m/s", "slosh-mass lateral velocity",
+                                     yz, "body")
+        s["slosh_frequency"] = Signal(aux[:, L.A_SLOSH_W:L.A_SLOSH_W + 2] / (2.0 * np.pi), "Hz",
+                                      "slosh natural frequency at the current acceleration", ("lox", "lh2"))
+        s["liquid_level"] = Signal(aux[:, L.A_LEVEL:L.A_LEVEL + 2], "m", "liquid level above the tank bottom",
+                                   ("lox", "lh2"))
+        s["slosh_force"] = Signal(aux[:, L.A_SLOSH_F:L.A_SLOSH_F + 6], "N", "force of the slosh masses on the vehicle",
+                                  ("lox_x", "lox_y", "lox_z", "lh2_x", "lh2_y", "lh2_z"), "body")
+    if lay.n_modes:
+        fo, n = lay.flex, lay.n_modes
+        modes = tuple(f"mode_{i + 1}" for i in range(n))
+        s["flex_q"] = Signal(x[:, fo:fo + n], "kg^0.5*m", "modal coordinates (unit generalized mass)", modes)
+        s["flex_qdot"] = Signal(x[:, fo + n:fo + 2 * n], "kg^0.5*m/s", "modal velocities", modes)
+        s["flex_gimbal_rotation"] = Signal(aux[:, L.A_FLEX_GIMBAL:L.A_FLEX_GIMBAL + 3], "rad",
+                                           "flex rotation at the active gimbal (turns the thrust)", rpy, "body")
     return s

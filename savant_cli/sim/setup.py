@@ -4,8 +4,11 @@ computation."""
 
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass
 from pathlib import Path
+
+import numpy as np
 
 from savant_cli.config import SavantConfig
 from savant_cli.errors import ConfigError
@@ -14,6 +17,8 @@ from savant_cli.io.guidance_file import read_guidance
 from savant_cli.paths import hydra_search_dirs, resolve_data_path
 from savant_cli.sim.build import SimModel, build_model
 from savant_cli.vehicle import Vehicle, load_vehicle
+
+log = logging.getLogger(__name__)
 
 
 @dataclass
@@ -50,4 +55,29 @@ def start_from_staging(model: SimModel, cfg: SavantConfig, path: Path) -> None:
         raise ConfigError(key, str(path), f"was written for guidance {st.guidance!r}, not {cfg.guidance.name!r}")
     if abs(st.dt_s - model.rates.dt) > 1e-12:
         raise ConfigError(key, str(path), f"was written with a plant step of {st.dt_s} s; sim.plant_rate_hz gives {model.rates.dt} s")
-    model.x0, model.d0, model.u0, model.k0 = st.x, st.d, st.u, st.step
+    model.x0 = staging_vector(st, model.layout, key, path)
+    model.d0, model.u0, model.k0 = st.d, st.u, st.step
+
+
+def staging_vector(st, layout, key: str, path: Path) -> np.ndarray:
+    """The model's state vector from a staging state, by name.
+
+    States of models the file was written without start at rest: exact for the flex
+    modes and the actuators (all restart at separation) and an approximation for
+    slosh (logged). A model the file has but the config has off is ignored.
+    """
+    have = dict(zip(st.names, st.x, strict=True))
+    x = np.zeros(layout.n)
+    missing_slosh = False
+    for i, name in enumerate(layout.names()):
+        if name in have:
+            x[i] = have[name]
+        elif name.startswith(("flex_", "valve_")) or name.endswith(("_piston", "_ddot")):
+            x[i] = 0.0  # reset at separation anyway
+        elif name.startswith("slosh_"):
+            missing_slosh = True
+        else:
+            raise ConfigError(key, str(path), f"has no state {name!r}")
+    if missing_slosh:
+        log.warning("%s was written without slosh: the slosh masses start at rest at separation", path)
+    return x

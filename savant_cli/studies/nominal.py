@@ -35,7 +35,8 @@ def fly(cfg: SavantConfig, raw_cfg: DictConfig, progress: bool | None = None) ->
     staging = None
     if result.stop_code == STOP_SEPARATION:
         staging = StagingState(vehicle=cfg.vehicle["name"], guidance=cfg.guidance.name, dt_s=prep.model.rates.dt,
-                               step=result.k_final, x=result.x, d=result.d, u=result.u)
+                               step=result.k_final, x=result.x, d=result.d, u=result.u,
+                               names=tuple(prep.model.layout.names()))
     return RunRecord(
         signals=sig, events=events, summary=summary,
         config_yaml=OmegaConf.to_yaml(raw_cfg, resolve=True),

@@ -1,0 +1,151 @@
+"""Flexible-body and slosh data of a vehicle, loaded only when the model is switched on,
+checked against the config and arranged as the compiled plant's tables.
+
+Modal sets come from ``vehicle.flex`` (files read by :mod:`savant_cli.io.modal_data`);
+slosh tables from ``vehicle.slosh``. Every problem is a ConfigError naming the key.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from savant_cli.config import FlexConfig, SloshConfig
+from savant_cli.errors import ConfigError
+from savant_cli.io.modal_data import ModalSet, read_modal_set, read_numeric_csv
+from savant_cli.sim import layout as L
+from savant_cli.vehicle import Vehicle
+
+
+@dataclass(frozen=True)
+class FlexTables:
+    """Modal data at the plant's points, all four sets (``layout.FLEX_SETS`` order)."""
+
+    frequency_rad_s: np.ndarray  # (4, n_modes)
+    damping: np.ndarray  # (n_modes,)
+    shapes: np.ndarray  # (4, n_modes, N_POINTS, 6), body axes, SI
+    sets: tuple[ModalSet, ...]
+
+
+@dataclass(frozen=True)
+class SloshTank:
+    """One tank: table vs liquid level and geometry (SI)."""
+
+    name: str
+    level_m: np.ndarray
+    frequency_rad_s: np.ndarray  # at the reference acceleration
+    damping: np.ndarray
+    mass_kg: np.ndarray
+    height_m: np.ndarray  # spring-mass height above the tank bottom
+    radius_m: float
+    bottom_station_m: float
+    density_kgm3: float
+
+
+@dataclass(frozen=True)
+class SloshData:
+    reference_accel_mps2: float
+    tanks: tuple[SloshTank, SloshTank]  # LOX, LH2
+
+
+def _spec(vehicle: Vehicle, section: str) -> dict:
+    spec = vehicle.flex_spec if section == "flex" else vehicle.slosh_spec
+    if not spec:
+        raise ConfigError(f"vehicle.{section}", None,
+                          f"missing: {section}=on needs the vehicle's `{section}` section (or use {section}=off)")
+    return spec
+
+
+def load_flex(vehicle: Vehicle, fcfg: FlexConfig, plant_rate_hz: float) -> FlexTables:
+    """Read the four modal sets, keep ``fcfg.n_modes`` and evaluate them at the points."""
+    spec = _spec(vehicle, "flex")
+    key = "vehicle.flex"
+    for k in spec:
+        if k not in ("directory", "units", "nodes"):
+            raise ConfigError(f"{key}.{k}", spec[k], "unknown key; allowed: directory, units, nodes")
+    units = spec.get("units") or {}
+    folder = Path(vehicle.data_dir or ".") / str(spec.get("directory", "flex"))
+    if not folder.is_dir():
+        raise ConfigError(f"{key}.directory", str(folder), "modal data folder not found")
+    nodes = spec.get("nodes") or {}
+    for pk in L.POINT_KEYS:
+        ids = nodes.get(pk)
+        if not isinstance(ids, (list, tuple)) or not ids or not all(isinstance(i, int) for i in ids):
+            raise ConfigError(f"{key}.nodes.{pk}", ids, "must be a non-empty list of integer node ids")
+    sets = tuple(read_modal_set(folder, name, (str(units.get("length", "")), str(units.get("force", ""))),
+                                f"{key} set {name}") for name in L.FLEX_SETS)
+    n = fcfg.n_modes
+    for ms in sets:
+        if ms.frequency_rad_s.size < n:
+            raise ConfigError("flex.n_modes", n, f"modal set {ms.name!r} has only {ms.frequency_rad_s.size} modes")
+    freq = np.array([ms.frequency_rad_s[:n] for ms in sets]) * fcfg.frequency_scale
+    # RK4 resolves a mode well (numerical damping < 0.2 % of critical) below 1/8 of the step rate
+    in_use = freq if fcfg.switching == "propellant" else freq[[0, 2]]  # burnout sets unused otherwise
+    limit = 2.0 * np.pi * plant_rate_hz / 8.0
+    if in_use.max() >= limit:
+        raise ConfigError("flex.n_modes", n, f"the highest retained mode ({in_use.max() / 2 / np.pi:.1f} Hz) must stay "
+                          f"below sim.plant_rate_hz / 8 = {plant_rate_hz / 8:g} Hz for the RK4 step; keep fewer "
+                          "modes or raise sim.plant_rate_hz")
+    shapes = np.zeros((len(sets), n, L.N_POINTS, 6))
+    for s, ms in enumerate(sets):
+        upper = s >= 2
+        for pt, pk in enumerate(L.POINT_KEYS):
+            if upper and pt in L.FIRST_STAGE_POINTS:
+                continue  # the first stage is gone in the upper-stage sets
+            shapes[s, :, pt, :] = ms.at_nodes(nodes[pk], f"{key}.nodes.{pk}")[:n]
+    shapes *= fcfg.shape_scale
+    zeta = np.asarray(fcfg.damping_per_mode[:n] if fcfg.damping_per_mode else [fcfg.damping] * n, float)
+    return FlexTables(frequency_rad_s=freq, damping=zeta, shapes=shapes, sets=sets)
+
+
+SLOSH_COLUMNS = ("level_m", "frequency_hz", "damping", "slosh_mass_kg", "slosh_height_m")
+
+
+def _tank(name: str, node: dict, vdir: Path, load_kg: float) -> SloshTank:
+    key = f"vehicle.slosh.{name}"
+    for k in ("table", "radius_m", "bottom_station_m", "density_kgm3"):
+        if k not in node:
+            raise ConfigError(f"{key}.{k}", None, "missing")
+    for k in ("radius_m", "density_kgm3"):
+        if not float(node[k]) > 0.0:
+            raise ConfigError(f"{key}.{k}", node[k], "must be positive")
+    path = vdir / str(node["table"])
+    header, data = read_numeric_csv(path, f"{key}.table")
+    if header != list(SLOSH_COLUMNS):
+        raise ConfigError(f"{key}.table", str(path), f"header must be {','.join(SLOSH_COLUMNS)}")
+    level = data[:, 0]
+    tkey = f"{path.parent.name}/{path.name}"
+    if level.size < 2 or np.any(np.diff(level) <= 0.0):
+        raise ConfigError(f"{tkey}:level_m", level.tolist()[:5], "must be strictly increasing (at least 2 rows)")
+    radius, density = float(node["radius_m"]), float(node["density_kgm3"])
+    full = load_kg / (density * np.pi * radius**2)
+    if level[0] > 0.0 or level[-1] < full * (1.0 - 1e-9):
+        raise ConfigError(f"{tkey}:level_m", [float(level[0]), float(level[-1])],
+                          f"must cover the tank from 0 to the full-load level {full:.4f} m")
+    for col, what in ((1, "frequency_hz"), (3, "slosh_mass_kg"), (4, "slosh_height_m")):
+        if np.any(data[:, col] < 0.0):
+            raise ConfigError(f"{tkey}:{what}", float(data[:, col].min()), "must be zero or positive")
+    if np.any(data[:, 2] < 0.0):
+        raise ConfigError(f"{tkey}:damping", float(data[:, 2].min()), "damping must not be negative")
+    if np.any(data[:, 3] > density * np.pi * radius**2 * level + 1e-6 * load_kg):
+        raise ConfigError(f"{tkey}:slosh_mass_kg", float(data[:, 3].max()), "exceeds the liquid mass at its level")
+    return SloshTank(name=name, level_m=level, frequency_rad_s=2.0 * np.pi * data[:, 1], damping=data[:, 2],
+                     mass_kg=data[:, 3], height_m=data[:, 4], radius_m=radius,
+                     bottom_station_m=float(node["bottom_station_m"]), density_kgm3=density)
+
+
+def load_slosh(vehicle: Vehicle, scfg: SloshConfig) -> SloshData:
+    """Read the LOX and LH2 slosh tables and check they cover each tank."""
+    spec = _spec(vehicle, "slosh")
+    for k in spec:
+        if k not in ("reference_accel_mps2", "lox", "lh2"):
+            raise ConfigError(f"vehicle.slosh.{k}", spec[k], "unknown key; allowed: reference_accel_mps2, lox, lh2")
+    a_ref = float(spec.get("reference_accel_mps2", 0.0))
+    if not a_ref > 0.0:
+        raise ConfigError("vehicle.slosh.reference_accel_mps2", a_ref, "must be positive")
+    vdir = Path(vehicle.data_dir or ".")
+    us = vehicle.upper_stage
+    tanks = (_tank("lox", spec.get("lox") or {}, vdir, us.lox_kg), _tank("lh2", spec.get("lh2") or {}, vdir, us.lh2_kg))
+    return SloshData(reference_accel_mps2=a_ref, tanks=tanks)

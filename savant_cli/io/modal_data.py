@@ -1,0 +1,203 @@
+"""Import of flexible-body modal data sets (frequencies and mode shapes at nodes).
+
+A set is three CSV files in the vehicle's flex folder (``#`` comment lines, then a header):
+
+* ``<set>_modes.csv`` — ``mode, frequency_hz, generalized_mass``;
+* ``<set>_shapes.csv`` — ``mode, node, station_<len>, dx_<len>, dy_<len>, dz_<len>,
+  rx_rad, ry_rad, rz_rad``: displacement and rotation per unit modal coordinate at each
+  node, structure frame (x aft of the nose tip, y = body y, z = −body z);
+* ``<set>_nodes.csv`` (optional) — ``node, station_<len>, mass_*, rotary_inertia_*``:
+  the lumped masses, only used to check generalized-mass consistency.
+
+Unit conversion follows the source paper (§III.K). With unit generalized mass in a
+consistent (length, force, second) system, a change of units keeps the generalized mass
+at 1 only if the modal coordinate changes with the square root of the energy unit: for
+length factor ``c_L`` and force factor ``c_F`` to SI, displacements scale by
+``c_L / √(c_F c_L)`` and rotations by ``1 / √(c_F c_L)``. For inches to feet with pounds
+force (``c_F = 1``, ``c_L = 1/12``) that is the paper's ÷√12 and ×√12. Structure to body
+is ``diag(−1, 1, −1)`` for displacements and rotations alike (a proper rotation).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from savant_cli import constants as C
+from savant_cli.errors import ConfigError
+
+LENGTH_TO_M = {"in": C.IN, "ft": C.FT, "m": 1.0}
+FORCE_TO_N = {"lbf": C.LBF, "N": 1.0}
+STRUCTURE_TO_BODY = np.array([-1.0, 1.0, -1.0])
+
+
+@dataclass(frozen=True)
+class ModalSet:
+    """One modal data set in SI, body frame, unit generalized mass (kg).
+
+    Attributes
+    ----------
+    name : str
+    frequency_rad_s : ndarray (n_modes,)
+    nodes : ndarray (n_nodes,) int
+    station_m : ndarray (n_nodes,)
+        Structure-frame x of each node.
+    shapes : ndarray (n_modes, n_nodes, 6)
+        Displacement (m per √kg·m) and rotation (rad per √kg·m) per unit modal
+        coordinate, body axes.
+    node_mass_kg, node_inertia_kgm2 : ndarray (n_nodes,) or None
+        Lumped masses when the set provides them.
+    """
+
+    name: str
+    frequency_rad_s: np.ndarray
+    nodes: np.ndarray
+    station_m: np.ndarray
+    shapes: np.ndarray
+    node_mass_kg: np.ndarray | None = None
+    node_inertia_kgm2: np.ndarray | None = None
+
+    def at_nodes(self, node_ids: list[int], key: str) -> np.ndarray:
+        """Mean shape over ``node_ids`` (an attach point may average nodes): (n_modes, 6)."""
+        idx = []
+        for nid in node_ids:
+            hit = np.nonzero(self.nodes == int(nid))[0]
+            if hit.size == 0:
+                raise ConfigError(key, int(nid), f"node is not in modal set {self.name!r} "
+                                  f"(its nodes run {int(self.nodes.min())}..{int(self.nodes.max())})")
+            idx.append(int(hit[0]))
+        return self.shapes[:, idx, :].mean(axis=1)
+
+
+def conversion_factors(length_unit: str, force_unit: str) -> tuple[float, float]:
+    """Factors (displacement, rotation) taking unit-generalized-mass shapes to SI."""
+    c_l, c_f = LENGTH_TO_M[length_unit], FORCE_TO_N[force_unit]
+    energy = c_l * c_f
+    return c_l / np.sqrt(energy), 1.0 / np.sqrt(energy)
+
+
+def convert_shapes(shapes: np.ndarray, from_units: tuple[str, str], to_units: tuple[str, str]) -> np.ndarray:
+    """Re-normalize ``(..., 6)`` shapes (3 displacements, 3 rotations) between unit systems
+    ``(length, force)``, keeping unit generalized mass (the paper's ÷√12, ×√12 for in→ft)."""
+    d0, r0 = conversion_factors(*from_units)
+    d1, r1 = conversion_factors(*to_units)
+    out = np.array(shapes, dtype=float, copy=True)
+    out[..., :3] *= d0 / d1
+    out[..., 3:] *= r0 / r1
+    return out
+
+
+def read_numeric_csv(path: Path, key: str) -> tuple[list[str], np.ndarray]:
+    """Header names and the numeric rows of a CSV with `#` comment lines."""
+    if not path.is_file():
+        raise ConfigError(key, str(path), "modal data file not found")
+    with open(path) as f:
+        lines = [ln for ln in f if ln.strip() and not ln.lstrip().startswith("#")]
+    if len(lines) < 2:
+        raise ConfigError(key, str(path), "needs a header row and at least one data row")
+    header = [h.strip() for h in lines[0].split(",")]
+    try:
+        data = np.array([[float(v) for v in ln.split(",")] for ln in lines[1:]])
+    except ValueError as exc:
+        raise ConfigError(key, str(path), f"non-numeric entry ({exc})") from None
+    if data.shape[1] != len(header) or not np.all(np.isfinite(data)):
+        raise ConfigError(key, str(path), "every row needs one finite number per header column")
+    return header, data
+
+
+def _column(header: list[str], data: np.ndarray, prefix: str, path: Path, key: str) -> tuple[np.ndarray, str]:
+    """Column whose name is ``prefix`` or ``prefix_<unit>``; returns values and unit."""
+    for i, h in enumerate(header):
+        if h == prefix or h.startswith(prefix + "_"):
+            return data[:, i], h[len(prefix) + 1:]
+    raise ConfigError(key, str(path), f"missing column {prefix!r} (has {', '.join(header)})")
+
+
+def read_modal_set(folder: Path, name: str, units: tuple[str, str], key: str) -> ModalSet:
+    """Read one set and convert it to SI, body frame.
+
+    Parameters
+    ----------
+    folder : Path
+        The vehicle's flex folder.
+    name : str
+        Set name (file prefix).
+    units : (str, str)
+        Declared length unit (``in``, ``ft``, ``m``) and force unit (``lbf``, ``N``).
+    key : str
+        Config key named in errors.
+    """
+    length_unit, force_unit = units
+    if length_unit not in LENGTH_TO_M:
+        raise ConfigError(f"{key}.units.length", length_unit, f"must be one of {', '.join(LENGTH_TO_M)}")
+    if force_unit not in FORCE_TO_N:
+        raise ConfigError(f"{key}.units.force", force_unit, f"must be one of {', '.join(FORCE_TO_N)}")
+    mpath = folder / f"{name}_modes.csv"
+    mh, md = read_numeric_csv(mpath, key)
+    modes = _column(mh, md, "mode", mpath, key)[0].astype(int)
+    freq_hz = _column(mh, md, "frequency", mpath, key)[0]
+    gmass = _column(mh, md, "generalized_mass", mpath, key)[0]
+    if np.any(freq_hz <= 0.0):
+        bad = float(freq_hz[freq_hz <= 0.0][0])
+        raise ConfigError(f"{key}: {mpath.name}:frequency_hz", bad, "modal frequencies must be positive")
+    if np.any(gmass <= 0.0):
+        raise ConfigError(f"{key}: {mpath.name}:generalized_mass", float(gmass.min()), "must be positive")
+    if not np.array_equal(modes, np.arange(1, modes.size + 1)):
+        raise ConfigError(f"{key}: {mpath.name}:mode", modes.tolist(), "modes must be numbered 1, 2, … in order")
+    if np.any(np.diff(freq_hz) < 0.0):
+        raise ConfigError(f"{key}: {mpath.name}:frequency_hz", freq_hz.tolist(),
+                          "modes must be listed lowest frequency first")
+
+    spath = folder / f"{name}_shapes.csv"
+    sh, sd = read_numeric_csv(spath, key)
+    smode = _column(sh, sd, "mode", spath, key)[0].astype(int)
+    snode = _column(sh, sd, "node", spath, key)[0].astype(int)
+    station, st_unit = _column(sh, sd, "station", spath, key)
+    cols = []
+    for comp in ("dx", "dy", "dz"):
+        vals, unit = _column(sh, sd, comp, spath, key)
+        if unit != length_unit:
+            raise ConfigError(f"{key}: {spath.name}:{comp}_{unit}", unit, f"must be in the declared length unit {length_unit!r}")
+        cols.append(vals)
+    for comp in ("rx", "ry", "rz"):
+        vals, unit = _column(sh, sd, comp, spath, key)
+        if unit != "rad":
+            raise ConfigError(f"{key}: {spath.name}:{comp}_{unit}", unit, "rotations must be in rad")
+        cols.append(vals)
+    nodes = np.unique(snode)
+    n_m, n_n = modes.size, nodes.size
+    if sd.shape[0] != n_m * n_n:
+        raise ConfigError(key, str(spath), f"needs one row per (mode, node): {n_m} x {n_n} = {n_m * n_n}, has {sd.shape[0]}")
+    shapes = np.zeros((n_m, n_n, 6))
+    col = np.column_stack(cols)
+    mi = smode - 1
+    ni = np.searchsorted(nodes, snode)
+    if mi.min() < 0 or mi.max() >= n_m:
+        raise ConfigError(key, str(spath), f"mode numbers must be within 1..{n_m}")
+    shapes[mi, ni, :] = col
+    stations = np.zeros(n_n)
+    stations[ni] = station * LENGTH_TO_M.get(st_unit, np.nan)
+    if not np.all(np.isfinite(stations)):
+        raise ConfigError(key, str(spath), f"station unit {st_unit!r} unknown")
+    shapes /= np.sqrt(gmass)[:, None, None]  # to unit generalized mass
+    shapes = convert_shapes(shapes, (length_unit, force_unit), ("m", "N"))
+    shapes[..., :3] *= STRUCTURE_TO_BODY
+    shapes[..., 3:] *= STRUCTURE_TO_BODY
+
+    node_mass = node_inertia = None
+    npath = folder / f"{name}_nodes.csv"
+    if npath.is_file():
+        nh, nd = read_numeric_csv(npath, key)
+        nn = _column(nh, nd, "node", npath, key)[0].astype(int)
+        m, _ = _column(nh, nd, "mass", npath, key)
+        j, _ = _column(nh, nd, "rotary_inertia", npath, key)
+        c_l, c_f = LENGTH_TO_M[length_unit], FORCE_TO_N[force_unit]
+        node_mass = np.zeros(n_n)
+        node_inertia = np.zeros(n_n)
+        idx = np.searchsorted(nodes, nn)
+        node_mass[idx] = m * c_f / c_l  # force·s²/length → kg
+        node_inertia[idx] = j * c_f * c_l  # force·length·s² → kg m²
+    return ModalSet(name=name, frequency_rad_s=2.0 * np.pi * freq_hz, nodes=nodes, station_m=stations,
+                    shapes=shapes, node_mass_kg=node_mass, node_inertia_kgm2=node_inertia)
