@@ -538,7 +538,9 @@ def derived_figures(lay: Layout = LAYOUT) -> dict[str, float]:
             M_J2X * (J2X_RADIUS_M**2 / 4.0 + J2X_LENGTH_M**2 / 12.0 + j2x_cg**2),
         "rcs.location_x_m": s["us_aft"] - 0.5,
         "sensors.imu_x_m": 0.5 * (s["us_fwd"] + s["lh2_fwd"]),
-        "sensors.rate_gyro_first_stage_x_m": s["fs_fwd"] + 2.0,
+        # aft skirt, behind the first bending mode's antinode: its slope there has the
+        # opposite sign to the upper stage's, so blending the two gyros can null the mode
+        "sensors.rate_gyro_first_stage_x_m": s["fs_gimbal"] - 1.5,
         "configurations.upper.moment_reference_x_m": s["cm_fwd"],
         "separation_time_s": separation_time(),
     }

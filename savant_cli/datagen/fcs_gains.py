@@ -124,7 +124,7 @@ def _fmt(vals) -> str:
     return "[" + ", ".join(f"{v:.4g}" for v in vals) + "]"
 
 
-def controller_yaml(tables: dict) -> str:
+def controller_yaml(tables: dict, stack_blend: list[float]) -> str:
     """The whole msfc_pid controller YAML text."""
     lines = [
         "# MSFC-like gain-scheduled PID pitch/yaw control with flex filters and rate blending,",
@@ -134,7 +134,7 @@ def controller_yaml(tables: dict) -> str:
         "# Ki 1/s, Kd s.",
         "name: msfc_pid",
         "blending:            # weights of [upper-stage gyro, IMU, first-stage gyro]; sum to 1",
-        "  stack: [0.8, 0.0, 0.2]",
+        f"  stack: {_fmt(stack_blend)}   # nulls the first bending mode (flex_filters.stack_blend)",
         "  upper: [1.0, 0.0, 0.0]",
         "flex_filters:        # two 4th-order discrete sections in series per path, at 50 Hz",
     ]
@@ -185,7 +185,7 @@ def main(argv: list[str] | None = None) -> None:
     cfg = _compose(args.overrides)
     vdir = resolve_data_path("vehicle.data_dir", "vehicle", cfg.vehicle["data_dir"], [shipped_config_dir()], must_be_dir=True)
     vehicle = load_vehicle(cfg.vehicle, vdir)
-    text = controller_yaml(design(cfg, vehicle))
+    text = controller_yaml(design(cfg, vehicle), flex_filters.vehicle_stack_blend(cfg.vehicle, vdir))
     out = args.out or shipped_config_dir() / "controller" / "msfc_pid.yaml"
     write_text_atomic(out, text)
     print(text)

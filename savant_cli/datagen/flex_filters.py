@@ -9,6 +9,12 @@ paper §III.F). The defaults are designed with scipy at the 50 Hz control rate:
   and third bending frequencies (stack 2.5 / 4.5 Hz; upper stage 6 / 9 Hz, [E]: no public
   Ares I modal data); the first stack mode (~1 Hz) is left to phase stabilization.
 
+The integrated-stack rate blending nulls the first bending mode instead of filtering it
+(:func:`stack_blend`): the first-stage gyro sits aft of the mode's antinode, where its
+slope has the opposite sign to the upper-stage gyro's, and the weights make the blended
+slope zero. The mode (~1 Hz, modal gain far too high to gain-stabilize next to a 0.2 Hz
+rigid-body loop) then barely enters the rate feedback; the attitude path's lag damps it.
+
 Run ``python -m savant_cli.datagen.flex_filters`` to print the YAML block.
 """
 
@@ -32,6 +38,33 @@ def design_set(lowpass_hz: float, notch_hz: tuple[float, float], notch_q: float,
     bn2, an2 = signal.iirnotch(notch_hz[1], notch_q, fs=fs_hz)
     b2, a2 = np.convolve(bn1, bn2), np.convolve(an1, an2)
     return [{"b": b1.tolist(), "a": a1.tolist()}, {"b": b2.tolist(), "a": a2.tolist()}]
+
+
+def stack_blend(slope_upper: float, slope_first: float) -> list[float]:
+    """Blend weights ``[upper-stage gyro, IMU, first-stage gyro]`` with
+    ``w_u σ_u + w_f σ_f = 0`` and ``w_u + w_f = 1`` for the first mode's slopes σ (rad per
+    unit modal coordinate, same axis) at the two gyros; rounded to 3 decimals."""
+    if slope_upper * slope_first >= 0.0:
+        raise ValueError("the gyros' slopes must have opposite signs to null the mode with positive weights")
+    w_first = round(slope_upper / (slope_upper - slope_first), 3)
+    return [round(1.0 - w_first, 3), 0.0, w_first]
+
+
+def vehicle_stack_blend(vehicle_cfg, vehicle_dir) -> list[float]:
+    """:func:`stack_blend` for a vehicle's first-stage-liftoff modal set (pitch plane)."""
+    from pathlib import Path
+
+    from savant_cli.io.modal_data import read_modal_set
+
+    spec = vehicle_cfg["flex"]
+    units = (spec["units"]["length"], spec["units"]["force"])
+    ms = read_modal_set(Path(vehicle_dir) / spec["directory"], "first_stage_liftoff", units, "vehicle.flex")
+    nodes = spec["nodes"]
+    first_pitch_mode = ms.at_nodes(list(nodes["rate_gyro_upper_stage"]), "")[:, 4] != 0.0
+    mode = int(np.argmax(first_pitch_mode))  # lowest mode with a pitch (body y) rotation
+    s_u = ms.at_nodes(list(nodes["rate_gyro_upper_stage"]), "vehicle.flex.nodes.rate_gyro_upper_stage")[mode, 4]
+    s_f = ms.at_nodes(list(nodes["rate_gyro_first_stage"]), "vehicle.flex.nodes.rate_gyro_first_stage")[mode, 4]
+    return stack_blend(float(s_u), float(s_f))
 
 
 def main() -> None:
