@@ -201,6 +201,7 @@ def advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0:
     n_cols = log.shape[1]
     flex3 = np.zeros(3)
     so = int(p[L.P_SLOSH_OFF])
+    has_flex = int(p[L.P_FLEX_OFF]) >= 0
     for j in range(n_steps):
         k = k0 + j
         t = k * dt
@@ -219,7 +220,8 @@ def advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0:
         config = int(u[U_CONFIG])
         if k % rates.n_sensor == 0:
             for g in range(3):  # each gyro reads rigid plus flex rate at its node
-                flex_point(x, config, p, tb, L.GYRO_POINTS[g], True, flex3)
+                if has_flex:
+                    flex_point(x, config, p, tb, L.GYRO_POINTS[g], True, flex3)
                 for ax in range(3):
                     s = D_GYRO_X + 6 * g + 2 * ax
                     d[D_GYRO_Y + 3 * g + ax] = gyro_step(
@@ -233,8 +235,9 @@ def advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0:
             else:
                 v_rel = earth.velocity_relative_eci(x[R:R + 3], x[V:V + 3], p[P_OMEGA_E])
                 sched_var = np.sqrt(v_rel[0] ** 2 + v_rel[1] ** 2 + v_rel[2] ** 2)
-            flex_point(x, config, p, tb, L.PT_IMU, False, flex3)  # flex rotation at the nav unit
-            d[L.D_FLEX_NAV:L.D_FLEX_NAV + 3] = flex3
+            if has_flex:
+                flex_point(x, config, p, tb, L.PT_IMU, False, flex3)  # flex rotation at the nav unit
+                d[L.D_FLEX_NAV:L.D_FLEX_NAV + 3] = flex3
             fcs_step(d, x[Q:Q + 4], phase, sched_var, dt_fcs, ft)
             u[U_DPC] = d[D_CMD_P]
             u[U_DYC] = d[D_CMD_Y]
