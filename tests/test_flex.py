@@ -131,6 +131,7 @@ def test_damped_mode_frequency_and_log_decrement(zeta):
 # ------------------------------------------------------------------------ sensors
 
 
+@pytest.mark.parametrize("n_used", [3, 2])  # 2: fewer retained modes than the tables hold
 @pytest.mark.parametrize("config,switch,sets,weight", [
     (L.CONFIG_STACK, 0, (0, 1), 0.0),
     (L.CONFIG_UPPER, 0, (2, 3), 0.0),
@@ -138,13 +139,14 @@ def test_damped_mode_frequency_and_log_decrement(zeta):
     (L.CONFIG_STACK, 1, (0, 1), 0.25),  # by propellant: 75 % of the stage remains
     (L.CONFIG_UPPER, 1, (2, 3), 0.6),  # 40 % remains
 ])
-def test_flex_point_rotation_and_rate_at_every_point(config, switch, sets, weight):
+def test_flex_point_rotation_and_rate_at_every_point(config, switch, sets, weight, n_used):
     """``flex_point`` = Σ_i [(1−w) σ_i^a(pt) + w σ_i^b(pt)] q_i (or q̇_i), with w the
     fraction of the stage's propellant burned (0 with the separation switch)."""
     rng = np.random.default_rng(3)
-    nm = 3
-    shapes = _random_shapes(rng, nm)
-    tb = pack_tables(_flex_tables(np.full((N_SETS, nm), 10.0), np.zeros(nm), shapes))
+    nd = 3
+    shapes = _random_shapes(rng, nd)
+    tb = pack_tables(_flex_tables(np.full((N_SETS, nd), 10.0), np.zeros(nd), shapes))
+    nm = n_used
     p, lay = _flex_params(nm, switch=switch)
     p[L.P_FS_PROP_FULL] = 4.0e5
     p[L.P_US_PROP_FULL] = 1.0e5
@@ -158,7 +160,7 @@ def test_flex_point_rotation_and_rate_at_every_point(config, switch, sets, weigh
     x[fo:fo + nm] = q
     x[fo + nm:fo + 2 * nm] = qd
     sa, sb = sets
-    sig = (1.0 - weight) * shapes[sa, :, :, 3:] + weight * shapes[sb, :, :, 3:]  # (nm, N_POINTS, 3)
+    sig = (1.0 - weight) * shapes[sa, :, :, 3:] + weight * shapes[sb, :, :, 3:]  # (nd, N_POINTS, 3)
     out = np.zeros(3)
     for pt in range(L.N_POINTS):
         expected_rate = sum(sig[i, pt] * qd[i] for i in range(nm))

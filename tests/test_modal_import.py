@@ -230,3 +230,27 @@ def test_same_physical_mode_in_feet_and_pounds_reads_back_to_the_same_si_shape(t
     g = np.einsum("n,ink->i", b.node_mass_kg, b.shapes[:, :, :3] ** 2) + np.einsum(
         "n,ink->i", b.node_inertia_kgm2, b.shapes[:, :, 3:] ** 2)
     np.testing.assert_allclose(g, 1.0, rtol=1e-12)
+
+
+@pytest.mark.parametrize("bad_id", [999, 50])
+def test_nodes_file_with_an_unknown_node_is_refused(tmp_path, bad_id):
+    sh = np.ones((1, 3, 6))
+    _write_set(tmp_path, "a", ("m", "N"), [1.0], [1.0], np.array([0.0, 1.0, 2.0]), sh,
+               [1.0, 2.0, 3.0], [1.0, 1.0, 1.0])
+    f = tmp_path / "a_nodes.csv"
+    f.write_text(f.read_text().replace("\n102,", f"\n{bad_id},"))
+    with pytest.raises(ConfigError) as exc:
+        read_modal_set(tmp_path, "a", ("m", "N"), "vehicle.flex set a")
+    assert exc.value.key.startswith("vehicle.flex set a")
+
+
+def test_shapes_file_needs_each_mode_node_pair_once(tmp_path):
+    sh = np.ones((2, 3, 6))
+    _write_set(tmp_path, "b", ("m", "N"), [1.0, 2.0], [1.0, 1.0], np.array([0.0, 1.0, 2.0]), sh)
+    f = tmp_path / "b_shapes.csv"
+    lines = f.read_text().splitlines()
+    i = next(k for k, ln in enumerate(lines) if ln.startswith("1,101,"))
+    lines[i] = lines[i].replace("1,101,1.0,", "1,100,0.0,")  # (1, 100) twice, (1, 101) missing
+    f.write_text("\n".join(lines) + "\n")
+    with pytest.raises(ConfigError):
+        read_modal_set(tmp_path, "b", ("m", "N"), "vehicle.flex set b")

@@ -5,9 +5,12 @@ paper §III.F). The defaults are designed with scipy at the 50 Hz control rate:
 
 * section 1: 4th-order Butterworth low-pass, gain-stabilizing everything above its
   corner (8 Hz on both stages);
-* section 2: a pair of second-order notches (quality factor 1.5) at the estimated second
-  and third bending frequencies (stack 2.5 / 4.5 Hz; upper stage 6 / 9 Hz, [E]: no public
-  Ares I modal data); the first stack mode (~1 Hz) is left to phase stabilization.
+* section 2: a pair of second-order notches at bending frequencies: on the stack the
+  second and third estimated modes (2.5 / 4.5 Hz, quality factor 1.5; the beam model of
+  ``datagen.ares_i_flex`` gives 2.5 / 5.0 Hz); on the upper stage the beam model's first
+  and second bending modes at ignition (9.5 / 21.7 Hz, quality factor 1.0: wide enough
+  for the rise toward burnout). With the earlier 6 / 9 Hz estimates the 9.5 Hz mode
+  limit-cycled at the valve-flow limit with the simplex actuator and tail-wags-dog on.
 
 The integrated-stack rate blending nulls the first bending mode instead of filtering it
 (:func:`stack_blend`): the first-stage gyro sits aft of the mode's antinode, where its
@@ -26,7 +29,7 @@ from scipy import signal
 FCS_RATE_HZ = 50.0
 DESIGN = {
     "stack": {"lowpass_hz": 8.0, "notch_hz": (2.5, 4.5), "notch_q": 1.5},
-    "upper": {"lowpass_hz": 8.0, "notch_hz": (6.0, 9.0), "notch_q": 1.5},
+    "upper": {"lowpass_hz": 8.0, "notch_hz": (9.5, 21.7), "notch_q": 1.0},
 }
 
 

@@ -176,6 +176,8 @@ def read_modal_set(folder: Path, name: str, units: tuple[str, str], key: str) ->
     ni = np.searchsorted(nodes, snode)
     if mi.min() < 0 or mi.max() >= n_m:
         raise ConfigError(key, str(spath), f"mode numbers must be within 1..{n_m}")
+    if np.unique(mi * n_n + ni).size != n_m * n_n:
+        raise ConfigError(key, str(spath), "needs every (mode, node) pair exactly once")
     shapes[mi, ni, :] = col
     stations = np.zeros(n_n)
     stations[ni] = station * LENGTH_TO_M.get(st_unit, np.nan)
@@ -196,6 +198,9 @@ def read_modal_set(folder: Path, name: str, units: tuple[str, str], key: str) ->
         c_l, c_f = LENGTH_TO_M[length_unit], FORCE_TO_N[force_unit]
         node_mass = np.zeros(n_n)
         node_inertia = np.zeros(n_n)
+        unknown = nn[~np.isin(nn, nodes)]
+        if unknown.size:
+            raise ConfigError(f"{key}: {npath.name}:node", int(unknown[0]), "node is not in the shapes file")
         idx = np.searchsorted(nodes, nn)
         node_mass[idx] = m * c_f / c_l  # force·s²/length → kg
         node_inertia[idx] = j * c_f * c_l  # force·length·s² → kg m²
