@@ -59,7 +59,40 @@ class PhaseConfig:
 
 @dataclass
 class StudyConfig:
+    """``study=nominal``: one flight."""
+
     name: str = "nominal"
+
+
+@dataclass
+class MarginRequirement:
+    gain_dB: float = 6.0
+    phase_deg: float = 30.0
+
+
+@dataclass
+class LinearRequirements:
+    rigid_aero: MarginRequirement = field(default_factory=MarginRequirement)
+    slosh: MarginRequirement = field(default_factory=MarginRequirement)
+    flex: MarginRequirement = field(default_factory=MarginRequirement)
+
+
+@dataclass
+class LinearStudyConfig:
+    """``study=linear``: frozen-time linearization and stability margins."""
+
+    name: str = "linear"
+    times: list[float] = field(default_factory=lambda: [55.0, 130.0, 180.0, 230.0])
+    every: float = 0.0  # > 0: points every `every` s over the whole flight instead of `times`
+    event_clearance_s: float = 0.1  # a time this close to an event is refused (skipped with `every`)
+    jacobian: str = "auto"  # auto: per-state steps; fixed: one user step
+    jacobian_step: float = 1e-6  # the fixed step, as an attitude perturbation in rad
+    charts: str = "auto"  # all | none | auto (per-point charts up to 20 points)
+    exclusion_zones: bool = True  # Nichols exclusion zones
+    requirements: LinearRequirements = field(default_factory=LinearRequirements)
+
+
+STUDY_SCHEMAS: dict[str, type] = {"nominal": StudyConfig, "linear": LinearStudyConfig}
 
 
 @dataclass
@@ -248,7 +281,7 @@ class SavantConfig:
     controller: ControllerConfig = field(default_factory=ControllerConfig)
     guidance: GuidanceConfig = field(default_factory=GuidanceConfig)
     sensors: SensorsConfig = field(default_factory=SensorsConfig)
-    study: StudyConfig = field(default_factory=StudyConfig)
+    study: Any = field(default_factory=lambda: {"name": "nominal"})  # typed per study in validate()
     sim: SimConfig = field(default_factory=SimConfig)
     environment: EnvironmentConfig = field(default_factory=EnvironmentConfig)
     output: OutputConfig = field(default_factory=OutputConfig)
@@ -446,6 +479,40 @@ def validate(cfg: DictConfig) -> SavantConfig:
     """
     merged = _strict_merge(cfg)
     typed = OmegaConf.to_object(merged)
+    typed.study = _study(typed.study)
     _check_physics(typed)
     return typed
+
+
+def _study(node: Any) -> Any:
+    """The study section merged onto its own study's schema (unknown keys refused)."""
+    name = node.get("name") if isinstance(node, dict) else None
+    if name not in STUDY_SCHEMAS:
+        raise ConfigError("study.name", name, f"must be one of {', '.join(STUDY_SCHEMAS)}")
+    try:
+        merged = OmegaConf.merge(OmegaConf.structured(STUDY_SCHEMAS[name]), node)
+    except OmegaConfBaseException as exc:
+        key = "study." + str(getattr(exc, "full_key", None) or "?")
+        msg = str(exc).splitlines()[0]
+        allowed = "unknown key; see `savant run --cfg job`" if "not in" in msg else msg
+        raise ConfigError(key, getattr(exc, "value", None), allowed) from None
+    study = OmegaConf.to_object(merged)
+    if isinstance(study, LinearStudyConfig):
+        _check_linear(study)
+    return study
+
+
+def _check_linear(s: LinearStudyConfig) -> None:
+    if s.every < 0:
+        raise ConfigError("study.every", s.every, "must be zero (use study.times) or a positive interval in s")
+    if s.every == 0:
+        if not s.times:
+            raise ConfigError("study.times", list(s.times), "must list at least one flight time (s)")
+        for i, t in enumerate(s.times):
+            if not (t > 0.0 and np.isfinite(t)):
+                raise ConfigError(f"study.times[{i}]", t, "must be a positive flight time in s")
+    _non_negative("study.event_clearance_s", s.event_clearance_s)
+    _one_of("study.jacobian", s.jacobian, ("auto", "fixed"))
+    _positive("study.jacobian_step", s.jacobian_step)
+    _one_of("study.charts", s.charts, ("auto", "all", "none"))
 

@@ -150,7 +150,7 @@ def _write_summary(group: h5py.Group, summary: dict[str, Any]) -> None:
     group.attrs[NONE_MARKER] = _str_array(none_keys)
 
 
-def write_run(path: Path | str, record: RunRecord) -> None:
+def write_run(path: Path | str, record: RunRecord, extra=None) -> None:
     """Write a run to an HDF5 file, atomically.
 
     Parameters
@@ -159,6 +159,8 @@ def write_run(path: Path | str, record: RunRecord) -> None:
         Destination, normally ``<run_dir>/savant.h5`` (directory created if missing).
     record : RunRecord
         The run. Every signal must have as many rows as ``record.signals["time"]``.
+    extra : callable, optional
+        ``extra(h5py.File)`` writes a study's own groups inside the same atomic write.
 
     Raises
     ------
@@ -192,6 +194,8 @@ def write_run(path: Path | str, record: RunRecord) -> None:
             ev.create_dataset("name", data=_str_array([e[0] for e in record.events]), dtype=_STR)
             ev.create_dataset("time_s", data=np.array([float(e[1]) for e in record.events], dtype=np.float64))
             _write_summary(f.create_group("summary", track_order=True), record.summary)
+            if extra is not None:
+                extra(f)
 
 
 def _as_str(value: Any) -> str:

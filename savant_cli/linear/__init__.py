@@ -1,1 +1,1 @@
-"""savant_cli.linear"""
+"""Frequency-domain stability analysis at trajectory time points (``study=linear``)."""

@@ -107,7 +107,8 @@ U_RCS = 2  # roll jet command: +1, 0, -1
 U_CONFIG = 3  # aero/mass configuration: 0 stack, 1 upper with LES, 2 upper
 U_ENGINE = 4  # 0 first stage burning, 1 no thrust, 2 upper stage burning
 U_T_IGN = 5  # J-2X ignition time, s (mission time)
-N_INPUT = 6
+U_GUST = 6  # gust velocity, body axes (3), m/s: the air moves with it (linear-analysis disturbance input)
+N_INPUT = 9
 
 CONFIG_STACK = 0
 CONFIG_UPPER_LES = 1

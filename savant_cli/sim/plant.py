@@ -358,9 +358,9 @@ def derivative(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.nda
         ay_ -= st * we_x + ct * we_y
         az_ -= we_z
     # air-relative velocity in body axes (R^T v)
-    ub = m00 * ax_ + m10 * ay_ + m20 * az_
-    vb = m01 * ax_ + m11 * ay_ + m21 * az_
-    wb = m02 * ax_ + m12 * ay_ + m22 * az_
+    ub = m00 * ax_ + m10 * ay_ + m20 * az_ - u[L.U_GUST]
+    vb = m01 * ax_ + m11 * ay_ + m21 * az_ - u[L.U_GUST + 1]
+    wb = m02 * ax_ + m12 * ay_ + m22 * az_ - u[L.U_GUST + 2]
     vair = np.sqrt(ub * ub + vb * vb + wb * wb)
     alpha = np.arctan2(wb, ub)
     beta = np.arcsin(vb / vair) if vair > 1e-6 else 0.0

@@ -4,7 +4,7 @@ reasons, and conversion of the raw log into named signals with units."""
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
@@ -41,6 +41,19 @@ class SimResult:
     message: str
     t_final: float
     sim_wall_time_s: float  # wall time inside the compiled loop
+    snapshots: dict = field(default_factory=dict)  # step → Snapshot, for linearization
+
+
+@dataclass(frozen=True)
+class Snapshot:
+    """The complete simulation state at the start of a plant step (before its events)."""
+
+    step: int
+    t: float
+    x: np.ndarray
+    d: np.ndarray
+    u: np.ndarray
+    events: np.ndarray
 
 
 def log_columns(n_state: int) -> int:
@@ -48,11 +61,14 @@ def log_columns(n_state: int) -> int:
     return 1 + n_state + L.N_AUX + L.N_DISC
 
 
-def simulate(model: SimModel, progress: bool = True, chunk_s: float = 10.0) -> SimResult:
+def simulate(model: SimModel, progress: bool = True, chunk_s: float = 10.0,
+             snapshot_steps: tuple[int, ...] = ()) -> SimResult:
     """Fly one run from the model's initial state until a stop condition.
 
     A diverging run returns normally with ``status = "diverged"`` and the history up to
-    the failure; ``KeyboardInterrupt`` returns ``status = "interrupted"``.
+    the failure; ``KeyboardInterrupt`` returns ``status = "interrupted"``. The complete
+    state at each of ``snapshot_steps`` (plant step indices) reached is kept in
+    ``result.snapshots``.
     """
     rt = model.rates
     x = model.x0.copy()
@@ -67,6 +83,8 @@ def simulate(model: SimModel, progress: bool = True, chunk_s: float = 10.0) -> S
     tb = model.packed_tables
     chunk = max(1, int(round(chunk_s / rt.dt)))
     k = model.k0
+    pending = sorted(s for s in set(snapshot_steps) if s >= k)
+    snaps: dict[int, Snapshot] = {}
     row = 0
     code = E.RUNNING
     detail = ""
@@ -78,9 +96,15 @@ def simulate(model: SimModel, progress: bool = True, chunk_s: float = 10.0) -> S
         task = bar.add_task("flight", total=t_max, t=k * rt.dt, completed=k * rt.dt)
         try:
             while code == E.RUNNING and k < n_total:
+                while pending and pending[0] == k:
+                    snaps[k] = Snapshot(k, k * rt.dt, x.copy(), d.copy(), u.copy(), events.copy())
+                    pending.pop(0)
+                n_next = min(chunk, n_total - k)
+                if pending:
+                    n_next = min(n_next, pending[0] - k)
                 t0 = time.perf_counter()
                 code, done, row, detail = E.advance(
-                    x, d, u, events, k, min(chunk, n_total - k), rt, model.p, tb,
+                    x, d, u, events, k, n_next, rt, model.p, tb,
                     model.fcs, model.gyro, model.guidance, model.sched, log, row)
                 wall += time.perf_counter() - t0
                 k += done
@@ -108,7 +132,7 @@ def simulate(model: SimModel, progress: bool = True, chunk_s: float = 10.0) -> S
         log[row, 1 + nx + L.N_AUX:] = d
         row += 1
     return SimResult(log=log[:row].copy(), x=x, d=d, u=u, k_final=k, events=events, status=status, stop_code=code,
-                     message=message, t_final=t_final, sim_wall_time_s=wall)
+                     message=message, t_final=t_final, sim_wall_time_s=wall, snapshots=snaps)
 
 
 # ----------------------------------------------------------------- signals from log

@@ -1,0 +1,199 @@
+"""``study=linear``: stability margins of the closed-loop vehicle at flight times.
+
+A time run (the nominal flight, written like ``study=nominal``) sets the operating
+points; at each, the plant is linearized (``linear/plant.py``), assembled with the
+discrete flight control (``linear/loops.py``) and analysed (``linear/margins.py``).
+Outputs: ``savant.h5`` (time history + ``linear`` group), ``linear.mat``, ``margins.csv``,
+``summary.json`` (with ``margins``), charts in ``plots/linear/`` and a console table.
+"""
+
+from __future__ import annotations
+
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+from omegaconf import DictConfig, OmegaConf
+from rich.console import Console
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.table import Table
+
+from savant_cli.config import LinearStudyConfig, SavantConfig
+from savant_cli.errors import ConfigError
+from savant_cli.io.atomic import write_json_atomic
+from savant_cli.io.console import print_run_summary
+from savant_cli.io.hdf5 import write_run
+from savant_cli.io.provenance import collect_provenance
+from savant_cli.io.record import RunRecord
+from savant_cli.linear.loops import AXES, LinearPoint, assemble
+from savant_cli.linear.margins import Bands, MarginRow, bandwidth_hz, disk_margins, loop_margins
+from savant_cli.linear.plant import linearize_plant
+from savant_cli.linear.store import write_linear_group, write_margins_csv, write_mat
+from savant_cli.sim.engine import EVENT_NAMES
+from savant_cli.sim.run import simulate, signals
+from savant_cli.sim.setup import prepare
+from savant_cli.sim.summary import summarize
+
+MAX_CHART_POINTS = 20
+
+
+def requested_times(study: LinearStudyConfig, t_end: float) -> list[float]:
+    """The configured times (or the ``every`` grid up to ``t_end``), sorted, unique."""
+    if study.every > 0:
+        return [float(t) for t in np.arange(study.every, t_end, study.every)]
+    return sorted({float(t) for t in study.times})
+
+
+def check_times(times: list[float], t_final: float, events: dict[str, float], study: LinearStudyConfig,
+                skip: bool) -> list[float]:
+    """Refuse (or, with ``skip``, drop) times outside the flight or on an event."""
+    keep = []
+    key = "study.every" if skip else "study.times"
+    for t in times:
+        if not 0.0 < t < t_final:
+            if skip:
+                continue
+            raise ConfigError(key, t, f"must lie inside the flight (0, {t_final:.2f}) s")
+        near = [n for n, te in events.items() if abs(t - te) < study.event_clearance_s]
+        if near:
+            if skip:
+                continue
+            raise ConfigError(key, t, f"falls on the event {near[0]} at {events[near[0]]:.2f} s "
+                              f"(keep {study.event_clearance_s} s away, study.event_clearance_s)")
+        keep.append(t)
+    return keep
+
+
+def bands_at(model, snap) -> Bands:
+    """Frequency bands of the retained flex modes and the slosh tanks at a point."""
+    lay = model.layout
+    flex_from = slosh = None
+    if lay.n_modes:
+        s = 0 if np.isnan(snap.events[0]) else 2
+        flex_from = 0.7 * float(model.tables.flex_freq[s, :lay.n_modes].min()) / (2 * np.pi)
+    if lay.slosh:
+        from savant_cli.sim import layout as L
+        from savant_cli.sim.plant import derivative
+
+        aux = np.zeros(L.N_AUX)
+        derivative(snap.t, snap.x, snap.u, model.p, model.packed_tables, aux, np.zeros(snap.x.size))
+        f = aux[L.A_SLOSH_W:L.A_SLOSH_W + 2] / (2 * np.pi)
+        if np.all(f > 0):
+            slosh = (float(f.min()), float(f.max()))
+    return Bands(flex_from, slosh)
+
+
+def analyse(model, snap, study: LinearStudyConfig, dt: float) -> tuple[LinearPoint, list[MarginRow], dict]:
+    """Linear systems, margins and scalar results of one point."""
+    lin = linearize_plant(model, snap, mode=study.jacobian, rel_step=study.jacobian_step)
+    pt = assemble(model, snap, lin, dt)
+    bands = bands_at(model, snap)
+    rows = []
+    extra: dict[str, float] = {"time_s": snap.t}
+    for c, axis in enumerate(AXES):
+        rows += loop_margins(pt.loops[axis], snap.t, axis, bands)
+        for k, v in disk_margins(pt.loops[axis]).items():
+            extra[f"{axis}_{k}"] = v
+        extra[f"{axis}_bandwidth_hz"] = bandwidth_hz(pt.closed[c, c])
+    for k, v in disk_margins(pt.mimo).items():
+        extra[f"mimo_{k}"] = v
+    poles = np.log(pt.closed.poles().astype(complex)) / dt
+    fast = poles[np.abs(poles) > 0.05]  # frozen-time trajectory drift (|s| < 0.05 rad/s) aside
+    extra["closed_loop_stable"] = bool(np.all(fast.real < 0.0))
+    extra["closed_loop_max_real_1_per_s"] = float(fast.real.max()) if fast.size else float("nan")
+    return pt, rows, extra
+
+
+def _table(rows: list[MarginRow], study: LinearStudyConfig) -> Table:
+    req = {"rigid/aero": study.requirements.rigid_aero, "slosh": study.requirements.slosh,
+           "flex": study.requirements.flex}
+    tb = Table(title="stability margins (loop at a time; gain dB, phase deg)")
+    for col in ("t (s)", "axis", "kind", "margin", "freq (Hz)", "band", "meets req."):
+        tb.add_column(col, justify="right" if col in ("t (s)", "margin", "freq (Hz)") else "left")
+    for r in rows:
+        need = req[r.band].gain_dB if r.kind == "gain" else req[r.band].phase_deg
+        ok = abs(r.value) >= need
+        tb.add_row(f"{r.time_s:.1f}", r.axis, r.kind, f"{r.value:.2f}", f"{r.frequency_hz:.3f}", r.band,
+                   "yes" if ok else "[red]NO[/red]")
+    return tb
+
+
+def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
+    """Fly, linearize at the study's times, write everything into ``out_dir``."""
+    study: LinearStudyConfig = cfg.study
+    console = Console()
+    t_start = time.perf_counter()
+    prep = prepare(cfg)
+    model = prep.model
+    rt = model.rates
+    t_end = cfg.sim.max_time_s
+    for i, t in enumerate(study.times if study.every == 0 else []):
+        if t >= t_end:
+            raise ConfigError(f"study.times[{i}]", t, f"must lie inside the flight (before sim.max_time_s = {t_end})")
+    wanted = requested_times(study, t_end)
+    steps = tuple(int(round(t / (rt.dt * rt.n_fcs))) * rt.n_fcs for t in wanted)  # on control cycles
+    result = simulate(model, progress=cfg.sim.progress, chunk_s=cfg.sim.chunk_s, snapshot_steps=steps)
+    sig = signals(result, model)
+    summary = summarize(result, sig)
+    events = {n: float(t) for n, t in zip(EVENT_NAMES, result.events) if t == t}
+    times = check_times([k * rt.dt for k in steps], result.t_final, events, study, skip=study.every > 0)
+    snaps = [result.snapshots[int(round(t / rt.dt))] for t in times]
+
+    points, rows, scalars = [], [], []
+    dt = rt.dt * rt.n_fcs
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # python-control notes on unconnected signals, by design
+        bar = Progress(TextColumn("[bold]linearize"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+                       transient=True, disable=not cfg.sim.progress)
+        with bar:
+            task = bar.add_task("points", total=len(snaps))
+            for snap in snaps:
+                pt, r, extra = analyse(model, snap, study, dt)
+                points.append(pt)
+                rows += r
+                scalars.append(extra)
+                bar.advance(task)
+
+    summary["margins"] = [{"time_s": r.time_s, "axis": r.axis, "kind": r.kind, "value": r.value,
+                           "frequency_hz": r.frequency_hz, "band": r.band} for r in rows]
+    summary["linear_points"] = scalars
+    summary["linear_note"] = "roll (on/off RCS) is left out of the linear analysis"
+    summary["process_wall_time_s"] = time.perf_counter() - t_start
+    record = RunRecord(signals=sig, events=list(events.items()), summary=summary,
+                       config_yaml=OmegaConf.to_yaml(raw_cfg, resolve=True),
+                       provenance=collect_provenance(wall_time_s=summary["process_wall_time_s"]),
+                       complete=result.status == "complete", status=result.status, message=result.message)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    hdf_summary = {k: v for k, v in summary.items() if not isinstance(v, list)}
+    if cfg.output.hdf5:
+        write_run(out_dir / "savant.h5", RunRecord(**{**record.__dict__, "summary": hdf_summary}),
+                  extra=lambda f: write_linear_group(f, points, rows))
+        write_mat(out_dir / "linear.mat", points)
+    write_margins_csv(out_dir / "margins.csv", rows)
+    write_json_atomic(out_dir / "summary.json", summary)
+    if cfg.output.plots:
+        _plots(record, points, rows, study, out_dir / "plots")
+    print_run_summary({k: v for k, v in hdf_summary.items() if k != "linear_note"}, record.status, record.message,
+                      console)
+    console.print(_table(rows, study))
+    console.print("roll (on/off jets) is left out of the linear analysis")
+    console.print(f"outputs: {out_dir}")
+    return 0 if record.complete else 1
+
+
+def _plots(record: RunRecord, points: list[LinearPoint], rows: list[MarginRow], study: LinearStudyConfig,
+           folder: Path) -> None:
+    from savant_cli.plots.ascent import plot_ascent
+    from savant_cli.plots.linear import plot_linear_point, plot_margin_envelope
+
+    plot_ascent(record, folder)
+    charts = study.charts == "all" or (study.charts == "auto" and len(points) <= MAX_CHART_POINTS)
+    if charts:
+        for pt in points:
+            plot_linear_point(pt.time_s, pt.loops, pt.closed, [r for r in rows if r.time_s == pt.time_s],
+                              folder / "linear", exclusion_zones=study.exclusion_zones)
+    req = {"rigid/aero": (study.requirements.rigid_aero.gain_dB, study.requirements.rigid_aero.phase_deg),
+           "slosh": (study.requirements.slosh.gain_dB, study.requirements.slosh.phase_deg),
+           "flex": (study.requirements.flex.gain_dB, study.requirements.flex.phase_deg)}
+    plot_margin_envelope(rows, folder / "linear" / "margin_envelope.png", requirements=req)
