@@ -122,38 +122,54 @@ def sensor_plant(lin: PlantLinearization, model: SimModel, dt: float) -> ct.Stat
     return ct.ss(disc.A, disc.B, disc.C, disc.D, dt, inputs=p.input_labels, outputs=p.output_labels, name="plant")
 
 
-def _rename_outputs(sys: ct.StateSpace, mapping: dict[str, str], name: str) -> ct.StateSpace:
-    return ct.ss(sys.A, sys.B, sys.C, sys.D, sys.dt, inputs=sys.input_labels,
-                 outputs=[mapping.get(o, o) for o in sys.output_labels], name=name)
-
-
 def assemble(model: SimModel, snap: Snapshot, lin: PlantLinearization, dt: float) -> LinearPoint:
-    """Discrete plant, controller, broken loops and closed loop of one point."""
+    """Discrete plant, controller, broken loops and closed loop of one point (state-space
+    algebra: series and feedback, no signal-name interconnection, for speed)."""
     plant = sensor_plant(lin, model, dt)
     fcs = controller_lti(model, snap, dt)
+    n_s = len(SENSOR_NAMES)
+    # G: plant inputs → controller outputs (commands zero); G2: from the two gimbal commands
+    g = ct.series(plant[:n_s, :], fcs[:, :n_s])
+    g2 = g[:, :2]
     loops, loops_open = {}, {}
     for c, axis in enumerate(AXES):
-        other = AXES[1 - c]
-        # loop-at-a-time: this axis's command broken, the other closed
-        k = _rename_outputs(fcs, {f"dc_{axis}": f"k_{axis}"}, "fcs")
-        g = ct.interconnect([plant, k], inplist=[f"dc_{axis}"], outlist=[f"k_{axis}"], name=f"L_{axis}")
-        loops[axis] = -g
-        k2 = _rename_outputs(fcs, {f"dc_{axis}": f"k_{axis}", f"dc_{other}": f"k_{other}"}, "fcs")
-        g2 = ct.interconnect([plant, k2], inplist=[f"dc_{axis}"], outlist=[f"k_{axis}"], name=f"Lo_{axis}")
-        loops_open[axis] = -g2
-    k_all = _rename_outputs(fcs, {"dc_pitch": "k_pitch", "dc_yaw": "k_yaw"}, "fcs")
-    mimo = -ct.interconnect([plant, k_all], inplist=["dc_pitch", "dc_yaw"], outlist=["k_pitch", "k_yaw"], name="L_mimo")
-    closed = ct.interconnect(
-        [plant, fcs], inplist=list(COMMANDS) + ["gust_y", "gust_z"],
-        outlist=["nav_pitch", "nav_yaw", "gimbal_pitch", "gimbal_yaw", "alpha", "beta", "dc_pitch", "dc_yaw"],
-        name="closed_loop")
-    closed = ct.ss(closed.A, closed.B, closed.C, closed.D, dt,
-                   inputs=["pitch_command", "yaw_command", "gust_y", "gust_z"],
+        close_other = np.zeros((2, 2))
+        close_other[1 - c, 1 - c] = 1.0  # the other axis's command fed back (dc = r + k)
+        one_open = ct.feedback(g2, ct.ss([], [], [], close_other, dt), sign=1)
+        loops[axis] = _named(-one_open[c, c], f"L_{axis}", f"dc_{axis}", f"k_{axis}")
+        loops_open[axis] = _named(-g2[c, c], f"Lo_{axis}", f"dc_{axis}", f"k_{axis}")
+    mimo = -g2
+    mimo = ct.ss(mimo.A, mimo.B, mimo.C, mimo.D, dt, inputs=["dc_pitch", "dc_yaw"], outputs=["k_pitch", "k_yaw"],
+                 name="L_mimo")
+    # closed loop: inputs [dc (2), gust (2), cmd (2)], outputs [k (2), selected plant outputs]
+    n_in = plant.ninputs
+    p_aug = ct.append(plant, ct.ss([], [], [], np.eye(2), dt))  # commands pass through
+    sel_k = np.zeros((n_s + 2, plant.noutputs + 2))
+    sel_k[:n_s, :n_s] = np.eye(n_s)
+    sel_k[n_s:, plant.noutputs:] = np.eye(2)
+    picks = ["nav_pitch", "nav_yaw", "gimbal_pitch", "gimbal_yaw", "alpha", "beta"]
+    sel_y = np.zeros((len(picks), plant.noutputs + 2))
+    for i, name in enumerate(picks):
+        sel_y[i, plant.output_labels.index(name)] = 1.0
+    # one copy of the plant states: [sensors, cmds] → controller, the picks pass through
+    h = ct.series(p_aug, ct.ss([], [], [], np.vstack([sel_k, sel_y]), dt),
+                  ct.append(fcs, ct.ss([], [], [], np.eye(len(picks)), dt)))
+    fb = np.zeros((n_in + 2, 2 + len(picks)))
+    fb[0, 0] = fb[1, 1] = 1.0  # dc = k
+    cl = ct.feedback(h, ct.ss([], [], [], fb, dt), sign=1)
+    inputs = [n_in, n_in + 1, 2, 3]  # cmd_pitch, cmd_yaw, gust_y, gust_z
+    outputs = [2, 3, 4, 5, 6, 7, 0, 1]
+    cl = cl[outputs, inputs]
+    closed = ct.ss(cl.A, cl.B, cl.C, cl.D, dt, inputs=["pitch_command", "yaw_command", "gust_y", "gust_z"],
                    outputs=["pitch_attitude", "yaw_attitude", "pitch_gimbal", "yaw_gimbal", "alpha", "beta",
                             "pitch_gimbal_command", "yaw_gimbal_command"], name="closed_loop")
     phase = {0: "stack", 1: "coast", 2: "upper"}[fcs_phase(snap.events)]
     return LinearPoint(time_s=snap.t, phase=phase, plant_continuous=lin.sys, plant=plant, controller=fcs,
                        loops=loops, loops_open=loops_open, mimo=mimo, closed=closed)
+
+
+def _named(sys: ct.StateSpace, name: str, inp: str, out: str) -> ct.StateSpace:
+    return ct.ss(sys.A, sys.B, sys.C, sys.D, sys.dt, inputs=[inp], outputs=[out], name=name)
 
 
 __all__ = ["AXES", "COMMANDS", "EXTRA_OUTPUTS", "GYRO_NAMES", "LinearPoint", "assemble", "controller_lti",

@@ -25,14 +25,46 @@ N_BASE = 700
 
 @dataclass(frozen=True)
 class MarginRow:
-    """One crossing of one loop."""
+    """One stability margin of one loop at one operating point.
+
+    Attributes
+    ----------
+    time_s : float
+        Flight time of the operating point (s).
+    axis : str
+        Loop: ``"pitch"`` or ``"yaw"``.
+    kind : str
+        ``"gain"`` (read at a phase crossover) or ``"phase"`` (read at a gain crossover).
+    value : float
+        Gain margin in dB (negative: the gain-reduction margin of an aerodynamically
+        unstable vehicle) or phase margin in deg.
+    frequency_hz : float
+        Crossover frequency (Hz).
+    band : str
+        ``"rigid/aero"``, ``"slosh"`` or ``"flex"``.
+    """
 
     time_s: float
-    axis: str  # pitch | yaw
-    kind: str  # gain | phase
-    value: float  # gain margin dB, phase margin deg
+    axis: str
+    kind: str
+    value: float
     frequency_hz: float
-    band: str  # rigid/aero | slosh | flex
+    band: str
+
+    def __post_init__(self) -> None:
+        if self.kind not in ("gain", "phase"):
+            raise ValueError(f"MarginRow.kind must be 'gain' or 'phase', not {self.kind!r}")
+
+    @property
+    def unit(self) -> str:
+        """``"dB"`` for a gain margin, ``"deg"`` for a phase margin."""
+        return "dB" if self.kind == "gain" else "deg"
+
+    def label(self) -> str:
+        """Short text of the margin, e.g. ``"pitch GM -8.5 dB @ 0.125 Hz"``."""
+        name = "GM" if self.kind == "gain" else "PM"
+        unit = " dB" if self.kind == "gain" else "°"
+        return f"{self.axis} {name} {self.value:.1f}{unit} @ {self.frequency_hz:.3g} Hz"
 
 
 @dataclass(frozen=True)
@@ -88,7 +120,7 @@ def loop_margins(loop: ct.StateSpace, time_s: float, axis: str, bands: Bands) ->
 def disk_margins(loop: ct.StateSpace) -> dict[str, float]:
     """Balanced (skew 0) disk margin of a SISO or MIMO loop: disk margin α, and the
     simultaneous gain (dB) and phase (deg) variations it guarantees."""
-    w = frequency_grid(loop if loop.ninputs == 1 else loop[0, 0])[::2]
+    w = frequency_grid(loop if loop.ninputs == 1 else loop[0, 0])[::4]
     dm, dgm, dpm = ct.disk_margins(loop, w, skew=0.0)
     return {"disk_margin": float(dm), "disk_gain_margin_dB": float(20 * np.log10(dgm)) if dgm > 0 else float("nan"),
             "disk_phase_margin_deg": float(dpm)}

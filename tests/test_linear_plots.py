@@ -1,0 +1,305 @@
+"""Charts of the frequency-domain stability study (``savant_cli.plots.linear``).
+
+The loops are built here: a discretized (50 Hz, zero-order hold) aerodynamically unstable
+rigid pitch plane θ̈ = μα θ + μc δ (μα = 0.4, μc = 1.2 1/s²) with a second-order actuator,
+a lightly damped 1 Hz bending mode seen by the attitude and rate sensors, and a PID
+attitude controller (Tustin) with a rate filter and one sample of computational delay.
+The loop is open-loop unstable (one real pole outside the unit circle) and crosses
+−180° several times (a gain-reduction margin, the rigid high-frequency margin, the
+bending mode's phase crossings).
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import textwrap
+import warnings
+from pathlib import Path
+
+import control as ct
+import numpy as np
+import pytest
+
+from savant_cli.plots import linear
+from savant_cli.plots.linear import MarginRow, plot_linear_point, plot_margin_envelope, point_tag
+
+PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
+DT = 0.02
+ROOT = Path(__file__).resolve().parents[1]
+KINDS = ("bode", "nichols", "nyquist", "rootlocus", "pzmap", "response")
+
+
+def axis_plant(name: str, mu_a: float = 0.4, mu_c: float = 1.2, flex_hz: float = 1.0, flex_zeta: float = 0.005,
+               flex_gain: float = 2.0, slope: float = 0.02) -> ct.StateSpace:
+    """Continuous plant of one axis: δ command (rad) → sensed attitude, sensed rate,
+    attitude, gimbal (rad, rad/s, rad, rad). States θ, q, δ, δ̇, η, η̇."""
+    wa, wf = 2 * np.pi * 8.0, 2 * np.pi * flex_hz
+    a = np.zeros((6, 6))
+    a[0, 1] = 1.0
+    a[1, 0], a[1, 2] = mu_a, mu_c
+    a[2, 3] = 1.0
+    a[3, 2], a[3, 3] = -wa**2, -2 * 0.7 * wa
+    a[4, 5] = 1.0
+    a[5, 4], a[5, 5], a[5, 2] = -wf**2, -2 * flex_zeta * wf, flex_gain
+    b = np.zeros((6, 1))
+    b[3, 0] = wa**2
+    c = np.zeros((4, 6))
+    c[0, 0], c[0, 4] = 1.0, -slope  # attitude sensor sees the local slope of the mode
+    c[1, 1], c[1, 5] = 1.0, slope
+    c[2, 0] = 1.0
+    c[3, 2] = 1.0
+    return ct.ss(a, b, c, np.zeros((4, 1)), inputs=[f"{name}_delta_c"],
+                 outputs=[f"{name}_theta_s", f"{name}_q_s", f"{name}_attitude", f"{name}_gimbal"])
+
+
+def axis_controller(name: str, kp: float = 2.2, kd: float = 1.75, ki: float = 1.0) -> ct.StateSpace:
+    """Discrete PID: δc = kp (θc − θs) + ki ∫(θc − θs) − kd F(s) qs, then one sample of delay."""
+    wf = 2 * np.pi * 4.0
+    f = ct.ss(ct.tf([wf**2], [1.0, 2 * 0.7 * wf, wf**2]))
+    pd = ct.ss(f.A, np.hstack([np.zeros((2, 2)), f.B]), -kd * f.C, np.array([[kp, -kp, -kd * f.D[0, 0]]]))
+    pid = ct.parallel(pd, ct.ss([[0.0]], [[1.0, -1.0, 0.0]], [[ki]], [[0.0, 0.0, 0.0]]))
+    cd = ct.series(ct.c2d(pid, DT, "tustin"), ct.ss([[0.0]], [[1.0]], [[1.0]], [[0.0]], DT))
+    return ct.ss(cd.A, cd.B, cd.C, cd.D, DT, inputs=[f"{name}_command", f"{name}_theta_s", f"{name}_q_s"],
+                 outputs=[f"{name}_u"], name=f"{name}_fcs")
+
+
+def build_system(yaw_mu_a: float = 0.3) -> tuple[dict[str, ct.StateSpace], ct.StateSpace]:
+    """Loops broken at each actuator command and the closed loop of both axes.
+
+    The two axes are uncoupled here, so the loop of one axis with the other axis closed
+    is that axis's plant and controller alone. (A loop that also carries the other axis's
+    states, cancelled, has the same frequency response, but ``ct.stability_margins``
+    returns spurious crossings for it: it is built from this minimal one.)
+    """
+    plants, controllers, loops = [], [], {}
+    for name, mu_a in (("pitch", 0.4), ("yaw", yaw_mu_a)):
+        p = ct.c2d(axis_plant(name, mu_a=mu_a), DT, "zoh")
+        plant = ct.ss(p.A, p.B, p.C, p.D, DT, inputs=p.input_labels, outputs=p.output_labels, name=f"{name}_plant")
+        controller = axis_controller(name)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # unused signals of the interconnection
+            opened = ct.interconnect([plant, controller], inputs=[f"{name}_delta_c"], outputs=[f"{name}_u"])
+        loops[name] = -opened  # δc = −L δ: the closed loop is L / (1 + L)
+        plants.append(plant)
+        controllers.append(controller)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        closed = ct.interconnect(plants + controllers, connections=[["pitch_plant.pitch_delta_c", "pitch_fcs.pitch_u"],
+                                                                    ["yaw_plant.yaw_delta_c", "yaw_fcs.yaw_u"],
+                                                                    ["pitch_fcs.pitch_theta_s", "pitch_plant.pitch_theta_s"],
+                                                                    ["pitch_fcs.pitch_q_s", "pitch_plant.pitch_q_s"],
+                                                                    ["yaw_fcs.yaw_theta_s", "yaw_plant.yaw_theta_s"],
+                                                                    ["yaw_fcs.yaw_q_s", "yaw_plant.yaw_q_s"]],
+                                 inplist=["pitch_fcs.pitch_command", "yaw_fcs.yaw_command"],
+                                 inputs=["pitch_command", "yaw_command"],
+                                 outlist=["pitch_plant.pitch_attitude", "yaw_plant.yaw_attitude",
+                                          "pitch_plant.pitch_gimbal", "yaw_plant.yaw_gimbal"],
+                                 outputs=["pitch_attitude", "yaw_attitude", "pitch_gimbal", "yaw_gimbal"])
+    return loops, closed
+
+
+def band(f_hz: float) -> str:
+    return "flex" if abs(f_hz - 1.0) < 0.15 else "slosh" if 0.3 <= f_hz <= 0.8 else "rigid/aero"
+
+
+def margin_rows(loops: dict[str, ct.StateSpace], time_s: float) -> list[MarginRow]:
+    rows = []
+    for axis, loop in loops.items():
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # "falling back to 'frd' method"
+            gm, pm, _, wpc, wgc, _ = ct.stability_margins(loop, returnall=True)
+        for g, w in zip(gm, wpc):
+            rows.append(MarginRow(time_s, axis, "gain", float(20 * np.log10(g)), float(w / (2 * np.pi)), band(w / (2 * np.pi))))
+        for p, w in zip(pm, wgc):
+            rows.append(MarginRow(time_s, axis, "phase", float(p), float(w / (2 * np.pi)), band(w / (2 * np.pi))))
+    return rows
+
+
+@pytest.fixture(scope="module")
+def system():
+    loops, closed = build_system()
+    return loops, closed, margin_rows(loops, 55.0)
+
+
+@pytest.fixture(scope="module")
+def responses(system):
+    loops, _, rows = system
+    return [linear._loop_response(a, loops[a], rows) for a in ("pitch", "yaw")]
+
+
+def test_test_loops_are_what_the_charts_expect(system):
+    loops, closed, rows = system
+    for loop in loops.values():
+        assert loop.isdtime() and loop.dt == DT and loop.issiso()
+        assert np.count_nonzero(np.abs(loop.poles()) > 1.0) == 1  # aerodynamically unstable
+        assert np.all(np.abs(ct.feedback(loop, 1).poles()) < 1.0)  # stabilized by the loop
+    assert set(closed.input_labels) == {"pitch_command", "yaw_command"}
+    assert {"pitch_attitude", "yaw_attitude", "pitch_gimbal", "yaw_gimbal"} <= set(closed.output_labels)
+    gains = [r.value for r in rows if r.axis == "pitch" and r.kind == "gain"]
+    assert min(gains) < 0.0 < max(gains) and len(gains) >= 3  # gain-reduction and gain margins
+    assert any(r.kind == "phase" for r in rows)
+
+
+def test_plot_linear_point_writes_six_pngs(system, tmp_path):
+    loops, closed, rows = system
+    out = tmp_path / "charts"
+    paths = plot_linear_point(55.0, loops, closed, rows, out)
+    assert [p.name for p in paths] == [f"{k}_t0055.0.png" for k in KINDS]
+    for p in paths:
+        assert p.parent == out and p.read_bytes()[:8] == PNG_MAGIC
+    assert sorted(f.name for f in out.iterdir()) == sorted(p.name for p in paths)  # no temporary files left
+
+
+def test_point_tag_and_margin_row():
+    assert point_tag(55.0) == "t0055.0" and point_tag(123.45) == "t0123.5"
+    row = MarginRow(10.0, "pitch", "gain", -8.46, 0.125, "rigid/aero")
+    assert row.unit == "dB" and row.label() == "pitch GM -8.5 dB @ 0.125 Hz"
+    with pytest.raises(ValueError, match="kind"):
+        MarginRow(10.0, "pitch", "delay", 1.0, 1.0, "flex")
+
+
+def test_nichols_annotates_every_margin(system, responses):
+    _, _, rows = system
+    fig = linear._nichols_figure(55.0, responses, rows, exclusion_zones=True)
+    ax = fig.axes[0]
+    texts = " | ".join(t.get_text() for t in ax.texts)
+    for row in rows:
+        assert f"{row.value:.1f}" in texts, row
+    assert "55.0 s" in fig._suptitle.get_text()
+    assert "deg" in ax.get_xlabel() and "dB" in ax.get_ylabel()
+    assert ax.get_legend() is not None
+    zones = [p for p in ax.patches if p.get_width() == pytest.approx(2 * linear.EXCLUSION_PHASE_DEG)]
+    assert zones and all(p.get_height() == pytest.approx(2 * linear.EXCLUSION_GAIN_DB) for p in zones)
+    assert any(z.get_x() == pytest.approx(-180.0 - linear.EXCLUSION_PHASE_DEG) for z in zones)
+    plain = linear._nichols_figure(55.0, responses, rows, exclusion_zones=False).axes[0]
+    assert not [p for p in plain.patches if p.get_width() == pytest.approx(2 * linear.EXCLUSION_PHASE_DEG)]
+
+
+def test_phase_convention_puts_the_rigid_crossover_critical_point_at_minus_180(system, responses):
+    _, _, rows = system
+    for lp in responses:
+        pm = min((r for r in rows if r.axis == lp.axis and r.kind == "phase"), key=lambda r: r.frequency_hz)
+        i = int(np.argmin(np.abs(lp.f_hz - pm.frequency_hz)))
+        assert lp.f_hz[i] == pytest.approx(pm.frequency_hz)  # margin frequencies are on the grid
+        assert -360.0 < lp.phase_deg[i] <= 0.0
+        assert lp.phase_deg[i] == pytest.approx(-180.0 + pm.value, abs=0.5)
+        assert np.max(np.abs(np.diff(lp.phase_deg))) < 90.0  # unwrapped
+
+
+def test_bode_axes_units(system, responses):
+    _, _, rows = system
+    fig = linear._bode_figure(55.0, responses, rows)
+    ax_m, ax_p = fig.axes
+    assert "dB" in ax_m.get_ylabel()
+    assert "deg" in ax_p.get_ylabel() and "Hz" in ax_p.get_xlabel()
+    assert ax_p.get_xscale() == "log"
+    lo, hi = ax_p.get_xlim()
+    assert lo == pytest.approx(0.01) and hi == pytest.approx(25.0)  # 0.01 Hz to Nyquist
+    assert "55.0 s" in fig._suptitle.get_text() and fig.legends
+    # the phase is drawn in degrees: it spans several multiples of 180, not of π
+    phase = np.concatenate([line.get_ydata() for line in ax_p.lines if len(line.get_ydata()) > 100])
+    assert np.ptp(phase) > 180.0
+
+
+def test_resonance_is_resolved(system, responses):
+    loops, _, _ = system
+    lp = responses[0]
+    f = np.linspace(0.9, 1.1, 20001)  # around the 1 Hz bending mode
+    dense = 20 * np.log10(np.abs(np.asarray(ct.frequency_response(loops["pitch"], 2 * np.pi * f).complex).ravel()))
+    near = (lp.f_hz > 0.9) & (lp.f_hz < 1.1)
+    assert lp.mag_db[near].max() == pytest.approx(dense.max(), abs=0.2)
+    assert lp.mag_db[near].min() == pytest.approx(dense.min(), abs=0.5)
+
+
+def test_root_locus_closed_loop_poles_at_nominal_gain(system):
+    loops, closed, _ = system
+    loop = loops["pitch"]
+    gains = linear.ROOT_LOCUS_GAINS
+    loci = linear._root_locus(loop, gains)
+    assert loci.shape == (gains.size, loop.nstates) and 1.0 in gains
+    exact = ct.feedback(loop, 1).poles()
+    at_one = loci[int(np.argmin(np.abs(gains - 1.0)))]
+    assert max(np.min(np.abs(at_one - p)) for p in exact) < 1e-9
+    assert np.max(np.abs(at_one)) < 1.0  # and the closed loop is stable, as closed.poles() says
+    assert np.max(np.abs(closed.poles())) < 1.0
+
+
+def test_response_and_pzmap_figures(system):
+    _, closed, _ = system
+    fig = linear._response_figure(55.0, closed)
+    assert len(fig.axes) == 6 and fig.legends and "55.0 s" in fig._suptitle.get_text()
+    assert all("deg" in ax.get_ylabel() for ax in fig.axes[::2])
+    step_attitude = fig.axes[0].lines[1].get_ydata()  # after the dashed command
+    assert step_attitude[-1] == pytest.approx(1.0, abs=0.1)  # tracks the 1° step
+    fig = linear._pzmap_figure(55.0, closed)
+    assert fig.legends and "Re z" in fig.axes[0].get_xlabel() and "Hz" in fig.axes[1].get_ylabel()
+
+
+def test_bad_loops_are_refused(system, tmp_path):
+    loops, closed, rows = system
+    with pytest.raises(ValueError, match="at least one loop"):
+        plot_linear_point(1.0, {}, closed, rows, tmp_path)
+    with pytest.raises(ValueError, match="SISO"):
+        plot_linear_point(1.0, {"pitch": closed}, closed, rows, tmp_path)
+    assert not list(tmp_path.iterdir())
+
+
+def test_margin_envelope(system, tmp_path):
+    loops, _, _ = system
+    rows = []
+    for t in (10.0, 40.0, 70.0):
+        rows += margin_rows(loops, t)
+    rows.append(MarginRow(70.0, "yaw", "gain", float("inf"), float("nan"), "flex"))  # skipped
+    req = {"rigid/aero": (6.0, 30.0), "slosh": (6.0, 30.0), "flex": (6.0, 30.0)}
+    out = plot_margin_envelope(rows, tmp_path / "env" / "margin_envelope.png", requirements=req)
+    assert out == tmp_path / "env" / "margin_envelope.png" and out.read_bytes()[:8] == PNG_MAGIC
+    assert [f.name for f in out.parent.iterdir()] == ["margin_envelope.png"]
+    fig = linear._envelope_figure(rows, req)
+    ax_g, ax_p = fig.axes
+    assert "dB" in ax_g.get_ylabel() and "deg" in ax_p.get_ylabel() and "(s)" in ax_p.get_xlabel()
+    levels = {round(float(line.get_ydata()[0]), 6) for line in ax_g.lines}
+    assert {6.0, -6.0} <= levels and 30.0 in {round(float(line.get_ydata()[0]), 6) for line in ax_p.lines}
+    assert plot_margin_envelope(rows[:3], tmp_path / "plain.png").read_bytes()[:8] == PNG_MAGIC
+
+
+def test_no_pyplot(tmp_path):
+    """The module never imports or uses pyplot.
+
+    ``"matplotlib.pyplot" not in sys.modules`` cannot be the test: python-control imports
+    pyplot when it is imported. Instead the module's source must not import it, and in a
+    fresh interpreter where ``matplotlib.pyplot`` is a stub whose every attribute raises,
+    importing the module and drawing every chart must still work.
+    """
+    import ast
+
+    tree = ast.parse(Path(linear.__file__).read_text(encoding="utf-8"))
+    imported = [a.name for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names]
+    imported += [f"{n.module}.{a.name}" for n in ast.walk(tree) if isinstance(n, ast.ImportFrom) for a in n.names]
+    assert not [name for name in imported if "pyplot" in name]
+
+    code = textwrap.dedent(f"""
+        import sys, types, warnings
+        class Stub(types.ModuleType):
+            def __getattr__(self, name):
+                raise AssertionError(f"pyplot.{{name}} used")
+        sys.modules["matplotlib.pyplot"] = Stub("matplotlib.pyplot")
+        from pathlib import Path
+        import control as ct
+        from savant_cli.plots.linear import MarginRow, plot_linear_point, plot_margin_envelope
+        warnings.simplefilter("ignore")
+        plant = ct.c2d(ct.ss([[0, 1], [0.4, 0]], [[0], [1.2]], [[1, 0], [0, 1]], [[0], [0]]), 0.02, "zoh")
+        loop = ct.series(plant, ct.ss([], [], [], [[2.2, 1.75]], dt=0.02))
+        cl = ct.feedback(loop, 1)
+        closed = ct.ss(cl.A, cl.B, cl.C, cl.D, 0.02, inputs=["pitch_command"], outputs=["pitch_attitude"])
+        rows = [MarginRow(1.0, "pitch", "phase", 45.0, 0.3, "rigid/aero")]
+        out = Path({str(tmp_path)!r})
+        plot_linear_point(1.0, {{"pitch": loop}}, closed, rows, out)
+        plot_margin_envelope(rows, out / "env.png")
+        print(len(list(out.glob("*.png"))))
+    """)
+    env = {**os.environ, "PYTHONPATH": str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", "")}
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=120)
+    assert res.returncode == 0, res.stderr
+    assert res.stdout.strip() == "7"

@@ -1,0 +1,76 @@
+"""``savant run study=linear`` end to end: files, reload, bad times."""
+
+from __future__ import annotations
+
+import csv
+import json
+
+import control as ct
+import h5py
+import numpy as np
+import pytest
+from scipy.io import loadmat
+
+from test_end_to_end import run
+
+pytestmark = pytest.mark.slow
+
+
+@pytest.fixture(scope="module")
+def linear_run(tmp_path_factory):
+    out = tmp_path_factory.mktemp("linear")
+    proc = run(["run", "study=linear", "study.times=[55,180]", f"hydra.run.dir={out}/run", "sim.progress=false"],
+               cwd=out)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    return out / "run", proc
+
+
+def test_margins_csv_summary_console_and_charts(linear_run):
+    run_dir, proc = linear_run
+    rows = list(csv.DictReader(open(run_dir / "margins.csv")))
+    assert {r["axis"] for r in rows} == {"pitch", "yaw"}
+    assert {float(r["time_s"]) for r in rows} == {55.0, 180.0}
+    s = json.loads((run_dir / "summary.json").read_text())
+    assert len(s["margins"]) == len(rows) and "roll" in s["linear_note"]
+    # at max-Q the vehicle is aerodynamically unstable: a gain-reduction margin exists
+    assert any(r["kind"] == "gain" and float(r["value"]) < 0 and float(r["time_s"]) == 55.0 for r in rows)
+    assert "stability margins" in proc.stdout and "left out of the linear analysis" in proc.stdout
+    from savant_cli.plots.linear import point_tag
+
+    charts = {p.name for p in (run_dir / "plots" / "linear").iterdir()}
+    for kind in ("bode", "nichols", "nyquist", "rootlocus", "pzmap", "response"):
+        for t in (55.0, 180.0):
+            assert f"{kind}_{point_tag(t)}.png" in charts
+    assert "margin_envelope.png" in charts
+
+
+def test_reloaded_point_reproduces_the_margin_table(linear_run):
+    from savant_cli.linear.store import load_point
+
+    run_dir, _ = linear_run
+    loop = load_point(run_dir / "savant.h5", 55.0, "open_pitch")
+    assert isinstance(loop, ct.StateSpace) and loop.dt == pytest.approx(0.02)
+    assert loop.input_labels and loop.output_labels
+    from savant_cli.linear.margins import Bands, loop_margins
+
+    again = loop_margins(loop, 55.0, "pitch", Bands())
+    rows = [r for r in csv.DictReader(open(run_dir / "margins.csv")) if r["axis"] == "pitch" and r["time_s"] == "55.000"]
+    assert len(again) == len(rows)
+    for a, r in zip(sorted(again, key=lambda x: (x.kind, x.frequency_hz)), rows):
+        assert a.value == pytest.approx(float(r["value"]), abs=1e-3)
+    with pytest.raises(KeyError):
+        load_point(run_dir / "savant.h5", 56.0)
+    with h5py.File(run_dir / "savant.h5") as f:
+        names = [n.decode() if isinstance(n, bytes) else n for n in f["linear/t055000/plant_continuous/states"][()]]
+        assert "dtheta_y" in names and "q" in names
+    mat = loadmat(run_dir / "linear.mat", simplify_cells=True)
+    a = mat["t055000"]["open_pitch"]["A"]
+    assert np.allclose(a, loop.A)
+
+
+@pytest.mark.parametrize("times,message", [("[900]", "inside the flight"), ("[130.45]", "event separation")])
+def test_bad_times_are_config_errors(tmp_path, times, message):
+    proc = run(["run", "study=linear", f"study.times={times}", f"hydra.run.dir={tmp_path}/run", "sim.progress=false",
+                "output.plots=false"], cwd=tmp_path)
+    assert proc.returncode == 2
+    assert message in (proc.stdout + proc.stderr).replace("\n", " ")
