@@ -12,7 +12,7 @@ import pytest
 
 from conftest import compose_config
 from savant_cli.config import validate
-from savant_cli.linear.loops import assemble, controller_lti
+from savant_cli.linear.loops import assemble
 from savant_cli.linear.margins import Bands, loop_margins
 from savant_cli.linear.plant import linearize_plant
 from savant_cli.sim import layout as L

@@ -23,7 +23,12 @@ import numpy as np
 import pytest
 
 from savant_cli.plots import linear
-from savant_cli.plots.linear import MarginRow, plot_linear_point, plot_margin_envelope, point_tag
+from savant_cli.plots.linear import (
+    MarginRow,
+    plot_linear_point,
+    plot_margin_envelope,
+    point_tag,
+)
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 DT = 0.02
@@ -86,12 +91,12 @@ def build_system(yaw_mu_a: float = 0.3) -> tuple[dict[str, ct.StateSpace], ct.St
         controllers.append(controller)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        closed = ct.interconnect(plants + controllers, connections=[["pitch_plant.pitch_delta_c", "pitch_fcs.pitch_u"],
-                                                                    ["yaw_plant.yaw_delta_c", "yaw_fcs.yaw_u"],
-                                                                    ["pitch_fcs.pitch_theta_s", "pitch_plant.pitch_theta_s"],
-                                                                    ["pitch_fcs.pitch_q_s", "pitch_plant.pitch_q_s"],
-                                                                    ["yaw_fcs.yaw_theta_s", "yaw_plant.yaw_theta_s"],
-                                                                    ["yaw_fcs.yaw_q_s", "yaw_plant.yaw_q_s"]],
+        connections = []
+        for n in ("pitch", "yaw"):
+            connections += [[f"{n}_plant.{n}_delta_c", f"{n}_fcs.{n}_u"],
+                            [f"{n}_fcs.{n}_theta_s", f"{n}_plant.{n}_theta_s"],
+                            [f"{n}_fcs.{n}_q_s", f"{n}_plant.{n}_q_s"]]
+        closed = ct.interconnect(plants + controllers, connections=connections,
                                  inplist=["pitch_fcs.pitch_command", "yaw_fcs.yaw_command"],
                                  inputs=["pitch_command", "yaw_command"],
                                  outlist=["pitch_plant.pitch_attitude", "yaw_plant.yaw_attitude",
@@ -111,9 +116,11 @@ def margin_rows(loops: dict[str, ct.StateSpace], time_s: float) -> list[MarginRo
             warnings.simplefilter("ignore")  # "falling back to 'frd' method"
             gm, pm, _, wpc, wgc, _ = ct.stability_margins(loop, returnall=True)
         for g, w in zip(gm, wpc):
-            rows.append(MarginRow(time_s, axis, "gain", float(20 * np.log10(g)), float(w / (2 * np.pi)), band(w / (2 * np.pi))))
+            f = float(w / (2 * np.pi))
+            rows.append(MarginRow(time_s, axis, "gain", float(20 * np.log10(g)), f, band(f)))
         for p, w in zip(pm, wgc):
-            rows.append(MarginRow(time_s, axis, "phase", float(p), float(w / (2 * np.pi)), band(w / (2 * np.pi))))
+            f = float(w / (2 * np.pi))
+            rows.append(MarginRow(time_s, axis, "phase", float(p), f, band(f)))
     return rows
 
 
@@ -150,6 +157,19 @@ def test_plot_linear_point_writes_six_pngs(system, tmp_path):
     for p in paths:
         assert p.parent == out and p.read_bytes()[:8] == PNG_MAGIC
     assert sorted(f.name for f in out.iterdir()) == sorted(p.name for p in paths)  # no temporary files left
+
+
+def test_figures_reused_between_points_carry_nothing_over(system, tmp_path):
+    """Charts keep their figure from one point to the next: drawing point A, then a
+    different point B, then A again gives the same pixels as the first A."""
+    loops, closed, rows = system
+    first = plot_linear_point(55.0, loops, closed, rows, tmp_path / "a1")
+    other_loops, other_closed = build_system(yaw_mu_a=0.6)
+    plot_linear_point(80.0, other_loops, other_closed, margin_rows(other_loops, 80.0)[:2], tmp_path / "b",
+                      exclusion_zones=False)
+    again = plot_linear_point(55.0, loops, closed, rows, tmp_path / "a2")
+    for p, q in zip(first, again):
+        assert p.read_bytes() == q.read_bytes(), p.name
 
 
 def test_point_tag_and_margin_row():
@@ -230,15 +250,18 @@ def test_response_and_pzmap_figures(system):
     _, closed, _ = system
     fig = linear._response_figure(55.0, closed)
     assert len(fig.axes) == 6 and fig.legends and "55.0 s" in fig._suptitle.get_text()
-    assert all("deg" in ax.get_ylabel() for ax in fig.axes[::2])
-    step_attitude = fig.axes[0].lines[1].get_ydata()  # after the dashed command
+    lefts, rights = fig.axes[:3], fig.axes[3:]  # attitude, and gimbal on twin axes
+    assert all("attitude (deg)" in ax.get_ylabel() for ax in lefts)
+    assert all("gimbal (deg)" in ax.get_ylabel() for ax in rights)
+    assert "(s)" in lefts[-1].get_xlabel()
+    step_attitude = lefts[0].lines[1].get_ydata()  # after the dashed command
     assert step_attitude[-1] == pytest.approx(1.0, abs=0.1)  # tracks the 1° step
     fig = linear._pzmap_figure(55.0, closed)
     assert fig.legends and "Re z" in fig.axes[0].get_xlabel() and "Hz" in fig.axes[1].get_ylabel()
 
 
 def test_bad_loops_are_refused(system, tmp_path):
-    loops, closed, rows = system
+    _, closed, rows = system
     with pytest.raises(ValueError, match="at least one loop"):
         plot_linear_point(1.0, {}, closed, rows, tmp_path)
     with pytest.raises(ValueError, match="SISO"):
@@ -300,6 +323,7 @@ def test_no_pyplot(tmp_path):
         print(len(list(out.glob("*.png"))))
     """)
     env = {**os.environ, "PYTHONPATH": str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", "")}
-    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=120)
+    res = subprocess.run([sys.executable, "-c", code], check=False, capture_output=True, text=True, env=env,
+                         timeout=120)
     assert res.returncode == 0, res.stderr
     assert res.stdout.strip() == "7"
