@@ -987,6 +987,11 @@ def plot_linear_point(time_s: float, loops: dict[str, ct.StateSpace], closed: ct
     Frequencies in Hz, magnitudes in dB, phases in deg (unwrapped; the shift convention
     is in the module notes), time in s. See the module docstring for the frequency grid,
     the Nyquist radius compression and the root-locus method.
+
+    Each chart's figure is kept per calling thread and reused by the next call (module
+    notes, *Speed*); matplotlib's ``text.hinting`` is set to ``"none"`` during each draw
+    and restored. Both are invisible to a caller that does not draw with matplotlib on
+    another thread at the same time.
     """
     if not loops:
         raise ValueError("plot_linear_point needs at least one loop")
