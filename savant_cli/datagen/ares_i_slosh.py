@@ -71,7 +71,7 @@ from pathlib import Path
 
 import numpy as np
 
-from savant_cli.datagen.ares_i_tables import M_LH2, M_LOX, US_DIAMETER_M
+from savant_cli.datagen.ares_i_tables import M_LH2, M_LOX, US_DIAMETER_M, write_csv
 
 try:  # shared constants (savant_cli/constants.py), with a local fallback
     from savant_cli.constants import G0
@@ -393,18 +393,6 @@ def tank_table(tank: Tank) -> np.ndarray:
 
 
 # ========================================================================== writing
-def _write(path: Path, header: list[str], rows: np.ndarray, comments: list[str], fmt: str = "%.10g") -> None:
-    """``# `` comment lines, a header row, comma-separated rows; atomic."""
-    from savant_cli.io.atomic import atomic_path
-
-    with atomic_path(path) as tmp:
-        with open(tmp, "w") as f:
-            for c in comments:
-                f.write(f"# {c}\n")
-            f.write(",".join(header) + "\n")
-            np.savetxt(f, rows, delimiter=",", fmt=fmt)
-
-
 def tank_comments(tank: Tank) -> list[str]:
     """The comment lines of one tank's CSV."""
     r = tank.radius_m
@@ -448,7 +436,7 @@ def write_all(out: Path) -> list[Path]:
     paths = []
     for tank in TANKS:
         path = out / f"slosh_{tank.name}.csv"
-        _write(path, HEADER, tank_table(tank), tank_comments(tank))
+        write_csv(path, HEADER, tank_table(tank), tank_comments(tank))
         paths.append(path)
     return paths
 

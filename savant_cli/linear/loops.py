@@ -29,7 +29,7 @@ from savant_cli.sim import engine as E
 from savant_cli.sim import layout as L
 from savant_cli.sim.build import SimModel
 from savant_cli.sim.run import Snapshot
-from savant_cli.linear.plant import EXTRA_OUTPUTS, GYRO_NAMES, SENSOR_NAMES, PlantLinearization
+from savant_cli.linear.plant import SENSOR_NAMES, PlantLinearization
 
 AXES = ("pitch", "yaw")
 COMMANDS = ("cmd_pitch", "cmd_yaw")
@@ -172,5 +172,5 @@ def _named(sys: ct.StateSpace, name: str, inp: str, out: str) -> ct.StateSpace:
     return ct.ss(sys.A, sys.B, sys.C, sys.D, sys.dt, inputs=[inp], outputs=[out], name=name)
 
 
-__all__ = ["AXES", "COMMANDS", "EXTRA_OUTPUTS", "GYRO_NAMES", "LinearPoint", "assemble", "controller_lti",
+__all__ = ["AXES", "COMMANDS", "LinearPoint", "assemble", "controller_lti",
            "sensor_plant"]

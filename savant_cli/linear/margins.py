@@ -129,7 +129,8 @@ def disk_margins(loop: ct.StateSpace) -> dict[str, float]:
 def bandwidth_hz(closed_siso: ct.StateSpace) -> float:
     """−3 dB bandwidth (Hz) of a closed-loop command response, from its frequency
     response (the first frequency where the gain falls 3 dB below its low-frequency
-    value); NaN if it never does below the Nyquist frequency."""
+    value); NaN if it never does below the Nyquist frequency. ``control.bandwidth``
+    brackets the root from the DC gain and fails on these discrete loops, hence this."""
     w = frequency_grid(closed_siso)
     mag = np.abs(closed_siso.frequency_response(w).complex.ravel())
     ref = mag[0]

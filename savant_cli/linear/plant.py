@@ -9,9 +9,10 @@ and the roll jets' thrust fractions (on/off control, outside linear analysis) ar
 out. Velocity stays: it carries the angle-of-attack drift of the pitch plane.
 
 Step sizes are chosen per state from its physical scale (:data:`STEP`), central
-differences, error O(h²): with the defaults the Jacobian of the rigid-body part agrees
-with the closed-form pitch-plane coefficients to better than 1e-6 relative (tested),
-far below what margins resolve. ``mode="fixed"`` uses one user step for every
+differences, error O(h²). Checked (tests/test_linear.py) against a closed-form rigid
+pitch-plane model: rigid gain margin within 2e-4 dB, phase margin within 0.1°, the
+aerodynamic gain margin within 2.3 %; and against the nonlinear plant's small-step
+response within 5 % of peak. ``mode="fixed"`` uses one user step for every
 perturbation instead (``rel_step`` × the state's scale).
 """
 

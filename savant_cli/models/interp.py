@@ -3,7 +3,8 @@
 Two families: functions on separate arrays (``locate``, ``interp1``, ``trilinear``) and
 ``*_at`` functions that read one flat array at given offsets. The plant keeps all its
 tables in one flat array because numba reference-counts every array argument on every
-call; one array instead of two dozen halved the cost of the plant derivative.
+call; with two dozen table arrays those atomic operations were a quarter of the run time
+(measured with perf, ``docs/architecture.md``).
 
 ``np.interp`` serves single 1-D columns. Where one breakpoint search feeds many columns
 (mass properties) or three axes (aerodynamic coefficients), these kernels find the cell

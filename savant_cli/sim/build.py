@@ -18,7 +18,7 @@ from savant_cli.models.sensors import gyro_discrete, gyro_steady_state
 from savant_cli.sim import engine as E
 from savant_cli.sim import layout as L
 from savant_cli.sim.engine import GuidanceTable, GyroModel, Rates
-from savant_cli.flex_slosh import load_flex, load_slosh
+from savant_cli.flex_slosh import SloshData, load_flex, load_slosh
 from savant_cli.sim.plant import PlantTables, pack_tables
 from savant_cli.vehicle import Vehicle
 
@@ -86,7 +86,14 @@ def _common_aero_grid(vehicle: Vehicle):
     return mach, alpha, beta, np.ascontiguousarray(coef), ref
 
 
-def _flex_slosh_tables(cfg: SavantConfig, vehicle: Vehicle) -> dict[str, np.ndarray]:
+def _slosh(cfg: SavantConfig, vehicle: Vehicle, slosh: SloshData | None) -> SloshData | None:
+    """The slosh data when slosh is on (loaded here unless the caller already has it)."""
+    if not cfg.slosh.enabled:
+        return None
+    return slosh if slosh is not None else load_slosh(vehicle, cfg.slosh)
+
+
+def _flex_slosh_tables(cfg: SavantConfig, vehicle: Vehicle, slosh: SloshData | None) -> dict[str, np.ndarray]:
     """The flex and slosh fields of :class:`PlantTables` (small placeholders when off)."""
     out: dict[str, np.ndarray] = {}
     if cfg.flex.enabled:
@@ -94,8 +101,8 @@ def _flex_slosh_tables(cfg: SavantConfig, vehicle: Vehicle) -> dict[str, np.ndar
         out.update(flex_freq=fx.frequency_rad_s, flex_zeta=fx.damping, flex_shape=fx.shapes)
     else:
         out.update(flex_freq=np.zeros((4, 1)), flex_zeta=np.zeros(1), flex_shape=np.zeros((4, 1, L.N_POINTS, 6)))
-    if cfg.slosh.enabled:
-        sl = load_slosh(vehicle, cfg.slosh)
+    sl = _slosh(cfg, vehicle, slosh)
+    if sl is not None:
         level, n = _stack([t.level_m for t in sl.tanks])
         data, _ = _stack([np.column_stack([t.frequency_rad_s, t.damping, t.mass_kg, t.height_m]) for t in sl.tanks])
         out.update(slosh_level=level, slosh_data=data, slosh_len=n)
@@ -105,7 +112,7 @@ def _flex_slosh_tables(cfg: SavantConfig, vehicle: Vehicle) -> dict[str, np.ndar
     return {k: np.ascontiguousarray(v, dtype=np.int64 if k == "slosh_len" else np.float64) for k, v in out.items()}
 
 
-def plant_tables(cfg: SavantConfig, vehicle: Vehicle) -> PlantTables:
+def plant_tables(cfg: SavantConfig, vehicle: Vehicle, slosh: SloshData | None = None) -> PlantTables:
     """Tabular plant data from the vehicle and the winds, flex and slosh configs."""
     mach, alpha, beta, coef, ref = _common_aero_grid(vehicle)
     aeros = [vehicle.configurations[n].aero for n in CONFIG_NAMES]
@@ -131,11 +138,11 @@ def plant_tables(cfg: SavantConfig, vehicle: Vehicle) -> PlantTables:
         rcs_alt=f64(rcs.altitude_m), rcs_thrust=f64(rcs.thrust_vac_N),
         atm_alt=f64(atm_alt), atm_lnp=f64(atm_lnp), atm_lnrho=f64(atm_lnrho),
         wind_alt=f64(wind[0]), wind_north=f64(wind[1]), wind_east=f64(wind[2]),
-        **_flex_slosh_tables(cfg, vehicle),
+        **_flex_slosh_tables(cfg, vehicle, slosh),
     )
 
 
-def scalar_parameters(cfg: SavantConfig, vehicle: Vehicle) -> np.ndarray:
+def scalar_parameters(cfg: SavantConfig, vehicle: Vehicle, slosh: SloshData | None = None) -> np.ndarray:
     """The scalar parameter vector ``p`` (see :mod:`savant_cli.sim.layout`)."""
     p = np.zeros(L.N_PARAM)
     p[L.P_MU] = C.MU_EARTH
@@ -191,8 +198,8 @@ def scalar_parameters(cfg: SavantConfig, vehicle: Vehicle) -> np.ndarray:
     p[L.P_SLOSH_AREF] = 1.0
     p[L.P_SLOSH_FREQ_SCALE] = cfg.slosh.frequency_scale
     p[L.P_SLOSH_ZETA_SCALE] = cfg.slosh.damping_scale
-    if cfg.slosh.enabled:
-        sl = load_slosh(vehicle, cfg.slosh)
+    sl = _slosh(cfg, vehicle, slosh)
+    if sl is not None:
         p[L.P_SLOSH_AREF] = sl.reference_accel_mps2
         for j, tank in enumerate(sl.tanks):
             p[L.P_TANK + 3 * j:L.P_TANK + 3 * j + 3] = tank.radius_m, tank.bottom_station_m, tank.density_kgm3
@@ -292,8 +299,9 @@ def pad_state(cfg: SavantConfig, vehicle: Vehicle) -> tuple[np.ndarray, np.ndarr
 
 def build_model(cfg: SavantConfig, vehicle: Vehicle, guidance: GuidanceTable) -> SimModel:
     """Numeric model of one run."""
-    p = scalar_parameters(cfg, vehicle)
-    tb = plant_tables(cfg, vehicle)
+    slosh = _slosh(cfg, vehicle, None)
+    p = scalar_parameters(cfg, vehicle, slosh)
+    tb = plant_tables(cfg, vehicle, slosh)
     ft = fcs_tables(cfg)
     rt = rates(cfg)
     ad, bd, cd, dd = gyro_discrete(cfg.sensors.rate_gyro.natural_frequency_hz,

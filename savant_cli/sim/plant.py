@@ -201,6 +201,15 @@ def actuator_simplex(x: np.ndarray, k: int, kv: int, cmd: float, p: np.ndarray, 
 
 
 @njit(cache=True, error_model="numpy")
+def minus_point_mass(ixx: float, iyy: float, izz: float, ixy: float, ixz: float, iyz: float,
+                     m: float, dx: float, dy: float, dz: float):
+    """Inertia tensor elements minus those of a point mass ``m`` at body offset ``d``:
+    ``I − m (|d|² E − d dᵀ)`` (off-diagonal elements are tensor elements, −products)."""
+    return (ixx - m * (dy * dy + dz * dz), iyy - m * (dx * dx + dz * dz), izz - m * (dx * dx + dy * dy),
+            ixy + m * dx * dy, ixz + m * dx * dz, iyz + m * dy * dz)
+
+
+@njit(cache=True, error_model="numpy")
 def slosh_tank(tb: np.ndarray, p: np.ndarray, j: int, liquid_kg: float):
     """Level (m), slosh ω at the reference acceleration (rad/s), ζ, slosh mass (kg) and
     slosh-mass station (structure x, m) of tank ``j`` holding ``liquid_kg``.
@@ -399,22 +408,10 @@ def derivative(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.nda
         cgx_r = (mass * cgx - ms0 * xs0 - ms1 * xs1) / m_r
         cgy_r = mass * cgy / m_r
         cgz_r = mass * cgz / m_r
-        for j in range(2):
-            mj, xj = (ms0, xs0) if j == 0 else (ms1, xs1)
-            dx, dy_, dz = -(xj - cgx), -cgy, cgz  # total CG → slosh mass, body axes
-            ixx -= mj * (dy_ * dy_ + dz * dz)
-            iyy -= mj * (dx * dx + dz * dz)
-            izz -= mj * (dx * dx + dy_ * dy_)
-            ixy += mj * dx * dy_
-            ixz += mj * dx * dz
-            iyz += mj * dy_ * dz
-        ex, ey, ez = -(cgx_r - cgx), cgy_r - cgy, -(cgz_r - cgz)  # total → rigid CG, body
-        ixx -= m_r * (ey * ey + ez * ez)
-        iyy -= m_r * (ex * ex + ez * ez)
-        izz -= m_r * (ex * ex + ey * ey)
-        ixy += m_r * ex * ey
-        ixz += m_r * ex * ez
-        iyz += m_r * ey * ez
+        # remove each slosh mass (offset from the total CG), then move to the rigid CG
+        for mj, dx, dy_, dz in ((ms0, -(xs0 - cgx), -cgy, cgz), (ms1, -(xs1 - cgx), -cgy, cgz),
+                                (m_r, -(cgx_r - cgx), cgy_r - cgy, -(cgz_r - cgz))):
+            ixx, iyy, izz, ixy, ixz, iyz = minus_point_mass(ixx, iyy, izz, ixy, ixz, iyz, mj, dx, dy_, dz)
         mass, cgx, cgy, cgz = m_r, cgx_r, cgy_r, cgz_r
 
     # ---------------------------------------------------------- aerodynamics

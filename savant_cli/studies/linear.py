@@ -30,7 +30,9 @@ from savant_cli.linear.loops import AXES, LinearPoint, assemble
 from savant_cli.linear.margins import Bands, MarginRow, bandwidth_hz, disk_margins, loop_margins
 from savant_cli.linear.plant import linearize_plant
 from savant_cli.linear.store import write_linear_group, write_margins_csv, write_mat
+from savant_cli.sim import layout as L
 from savant_cli.sim.engine import EVENT_NAMES
+from savant_cli.sim.plant import derivative
 from savant_cli.sim.run import simulate, signals
 from savant_cli.sim.setup import prepare
 from savant_cli.sim.summary import summarize
@@ -73,9 +75,6 @@ def bands_at(model, snap) -> Bands:
         s = 0 if np.isnan(snap.events[0]) else 2
         flex_from = 0.7 * float(model.tables.flex_freq[s, :lay.n_modes].min()) / (2 * np.pi)
     if lay.slosh:
-        from savant_cli.sim import layout as L
-        from savant_cli.sim.plant import derivative
-
         aux = np.zeros(L.N_AUX)
         derivative(snap.t, snap.x, snap.u, model.p, model.packed_tables, aux, np.zeros(snap.x.size))
         f = aux[L.A_SLOSH_W:L.A_SLOSH_W + 2] / (2 * np.pi)
