@@ -15,6 +15,7 @@ import time
 import warnings
 from pathlib import Path
 
+import savant_cli  # noqa: F401  (first: sets one BLAS thread per process, as the CLI does)
 import numpy as np
 
 

@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import control as ct
 import numpy as np
 from scipy.linalg import block_diag
+from scipy.signal import tf2ss
 
 from savant_cli.models.fcs import FCS_STACK, GYRO_FIRST, GYRO_UPPER
 from savant_cli.sim import engine as E
@@ -54,13 +55,10 @@ def fcs_phase(events: np.ndarray) -> int:
     return int(E.fcs_phase(events))
 
 
-def _siso(num, den, dt: float) -> ct.StateSpace:
-    return ct.ss(ct.tf(num, den, dt))
-
-
-def _filter(coef: np.ndarray, dt: float) -> ct.TransferFunction:
-    """Two fourth-order sections in series (coefficients in powers of z⁻¹, a₀ = 1)."""
-    return ct.tf(coef[0, 0], coef[0, 1], dt) * ct.tf(coef[1, 0], coef[1, 1], dt)
+def _filter(coef: np.ndarray, dt: float) -> ct.StateSpace:
+    """Two fourth-order sections in series (coefficients in powers of z⁻¹, a₀ = 1),
+    multiplied in state space (no polynomial products or cancellations)."""
+    return ct.ss(*tf2ss(coef[0, 0], coef[0, 1]), dt) * ct.ss(*tf2ss(coef[1, 0], coef[1, 1]), dt)
 
 
 def controller_lti(model: SimModel, snap: Snapshot, dt: float) -> ct.StateSpace:
@@ -74,14 +72,14 @@ def controller_lti(model: SimModel, snap: Snapshot, dt: float) -> ct.StateSpace:
     fset = 0 if phase == FCS_STACK else 1
     own = GYRO_FIRST if phase == FCS_STACK else GYRO_UPPER
     gains = snap.d[L.D_GAINS:L.D_GAINS + 8]
-    integ = ct.tf([dt, 0.0], [1.0, -1.0], dt)
+    integ = ct.ss(1.0, 1.0, dt, dt, dt)  # T z / (z − 1) = T + T / (z − 1)
     n_in = len(SENSOR_NAMES) + len(COMMANDS)
     blocks = []
     for c, axis in enumerate(AXES):
         ax = c + 1  # body y (pitch), z (yaw)
         kp, ki, kd, kir = gains[4 * c:4 * c + 4]
-        parts = [ct.ss(kp + ki * integ), ct.ss(kd * _filter(ft.filters[fset, 0], dt)),
-                 ct.ss(kir * _filter(ft.filters[fset, 1], dt) * integ)]
+        parts = [kp + ki * integ, kd * _filter(ft.filters[fset, 0], dt),
+                 kir * _filter(ft.filters[fset, 1], dt) * integ]
         m = np.zeros((3, n_in))  # [e, blended rate, own-gyro rate] from the inputs
         m[0, ax] = 1.0
         m[0, len(SENSOR_NAMES) + c] = -1.0  # e = attitude − command

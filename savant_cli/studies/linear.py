@@ -29,6 +29,7 @@ from savant_cli.io.record import RunRecord
 from savant_cli.linear.loops import AXES, LinearPoint, assemble
 from savant_cli.linear.margins import Bands, MarginRow, bandwidth_hz, disk_margins, loop_margins
 from savant_cli.linear.plant import linearize_plant
+from savant_cli.linear.response import FastResponse
 from savant_cli.linear.store import write_linear_group, write_margins_csv, write_mat
 from savant_cli.sim import layout as L
 from savant_cli.sim.engine import EVENT_NAMES
@@ -91,8 +92,9 @@ def analyse(model, snap, study: LinearStudyConfig, dt: float) -> tuple[LinearPoi
     rows = []
     extra: dict[str, float] = {"time_s": snap.t}
     for c, axis in enumerate(AXES):
-        rows += loop_margins(pt.loops[axis], snap.t, axis, bands)
-        for k, v in disk_margins(pt.loops[axis]).items():
+        fr = FastResponse(pt.loops[axis])
+        rows += loop_margins(pt.loops[axis], snap.t, axis, bands, fr)
+        for k, v in disk_margins(pt.loops[axis], fr).items():
             extra[f"{axis}_{k}"] = v
         extra[f"{axis}_bandwidth_hz"] = bandwidth_hz(pt.closed[c, c])
     for k, v in disk_margins(pt.mimo).items():
