@@ -22,6 +22,9 @@ commands:
   run [overrides]     fly the configured study (Hydra: -m for sweeps, --cfg job to
                       print the config, --help for the config groups)
   report RUN_DIR      redraw the plots and console summary of a finished run
+  collect DIR         merge the shard folders of a Monte Carlo multirun into DIR
+  rerun DIR run=N     fly run N of the Monte Carlo batch in DIR again, with its
+                      whole time history and plots (DIR/rerun_<N>/)
   --version           print the version
   --help              this text
 
@@ -30,6 +33,8 @@ examples:
   savant run winds=none sim.plant_rate_hz=400
   savant run -m winds=none,ksc_mean_annual
   savant report outputs/2026-11-23/10-00-00_nominal
+  savant run study=montecarlo study.n_runs=200
+  savant rerun outputs/2026-11-23/11-00-00_montecarlo run=137
 """
 
 
@@ -106,8 +111,36 @@ def main(argv: list[str] | None = None) -> int:
             return 2
         console.print(f"{len(paths)} plots written to {Path(rest[0]) / 'plots'}")
         return 0
+    if cmd in ("collect", "rerun"):
+        return _batch_command(cmd, rest)
     Console(stderr=True).print(f"unknown command {cmd!r}\n\n{USAGE}", markup=False)
     return 2
+
+
+def _batch_command(cmd: str, rest: list[str]) -> int:
+    """``savant collect DIR`` and ``savant rerun DIR run=N``."""
+    err = Console(stderr=True)
+    usage = "usage: savant collect DIR" if cmd == "collect" else "usage: savant rerun DIR run=N"
+    if (cmd == "collect" and len(rest) != 1) or (cmd == "rerun" and (len(rest) != 2 or not rest[1].startswith("run="))):
+        err.print(usage)
+        return 2
+    folder = Path(rest[0])
+    if not folder.is_dir():
+        err.print(f"[bold red]error[/]: {folder} is not a folder\n{usage}")
+        return 2
+    from savant_cli.studies import montecarlo
+
+    try:
+        if cmd == "collect":
+            return montecarlo.collect(folder)
+        try:
+            number = int(rest[1][4:])
+        except ValueError:
+            raise ConfigError("run", rest[1][4:], "must be an integer run number") from None
+        return montecarlo.rerun(folder, number)
+    except ConfigError as exc:
+        err.print(f"[bold red]error[/]: {exc}")
+        return ConfigError.exit_code
 
 
 if __name__ == "__main__":

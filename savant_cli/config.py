@@ -92,7 +92,66 @@ class LinearStudyConfig:
     requirements: LinearRequirements = field(default_factory=LinearRequirements)
 
 
-STUDY_SCHEMAS: dict[str, type] = {"nominal": StudyConfig, "linear": LinearStudyConfig}
+@dataclass
+class DispersionSpec:
+    """One dispersed quantity of ``study=montecarlo`` (see docs/montecarlo.md).
+
+    ``target``: a config path (``winds.scale``, ``sensors.misalignment_deg.imu[1]``), a
+    loaded-vehicle attribute (``vehicle.upper_stage.isp_vac_s``), a vehicle-table
+    quantity (``tables.first_stage.thrust`` …) or the config group ``winds``.
+    ``apply``: the sample multiplies (``scale``), is added to (``offset``) or replaces
+    (``value``) the nominal."""
+
+    target: str = ""
+    apply: str = "scale"  # scale | offset | value
+    dist: str = "normal"  # normal | uniform | triangular | choice | constant
+    mean: Any = None  # normal; default 1 for scale, 0 for offset
+    sigma: float = 0.0  # normal
+    truncate_sigma: float = 0.0  # normal: > 0 truncates at ± this many σ
+    low: Any = None  # uniform, triangular
+    high: Any = None  # uniform, triangular
+    mode: Any = None  # triangular
+    values: list[Any] = field(default_factory=list)  # choice
+    weights: list[float] = field(default_factory=list)  # choice (default equal)
+    value: Any = None  # constant
+    source: str = ""  # where the numbers come from
+
+
+@dataclass
+class CorrelationGroup:
+    """Dispersions drawn with a correlation matrix (Gaussian copula)."""
+
+    names: list[str] = field(default_factory=list)
+    matrix: list[list[float]] = field(default_factory=list)
+
+
+@dataclass
+class HistoriesSpec:
+    """Decimated time histories kept for every run (empty list: none)."""
+
+    signals: list[str] = field(default_factory=list)
+    rate_hz: float = 5.0
+
+
+@dataclass
+class MonteCarloStudyConfig:
+    """``study=montecarlo``: dispersed full-fidelity ascents."""
+
+    name: str = "montecarlo"
+    n_runs: int = 1000  # run 0 is the nominal
+    seed: int = 20261123  # master seed; run i uses SeedSequence(seed).spawn(n)[i]
+    workers: int = 0  # processes; 0: all cores
+    shards: int = 1  # split the batch into this many shards …
+    shard: int = 0  # … and fly this one (Hydra multirun: study.shard='range(0,N)')
+    dispersions: dict[str, DispersionSpec] = field(default_factory=dict)
+    correlations: list[CorrelationGroup] = field(default_factory=list)
+    histories: HistoriesSpec = field(default_factory=HistoriesSpec)
+    linear_times: list[float] = field(default_factory=list)  # s: margins of every run at these times
+    requirements: LinearRequirements = field(default_factory=LinearRequirements)
+
+
+STUDY_SCHEMAS: dict[str, type] = {"nominal": StudyConfig, "linear": LinearStudyConfig,
+                                  "montecarlo": MonteCarloStudyConfig}
 
 
 @dataclass
@@ -126,6 +185,8 @@ class ActuatorStage:
     damping_Nms_per_rad: float = 1.0e5
     leakage_rad_s_per_Nm: float = 0.0
     feedback: str = "piston"  # piston (ram LVDT) | nozzle
+    # thrust-line misalignment from the actuator null, pitch and yaw, deg (both variants)
+    null_bias_deg: list[float] = field(default_factory=lambda: [0.0, 0.0])
 
 
 @dataclass
@@ -168,9 +229,20 @@ class RateGyroConfig:
 
 
 @dataclass
+class SensorMisalignment:
+    """Mounting misalignment of each sensor package: a small rotation vector from the body
+    axes to the sensor's axes (x, y, z body axes, deg)."""
+
+    imu: list[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])
+    rate_gyro_upper_stage: list[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])
+    rate_gyro_first_stage: list[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])
+
+
+@dataclass
 class SensorsConfig:
     name: str = "ares_i_gyros"
     rate_gyro: RateGyroConfig = field(default_factory=RateGyroConfig)
+    misalignment_deg: SensorMisalignment = field(default_factory=SensorMisalignment)
 
 
 @dataclass
@@ -332,6 +404,16 @@ def _one_of(key: str, value: Any, allowed: tuple) -> None:
         raise ConfigError(key, value, f"must be one of {', '.join(map(str, allowed))}")
 
 
+def _small_angles(key: str, values: list[float], n: int, limit_deg: float, axes: str) -> None:
+    """``values`` must be ``n`` finite angles (deg), each of magnitude at most ``limit_deg``."""
+    vals = list(values)
+    if len(vals) != n:
+        raise ConfigError(key, vals, f"must list {n} angles in deg ({axes})")
+    for i, v in enumerate(vals):
+        if not (np.isfinite(v) and abs(v) <= limit_deg):
+            raise ConfigError(f"{key}[{i}]", v, f"must be a finite angle within ±{limit_deg} deg")
+
+
 def _increasing(key: str, values: list[float]) -> None:
     arr = np.asarray(values, dtype=float)
     if arr.size < 2 or not np.all(np.diff(arr) > 0.0):
@@ -405,6 +487,7 @@ def _check_physics(cfg: SavantConfig) -> None:
         a = getattr(cfg.actuator, stage)
         for name in ("loop_gain_rad_s", "natural_frequency_hz", "damping", "rate_limit_deg_s"):
             _positive(f"actuator.{stage}.{name}", getattr(a, name))
+        _small_angles(f"actuator.{stage}.null_bias_deg", a.null_bias_deg, 2, 2.0, "pitch, yaw")
         if cfg.actuator.name == "simplex":
             for name in ("valve_frequency_hz", "valve_damping", "stiffness_Nm_per_rad", "damping_Nms_per_rad"):
                 _positive(f"actuator.{stage}.{name}", getattr(a, name))
@@ -433,6 +516,9 @@ def _check_physics(cfg: SavantConfig) -> None:
         _non_negative("slosh.damping_scale", cfg.slosh.damping_scale)
     _positive("sensors.rate_gyro.natural_frequency_hz", cfg.sensors.rate_gyro.natural_frequency_hz)
     _positive("sensors.rate_gyro.damping", cfg.sensors.rate_gyro.damping)
+    for name in ("imu", "rate_gyro_upper_stage", "rate_gyro_first_stage"):
+        _small_angles(f"sensors.misalignment_deg.{name}", getattr(cfg.sensors.misalignment_deg, name), 3, 1.0,
+                      "about body x, y, z")
     nyquist = 0.5 * cfg.sim.sensor_rate_hz
     if cfg.sensors.rate_gyro.natural_frequency_hz >= nyquist:
         raise ConfigError("sensors.rate_gyro.natural_frequency_hz", cfg.sensors.rate_gyro.natural_frequency_hz,
@@ -499,7 +585,28 @@ def _study(node: Any) -> Any:
     study = OmegaConf.to_object(merged)
     if isinstance(study, LinearStudyConfig):
         _check_linear(study)
+    if isinstance(study, MonteCarloStudyConfig):
+        _check_montecarlo(study)
     return study
+
+
+def _check_montecarlo(s: MonteCarloStudyConfig) -> None:
+    """Counts and sharding; the dispersion spec is checked against the model by
+    :func:`savant_cli.montecarlo.spec.parse` before anything runs."""
+    if s.n_runs < 1:
+        raise ConfigError("study.n_runs", s.n_runs, "must be at least 1 (run 0 is the nominal)")
+    if s.workers < 0:
+        raise ConfigError("study.workers", s.workers, "must be 0 (all cores) or a positive process count")
+    if s.shards < 1 or s.shards > s.n_runs:
+        raise ConfigError("study.shards", s.shards, f"must be between 1 and study.n_runs ({s.n_runs})")
+    if not 0 <= s.shard < s.shards:
+        raise ConfigError("study.shard", s.shard, f"must be between 0 and study.shards - 1 ({s.shards - 1})")
+    if s.seed < 0:
+        raise ConfigError("study.seed", s.seed, "must be a non-negative integer")
+    _positive("study.histories.rate_hz", s.histories.rate_hz)
+    for i, t in enumerate(s.linear_times):
+        if not (t > 0.0 and np.isfinite(t)):
+            raise ConfigError(f"study.linear_times[{i}]", t, "must be a positive flight time in s")
 
 
 def _check_linear(s: LinearStudyConfig) -> None:

@@ -8,6 +8,7 @@ slosh tables from ``vehicle.slosh``. Every problem is a ConfigError naming the k
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
@@ -58,6 +59,18 @@ def _spec(vehicle: Vehicle, section: str) -> dict:
     return spec
 
 
+@lru_cache(maxsize=32)
+def _modal_set_cached(folder: Path, name: str, units: tuple[str, str], key: str, stamp: tuple) -> ModalSet:
+    return read_modal_set(folder, name, units, key)
+
+
+def _modal_set(folder: Path, name: str, units: tuple[str, str], key: str) -> ModalSet:
+    """One modal set, read once per process while its files are unchanged (a Monte Carlo
+    batch builds a model per run; the sets are not modified by their users)."""
+    stamp = tuple((f.name, f.stat().st_mtime_ns, f.stat().st_size) for f in sorted(folder.glob(f"{name}*")))
+    return _modal_set_cached(folder, name, units, key, stamp)
+
+
 def load_flex(vehicle: Vehicle, fcfg: FlexConfig, plant_rate_hz: float) -> FlexTables:
     """Read the four modal sets, keep ``fcfg.n_modes`` and evaluate them at the points."""
     spec = _spec(vehicle, "flex")
@@ -74,8 +87,8 @@ def load_flex(vehicle: Vehicle, fcfg: FlexConfig, plant_rate_hz: float) -> FlexT
         ids = nodes.get(pk)
         if not isinstance(ids, (list, tuple)) or not ids or not all(isinstance(i, int) for i in ids):
             raise ConfigError(f"{key}.nodes.{pk}", ids, "must be a non-empty list of integer node ids")
-    sets = tuple(read_modal_set(folder, name, (str(units.get("length", "")), str(units.get("force", ""))),
-                                f"{key} set {name}") for name in L.FLEX_SETS)
+    unit_pair = (str(units.get("length", "")), str(units.get("force", "")))
+    sets = tuple(_modal_set(folder, name, unit_pair, f"{key} set {name}") for name in L.FLEX_SETS)
     n = fcfg.n_modes
     for ms in sets:
         if ms.frequency_rad_s.size < n:

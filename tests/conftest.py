@@ -17,3 +17,24 @@ def compose_config(overrides: list[str] | None = None):
 @pytest.fixture
 def compose_cfg():
     return compose_config
+
+
+# The plot modules must never use matplotlib.pyplot (global state, GUI backends): the
+# tests check their source and run them in an interpreter where pyplot is this stub.
+PYPLOT_STUB = """
+import sys, types
+class Stub(types.ModuleType):
+    def __getattr__(self, name):
+        raise AssertionError(f"pyplot.{name} used")
+sys.modules["matplotlib.pyplot"] = Stub("matplotlib.pyplot")
+"""
+
+
+def imported_names(path) -> list[str]:
+    """Every module and name a Python source file imports (``a.b`` and ``a.b.name``)."""
+    import ast
+    from pathlib import Path
+
+    tree = ast.parse(Path(path).read_text(encoding="utf-8"))
+    names = [a.name for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names]
+    return names + [f"{n.module}.{a.name}" for n in ast.walk(tree) if isinstance(n, ast.ImportFrom) for a in n.names]

@@ -22,6 +22,7 @@ import control as ct
 import numpy as np
 import pytest
 
+from conftest import PYPLOT_STUB, imported_names
 from savant_cli.plots import linear
 from savant_cli.plots.linear import (
     MarginRow,
@@ -295,19 +296,10 @@ def test_no_pyplot(tmp_path):
     fresh interpreter where ``matplotlib.pyplot`` is a stub whose every attribute raises,
     importing the module and drawing every chart must still work.
     """
-    import ast
+    assert not [name for name in imported_names(linear.__file__) if "pyplot" in name]
 
-    tree = ast.parse(Path(linear.__file__).read_text(encoding="utf-8"))
-    imported = [a.name for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names]
-    imported += [f"{n.module}.{a.name}" for n in ast.walk(tree) if isinstance(n, ast.ImportFrom) for a in n.names]
-    assert not [name for name in imported if "pyplot" in name]
-
-    code = textwrap.dedent(f"""
-        import sys, types, warnings
-        class Stub(types.ModuleType):
-            def __getattr__(self, name):
-                raise AssertionError(f"pyplot.{{name}} used")
-        sys.modules["matplotlib.pyplot"] = Stub("matplotlib.pyplot")
+    code = PYPLOT_STUB + textwrap.dedent(f"""
+        import warnings
         from pathlib import Path
         import control as ct
         from savant_cli.plots.linear import MarginRow, plot_linear_point, plot_margin_envelope

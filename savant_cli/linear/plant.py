@@ -24,6 +24,7 @@ import control as ct
 import numpy as np
 
 from savant_cli.models import quaternion as qt
+from savant_cli.models.sensors import misalignment
 from savant_cli.sim import layout as L
 from savant_cli.sim.build import SimModel
 from savant_cli.sim.plant import derivative, flex_point
@@ -123,17 +124,21 @@ def _rates(x0: np.ndarray, idx: np.ndarray, x: np.ndarray, xd: np.ndarray) -> np
 
 
 def _outputs(model: SimModel, t: float, x: np.ndarray, x0: np.ndarray, u: np.ndarray, tb: np.ndarray) -> np.ndarray:
-    """Sensor signals the flight control reads (attitude + flex at the nav unit, each
-    gyro's rigid + flex rate), then gimbal angles and α, β."""
+    """Sensor signals the flight control reads, as the time run forms them (engine.advance):
+    the navigation attitude q_b2i ⊗ q_s2b relative to its value at ``x0``, plus the flex
+    rotation at the nav unit; each gyro's rigid + flex rate in its own (misaligned) axes;
+    then gimbal angles and α, β."""
+    p = model.p
     config = int(u[L.U_CONFIG])
     rot = np.zeros(3)
-    flex_point(x, config, model.p, tb, L.PT_IMU, False, rot)
-    dq = qt.qmul(qt.qconj(x0[L.Q:L.Q + 4]), x[L.Q:L.Q + 4])
+    flex_point(x, config, p, tb, L.PT_IMU, False, rot)
+    q_imu = misalignment(p[L.P_IMU_MISALIGN:L.P_IMU_MISALIGN + 3])[0]
+    dq = qt.qmul(qt.qconj(qt.qmul(x0[L.Q:L.Q + 4], q_imu)), qt.qmul(x[L.Q:L.Q + 4], q_imu))
     y = [2.0 * dq[1:4] + rot]
-    for pt in L.GYRO_POINTS:
+    for pt, pm in zip(L.GYRO_POINTS, L.GYRO_MISALIGN, strict=True):
         fr = np.zeros(3)
-        flex_point(x, config, model.p, tb, pt, True, fr)
-        y.append(x[L.W:L.W + 3] + fr)
+        flex_point(x, config, p, tb, pt, True, fr)
+        y.append(misalignment(p[pm:pm + 3])[1] @ (x[L.W:L.W + 3] + fr))
     aux = np.zeros(L.N_AUX)
     derivative(t, x, u, model.p, tb, aux, np.zeros(x.size))
     y.append(np.array([aux[L.A_DP], aux[L.A_DY], aux[L.A_ALPHA], aux[L.A_BETA]]))

@@ -3,7 +3,8 @@
 Convention (see docs/architecture.md): an attitude quaternion ``q_b2i`` rotates body
 vectors into the inertial frame, ``v_i = q ⊗ v_b ⊗ q*``; its direction-cosine matrix
 ``dcm(q)`` is body→inertial, and the kinematics are ``q̇ = ½ q ⊗ [0, ω_body]``.
-All functions are compiled with numba and allocate only their small results.
+All functions are compiled with numba and allocate only their small results
+(``qmul_into`` none).
 """
 
 from __future__ import annotations
@@ -13,13 +14,20 @@ from numba import njit
 
 
 @njit(cache=True, error_model="numpy")
-def qmul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Hamilton product ``a ⊗ b``."""
-    out = np.empty(4)
+def qmul_into(a: np.ndarray, b: np.ndarray, out: np.ndarray) -> None:
+    """Hamilton product ``a ⊗ b`` written into ``out`` (no allocation; ``out`` must not
+    alias ``a`` or ``b``)."""
     out[0] = a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3]
     out[1] = a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2]
     out[2] = a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1]
     out[3] = a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0]
+
+
+@njit(cache=True, error_model="numpy")
+def qmul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Hamilton product ``a ⊗ b``."""
+    out = np.empty(4)
+    qmul_into(a, b, out)
     return out
 
 

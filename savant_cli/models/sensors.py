@@ -1,8 +1,9 @@
 """Rate gyros: a continuous second-order transfer function per axis, discretized
-with a zero-order hold at the sensor rate.
+with a zero-order hold at the sensor rate; sensor mounting misalignment.
 
 The navigation unit is perfect (attitude, position and velocity sampled exactly), as in
-the source paper (§III.H).
+the source paper (§III.H), apart from an optional mounting misalignment
+(:func:`misalignment`) that it shares with its own rate gyro.
 
 The zero-order-hold discretization is the matrix exponential of the augmented system
 ``exp([[A, B], [0, 0]] T)`` (:func:`scipy.linalg.expm`), which is what
@@ -16,6 +17,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 from scipy.linalg import expm
+
+from savant_cli.models import quaternion as qt
 
 
 def gyro_discrete(natural_frequency_hz: float, damping: float, dt_s: float):
@@ -53,3 +56,20 @@ def gyro_step(state: np.ndarray, rate_in: float, ad: np.ndarray, bd: np.ndarray,
 def gyro_steady_state(ad: np.ndarray, bd: np.ndarray, rate_in: float) -> np.ndarray:
     """Filter state in equilibrium with a constant input (for a quiet start)."""
     return np.linalg.solve(np.eye(2) - ad, bd * rate_in)
+
+
+@njit(cache=True, error_model="numpy")
+def misalignment(eps: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Mounting of a sensor whose axes are the body axes turned by the rotation vector
+    ``eps`` = ε (rad, body axes; right-hand rule, e.g. ε_y > 0 turns the sensor's x axis
+    nose-up, toward −z_body).
+
+    Returns ``(q_s2b, c_b2s)``: the quaternion of the rotation ε (exact exponential map;
+    it maps sensor-axis vectors into body axes, ``q_s2b = [1, 0, 0, 0]`` exactly for
+    ε = 0) and ``c_b2s = R(ε)ᵀ``, where ``R(ε) = dcm(q_s2b) ≈ I + [ε×]`` has the sensor
+    axes as its columns. A rate gyro reads ``ω_s = R(ε)ᵀ ω ≈ ω − ε × ω``; the navigation
+    unit reports the attitude of its own axes, ``q_s2i = q_b2i ⊗ q_s2b``, so the flight
+    software's attitude error becomes ``e + ε`` to first order.
+    """
+    q = qt.from_rotation_vector(eps)
+    return q, qt.dcm(q).T.copy()

@@ -14,7 +14,7 @@ from savant_cli.config import SavantConfig
 from savant_cli.models import earth, quaternion as qt
 from savant_cli.models.atmosphere import upper_atmosphere_table
 from savant_cli.models.fcs import FcsTables
-from savant_cli.models.sensors import gyro_discrete, gyro_steady_state
+from savant_cli.models.sensors import gyro_discrete, gyro_steady_state, misalignment
 from savant_cli.sim import engine as E
 from savant_cli.sim import layout as L
 from savant_cli.sim.engine import GuidanceTable, GyroModel, Rates
@@ -60,16 +60,33 @@ def _stack(arrays: list[np.ndarray], fill: float = 0.0) -> tuple[np.ndarray, np.
     return np.ascontiguousarray(out), np.array([a.shape[0] for a in arrays], dtype=np.int64)
 
 
+_AERO_CACHE: list[tuple[tuple, tuple]] = []  # (the aero objects, the resampled grid), newest last
+
+
 def _common_aero_grid(vehicle: Vehicle):
     """Resample the three configurations' aero tables onto the union of their axes.
 
     Multilinear interpolation of a multilinear interpolant at refined nodes reproduces it
     exactly, and clamping outside a table is the same before and after, so this is
-    lossless; it lets the kernel hold one (3, 6, nM, nA, nB) array.
+    lossless; it lets the kernel hold one (3, 6, nM, nA, nB) array. The result is kept
+    for the same (immutable) aero objects, so a batch of models of one vehicle resamples
+    once; callers must not modify the returned arrays in place.
     """
+    aeros = tuple(vehicle.configurations[n].aero for n in CONFIG_NAMES)
+    for key, grid in _AERO_CACHE:
+        if all(a is b for a, b in zip(key, aeros)):
+            return grid
+    grid = _resample_aero(aeros)
+    for arr in grid:
+        arr.setflags(write=False)  # shared between models: an in-place change would leak
+    _AERO_CACHE.append((aeros, grid))
+    del _AERO_CACHE[:-4]
+    return grid
+
+
+def _resample_aero(aeros: tuple):
     from scipy.interpolate import RegularGridInterpolator
 
-    aeros = [vehicle.configurations[n].aero for n in CONFIG_NAMES]
     mach = np.unique(np.concatenate([a.mach for a in aeros]))
     alpha = np.unique(np.concatenate([a.alpha_rad for a in aeros]))
     beta = np.unique(np.concatenate([a.beta_rad for a in aeros]))
@@ -195,6 +212,12 @@ def scalar_parameters(cfg: SavantConfig, vehicle: Vehicle, slosh: SloshData | No
                                   np.radians(a.rate_limit_deg_s), a.stiffness_Nm_per_rad, a.damping_Nms_per_rad,
                                   eng.inertia_about_gimbal_kgm2, a.leakage_rad_s_per_Nm,
                                   1.0 if a.feedback == "nozzle" else 0.0)
+    for stage, base in (("first_stage", L.P_FS_GIMBAL_BIAS), ("upper_stage", L.P_US_GIMBAL_BIAS)):
+        p[base:base + 2] = np.radians(getattr(cfg.actuator, stage).null_bias_deg)
+    mis = cfg.sensors.misalignment_deg
+    for base, eps in ((L.P_IMU_MISALIGN, mis.imu), (L.P_GYRO_US_MISALIGN, mis.rate_gyro_upper_stage),
+                      (L.P_GYRO_FS_MISALIGN, mis.rate_gyro_first_stage)):
+        p[base:base + 3] = np.radians(eps)
     p[L.P_SLOSH_AREF] = 1.0
     p[L.P_SLOSH_FREQ_SCALE] = cfg.slosh.frequency_scale
     p[L.P_SLOSH_ZETA_SCALE] = cfg.slosh.damping_scale
@@ -322,10 +345,11 @@ def build_model(cfg: SavantConfig, vehicle: Vehicle, guidance: GuidanceTable) ->
 
     d0 = np.zeros(L.N_DISC)
     for g in range(3):
+        w_sensed = misalignment(p[L.GYRO_MISALIGN[g]:L.GYRO_MISALIGN[g] + 3])[1] @ w0  # in the gyro's axes
         for ax in range(3):
             s = L.D_GYRO_X + 6 * g + 2 * ax
-            d0[s:s + 2] = gyro_steady_state(ad, bd, w0[ax])
-            d0[L.D_GYRO_Y + 3 * g + ax] = w0[ax]
+            d0[s:s + 2] = gyro_steady_state(ad, bd, w_sensed[ax])
+            d0[L.D_GYRO_Y + 3 * g + ax] = w_sensed[ax]
     u0 = np.zeros(L.N_INPUT)
     u0[L.U_CONFIG] = L.CONFIG_STACK
     u0[L.U_ENGINE] = L.ENGINE_FIRST

@@ -20,10 +20,10 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from savant_cli.models import earth
+from savant_cli.models import earth, quaternion as qt
 from savant_cli.models.fcs import FCS_COAST, FCS_STACK, FCS_UPPER, FcsTables, fcs_step, reset_phase
 from savant_cli.models.guidance import guidance_sample, smoother_step
-from savant_cli.models.sensors import gyro_step
+from savant_cli.models.sensors import gyro_step, misalignment
 from savant_cli.sim.layout import (
     A_ALT, ACT_P, ACT_Y, CONFIG_UPPER, CONFIG_UPPER_LES, D_CMD_P, D_CMD_RCS, D_CMD_Y,
     D_GYRO_X, D_GYRO_Y, ENGINE_OFF, ENGINE_UPPER, MFS, MLH2, MLOX, N_AUX, N_STATE,
@@ -200,6 +200,12 @@ def advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0:
     work = work_array(nx)
     n_cols = log.shape[1]
     flex3 = np.zeros(3)
+    # sensor mounting misalignment: each gyro reads R(ε)ᵀ ω, the nav unit q_b2i ⊗ q_s2b
+    c_gyro = np.empty((3, 3, 3))  # body → sensor axes, per gyro (FCS order)
+    for g in range(3):
+        c_gyro[g] = misalignment(p[L.GYRO_MISALIGN[g]:L.GYRO_MISALIGN[g] + 3])[1]
+    q_imu = misalignment(p[L.P_IMU_MISALIGN:L.P_IMU_MISALIGN + 3])[0]
+    q_nav = np.empty(4)
     so = int(p[L.P_SLOSH_OFF])
     has_flex = int(p[L.P_FLEX_OFF]) >= 0
     for j in range(n_steps):
@@ -219,13 +225,14 @@ def advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0:
             guidance_sample(d, t, gt.time, gt.quat, gt.rate, k == 0)
         config = int(u[U_CONFIG])
         if k % rates.n_sensor == 0:
-            for g in range(3):  # each gyro reads rigid plus flex rate at its node
+            for g in range(3):  # each gyro reads rigid plus flex rate at its node, in its own axes
                 if has_flex:
                     flex_point(x, config, p, tb, L.GYRO_POINTS[g], True, flex3)
+                wbx, wby, wbz = x[W] + flex3[0], x[W + 1] + flex3[1], x[W + 2] + flex3[2]
                 for ax in range(3):
                     s = D_GYRO_X + 6 * g + 2 * ax
-                    d[D_GYRO_Y + 3 * g + ax] = gyro_step(
-                        d[s:s + 2], x[W + ax] + flex3[ax], gyro.ad, gyro.bd, gyro.cd, gyro.dd)
+                    w_in = c_gyro[g, ax, 0] * wbx + c_gyro[g, ax, 1] * wby + c_gyro[g, ax, 2] * wbz
+                    d[D_GYRO_Y + 3 * g + ax] = gyro_step(d[s:s + 2], w_in, gyro.ad, gyro.bd, gyro.cd, gyro.dd)
         if k % rates.n_fcs == 0:
             dt_fcs = rates.n_fcs * dt
             smoother_step(d, t, dt_fcs, sched[S_SMOOTH_ZETA], sched[S_SMOOTH_WN])
@@ -238,7 +245,8 @@ def advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0:
             if has_flex:
                 flex_point(x, config, p, tb, L.PT_IMU, False, flex3)  # flex rotation at the nav unit
                 d[L.D_FLEX_NAV:L.D_FLEX_NAV + 3] = flex3
-            fcs_step(d, x[Q:Q + 4], phase, sched_var, dt_fcs, ft)
+            qt.qmul_into(x[Q:Q + 4], q_imu, q_nav)  # sensed attitude q_b2i ⊗ q_s2b
+            fcs_step(d, q_nav, phase, sched_var, dt_fcs, ft)
             u[U_DPC] = d[D_CMD_P]
             u[U_DYC] = d[D_CMD_Y]
             u[U_RCS] = d[D_CMD_RCS]

@@ -178,7 +178,13 @@ P_SPX_FS = 64  # simplex parameters of the first stage (N_SPX), then of the uppe
 N_SPX = 9  # loop gain 1/s, valve ω rad/s, valve ζ, rate limit rad/s, stiffness N m/rad,
 #            damping N m s/rad, load inertia kg m², leakage rad/s per N m, feedback (0 piston, 1 nozzle)
 P_SPX_US = P_SPX_FS + N_SPX
-N_PARAM = P_SPX_US + N_SPX
+# error sources (nominal 0; see docs/models.md "Gimbal null bias and sensor misalignment")
+P_FS_GIMBAL_BIAS = P_SPX_US + N_SPX  # nozzle null bias (thrust-line misalignment), pitch, yaw, rad (2)
+P_US_GIMBAL_BIAS = P_FS_GIMBAL_BIAS + 2
+P_IMU_MISALIGN = P_US_GIMBAL_BIAS + 2  # mounting misalignment, small rotation vector body→sensor, rad (3)
+P_GYRO_US_MISALIGN = P_IMU_MISALIGN + 3
+P_GYRO_FS_MISALIGN = P_GYRO_US_MISALIGN + 3
+N_PARAM = P_GYRO_FS_MISALIGN + 3
 ACT_THIRD_ORDER = 0
 ACT_SIMPLEX = 1
 
@@ -207,7 +213,7 @@ A_MTHRUST = 26  # thrust moment about CG, body (3)
 A_RCS_TORQUE = 29
 A_PROP = 30  # propellant remaining of the burning configuration, kg
 A_CG = 31  # CG, structure frame (3)
-A_DP = 34  # effective (limited) gimbal angles, rad
+A_DP = 34  # effective (limited) actuator gimbal angles, rad (the null bias not included)
 A_DY = 35
 A_VEARTH = 36  # Earth-relative speed (no wind), m/s
 A_ACCEL = 37  # sensed (non-gravitational) acceleration, body (3)
@@ -262,3 +268,4 @@ FIRST_STAGE_POINTS = (PT_GYRO_FS, PT_GIMBAL_FS)  # absent from the upper-stage m
 # modal data sets, in this order in the packed tables
 FLEX_SETS = ("first_stage_liftoff", "first_stage_burnout", "second_stage_ignition", "second_stage_burnout")
 GYRO_POINTS = (PT_GYRO_US, PT_IMU, PT_GYRO_FS)  # in the FCS gyro order: upper, IMU, first
+GYRO_MISALIGN = (P_GYRO_US_MISALIGN, P_IMU_MISALIGN, P_GYRO_FS_MISALIGN)  # same order

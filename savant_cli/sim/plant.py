@@ -460,6 +460,7 @@ def derivative(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.nda
         sp = L.P_SPX_FS
         wa_, wn_, z_, rl_ = p[P_ACT_FS_WA], p[P_ACT_FS_WN], p[P_ACT_FS_ZETA], p[P_ACT_FS_RATE]
         pg = L.PT_GIMBAL_FS
+        gb_ = L.P_FS_GIMBAL_BIAS
     else:
         lim = p[P_US_GIMBAL_LIMIT]
         g0_ = P_US_GIMBAL_X
@@ -467,6 +468,7 @@ def derivative(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.nda
         sp = L.P_SPX_US
         wa_, wn_, z_, rl_ = p[P_ACT_US_WA], p[P_ACT_US_WN], p[P_ACT_US_ZETA], p[P_ACT_US_RATE]
         pg = L.PT_GIMBAL_US
+        gb_ = L.P_US_GIMBAL_BIAS
     if int(p[L.P_ACT_KIND]) == L.ACT_SIMPLEX:
         vo = int(p[L.P_VALVE_OFF])
         ddp = actuator_simplex(x, ACT_P, vo, clip(u[U_DPC], lim), p, sp, xd)
@@ -527,8 +529,9 @@ def derivative(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.nda
     ftx = fty = ftz = 0.0
     mtx = mty = mtz = 0.0
     if thrust > 0.0:
-        # the nozzle turns with the structure's flex rotation at the gimbal (follower thrust)
-        dpe, dye = dp - tgy, dy - tgz
+        # the thrust line is the actuator angle plus the nozzle's null bias (misalignment),
+        # and turns with the structure's flex rotation at the gimbal (follower thrust)
+        dpe, dye = dp + p[gb_] - tgy, dy + p[gb_ + 1] - tgz
         cdp, sdp = np.cos(dpe), np.sin(dpe)
         cdy, sdy = np.cos(dye), np.sin(dye)
         ftx = thrust * cdp * cdy

@@ -1,0 +1,1 @@
+"""Monte Carlo dispersion batches: spec and targets, batch execution, results."""

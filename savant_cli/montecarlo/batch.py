@@ -1,0 +1,287 @@
+"""Fly a batch of dispersed runs: one run (:func:`fly_run`), the per-run journal that
+makes a batch resumable, and the process pool.
+
+Journal. Each finished run is one small ``.npz`` file in ``<out>/runs/``, written to a
+temporary name and renamed (atomic), by the main process only (the one writer). A
+killed batch loses at most the runs in flight; restarting into the same folder skips the
+runs already there, after checking that the folder's ``runs/manifest.json`` was written
+for the same configuration (:func:`fingerprint`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import multiprocessing as mp
+import os
+import secrets
+import sys
+import time
+import traceback
+from collections.abc import Callable, Iterable
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from savant_cli.config import LinearStudyConfig, SavantConfig
+from savant_cli.errors import ConfigError
+from savant_cli.montecarlo.spec import DispersionSet
+from savant_cli.montecarlo.targets import apply_samples, build_dispersed
+from savant_cli.sim.build import SimModel
+from savant_cli.sim.engine import EVENT_NAMES
+from savant_cli.sim.run import simulate, signals
+from savant_cli.sim.summary import summarize
+
+#: summary keys that vary from machine to machine, kept out of the run tables
+WALL_KEYS = ("sim_wall_time_s", "realtime_factor", "process_wall_time_s")
+AXIS_CODES = ("pitch", "yaw")
+KIND_CODES = ("gain", "phase")
+BAND_CODES = ("rigid/aero", "slosh", "flex")
+
+
+@dataclass
+class Case:
+    """Everything a worker needs to fly any run of the batch (picklable)."""
+
+    cfg: SavantConfig
+    vehicle: Any
+    guidance: Any
+    dispersions: DispersionSet
+    history_signals: list[str]
+    history_time: np.ndarray
+    linear_times: list[float]
+    staging: Callable | None = None
+
+
+@dataclass
+class RunOutcome:
+    """What one run leaves in the journal."""
+
+    run: int
+    status: str  # complete | diverged | failed (an exception) | invalid (a sample the config refuses)
+    message: str
+    t_final: float
+    wall_s: float
+    values: np.ndarray  # per dispersion, as numbers (see DispersionSet.numbers)
+    summary_keys: list[str] = field(default_factory=list)
+    summary: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    events: np.ndarray = field(default_factory=lambda: np.full(len(EVENT_NAMES), np.nan))
+    histories: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), np.float32))
+    margins: np.ndarray = field(default_factory=lambda: np.zeros((0, 6)))  # time, axis, kind, band, value, f_hz
+
+
+def history_columns(sig: dict, names: list[str]) -> list[tuple[str, str, int | None]]:
+    """``(output name, signal, column)`` of each requested history; a vector signal
+    gives one history per column, ``<signal>_<column>``."""
+    out = []
+    for name in names:
+        s = sig[name]
+        if s.data.ndim == 1:
+            out.append((name, name, None))
+        else:
+            out.extend((f"{name}_{c}", name, j) for j, c in enumerate(s.columns))
+    return out
+
+
+def _decimate(sig: dict, names: list[str], grid: np.ndarray) -> np.ndarray:
+    t = sig["time"].data
+    cols = history_columns(sig, names)
+    out = np.full((len(cols), grid.size), np.nan, dtype=np.float32)
+    if t.size:
+        inside = grid <= t[-1]
+        for i, (_, name, j) in enumerate(cols):
+            data = sig[name].data if j is None else sig[name].data[:, j]
+            out[i, inside] = np.interp(grid[inside], t, data)
+    return out
+
+
+def _margins(case: Case, model: SimModel, result) -> np.ndarray:
+    from savant_cli.studies.linear import analyse
+
+    rows = []
+    dt_fcs = model.rates.dt * model.rates.n_fcs
+    lin_cfg = LinearStudyConfig(times=list(case.linear_times))
+    for k, snap in sorted(result.snapshots.items()):
+        if any(abs(snap.t - te) < lin_cfg.event_clearance_s for te in result.events if te == te):
+            continue  # on this run's event: no frozen-time point there
+        _, margin_rows, _ = analyse(model, snap, lin_cfg, dt_fcs)
+        rows += [(r.time_s, AXIS_CODES.index(r.axis), KIND_CODES.index(r.kind), BAND_CODES.index(r.band), r.value,
+                  r.frequency_hz) for r in margin_rows]
+    return np.array(rows, dtype=float).reshape(-1, 6)
+
+
+def fly_run(case: Case, run: int, keep: bool = False):
+    """Fly run ``run``; the :class:`RunOutcome`, plus ``(model, result, signals)`` with
+    ``keep`` (for ``savant rerun``). Never raises for a failing run: the error is the
+    outcome's status and message."""
+    import warnings
+
+    t0 = time.perf_counter()
+    samples = case.dispersions.sample(run)
+    values = case.dispersions.numbers(run, samples)
+    extra = None
+    try:
+        applied = apply_samples(case.cfg, case.vehicle, case.dispersions.triples(samples),
+                                case.dispersions.group_sections)
+        model = build_dispersed(applied, case.guidance, case.staging)
+        rt = model.rates
+        steps = tuple(int(round(t / (rt.dt * rt.n_fcs))) * rt.n_fcs for t in case.linear_times)
+        result = simulate(model, progress=False, snapshot_steps=steps)
+        sig = signals(result, model)
+        summ = summarize(result, sig)
+        keys = [k for k, v in summ.items() if isinstance(v, (int, float)) and not isinstance(v, bool)
+                and k not in WALL_KEYS]
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            margins = _margins(case, model, result) if case.linear_times else np.zeros((0, 6))
+        outcome = RunOutcome(run, result.status, result.message, float(result.t_final), 0.0, values, keys,
+                             np.array([float(summ[k]) for k in keys]), np.asarray(result.events, float),
+                             _decimate(sig, case.history_signals, case.history_time), margins)
+        if keep:
+            extra = (model, result, sig, summ)
+    except ConfigError as exc:
+        outcome = RunOutcome(run, "invalid", str(exc), float("nan"), 0.0, values)
+    except Exception as exc:  # noqa: BLE001 - a failing run is recorded, the batch goes on
+        last = traceback.extract_tb(exc.__traceback__)[-1]
+        outcome = RunOutcome(run, "failed", f"{type(exc).__name__}: {exc} ({Path(last.filename).name}:{last.lineno})",
+                             float("nan"), 0.0, values)
+    outcome.wall_s = time.perf_counter() - t0
+    return (outcome, extra) if keep else outcome
+
+
+# --------------------------------------------------------------------------- journal
+
+
+def fingerprint(cfg: SavantConfig) -> str:
+    """Hash of everything that decides the runs' results (not the worker count, the
+    sharding, the progress bar or the outputs)."""
+    d = dataclasses.asdict(cfg)
+    for k in ("workers", "shard", "shards"):
+        d["study"].pop(k, None)
+    d.pop("output", None)
+    d["sim"].pop("progress", None)
+    d["sim"].pop("chunk_s", None)
+    return hashlib.sha256(json.dumps(d, sort_keys=True, default=str).encode()).hexdigest()
+
+
+class Journal:
+    """The ``runs/`` folder of a batch: one ``run_NNNNNN.npz`` per finished run."""
+
+    def __init__(self, folder: Path, cfg: SavantConfig, names: list[str]) -> None:
+        self.folder = folder
+        folder.mkdir(parents=True, exist_ok=True)
+        manifest = {"fingerprint": fingerprint(cfg), "n_runs": cfg.study.n_runs, "dispersions": names}
+        path = folder / "manifest.json"
+        if path.is_file():
+            old = json.loads(path.read_text())
+            if old.get("fingerprint") != manifest["fingerprint"]:
+                raise ConfigError("hydra.run.dir", str(folder.parent),
+                                  "holds runs of a different configuration: choose a new output folder "
+                                  "(only study.workers, study.shard(s), sim.progress and output.* may change on resume)")
+        else:
+            tmp = folder / f".manifest.{secrets.token_hex(4)}.tmp"
+            tmp.write_text(json.dumps(manifest, indent=1))
+            os.replace(tmp, path)
+        self.manifest = manifest
+
+    def done(self) -> set[int]:
+        return {int(p.stem[4:]) for p in self.folder.glob("run_*.npz")}
+
+    def write(self, o: RunOutcome) -> None:
+        tmp = self.folder / f".run_{o.run:06d}.{os.getpid()}.tmp.npz"
+        np.savez(tmp, run=o.run, status=o.status, message=o.message, t_final=o.t_final, wall_s=o.wall_s,
+                 values=o.values, summary_keys=np.array(o.summary_keys, dtype=str), summary=o.summary,
+                 events=o.events, histories=o.histories, margins=o.margins)
+        os.replace(tmp, self.folder / f"run_{o.run:06d}.npz")
+
+
+def read_outcome(path: Path) -> RunOutcome:
+    """One journal file."""
+    with np.load(path, allow_pickle=False) as z:
+        return RunOutcome(int(z["run"]), str(z["status"]), str(z["message"]), float(z["t_final"]), float(z["wall_s"]),
+                          z["values"], [str(k) for k in z["summary_keys"]], z["summary"], z["events"],
+                          z["histories"], z["margins"])
+
+
+# ------------------------------------------------------------------------- execution
+
+_CASE: Case | None = None
+
+
+def _init_worker(case: Case) -> None:
+    global _CASE
+    _CASE = case
+
+
+def _fly(run: int) -> RunOutcome:
+    assert _CASE is not None
+    return fly_run(_CASE, run)
+
+
+def _context() -> mp.context.BaseContext:
+    # fork shares the built case and the loaded compiled engine; elsewhere spawn
+    return mp.get_context("fork" if sys.platform.startswith("linux") else "spawn")
+
+
+@dataclass
+class BatchStop:
+    """How the execution ended: ``"done"``, ``"interrupted"`` or ``"worker died"``."""
+
+    reason: str = "done"
+    detail: str = ""
+
+
+def execute(case: Case, todo: Iterable[int], journal: Journal, workers: int,
+            on_done: Callable[[RunOutcome], None]) -> BatchStop:
+    """Fly ``todo`` on ``workers`` processes (1: in this process), journaling each run
+    as it finishes. At most ``2 × workers`` runs are in flight."""
+    todo = list(todo)
+    if workers <= 1:
+        try:
+            for run in todo:
+                o = fly_run(case, run)
+                journal.write(o)
+                on_done(o)
+        except KeyboardInterrupt:
+            return BatchStop("interrupted", "interrupted by the user")
+        return BatchStop()
+    pending: dict[Future, int] = {}
+    queue = iter(todo)
+    stop = BatchStop()
+    pool = ProcessPoolExecutor(max_workers=workers, mp_context=_context(), initializer=_init_worker, initargs=(case,))
+    try:
+        for run in queue:
+            pending[pool.submit(_fly, run)] = run
+            if len(pending) >= 2 * workers:
+                break
+        while pending:
+            finished, _ = wait(pending, return_when=FIRST_COMPLETED)
+            for fut in finished:
+                pending.pop(fut)
+                o = fut.result()
+                journal.write(o)
+                on_done(o)
+                nxt = next(queue, None)
+                if nxt is not None:
+                    pending[pool.submit(_fly, nxt)] = nxt
+    except BrokenProcessPool:
+        stop = BatchStop("worker died", "a worker process died (killed or out of memory); the runs in flight were lost")
+    except KeyboardInterrupt:
+        stop = BatchStop("interrupted", "interrupted by the user")
+    finally:
+        pool.shutdown(wait=stop.reason == "done", cancel_futures=True)
+    return stop
+
+
+def default_workers() -> int:
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+
+
+def shard_runs(n_runs: int, shards: int, shard: int) -> range:
+    """The contiguous block of run numbers of one shard."""
+    return range(shard * n_runs // shards, (shard + 1) * n_runs // shards)

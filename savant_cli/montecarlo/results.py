@@ -1,0 +1,312 @@
+"""From the journal of a batch (one or many shard folders) to the batch's outputs:
+``savant.h5`` (group ``montecarlo``), ``minmax.csv``, ``percentiles.csv``,
+``margin_spread.csv``, ``summary.json``, plots and the console tables.
+
+Runs are streamed file by file into preallocated tables; the decimated histories go
+row by row into HDF5 and are read back one signal at a time for the envelope plots,
+so memory does not grow with the number of runs beyond the scalar tables.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import h5py
+import numpy as np
+from rich.console import Console
+from rich.table import Table
+
+from savant_cli.errors import ConfigError
+from savant_cli.io.atomic import atomic_path, write_json_atomic, write_text_atomic
+from savant_cli.io.console import split_unit
+from savant_cli.montecarlo.batch import AXIS_CODES, BAND_CODES, KIND_CODES, read_outcome
+from savant_cli.sim.engine import EVENT_NAMES
+
+PERCENTILES = (0.135, 50.0, 99.865)  # the ±3σ-equivalent tails of a normal distribution
+
+
+@dataclass
+class Inventory:
+    """The journal files of a batch, by run number."""
+
+    files: dict[int, Path]
+    manifest: dict
+    duplicates: dict[int, list[Path]] = field(default_factory=dict)
+
+    def missing(self, expected: range | list[int]) -> list[int]:
+        return [r for r in expected if r not in self.files]
+
+
+def inventory(run_dirs: list[Path]) -> Inventory:
+    """Index the journal folders (``runs/``) of one batch; every folder must hold the
+    same configuration (manifest fingerprint)."""
+    files: dict[int, Path] = {}
+    dups: dict[int, list[Path]] = {}
+    manifest: dict | None = None
+    for d in run_dirs:
+        m = json.loads((d / "manifest.json").read_text())
+        if manifest is None:
+            manifest = m
+        elif m["fingerprint"] != manifest["fingerprint"]:
+            raise ConfigError("collect", str(d), f"holds runs of a different configuration than {run_dirs[0]}")
+        for p in sorted(d.glob("run_*.npz")):
+            run = int(p.stem[4:])
+            if run in files:
+                dups.setdefault(run, [files[run]]).append(p)
+            else:
+                files[run] = p
+    if manifest is None:
+        raise ConfigError("collect", [str(d) for d in run_dirs], "no batch journal (runs/manifest.json) found")
+    return Inventory(files, manifest, dups)
+
+
+def ranges_text(runs: list[int]) -> str:
+    """``[1, 2, 3, 7]`` → ``"1-3, 7"``."""
+    out, start, prev = [], None, None
+    for r in runs + [None]:
+        if start is not None and (r is None or r != prev + 1):
+            out.append(f"{start}" if start == prev else f"{start}-{prev}")
+            start = None
+        if r is not None and start is None:
+            start = r
+        prev = r
+    return ", ".join(out)
+
+
+@dataclass
+class Tables:
+    """The batch's scalar tables (rows: the runs present, by run number)."""
+
+    runs: np.ndarray
+    status: list[str]
+    message: list[str]
+    t_final: np.ndarray
+    wall_s: np.ndarray
+    values: np.ndarray  # (n, n_dispersions)
+    summary_keys: list[str]
+    summary: np.ndarray  # (n, n_keys)
+    events: np.ndarray  # (n, n_events)
+    margins: np.ndarray  # (m, 7): run, time, axis, kind, band, value, f_hz
+    history_names: list[str]
+
+    @property
+    def ok(self) -> np.ndarray:
+        """Runs with usable results (complete or diverged: a diverged run still flew)."""
+        return np.array([s in ("complete", "diverged") for s in self.status])
+
+
+def _write_tables(h5: h5py.Group, inv: Inventory, runs: list[int], history_names: list[str],
+                  history_time: np.ndarray) -> Tables:
+    n = len(runs)
+    nd = len(inv.manifest["dispersions"])
+    status, message, keys = [], [], []
+    t_final, wall = np.full(n, np.nan), np.full(n, np.nan)
+    values = np.full((n, nd), np.nan)
+    events = np.full((n, len(EVENT_NAMES)), np.nan)
+    summary_cols: dict[str, np.ndarray] = {}
+    margins = []
+    hist = None
+    if history_names:
+        hg = h5.create_group("histories")
+        hg.create_dataset("time", data=history_time)
+        hist = {name: hg.create_dataset(name, shape=(n, history_time.size), dtype="f4", fillvalue=np.nan,
+                                        chunks=(1, history_time.size), compression="gzip", compression_opts=1)
+                for name in history_names}
+    for i, run in enumerate(runs):
+        o = read_outcome(inv.files[run])
+        status.append(o.status)
+        message.append(o.message)
+        t_final[i], wall[i] = o.t_final, o.wall_s
+        values[i, :o.values.size] = o.values
+        events[i] = o.events
+        for k, v in zip(o.summary_keys, o.summary):
+            if k not in summary_cols:
+                keys.append(k)
+                summary_cols[k] = np.full(n, np.nan)
+            summary_cols[k][i] = v
+        if o.margins.size:
+            margins.append(np.column_stack([np.full(len(o.margins), run), o.margins]))
+        if hist is not None and o.histories.size:
+            for j, name in enumerate(history_names):
+                hist[name][i] = o.histories[j]
+    return Tables(np.asarray(runs), status, message, t_final, wall, values, keys,
+                  np.column_stack([summary_cols[k] for k in keys]) if keys else np.zeros((n, 0)), events,
+                  np.vstack(margins) if margins else np.zeros((0, 7)), history_names)
+
+
+def _strings(items: list[str]) -> np.ndarray:
+    return np.array(items, dtype=h5py.string_dtype())
+
+
+def percentile_rows(names: list[str], data: np.ndarray, runs: np.ndarray) -> list[dict[str, Any]]:
+    """Per column: max and its run, min and its run, percentiles, mean, σ, mean ± 3σ
+    (finite values only)."""
+    rows = []
+    for j, name in enumerate(names):
+        col = data[:, j]
+        good = np.isfinite(col)
+        if not good.any():
+            continue
+        v, r = col[good], runs[good]
+        p = np.percentile(v, PERCENTILES)
+        mean, std = float(v.mean()), float(v.std(ddof=1)) if v.size > 1 else 0.0
+        rows.append({"variable": name, "max": float(v.max()), "max_run": int(r[np.argmax(v)]),
+                     "min": float(v.min()), "min_run": int(r[np.argmin(v)]), "p0.135": float(p[0]),
+                     "p50": float(p[1]), "p99.865": float(p[2]), "mean": mean, "std": std,
+                     "mean_minus_3sigma": mean - 3 * std, "mean_plus_3sigma": mean + 3 * std, "n": int(v.size)})
+    return rows
+
+
+def margin_spread(margins: np.ndarray) -> list[dict[str, Any]]:
+    """Per (time, axis, kind, band): the critical crossing of each run (smallest |margin|),
+    then its spread over the runs."""
+    rows = []
+    if not margins.size:
+        return rows
+    keys = np.unique(margins[:, 1:5], axis=0)
+    for t, ax, kd, bd in keys:
+        sel = margins[(margins[:, 1] == t) & (margins[:, 2] == ax) & (margins[:, 3] == kd) & (margins[:, 4] == bd)]
+        crit: dict[int, float] = {}
+        for run, value in zip(sel[:, 0].astype(int), sel[:, 5]):
+            if run not in crit or abs(value) < abs(crit[run]):
+                crit[run] = float(value)
+        runs = np.array(list(crit))
+        vals = np.array(list(crit.values()))
+        p = np.percentile(vals, PERCENTILES)
+        rows.append({"time_s": float(t), "axis": AXIS_CODES[int(ax)], "kind": KIND_CODES[int(kd)],
+                     "band": BAND_CODES[int(bd)], "runs": int(vals.size),
+                     "worst": float(vals[np.argmin(np.abs(vals))]), "worst_run": int(runs[np.argmin(np.abs(vals))]),
+                     "min": float(vals.min()), "min_run": int(runs[np.argmin(vals)]),
+                     "max": float(vals.max()), "max_run": int(runs[np.argmax(vals)]),
+                     "p0.135": float(p[0]), "p50": float(p[1]), "p99.865": float(p[2])})
+    return rows
+
+
+def _csv(path: Path, rows: list[dict[str, Any]]) -> None:
+    buf = io.StringIO()
+    if rows:
+        w = csv.DictWriter(buf, fieldnames=list(rows[0]), lineterminator="\n")
+        w.writeheader()
+        for r in rows:
+            w.writerow({k: (f"{v:.10g}" if isinstance(v, float) else v) for k, v in r.items()})
+    write_text_atomic(path, buf.getvalue())
+
+
+def write_outputs(out_dir: Path, inv: Inventory, expected: list[int], dispersions: list[dict[str, Any]],
+                  config_yaml: str, provenance: dict[str, str], history_names: list[str],
+                  history_time: np.ndarray, requirements: dict[str, tuple[float, float]] | None,
+                  plots: bool, console: Console | None = None) -> dict[str, Any]:
+    """Write every batch output into ``out_dir``; returns the ``summary.json`` content."""
+    runs = sorted(r for r in expected if r in inv.files)
+    missing = inv.missing(expected)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    with atomic_path(out_dir / "savant.h5") as tmp, h5py.File(tmp, "w") as f:
+        g = f.create_group("montecarlo")
+        g.attrs.update({"n_runs_expected": len(expected), "n_runs_present": len(runs), "seed": inv.manifest.get("seed", -1),
+                        "config_yaml": config_yaml, "percentiles": PERCENTILES,
+                        "missing_runs": ranges_text(missing)})
+        for k, v in provenance.items():
+            g.attrs[f"provenance_{k}"] = str(v)
+        tb = _write_tables(g, inv, runs, history_names, history_time)
+        rg = g.create_group("runs")
+        rg.create_dataset("run", data=tb.runs)
+        rg.create_dataset("status", data=_strings(tb.status))
+        rg.create_dataset("message", data=_strings(tb.message))
+        rg.create_dataset("t_final_s", data=tb.t_final)
+        rg.create_dataset("wall_time_s", data=tb.wall_s)
+        eg = g.create_group("events")
+        for j, name in enumerate(EVENT_NAMES):
+            eg.create_dataset(f"{name}_s", data=tb.events[:, j])
+        dg = g.create_group("dispersions")
+        for j, d in enumerate(dispersions):
+            ds = dg.create_dataset(d["name"], data=tb.values[:, j])
+            ds.attrs.update({k: json.dumps(v) if isinstance(v, (list, tuple)) else v for k, v in d.items() if k != "name"})
+        sg = g.create_group("summary")
+        for j, k in enumerate(tb.summary_keys):
+            sg.create_dataset(k, data=tb.summary[:, j])
+        mg = g.create_group("margins")
+        for j, col in enumerate(("run", "time_s", "axis", "kind", "band", "value", "frequency_hz")):
+            data = tb.margins[:, j]
+            if col in ("axis", "kind", "band"):
+                codes = {"axis": AXIS_CODES, "kind": KIND_CODES, "band": BAND_CODES}[col]
+                mg.create_dataset(col, data=_strings([codes[int(c)] for c in data]))
+            else:
+                mg.create_dataset(col, data=data.astype(int) if col == "run" else data)
+    ok = tb.ok
+    stats = percentile_rows(tb.summary_keys, tb.summary[ok], tb.runs[ok])
+    disp_stats = percentile_rows([d["name"] for d in dispersions], tb.values[tb.runs > 0], tb.runs[tb.runs > 0])
+    spread = margin_spread(tb.margins)
+    _csv(out_dir / "minmax.csv", [{k: r[k] for k in ("variable", "max", "max_run", "min", "min_run")} for r in stats])
+    _csv(out_dir / "percentiles.csv", stats)
+    _csv(out_dir / "dispersion_statistics.csv", disp_stats)
+    if spread:
+        _csv(out_dir / "margin_spread.csv", spread)
+    failures = [{"run": int(r), "status": s, "message": m, "t_final_s": t}
+                for r, s, m, t in zip(tb.runs, tb.status, tb.message, tb.t_final) if s != "complete"]
+    counts = {s: tb.status.count(s) for s in sorted(set(tb.status))}
+    summary = {"study": "montecarlo", "n_runs_expected": len(expected), "n_runs_present": len(runs),
+               "missing_runs": ranges_text(missing), "status_counts": counts, "failures": failures,
+               "statistics": stats, "dispersion_statistics": disp_stats, "margin_spread": spread}
+    write_json_atomic(out_dir / "summary.json", summary)
+    if plots:
+        _plots(out_dir, tb, dispersions, requirements)
+    if console is not None:
+        print_tables(console, stats, spread, counts, missing)
+    return summary
+
+
+def _plots(out_dir: Path, tb: Tables, dispersions: list[dict[str, Any]],
+           requirements: dict[str, tuple[float, float]] | None) -> None:
+    from savant_cli.plots import montecarlo as mcp
+
+    folder = out_dir / "plots"
+    ok = tb.ok
+    nominal_row = np.nonzero(tb.runs == 0)[0]
+    values = {k: tb.summary[ok, j] for j, k in enumerate(tb.summary_keys)}
+    units = {k: split_unit(k)[1] for k in tb.summary_keys}
+    nominal = {k: float(tb.summary[nominal_row[0], j]) for j, k in enumerate(tb.summary_keys)} if nominal_row.size else None
+    mcp.plot_histograms(values, folder, units=units, nominal=nominal)
+    disp = {d["name"]: tb.values[tb.runs > 0, j] for j, d in enumerate(dispersions)}
+    if disp:
+        mcp.plot_histograms(disp, folder / "dispersions", units={d["name"]: d.get("units", "") for d in dispersions})
+    if tb.history_names:
+        with h5py.File(out_dir / "savant.h5", "r") as f:
+            hg = f["montecarlo/histories"]
+            t = hg["time"][()]
+            for name in tb.history_names:  # one signal in memory at a time
+                mcp.plot_envelopes(t, {name: hg[name][()]}, folder, units=None)
+    if tb.margins.size:
+        m = tb.margins
+        table = {"run": m[:, 0].astype(int), "time_s": m[:, 1],
+                 "axis": np.array([AXIS_CODES[int(c)] for c in m[:, 2]]),
+                 "kind": np.array([KIND_CODES[int(c)] for c in m[:, 3]]),
+                 "band": np.array([BAND_CODES[int(c)] for c in m[:, 4]]), "value": m[:, 5], "frequency_hz": m[:, 6]}
+        mcp.plot_margin_spread(table, folder / "margin_spread.png", requirements=requirements)
+
+
+def print_tables(console: Console, stats: list[dict], spread: list[dict], counts: dict[str, int],
+                 missing: list[int]) -> None:
+    """The min/max table (and the margin spread) on the console."""
+    tb = Table(title="Monte Carlo: extremes over the runs (run number in brackets)")
+    for col in ("variable", "max", "min", "p0.135", "p50", "p99.865"):
+        tb.add_column(col, justify="left" if col == "variable" else "right")
+    for r in stats:
+        tb.add_row(r["variable"], f"{r['max']:.6g} [{r['max_run']}]", f"{r['min']:.6g} [{r['min_run']}]",
+                   f"{r['p0.135']:.6g}", f"{r['p50']:.6g}", f"{r['p99.865']:.6g}")
+    console.print(tb)
+    if spread:
+        ms = Table(title="margin spread (critical crossing per run; gain dB, phase deg)")
+        for col in ("t (s)", "axis", "kind", "band", "runs", "worst [run]", "p0.135", "p50", "p99.865"):
+            ms.add_column(col)
+        for r in spread:
+            ms.add_row(f"{r['time_s']:.1f}", r["axis"], r["kind"], r["band"], str(r["runs"]),
+                       f"{r['worst']:.2f} [{r['worst_run']}]", f"{r['p0.135']:.2f}", f"{r['p50']:.2f}",
+                       f"{r['p99.865']:.2f}")
+        console.print(ms)
+    console.print("runs: " + ", ".join(f"{k} {v}" for k, v in counts.items())
+                  + (f"; missing {ranges_text(missing)}" if missing else ""))

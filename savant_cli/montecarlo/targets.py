@@ -1,0 +1,287 @@
+"""What a dispersion acts on, and how one run's samples become its config, vehicle and
+numeric model.
+
+Four kinds of target (``study.dispersions.<name>.target``):
+
+``config``
+    Any numeric leaf of the validated config, list elements by index:
+    ``winds.scale``, ``flex.frequency_scale``, ``actuator.first_stage.natural_frequency_hz``,
+    ``sensors.misalignment_deg.imu[1]``. Applied to a copy of the typed config, which is
+    then checked like any config (a sample outside the allowed range fails that run with
+    the usual message).
+``vehicle``
+    A numeric attribute of the loaded vehicle (``vehicle.upper_stage.isp_vac_s``,
+    ``vehicle.first_stage.engine.inertia_about_gimbal_kgm2``), in the vehicle's SI units.
+``tables``
+    A vehicle-table quantity, see :data:`TABLE_TARGETS`.
+``group``
+    A config group whose option is drawn: ``winds`` (``dist: choice`` of option names).
+
+The model of a run is built by :func:`savant_cli.sim.build.build_model` from the
+dispersed config and vehicle (so every derived quantity, such as the separation time
+of a faster-burning motor, follows); aerodynamic scales are applied to its tables.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import re
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from omegaconf import OmegaConf
+
+from savant_cli.config import SavantConfig, WindsConfig, _check_physics
+from savant_cli.errors import ConfigError
+from savant_cli.sim.build import SimModel, build_model
+from savant_cli.vehicle import AERO_COEFFS, Vehicle
+
+KINDS = ("config", "vehicle", "tables", "group")
+UPPER_CONFIGS = ("upper_les", "upper")
+
+#: Vehicle-table targets: name → (units of the sample, allowed ``apply``, what it does).
+TABLE_TARGETS: dict[str, tuple[str, tuple[str, ...], str]] = {
+    "tables.first_stage.thrust": ("1", ("scale",), "vacuum thrust trace × k; mass flow follows at the same Isp"),
+    "tables.first_stage.burn_rate": ("1", ("scale",), "thrust × k on a time axis ÷ k: same impulse, burn time ÷ k"),
+    "tables.first_stage.dry_mass": ("kg", ("offset",), "mass added at the CG of the stack configuration"),
+    "tables.upper_stage.dry_mass": ("kg", ("offset",), "mass added at the CG of every configuration"),
+    **{f"tables.{c}.cg_{ax}": ("m", ("offset",), f"CG shift along structure {ax} ({c})")
+       for c in ("stack", "upper") for ax in "xyz"},
+    **{f"tables.{c}.inertia": ("1", ("scale",), f"all inertia components × k ({c})") for c in ("stack", "upper")},
+    **{f"tables.aero.{k}": ("1", ("scale",), f"aerodynamic coefficient {k} × k, every configuration")
+       for k in AERO_COEFFS},
+}
+GROUP_TARGETS = ("winds",)
+
+_PATH_RE = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*)((?:\[\d+\])*)$")
+
+
+@dataclass(frozen=True)
+class Target:
+    """A resolved dispersion target.
+
+    Attributes
+    ----------
+    key : str
+        As written in the spec.
+    kind : str
+        ``config``, ``vehicle``, ``tables`` or ``group``.
+    path : tuple
+        Attribute names and list indices from the root (config and vehicle targets).
+    nominal : float or None
+        The nominal value (config and vehicle targets).
+    units : str
+        Units of the nominal and of ``value``/``offset`` samples.
+    integer : bool
+        The target holds an integer (only ``apply: value`` makes sense).
+    choices : tuple
+        Option names of a group target.
+    """
+
+    key: str
+    kind: str
+    path: tuple = ()
+    nominal: float | None = None
+    units: str = ""
+    integer: bool = False
+    choices: tuple = ()
+
+
+def parse_path(key: str, text: str) -> tuple:
+    """``a.b[2].c`` → ``("a", "b", 2, "c")``; a ConfigError naming ``key`` otherwise."""
+    out: list = []
+    for part in text.split("."):
+        m = _PATH_RE.match(part)
+        if not m:
+            raise ConfigError(key, text, "must be a dotted path such as winds.scale or sensors.misalignment_deg.imu[1]")
+        out.append(m.group(1))
+        out.extend(int(i) for i in re.findall(r"\[(\d+)\]", m.group(2)))
+    return tuple(out)
+
+
+def _get(obj: Any, element: Any) -> Any:
+    if isinstance(element, int):
+        return obj[element]
+    if isinstance(obj, dict):
+        return obj[element]
+    if dataclasses.is_dataclass(obj):
+        if element not in {f.name for f in dataclasses.fields(obj)}:
+            raise KeyError(element)
+        return getattr(obj, element)
+    raise KeyError(element)
+
+
+def _walk(root: Any, path: tuple) -> Any:
+    obj = root
+    for element in path:
+        obj = _get(obj, element)
+    return obj
+
+
+def _units(name: str) -> str:
+    for suffix, unit in (("_deg", "deg"), ("_hz", "Hz"), ("_kg", "kg"), ("_m", "m"), ("_s", "s"), ("_N", "N"),
+                         ("_rad_s", "rad/s"), ("_kgm2", "kg m²")):
+        if name.endswith(suffix):
+            return unit
+    return "1"
+
+
+def resolve(key: str, text: str, cfg: SavantConfig, vehicle: Vehicle, search_dirs: list[Path]) -> Target:
+    """The target named ``text`` (``key``: the spec key named in errors)."""
+    if text in TABLE_TARGETS:
+        return Target(text, "tables", units=TABLE_TARGETS[text][0])
+    if text.startswith("tables."):
+        raise ConfigError(key, text, "unknown table target; known: " + ", ".join(TABLE_TARGETS))
+    if text in GROUP_TARGETS:
+        return Target(text, "group", choices=tuple(_group_options(text, search_dirs)))
+    path = parse_path(key, text)
+    kind, root, shown = ("vehicle", vehicle, path[1:]) if path[0] == "vehicle" else ("config", cfg, path)
+    try:
+        value = _walk(root, shown)
+    except (KeyError, IndexError, TypeError):
+        where = "the loaded vehicle's attributes (see savant_cli/vehicle.py)" if kind == "vehicle" else \
+            "the config (see `savant run --cfg job`)"
+        raise ConfigError(key, text, f"unknown target: no such key in {where}, and not a tables.* or group target") from None
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise ConfigError(key, text, f"must name a number, not {type(value).__name__} ({value!r})")
+    name = next((e for e in reversed(path) if isinstance(e, str)), "")
+    return Target(text, kind, tuple(shown), float(value), _units(name), integer=isinstance(value, (int, np.integer)))
+
+
+def _group_options(group: str, search_dirs: list[Path]) -> list[str]:
+    names: list[str] = []
+    for d in search_dirs:
+        for f in sorted((d / group).glob("*.yaml")):
+            if f.stem not in names:
+                names.append(f.stem)
+    return names
+
+
+def load_group_option(group: str, name: str, search_dirs: list[Path]) -> Any:
+    """A config group option as its typed section (``winds`` → WindsConfig)."""
+    for d in search_dirs:
+        f = d / group / f"{name}.yaml"
+        if f.is_file():
+            merged = OmegaConf.merge(OmegaConf.structured(WindsConfig), OmegaConf.load(f))
+            return OmegaConf.to_object(merged)
+    raise ConfigError(group, name, "no such option")
+
+
+# ------------------------------------------------------------------------ application
+
+
+def combine(apply: str, nominal: float, sample: float) -> float:
+    """The dispersed value of a numeric target."""
+    if apply == "scale":
+        return nominal * sample
+    if apply == "offset":
+        return nominal + sample
+    return sample
+
+
+def _set(obj: Any, path: tuple, value: Any) -> None:
+    """Set a leaf of a mutable (deep-copied) typed config."""
+    parent = _walk(obj, path[:-1])
+    last = path[-1]
+    if isinstance(last, int) or isinstance(parent, dict):
+        parent[last] = value
+    else:
+        setattr(parent, last, value)
+
+
+def _replace(obj: Any, path: tuple, value: Any) -> Any:
+    """A copy of a frozen dataclass tree with one leaf replaced."""
+    head, rest = path[0], path[1:]
+    if isinstance(head, int):
+        arr = np.array(obj, dtype=float, copy=True)
+        arr[head] = value if not rest else _replace(arr[head], rest, value)
+        return arr
+    if isinstance(obj, dict):
+        return {**obj, head: value if not rest else _replace(obj[head], rest, value)}
+    return dataclasses.replace(obj, **{head: value if not rest else _replace(getattr(obj, head), rest, value)})
+
+
+def _mass(vehicle: Vehicle, configs: tuple[str, ...], change) -> Vehicle:
+    confs = dict(vehicle.configurations)
+    for c in configs:
+        confs[c] = dataclasses.replace(confs[c], mass=change(confs[c].mass))
+    return dataclasses.replace(vehicle, configurations=confs)
+
+
+def _apply_table(vehicle: Vehicle, name: str, v: float) -> Vehicle:
+    """Vehicle-table dispersions applied before the build (aero is applied after)."""
+    fs = vehicle.first_stage
+    if name == "tables.first_stage.thrust":
+        return dataclasses.replace(vehicle, first_stage=dataclasses.replace(fs, thrust_vac_N=fs.thrust_vac_N * v))
+    if name == "tables.first_stage.burn_rate":
+        if not v > 0.0:
+            raise ConfigError(name, v, "burn-rate factor must be positive")
+        return dataclasses.replace(vehicle, first_stage=dataclasses.replace(
+            fs, thrust_time_s=fs.thrust_time_s / v, thrust_vac_N=fs.thrust_vac_N * v))
+    if name.endswith("dry_mass"):
+        configs = ("stack",) if ".first_stage." in name else ("stack", *UPPER_CONFIGS)
+        return _mass(vehicle, configs, lambda m: dataclasses.replace(m, mass_kg=m.mass_kg + v))
+    config = name.split(".")[1]
+    configs = (config,) if config == "stack" else UPPER_CONFIGS
+    if name.endswith("inertia"):
+        if not v > 0.0:
+            raise ConfigError(name, v, "inertia factor must be positive")
+        return _mass(vehicle, configs, lambda m: dataclasses.replace(m, inertia_kgm2=m.inertia_kgm2 * v))
+    axis = "xyz".index(name[-1])
+
+    def shift(m):
+        cg = m.cg_m.copy()
+        cg[:, axis] += v
+        return dataclasses.replace(m, cg_m=cg)
+
+    return _mass(vehicle, configs, shift)
+
+
+@dataclass
+class Applied:
+    """One run's dispersed inputs (what :func:`build_dispersed` flies)."""
+
+    cfg: SavantConfig
+    vehicle: Vehicle
+    aero_scale: np.ndarray  # per coefficient (CA, CY, CN, Cl, Cm, Cn)
+
+
+def apply_samples(cfg: SavantConfig, vehicle: Vehicle, items: list[tuple[Target, str, Any]],
+                  groups: dict[str, Any]) -> Applied:
+    """Apply ``(target, apply, sample)`` triples to copies of ``cfg`` and ``vehicle``.
+
+    ``groups`` maps a group target's option name to its loaded typed section."""
+    cfg = copy.deepcopy(cfg)
+    aero = np.ones(len(AERO_COEFFS))
+    for target, apply, sample in items:
+        if target.kind == "group":
+            setattr(cfg, target.key, copy.deepcopy(groups[sample]))
+    for target, apply, sample in items:
+        if target.kind == "config":
+            value = combine(apply, target.nominal, float(sample))
+            _set(cfg, target.path, int(round(value)) if target.integer else value)
+        elif target.kind == "vehicle":
+            value = combine(apply, target.nominal, float(sample))
+            vehicle = _replace(vehicle, target.path, int(round(value)) if target.integer else value)
+        elif target.kind == "tables":
+            if target.key.startswith("tables.aero."):
+                aero[AERO_COEFFS.index(target.key.rsplit(".", 1)[1])] *= float(sample)
+            else:
+                vehicle = _apply_table(vehicle, target.key, float(sample))
+    _check_physics(cfg)
+    return Applied(cfg, vehicle, aero)
+
+
+def build_dispersed(applied: Applied, guidance, staging=None) -> SimModel:
+    """The numeric model of one run (``staging``: a callable starting it from a stored
+    staging state, for ``phase=upper_stage`` batches)."""
+    model = build_model(applied.cfg, applied.vehicle, guidance)
+    if np.any(applied.aero_scale != 1.0):
+        coef = model.tables.aero_coef * applied.aero_scale[None, :, None, None, None]
+        model.tables = model.tables._replace(aero_coef=np.ascontiguousarray(coef))
+    if staging is not None:
+        staging(model, applied.cfg)
+    return model

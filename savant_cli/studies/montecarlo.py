@@ -1,0 +1,211 @@
+"""``study=montecarlo``: dispersed ascents, reproducible, resumable, shardable.
+
+``savant run study=montecarlo`` flies runs 0 … n−1 (run 0 the nominal) of the configured
+vehicle with the dispersions of ``study.dispersions`` (docs/montecarlo.md), on
+``study.workers`` processes, journaling each finished run in ``<out>/runs/``. Restarting
+the same command into the same folder (``hydra.run.dir=…``) skips the runs already
+there. With ``study.shards``/``study.shard`` one job flies one block of run numbers;
+``savant collect DIR`` merges the shards. ``savant rerun DIR run=N`` flies one run again
+with its whole time history.
+"""
+
+from __future__ import annotations
+
+import copy
+import time
+from functools import partial
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from omegaconf import DictConfig, OmegaConf
+from rich.console import Console
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+
+from savant_cli.config import MonteCarloStudyConfig, SavantConfig, validate
+from savant_cli.errors import ConfigError
+from savant_cli.io.guidance_file import read_guidance
+from savant_cli.io.provenance import collect_provenance
+from savant_cli.montecarlo.batch import (Case, Journal, RunOutcome, default_workers, execute, fly_run,
+                                         history_columns, read_outcome, shard_runs)
+from savant_cli.montecarlo.results import inventory, ranges_text, write_outputs
+from savant_cli.montecarlo.spec import DispersionSet, parse
+from savant_cli.montecarlo.targets import TABLE_TARGETS
+from savant_cli.paths import hydra_search_dirs, resolve_data_path
+from savant_cli.sim import engine as E
+from savant_cli.sim.run import signals, simulate
+from savant_cli.sim.setup import prepare, start_from_staging
+
+
+def _history_names(model, requested: list[str]) -> list[str]:
+    """Check the requested history signals on a 0.1 s flight; their column names."""
+    probe = copy.copy(model)
+    probe.sched = model.sched.copy()
+    probe.sched[E.S_T_MAX] = model.k0 * model.rates.dt + 0.1
+    sig = signals(simulate(probe, progress=False), probe)
+    for i, name in enumerate(requested):
+        if name not in sig or name == "time":
+            raise ConfigError(f"study.histories.signals[{i}]", name,
+                              "unknown signal; known: " + ", ".join(k for k in sig if k != "time"))
+    return [c[0] for c in history_columns(sig, requested)]
+
+
+def make_case(cfg: SavantConfig, search_dirs: list[Path] | None = None) -> tuple[Case, list[str]]:
+    """Load the vehicle and guidance once and check the whole spec (nothing flies but a
+    0.1 s probe); the case and the history column names."""
+    study: MonteCarloStudyConfig = cfg.study
+    dirs = search_dirs or hydra_search_dirs()
+    prep = prepare(cfg, dirs)
+    dset = parse(study, cfg, prep.vehicle, dirs)
+    staging = None
+    if cfg.phase.start == "staging":
+        staging = partial(start_from_staging, path=resolve_data_path("phase.staging_state_file", "phase",
+                                                                    cfg.phase.staging_state_file, dirs))
+    names = _history_names(prep.model, list(study.histories.signals))
+    grid = np.arange(0.0, cfg.sim.max_time_s + 1e-9, 1.0 / study.histories.rate_hz)
+    case = Case(cfg=cfg, vehicle=prep.vehicle, guidance=read_guidance(prep.command_file), dispersions=dset,
+                history_signals=list(study.histories.signals), history_time=grid,
+                linear_times=sorted(study.linear_times), staging=staging)
+    return case, names
+
+
+def dispersion_table(dset: DispersionSet) -> list[dict[str, Any]]:
+    """Name, target, apply, distribution and units of each dispersion (HDF5 attributes)."""
+    rows = []
+    for d in dset.items:
+        units = TABLE_TARGETS[d.target.key][0] if d.target.kind == "tables" else d.target.units
+        row = {"name": d.name, "target": d.target.key, "apply": d.apply, "dist": d.dist,
+               "units": "1" if d.apply == "scale" else units, "source": d.source}
+        if d.target.kind == "group":
+            row["choices"] = list(d.values) or [d.constant]  # the recorded number is the index
+        rows.append(row)
+    return rows
+
+
+def _requirements(study: MonteCarloStudyConfig) -> dict[str, tuple[float, float]]:
+    r = study.requirements
+    return {"rigid/aero": (r.rigid_aero.gain_dB, r.rigid_aero.phase_deg), "slosh": (r.slosh.gain_dB, r.slosh.phase_deg),
+            "flex": (r.flex.gain_dB, r.flex.phase_deg)}
+
+
+def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
+    """Fly this job's runs (resuming), then write the batch outputs into ``out_dir``."""
+    study: MonteCarloStudyConfig = cfg.study
+    console = Console()
+    t0 = time.perf_counter()
+    case, names = make_case(cfg)
+    journal = Journal(out_dir / "runs", cfg, case.dispersions.names)
+    mine = shard_runs(study.n_runs, study.shards, study.shard)
+    done = journal.done()
+    todo = [r for r in mine if r not in done]
+    workers = min(study.workers or default_workers(), max(len(todo), 1))
+    if done & set(mine):
+        console.print(f"resuming: {len(done & set(mine))} of {len(mine)} runs already in {journal.folder}")
+    failures = [0]
+    bar = Progress(TextColumn("[bold]monte carlo"), BarColumn(), MofNCompleteColumn(),
+                   TextColumn("failed {task.fields[failed]}"), TimeElapsedColumn(), TextColumn("eta"),
+                   TimeRemainingColumn(), disable=not cfg.sim.progress)
+
+    def on_done(o: RunOutcome) -> None:
+        if o.status != "complete":
+            failures[0] += 1
+        bar.update(task, advance=1, failed=failures[0])
+
+    with bar:
+        task = bar.add_task("runs", total=len(todo), failed=0)
+        stop = execute(case, todo, journal, workers, on_done)
+    summary = write_outputs(out_dir, inventory([journal.folder]), list(mine), dispersion_table(case.dispersions),
+                            OmegaConf.to_yaml(raw_cfg, resolve=True), collect_provenance(),
+                            names, case.history_time, _requirements(study), cfg.output.plots, console)
+    console.print(f"{len(todo)} runs flown on {workers} worker(s) in {time.perf_counter() - t0:.1f} s; "
+                  f"outputs: {out_dir}")
+    if stop.reason != "done":
+        console.print(f"[bold red]batch stopped[/]: {stop.detail}; run the same command with "
+                      f"hydra.run.dir={out_dir} to resume")
+        return 1
+    return 0 if not summary["missing_runs"] else 1
+
+
+# ---------------------------------------------------------------- rerun and collect
+
+
+def _load_config(run_dir: Path) -> tuple[SavantConfig, DictConfig]:
+    """The validated config of a batch folder (or of the first shard of a multirun folder)."""
+    path = run_dir / ".hydra" / "config.yaml"
+    if not path.is_file():
+        path = next(iter(sorted(run_dir.glob("*/.hydra/config.yaml"))), path)
+    if not path.is_file():
+        raise ConfigError("RUN_DIR", str(run_dir), "is not a savant run folder (no .hydra/config.yaml)")
+    raw = OmegaConf.load(path)
+    cfg = validate(raw)
+    if cfg.study.name != "montecarlo":
+        raise ConfigError("RUN_DIR", str(run_dir), f"holds a study={cfg.study.name} run, not a Monte Carlo batch")
+    return cfg, raw
+
+
+def rerun(run_dir: Path, run_number: int, console: Console | None = None) -> int:
+    """Fly run ``run_number`` of the batch in ``run_dir`` again with its whole time
+    history; write it like a nominal run into ``run_dir/rerun_<N>/`` and check it
+    against the batch's record of that run."""
+    from savant_cli.io.atomic import write_json_atomic
+    from savant_cli.io.hdf5 import write_run
+    from savant_cli.io.record import RunRecord
+    from savant_cli.sim.engine import EVENT_NAMES
+
+    console = console or Console()
+    cfg, raw = _load_config(run_dir)
+    if not 0 <= run_number < cfg.study.n_runs:
+        raise ConfigError("run", run_number, f"must be a run number of the batch, 0 to {cfg.study.n_runs - 1}")
+    case, _ = make_case(cfg)
+    outcome, extra = fly_run(case, run_number, keep=True)
+    out = run_dir / f"rerun_{run_number:06d}"
+    out.mkdir(parents=True, exist_ok=True)
+    if extra is None:
+        console.print(f"[bold red]run {run_number} {outcome.status}[/]: {outcome.message}")
+        return 1
+    model, result, sig, summ = extra
+    summ["dispersions"] = dict(zip(case.dispersions.names, outcome.values.tolist()))
+    record = RunRecord(signals=sig, events=[(n, float(t)) for n, t in zip(EVENT_NAMES, result.events) if t == t],
+                       summary={k: v for k, v in summ.items() if not isinstance(v, dict)},
+                       config_yaml=OmegaConf.to_yaml(raw, resolve=True), provenance=collect_provenance(),
+                       complete=result.status == "complete", status=result.status, message=result.message)
+    write_run(out / "savant.h5", record)
+    write_json_atomic(out / "summary.json", summ)
+    if cfg.output.plots:
+        from savant_cli.plots.ascent import plot_ascent
+
+        plot_ascent(record, out / "plots")
+    stored = next(iter(sorted(run_dir.rglob(f"runs/run_{run_number:06d}.npz"))), None)
+    if stored is not None:
+        ref = read_outcome(stored)
+        same = ref.summary_keys == outcome.summary_keys and np.array_equal(ref.summary, outcome.summary) \
+            and np.array_equal(ref.values, outcome.values, equal_nan=True)
+        console.print(f"run {run_number}: {'identical to' if same else '[bold red]DIFFERENT from[/]'} the batch record")
+        if not same:
+            return 1
+    console.print(f"run {run_number} ({outcome.status}) written to {out}")
+    return 0 if outcome.status == "complete" else 1
+
+
+def collect(folder: Path, console: Console | None = None) -> int:
+    """Merge the shard folders under ``folder`` (a Hydra multirun folder) into one
+    ``savant.h5`` and report there; 0 when every run is present exactly once."""
+    console = console or Console()
+    run_dirs = sorted(p.parent for p in folder.rglob("runs/manifest.json"))
+    if not run_dirs:
+        raise ConfigError("collect", str(folder), "has no Monte Carlo shard folders (*/runs/manifest.json)")
+    inv = inventory(run_dirs)
+    if inv.duplicates:
+        dup = ", ".join(f"run {r} in {', '.join(str(p.parent.parent) for p in ps)}" for r, ps in inv.duplicates.items())
+        raise ConfigError("collect", str(folder), f"holds runs more than once ({dup}): shards overlap")
+    cfg, raw = _load_config(run_dirs[0].parent)
+    case, names = make_case(cfg)
+    expected = list(range(cfg.study.n_runs))
+    missing = inv.missing(expected)
+    write_outputs(folder, inv, expected, dispersion_table(case.dispersions), OmegaConf.to_yaml(raw, resolve=True),
+                  collect_provenance(), names, case.history_time, _requirements(cfg.study), cfg.output.plots, console)
+    console.print(f"collected {len(inv.files)} runs from {len(run_dirs)} shard folder(s) into {folder}")
+    if missing:
+        console.print(f"[bold red]missing runs[/]: {ranges_text(missing)}")
+        return 1
+    return 0
