@@ -175,7 +175,8 @@ class Journal:
     def __init__(self, folder: Path, cfg: SavantConfig, names: list[str]) -> None:
         self.folder = folder
         folder.mkdir(parents=True, exist_ok=True)
-        manifest = {"fingerprint": fingerprint(cfg), "n_runs": cfg.study.n_runs, "dispersions": names}
+        manifest = {"fingerprint": fingerprint(cfg), "n_runs": cfg.study.n_runs, "seed": cfg.study.seed,
+                    "dispersions": names}
         path = folder / "manifest.json"
         if path.is_file():
             old = json.loads(path.read_text())
