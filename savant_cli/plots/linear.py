@@ -1045,3 +1045,31 @@ def plot_margin_envelope(rows: list[MarginRow], out_path: Path,
     (rigid/aero, slosh, flex), marker = axis (pitch ○, yaw △).
     """
     return _save(_envelope_figure(rows, requirements), Path(out_path))
+
+
+def plot_nichols_overlay(time_s: float, loops: Mapping[str, ct.LTI], out_path: Path, title: str = "Nichols chart",
+                         exclusion_zones: bool = True) -> Path:
+    """Overlay the Nichols curves of several variants of one loop (a parameter study).
+
+    Parameters
+    ----------
+    time_s : float
+        Flight time of the operating point (s), shown in the title.
+    loops : mapping of str to control.LTI
+        Legend label → discrete SISO open loop (negative-feedback convention).
+    out_path : pathlib.Path
+        PNG file to write.
+    title : str
+        Figure title (the time is appended).
+    exclusion_zones : bool
+        Draw the launch-vehicle exclusion zones around the critical points.
+
+    Returns
+    -------
+    pathlib.Path
+        ``out_path``.
+    """
+    responses = [_loop_response(label, sys, ()) for label, sys in loops.items()]
+    fig = _nichols_figure(time_s, responses, [], exclusion_zones)
+    _title(fig, title, time_s)
+    return _save(fig, Path(out_path))
