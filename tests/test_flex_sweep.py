@@ -8,7 +8,6 @@ import csv
 import json
 import warnings
 
-import numpy as np
 import pytest
 
 from conftest import compose_config
