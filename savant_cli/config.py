@@ -151,6 +151,15 @@ class MonteCarloStudyConfig:
 
 
 @dataclass
+class FlyoffStudyConfig(MonteCarloStudyConfig):
+    """``study=flyoff``: two or more controllers fly the same nominal and the same
+    dispersed runs (the Monte Carlo keys apply to each), compared metric by metric."""
+
+    name: str = "flyoff"
+    controllers: list[str] = field(default_factory=lambda: ["msfc_pid", "larc_pd"])
+
+
+@dataclass
 class FlexSweepStudyConfig:
     """``study=flex_sweep``: margins and Nichols charts with the bending frequencies, and
     separately the mode-shape magnitudes, scaled over a grid (the GVT decision study)."""
@@ -167,7 +176,8 @@ class FlexSweepStudyConfig:
 
 
 STUDY_SCHEMAS: dict[str, type] = {"nominal": StudyConfig, "linear": LinearStudyConfig,
-                                  "montecarlo": MonteCarloStudyConfig, "flex_sweep": FlexSweepStudyConfig}
+                                  "montecarlo": MonteCarloStudyConfig, "flex_sweep": FlexSweepStudyConfig,
+                                  "flyoff": FlyoffStudyConfig}
 
 
 @dataclass
@@ -603,6 +613,8 @@ def _study(node: Any) -> Any:
         _check_linear(study)
     if isinstance(study, MonteCarloStudyConfig):
         _check_montecarlo(study)
+    if isinstance(study, FlyoffStudyConfig) and len(set(study.controllers)) < 2:
+        raise ConfigError("study.controllers", list(study.controllers), "must name at least two different controllers")
     if isinstance(study, FlexSweepStudyConfig):
         _check_flex_sweep(study)
     return study

@@ -1,4 +1,5 @@
-"""Design the default gain schedule of ``conf/controller/msfc_pid.yaml``.
+"""Design the gain schedules of ``conf/controller/msfc_pid.yaml`` (the default) and of
+``conf/controller/larc_pd.yaml`` (the fly-off's alternative).
 
 Along the reference ascent of :mod:`savant_cli.datagen.guidance_commands`, the rigid
 pitch-plane model θ̈ = μα·α + μc·δ gives, at each schedule breakpoint,
@@ -11,7 +12,15 @@ Kd = 2ζω/μc; the integral gain is Ki = ω_i·Kp with ω_i = ``integral_ratio`
 attitude feedback Kp is shared between the navigation attitude error (1 − ``kir_share``)
 and the integrated-rate path (``kir_share``), whose sum is the designed stiffness.
 
-Run ``python -m savant_cli.datagen.fcs_gains`` to rewrite the controller YAML.
+Two designs (:data:`CONTROLLERS`):
+
+* ``msfc_pid`` (MSFC-like): PID, ω = 1.3 / 1.0 rad/s, ζ = 0.7, integral and
+  integrated-rate paths, the rate-path flex filters of :mod:`.flex_filters`.
+* ``larc_pd`` (LaRC-like): PD only (Ki = Kir = 0), stiffer (ω = 1.5 / 1.2 rad/s,
+  ζ = 0.6), its own filters: a lower low-pass corner (6 Hz) and wider notches (quality
+  factor 1.0 on the stack). The same gyro blend, since it follows from the gyro locations.
+
+Run ``python -m savant_cli.datagen.fcs_gains [--controller larc_pd]`` to rewrite the YAML.
 """
 
 from __future__ import annotations
@@ -31,6 +40,9 @@ from savant_cli.sim.layout import CONFIG_STACK, CONFIG_UPPER
 from savant_cli.sim.plant import mass_properties
 
 DESIGN = {
+    "name": "msfc_pid",
+    "title": "MSFC-like gain-scheduled PID",
+    "filters": None,  # flex_filters.DESIGN
     "stack": {"omega": 1.3, "zeta": 0.7},
     "upper": {"omega": 1.0, "zeta": 0.7},
     "integral_ratio": 0.15,
@@ -42,6 +54,12 @@ DESIGN = {
     "stack_design_end_before_separation_s": 12.0,
     "upper_design_start_after_ignition_s": 5.0,
 }
+LARC_PD = {**DESIGN, "name": "larc_pd", "title": "LaRC-like gain-scheduled PD (no integral paths)",
+           "stack": {"omega": 1.5, "zeta": 0.6}, "upper": {"omega": 1.2, "zeta": 0.6},
+           "integral_ratio": 0.0, "kir_share": 0.0,
+           "filters": {"stack": {"lowpass_hz": 6.0, "notch_hz": (2.5, 4.5), "notch_q": 1.0},
+                       "upper": {"lowpass_hz": 6.0, "notch_hz": (9.5, 21.7), "notch_q": 1.0}}}
+CONTROLLERS = {"msfc_pid": DESIGN, "larc_pd": LARC_PD}
 
 
 def pitch_coefficients(ref, t: float, y: np.ndarray, config: int) -> tuple[float, float]:
@@ -82,7 +100,7 @@ def pitch_coefficients(ref, t: float, y: np.ndarray, config: int) -> tuple[float
     return float(mu_alpha), float(mu_c)
 
 
-def design(cfg, vehicle) -> dict:
+def design(cfg, vehicle, spec: dict = DESIGN) -> dict:
     """Gain tables for the stack (vs altitude) and the upper stage (vs relative speed)."""
     ref, sols, turn, azimuth, steer, sol = solve(cfg, vehicle, verbose=False)
     # dense reference history
@@ -98,22 +116,22 @@ def design(cfg, vehicle) -> dict:
     vrel = np.array([np.linalg.norm(earth.velocity_relative_eci(yi[0:3], yi[3:6], C.OMEGA_EARTH)) for yi in y])
     tables = {}
     for name, axis_vals, sel, var, config in (
-        ("stack", DESIGN["stack_altitudes_m"], t < ref.t_sep - DESIGN["stack_design_end_before_separation_s"], alt,
+        ("stack", spec["stack_altitudes_m"], t < ref.t_sep - spec["stack_design_end_before_separation_s"], alt,
          CONFIG_STACK),
-        ("upper", DESIGN["upper_speeds_mps"], t > ref.t_ign + DESIGN["upper_design_start_after_ignition_s"], vrel,
+        ("upper", spec["upper_speeds_mps"], t > ref.t_ign + spec["upper_design_start_after_ignition_s"], vrel,
          CONFIG_UPPER),
     ):
-        d = DESIGN[name]
+        d = spec[name]
         w, z = d["omega"], d["zeta"]
         kp, kd, ki, kir, mus = [], [], [], [], []
         for val in axis_vals:
             i = int(np.argmin(np.abs(np.where(sel, var, np.inf) - val)))
             mu_a, mu_c = pitch_coefficients(ref, t[i], y[i], config)
             k_att = (w * w + max(mu_a, 0.0)) / mu_c
-            kp.append(k_att * (1.0 - DESIGN["kir_share"]))
-            kir.append(k_att * DESIGN["kir_share"])
+            kp.append(k_att * (1.0 - spec["kir_share"]))
+            kir.append(k_att * spec["kir_share"])
             kd.append(2.0 * z * w / mu_c)
-            ki.append(DESIGN["integral_ratio"] * w * k_att)
+            ki.append(spec["integral_ratio"] * w * k_att)
             mus.append((t[i], mu_a, mu_c))
         tables[name] = {"breakpoints": list(map(float, axis_vals)), "kp": kp, "ki": ki, "kd": kd, "kir": kir,
                         "design_points": mus}
@@ -124,22 +142,22 @@ def _fmt(vals) -> str:
     return "[" + ", ".join(f"{v:.4g}" for v in vals) + "]"
 
 
-def controller_yaml(tables: dict, stack_blend: list[float]) -> str:
-    """The whole msfc_pid controller YAML text."""
+def controller_yaml(tables: dict, stack_blend: list[float], spec: dict = DESIGN) -> str:
+    """The whole controller YAML text of the design ``spec``."""
     lines = [
-        "# MSFC-like gain-scheduled PID pitch/yaw control with flex filters and rate blending,",
+        f"# {spec['title']} pitch/yaw control with flex filters and rate blending,",
         "# and phase-plane roll control (source paper III.F). Generated by",
-        "# `python -m savant_cli.datagen.fcs_gains` (gains) and savant_cli.datagen.flex_filters",
-        "# (filters); see those modules for the design rules. Units: Kp and Kir rad/rad,",
-        "# Ki 1/s, Kd s.",
-        "name: msfc_pid",
+        f"# `python -m savant_cli.datagen.fcs_gains --controller {spec['name']}` (gains and filters,",
+        "# design rules in savant_cli.datagen.fcs_gains and .flex_filters). Units: Kp and Kir",
+        "# rad/rad, Ki 1/s, Kd s.",
+        f"name: {spec['name']}",
         "blending:            # weights of [upper-stage gyro, IMU, first-stage gyro]; sum to 1",
         f"  stack: {_fmt(stack_blend)}   # nulls the first bending mode (flex_filters.stack_blend)",
         "  upper: [1.0, 0.0, 0.0]",
         "flex_filters:        # two 4th-order discrete sections in series per path, at 50 Hz",
     ]
-    for name, spec in flex_filters.DESIGN.items():
-        sections = flex_filters.design_set(spec["lowpass_hz"], spec["notch_hz"], spec["notch_q"])
+    for name, fspec in (spec["filters"] or flex_filters.DESIGN).items():
+        sections = flex_filters.design_set(fspec["lowpass_hz"], fspec["notch_hz"], fspec["notch_q"])
         lines.append(f"  {name}:")
         for path in ("rate", "integrated_rate", "roll"):
             lines.append(f"    {path}:")
@@ -176,6 +194,7 @@ def controller_yaml(tables: dict, stack_blend: list[float]) -> str:
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("overrides", nargs="*")
+    ap.add_argument("--controller", choices=sorted(CONTROLLERS), default="msfc_pid")
     ap.add_argument("--out", type=Path, default=None)
     args = ap.parse_args(argv)
     from savant_cli.io.atomic import write_text_atomic
@@ -185,8 +204,9 @@ def main(argv: list[str] | None = None) -> None:
     cfg = _compose(args.overrides)
     vdir = resolve_data_path("vehicle.data_dir", "vehicle", cfg.vehicle["data_dir"], [shipped_config_dir()], must_be_dir=True)
     vehicle = load_vehicle(cfg.vehicle, vdir)
-    text = controller_yaml(design(cfg, vehicle), flex_filters.vehicle_stack_blend(cfg.vehicle, vdir))
-    out = args.out or shipped_config_dir() / "controller" / "msfc_pid.yaml"
+    spec = CONTROLLERS[args.controller]
+    text = controller_yaml(design(cfg, vehicle, spec), flex_filters.vehicle_stack_blend(cfg.vehicle, vdir), spec)
+    out = args.out or shipped_config_dir() / "controller" / f"{spec['name']}.yaml"
     write_text_atomic(out, text)
     print(text)
     print(f"wrote {out}")

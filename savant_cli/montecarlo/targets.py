@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 from omegaconf import OmegaConf
 
-from savant_cli.config import SavantConfig, WindsConfig, _check_physics
+from savant_cli.config import ControllerConfig, SavantConfig, WindsConfig, _check_physics
 from savant_cli.errors import ConfigError
 from savant_cli.sim.build import SimModel, build_model
 from savant_cli.vehicle import AERO_COEFFS, Vehicle
@@ -151,6 +151,14 @@ def resolve(key: str, text: str, cfg: SavantConfig, vehicle: Vehicle, search_dir
     return Target(text, kind, tuple(shown), float(value), _units(name), integer=isinstance(value, (int, np.integer)))
 
 
+GROUP_SCHEMAS = {"winds": WindsConfig, "controller": ControllerConfig}
+
+
+def group_options(group: str, search_dirs: list[Path]) -> list[str]:
+    """The option names of a config group in the search path."""
+    return _group_options(group, search_dirs)
+
+
 def _group_options(group: str, search_dirs: list[Path]) -> list[str]:
     names: list[str] = []
     for d in search_dirs:
@@ -161,13 +169,15 @@ def _group_options(group: str, search_dirs: list[Path]) -> list[str]:
 
 
 def load_group_option(group: str, name: str, search_dirs: list[Path]) -> Any:
-    """A config group option as its typed section (``winds`` → WindsConfig)."""
+    """A config group option as its typed section (``winds`` → WindsConfig,
+    ``controller`` → ControllerConfig)."""
     for d in search_dirs:
         f = d / group / f"{name}.yaml"
         if f.is_file():
-            merged = OmegaConf.merge(OmegaConf.structured(WindsConfig), OmegaConf.load(f))
+            plain = OmegaConf.to_container(OmegaConf.load(f), resolve=True)  # e.g. yaw: ${.pitch}
+            merged = OmegaConf.merge(OmegaConf.structured(GROUP_SCHEMAS[group]), plain)
             return OmegaConf.to_object(merged)
-    raise ConfigError(group, name, "no such option")
+    raise ConfigError(group, name, f"no such option; known: {', '.join(_group_options(group, search_dirs))}")
 
 
 # ------------------------------------------------------------------------ application

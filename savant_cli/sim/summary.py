@@ -38,6 +38,14 @@ def _event(result: SimResult, slot: int) -> float | None:
     return None if np.isnan(v) else float(v)
 
 
+def _on_time(t: np.ndarray, command: np.ndarray) -> float:
+    """Total time (s) a jet command is on (|command| ≥ 0.5), by the log's sample spacing."""
+    if t.size < 2:
+        return 0.0
+    dt = np.diff(t, append=t[-1])
+    return float(np.sum(dt[np.abs(command) >= 0.5]))
+
+
 def summarize(result: SimResult, sig: dict[str, Signal], process_wall_s: float | None = None) -> dict:
     """Summary scalars of a run (SI units named in the keys)."""
     t = sig["time"].data
@@ -63,7 +71,10 @@ def summarize(result: SimResult, sig: dict[str, Signal], process_wall_s: float |
         "max_alpha_deg": float(alpha_total[dense].max()) if dense.any() else 0.0,
         "max_qalpha_Pa_deg": float(np.max(qbar * alpha_total)),
         "max_gimbal_deg": float(gimbal.max()),
+        "max_gimbal_rate_deg_s": float(np.degrees(np.abs(sig["gimbal_rate"].data)).max()),
         "max_attitude_error_deg": float(att_err.max()),
+        "rms_attitude_error_deg": float(np.sqrt(np.mean(att_err * att_err))),
+        "rcs_on_time_s": _on_time(t, sig["rcs_command"].data),
         "max_roll_error_deg": float(att_err_roll.max()),
         "time_separation_s": _event(result, E.EV_SEPARATION),
         "time_upper_stage_ignition_s": _event(result, E.EV_IGNITION),

@@ -10,7 +10,7 @@ from types import ModuleType
 
 from savant_cli.errors import ConfigError
 
-STUDIES = ("nominal", "linear", "montecarlo", "flex_sweep")
+STUDIES = ("nominal", "linear", "montecarlo", "flex_sweep", "flyoff")
 
 
 def get_study(name: str) -> ModuleType:

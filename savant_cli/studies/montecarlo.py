@@ -26,7 +26,7 @@ from savant_cli.config import MonteCarloStudyConfig, SavantConfig, validate
 from savant_cli.errors import ConfigError
 from savant_cli.io.guidance_file import read_guidance
 from savant_cli.io.provenance import collect_provenance
-from savant_cli.montecarlo.batch import (Case, Journal, RunOutcome, default_workers, execute, fly_run,
+from savant_cli.montecarlo.batch import (BatchStop, Case, Journal, RunOutcome, default_workers, execute, fly_run,
                                          history_columns, read_outcome, shard_runs)
 from savant_cli.montecarlo.results import inventory, ranges_text, write_outputs
 from savant_cli.montecarlo.spec import DispersionSet, parse
@@ -88,10 +88,12 @@ def _requirements(study: MonteCarloStudyConfig) -> dict[str, tuple[float, float]
             "flex": (r.flex.gain_dB, r.flex.phase_deg)}
 
 
-def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
-    """Fly this job's runs (resuming), then write the batch outputs into ``out_dir``."""
+def fly_batch(cfg: SavantConfig, config_yaml: str, out_dir: Path, console: Console, title: str = "monte carlo",
+              print_tables: bool = True) -> tuple[dict, BatchStop]:
+    """Fly this job's runs of the batch of ``cfg`` (resuming from ``out_dir/runs``) and
+    write the batch outputs into ``out_dir``; the ``summary.json`` content and how the
+    execution ended."""
     study: MonteCarloStudyConfig = cfg.study
-    console = Console()
     t0 = time.perf_counter()
     case, names = make_case(cfg)
     journal = Journal(out_dir / "runs", cfg, case.dispersions.names)
@@ -102,7 +104,7 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
     if done & set(mine):
         console.print(f"resuming: {len(done & set(mine))} of {len(mine)} runs already in {journal.folder}")
     failures = [0]
-    bar = Progress(TextColumn("[bold]monte carlo"), BarColumn(), MofNCompleteColumn(),
+    bar = Progress(TextColumn(f"[bold]{title}"), BarColumn(), MofNCompleteColumn(),
                    TextColumn("failed {task.fields[failed]}"), TimeElapsedColumn(), TextColumn("eta"),
                    TimeRemainingColumn(), disable=not cfg.sim.progress)
 
@@ -115,10 +117,17 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
         task = bar.add_task("runs", total=len(todo), failed=0)
         stop = execute(case, todo, journal, workers, on_done)
     summary = write_outputs(out_dir, inventory([journal.folder]), list(mine), dispersion_table(case.dispersions),
-                            OmegaConf.to_yaml(raw_cfg, resolve=True), collect_provenance(),
-                            names, case.history_time, _requirements(study), cfg.output.plots, console)
-    console.print(f"{len(todo)} runs flown on {workers} worker(s) in {time.perf_counter() - t0:.1f} s; "
+                            config_yaml, collect_provenance(), names, case.history_time, _requirements(study),
+                            cfg.output.plots, console if print_tables else None)
+    console.print(f"{title}: {len(todo)} runs flown on {workers} worker(s) in {time.perf_counter() - t0:.1f} s; "
                   f"outputs: {out_dir}")
+    return summary, stop
+
+
+def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
+    """Fly this job's runs (resuming), then write the batch outputs into ``out_dir``."""
+    console = Console()
+    summary, stop = fly_batch(cfg, OmegaConf.to_yaml(raw_cfg, resolve=True), out_dir, console)
     if stop.reason != "done":
         console.print(f"[bold red]batch stopped[/]: {stop.detail}; run the same command with "
                       f"hydra.run.dir={out_dir} to resume")

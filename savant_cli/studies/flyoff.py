@@ -1,0 +1,194 @@
+"""``study=flyoff``: two or more controllers fly the same nominal and the same dispersed
+runs (source paper §IV), compared metric by metric, the winner of each marked.
+
+Each controller (a member of the ``controller`` config group) flies the batch of the
+study's Monte Carlo keys (``study.n_runs``, ``study.dispersions``, ``study.seed`` …;
+``n_runs: 1`` is the nominal alone) into ``<out>/<controller>/`` with every Monte Carlo
+output there. The same seed and dispersion names give every controller exactly the same
+dispersed vehicles. The comparison: ``flyoff.csv`` and ``summary.json`` (per metric and
+controller the nominal value and the 99.865 / 0.135 percentile over the runs, and the
+winner), a console table, and overlay plots of the nominal histories and of the
+dispersed distributions.
+"""
+
+from __future__ import annotations
+
+import copy
+import csv
+import io
+from pathlib import Path
+
+import h5py
+import numpy as np
+from omegaconf import DictConfig, OmegaConf
+from rich.console import Console
+from rich.table import Table
+
+from savant_cli.config import FlyoffStudyConfig, SavantConfig, _check_physics
+from savant_cli.errors import ConfigError
+from savant_cli.io.atomic import write_json_atomic, write_text_atomic
+from savant_cli.montecarlo.results import PERCENTILES
+from savant_cli.montecarlo.targets import load_group_option
+from savant_cli.paths import hydra_search_dirs
+from savant_cli.studies.montecarlo import fly_batch
+
+#: metric → (summary key or margin selector, better: "low" or "high", unit)
+METRICS: dict[str, tuple[str, str, str]] = {
+    "max attitude error": ("max_attitude_error_deg", "low", "deg"),
+    "RMS attitude error": ("rms_attitude_error_deg", "low", "deg"),
+    "max alpha": ("max_alpha_deg", "low", "deg"),
+    "max q-alpha": ("max_qalpha_Pa_deg", "low", "Pa deg"),
+    "max gimbal angle": ("max_gimbal_deg", "low", "deg"),
+    "max gimbal rate": ("max_gimbal_rate_deg_s", "low", "deg/s"),
+    "propellant remaining": ("propellant_remaining_kg", "high", "kg"),
+    "RCS on-time": ("rcs_on_time_s", "low", "s"),
+    "smallest rigid gain margin": ("margin:gain", "high", "dB"),
+    "smallest rigid phase margin": ("margin:phase", "high", "deg"),
+}
+
+
+def _controllers(study: FlyoffStudyConfig, dirs: list[Path]) -> dict:
+    out = {}
+    for i, name in enumerate(study.controllers):
+        try:
+            out[name] = load_group_option("controller", name, dirs)
+        except ConfigError as exc:
+            raise ConfigError(f"study.controllers[{i}]", name, exc.allowed) from None
+    return out
+
+
+def _per_run(h5: Path) -> dict[str, np.ndarray]:
+    """Per run (row order of the file; run 0 first): every metric's value."""
+    with h5py.File(h5) as f:
+        g = f["montecarlo"]
+        runs = g["runs/run"][()]
+        ok = np.array([s in (b"complete", "complete") for s in g["runs/status"][()]])
+        order = np.argsort(runs)
+        out = {"run": runs[order], "ok": ok[order]}
+        for metric, (key, _, _) in METRICS.items():
+            if key.startswith("margin:"):
+                kind = key.split(":")[1]
+                col = np.full(runs.size, np.nan)
+                m = g["margins"]
+                if m["run"].size:
+                    mr, mv = m["run"][()], m["value"][()]
+                    sel = (m["kind"].asstr()[()] == kind) & (m["band"].asstr()[()] == "rigid/aero")
+                    for j, r in enumerate(runs):
+                        vals = np.abs(mv[sel & (mr == r)])
+                        col[j] = vals.min() if vals.size else np.nan
+                out[metric] = col[order]
+            else:
+                out[metric] = g[f"summary/{key}"][()][order] if key in g["summary"] else np.full(runs.size, np.nan)
+        return out
+
+
+def compare(tables: dict[str, dict[str, np.ndarray]]) -> list[dict]:
+    """Per metric: each controller's nominal (run 0) value and its dispersed worst-case
+    percentile (``<controller>_dispersed``: 99.865 % for lower-is-better, 0.135 % for
+    higher-is-better, over the runs that completed), and the winner on that percentile
+    (on the nominal alone when there are no dispersed runs)."""
+    rows = []
+    for metric, (_, better, unit) in METRICS.items():
+        pct = PERCENTILES[2] if better == "low" else PERCENTILES[0]
+        row: dict = {"metric": metric, "unit": unit, "better": better, "percentile": pct}
+        score = {}
+        for ctrl, t in tables.items():
+            v = t[metric]
+            nominal = float(v[0]) if t["run"].size and t["run"][0] == 0 else float("nan")
+            good = v[t["ok"] & np.isfinite(v)]
+            tail = float(np.percentile(good, pct)) if good.size > 1 else nominal
+            row[f"{ctrl}_nominal"] = nominal
+            row[f"{ctrl}_dispersed"] = tail
+            if np.isfinite(tail):
+                score[ctrl] = tail
+        if score:
+            best = (min if better == "low" else max)(score, key=score.get)
+            tied = [c for c, s in score.items() if np.isclose(s, score[best], rtol=1e-9, atol=0.0)]
+            row["winner"] = best if len(tied) == 1 else "tie"
+        else:
+            row["winner"] = ""
+        rows.append(row)
+    return rows
+
+
+def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
+    """Fly every controller's batch, then compare."""
+    study: FlyoffStudyConfig = cfg.study
+    console = Console()
+    dirs = hydra_search_dirs()
+    controllers = _controllers(study, dirs)  # every name checked before anything flies
+    cfgs = {}
+    for name, ctrl in controllers.items():
+        c = copy.deepcopy(cfg)
+        c.controller = ctrl
+        _check_physics(c)
+        cfgs[name] = c
+    stopped = False
+    for name, c in cfgs.items():
+        raw = copy.deepcopy(raw_cfg)
+        raw.controller = OmegaConf.structured(c.controller)
+        _, stop = fly_batch(c, OmegaConf.to_yaml(raw, resolve=True), out_dir / name, console, title=name,
+                            print_tables=False)
+        stopped |= stop.reason != "done"
+    if stopped:
+        console.print(f"[bold red]a batch stopped[/]; run the same command with hydra.run.dir={out_dir} to resume")
+        return 1
+    tables = {name: _per_run(out_dir / name / "savant.h5") for name in cfgs}
+    rows = compare(tables)
+    _write(out_dir, rows, tables, study)
+    console.print(_table(rows, list(cfgs)))
+    if cfg.output.plots:
+        _plots(out_dir, rows, tables, list(cfgs))
+    console.print(f"outputs: {out_dir}")
+    return 0
+
+
+def _write(out_dir: Path, rows: list[dict], tables: dict, study: FlyoffStudyConfig) -> None:
+    buf = io.StringIO()
+    w = csv.DictWriter(buf, fieldnames=list(rows[0]), lineterminator="\n")
+    w.writeheader()
+    w.writerows(rows)
+    write_text_atomic(out_dir / "flyoff.csv", buf.getvalue())
+    write_json_atomic(out_dir / "summary.json", {
+        "study": "flyoff", "controllers": list(tables), "n_runs": study.n_runs,
+        "linear_times_s": list(study.linear_times), "metrics": rows,
+        "wins": {c: sum(r["winner"] == c for r in rows) for c in tables},
+        "runs_complete": {c: int(t["ok"].sum()) for c, t in tables.items()}})
+
+
+def _table(rows: list[dict], names: list[str]) -> Table:
+    tb = Table(title="controller fly-off (nominal / dispersed worst-case percentile; ★ = best)")
+    tb.add_column("metric")
+    for n in names:
+        tb.add_column(n, justify="right")
+    for r in rows:
+        cells = []
+        for n in names:
+            tail = r[f"{n}_dispersed"]
+            star = " ★" if r["winner"] == n else ""
+            cells.append(f"{r[f'{n}_nominal']:.4g} / {tail:.4g}{star}")
+        tb.add_row(f"{r['metric']} [{r['unit']}]", *cells)
+    return tb
+
+
+def _plots(out_dir: Path, rows: list[dict], tables: dict, names: list[str]) -> None:
+    from savant_cli.plots.flyoff import plot_history_overlays, plot_metric_histograms
+
+    folder = out_dir / "plots"
+    histories: dict[str, dict[str, np.ndarray]] = {}
+    time_s = None
+    for n in names:
+        with h5py.File(out_dir / n / "savant.h5") as f:
+            if "montecarlo/histories" not in f:
+                continue
+            hg = f["montecarlo/histories"]
+            time_s = hg["time"][()]
+            row0 = int(np.argmin(f["montecarlo/runs/run"][()]))
+            for sig in hg:
+                if sig != "time":
+                    histories.setdefault(sig, {})[n] = hg[sig][row0]
+    if histories and time_s is not None:
+        plot_history_overlays(time_s, histories, folder)
+    if any(t["run"].size > 1 for t in tables.values()):
+        values = {r["metric"]: {n: tables[n][r["metric"]][tables[n]["ok"]] for n in names} for r in rows}
+        plot_metric_histograms(values, folder / "flyoff_histograms.png", {r["metric"]: r["winner"] for r in rows})
