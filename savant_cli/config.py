@@ -160,6 +160,21 @@ class FlyoffStudyConfig(MonteCarloStudyConfig):
 
 
 @dataclass
+class ModeRetentionStudyConfig:
+    """``study=mode_retention``: add bending modes lowest first until the response and
+    the margins stop changing."""
+
+    name: str = "mode_retention"
+    times: list[float] = field(default_factory=lambda: [55.0, 180.0, 230.0])
+    step: int = 1  # modes added per step (2: a bending mode in both planes)
+    max_modes: int = 0  # 0: as many as the modal data and the plant rate allow
+    response_duration_s: float = 5.0  # closed-loop attitude-command step responses compared
+    response_tolerance: float = 0.05  # of the response's peak
+    margin_tolerance_dB: float = 0.5
+    margin_tolerance_deg: float = 2.0
+
+
+@dataclass
 class FlexSweepStudyConfig:
     """``study=flex_sweep``: margins and Nichols charts with the bending frequencies, and
     separately the mode-shape magnitudes, scaled over a grid (the GVT decision study)."""
@@ -177,7 +192,7 @@ class FlexSweepStudyConfig:
 
 STUDY_SCHEMAS: dict[str, type] = {"nominal": StudyConfig, "linear": LinearStudyConfig,
                                   "montecarlo": MonteCarloStudyConfig, "flex_sweep": FlexSweepStudyConfig,
-                                  "flyoff": FlyoffStudyConfig}
+                                  "flyoff": FlyoffStudyConfig, "mode_retention": ModeRetentionStudyConfig}
 
 
 @dataclass
@@ -617,7 +632,25 @@ def _study(node: Any) -> Any:
         raise ConfigError("study.controllers", list(study.controllers), "must name at least two different controllers")
     if isinstance(study, FlexSweepStudyConfig):
         _check_flex_sweep(study)
+    if isinstance(study, ModeRetentionStudyConfig):
+        _check_mode_retention(study)
     return study
+
+
+def _check_mode_retention(s: ModeRetentionStudyConfig) -> None:
+    if not s.times:
+        raise ConfigError("study.times", list(s.times), "must list at least one flight time (s)")
+    for i, t in enumerate(s.times):
+        if not (t > 0.0 and np.isfinite(t)):
+            raise ConfigError(f"study.times[{i}]", t, "must be a positive flight time in s")
+    if s.step < 1:
+        raise ConfigError("study.step", s.step, "must be a positive number of modes")
+    if s.max_modes < 0:
+        raise ConfigError("study.max_modes", s.max_modes, "must be 0 (as many as allowed) or a positive count")
+    _positive("study.response_duration_s", s.response_duration_s)
+    _positive("study.response_tolerance", s.response_tolerance)
+    _positive("study.margin_tolerance_dB", s.margin_tolerance_dB)
+    _positive("study.margin_tolerance_deg", s.margin_tolerance_deg)
 
 
 def _check_flex_sweep(s: FlexSweepStudyConfig) -> None:

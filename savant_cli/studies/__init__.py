@@ -10,7 +10,7 @@ from types import ModuleType
 
 from savant_cli.errors import ConfigError
 
-STUDIES = ("nominal", "linear", "montecarlo", "flex_sweep", "flyoff")
+STUDIES = ("nominal", "linear", "montecarlo", "flex_sweep", "flyoff", "mode_retention")
 
 
 def get_study(name: str) -> ModuleType:
