@@ -25,6 +25,8 @@ commands:
   collect DIR         merge the shard folders of a Monte Carlo multirun into DIR
   rerun DIR run=N     fly run N of the Monte Carlo batch in DIR again, with its
                       whole time history and plots (DIR/rerun_<N>/)
+  compare RUN_DIR REFERENCE --map MAP.yaml [--out DIR]
+                      compare a run with another simulation's time history
   --version           print the version
   --help              this text
 
@@ -113,8 +115,38 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     if cmd in ("collect", "rerun"):
         return _batch_command(cmd, rest)
+    if cmd == "compare":
+        return _compare_command(rest)
     Console(stderr=True).print(f"unknown command {cmd!r}\n\n{USAGE}", markup=False)
     return 2
+
+
+def _compare_command(rest: list[str]) -> int:
+    """``savant compare RUN_DIR REFERENCE --map MAP.yaml [--out DIR]``."""
+    import argparse
+
+    err = Console(stderr=True)
+    ap = argparse.ArgumentParser(prog="savant compare", add_help=False)
+    ap.add_argument("run_dir", type=Path)
+    ap.add_argument("reference", type=Path)
+    ap.add_argument("--map", type=Path, required=True, dest="mapping")
+    ap.add_argument("--out", type=Path, default=None)
+    ap.add_argument("--no-plots", action="store_true")
+    try:
+        args = ap.parse_args(rest)
+    except SystemExit:
+        err.print("usage: savant compare RUN_DIR REFERENCE --map MAP.yaml [--out DIR] [--no-plots]")
+        return 2
+    if not (args.run_dir / "savant.h5").is_file():
+        err.print(f"[bold red]error[/]: {args.run_dir} holds no savant.h5")
+        return 2
+    from savant_cli.compare import compare
+
+    try:
+        return compare(args.run_dir, args.reference, args.mapping, args.out, plots=not args.no_plots)
+    except ConfigError as exc:
+        err.print(f"[bold red]error[/]: {exc}")
+        return ConfigError.exit_code
 
 
 def _batch_command(cmd: str, rest: list[str]) -> int:
