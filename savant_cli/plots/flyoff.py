@@ -50,7 +50,7 @@ def plot_metric_histograms(values: Mapping[str, Mapping[str, np.ndarray]], out_p
     named in the panel title)."""
     names = list(values)
     rows = max(1, -(-len(names) // per_row))
-    fig = _figure(3.2 * per_row, 2.4 * rows + 0.6, left=0.5, bottom=0.45, top=0.5, wspace=0.3, hspace=0.55)
+    fig = _figure(3.2 * per_row, 2.4 * rows + 0.9, left=0.5, bottom=0.45, top=0.95, wspace=0.3, hspace=0.55)
     for i, name in enumerate(names):
         ax = fig.add_subplot(rows, per_row, i + 1)
         _style(ax, 4)
