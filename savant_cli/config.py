@@ -637,12 +637,17 @@ def _study(node: Any) -> Any:
     return study
 
 
-def _check_mode_retention(s: ModeRetentionStudyConfig) -> None:
-    if not s.times:
-        raise ConfigError("study.times", list(s.times), "must list at least one flight time (s)")
-    for i, t in enumerate(s.times):
+def _flight_times(times: list[float]) -> None:
+    """``study.times``: at least one positive, finite flight time (s)."""
+    if not times:
+        raise ConfigError("study.times", list(times), "must list at least one flight time (s)")
+    for i, t in enumerate(times):
         if not (t > 0.0 and np.isfinite(t)):
             raise ConfigError(f"study.times[{i}]", t, "must be a positive flight time in s")
+
+
+def _check_mode_retention(s: ModeRetentionStudyConfig) -> None:
+    _flight_times(s.times)
     if s.step < 1:
         raise ConfigError("study.step", s.step, "must be a positive number of modes")
     if s.max_modes < 0:
@@ -654,11 +659,7 @@ def _check_mode_retention(s: ModeRetentionStudyConfig) -> None:
 
 
 def _check_flex_sweep(s: FlexSweepStudyConfig) -> None:
-    if not s.times:
-        raise ConfigError("study.times", list(s.times), "must list at least one flight time (s)")
-    for i, t in enumerate(s.times):
-        if not (t > 0.0 and np.isfinite(t)):
-            raise ConfigError(f"study.times[{i}]", t, "must be a positive flight time in s")
+    _flight_times(s.times)
     if not s.parameters:
         raise ConfigError("study.parameters", list(s.parameters), "must list frequency and/or shape")
     for i, prm in enumerate(s.parameters):
@@ -699,11 +700,7 @@ def _check_linear(s: LinearStudyConfig) -> None:
     if s.every < 0:
         raise ConfigError("study.every", s.every, "must be zero (use study.times) or a positive interval in s")
     if s.every == 0:
-        if not s.times:
-            raise ConfigError("study.times", list(s.times), "must list at least one flight time (s)")
-        for i, t in enumerate(s.times):
-            if not (t > 0.0 and np.isfinite(t)):
-                raise ConfigError(f"study.times[{i}]", t, "must be a positive flight time in s")
+        _flight_times(s.times)
     _non_negative("study.event_clearance_s", s.event_clearance_s)
     _one_of("study.jacobian", s.jacobian, ("auto", "fixed"))
     _positive("study.jacobian_step", s.jacobian_step)
