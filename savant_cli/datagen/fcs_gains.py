@@ -194,7 +194,8 @@ def controller_yaml(tables: dict, stack_blend: list[float], spec: dict = DESIGN)
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("overrides", nargs="*")
-    ap.add_argument("--controller", choices=sorted(CONTROLLERS), default="msfc_pid")
+    ap.add_argument("--controller", choices=sorted(CONTROLLERS), default="msfc_pid", help="design rules")
+    ap.add_argument("--name", default=None, help="controller name (default: the design's); names the YAML")
     ap.add_argument("--out", type=Path, default=None)
     args = ap.parse_args(argv)
     from savant_cli.io.atomic import write_text_atomic
@@ -204,7 +205,7 @@ def main(argv: list[str] | None = None) -> None:
     cfg = _compose(args.overrides)
     vdir = resolve_data_path("vehicle.data_dir", "vehicle", cfg.vehicle["data_dir"], [shipped_config_dir()], must_be_dir=True)
     vehicle = load_vehicle(cfg.vehicle, vdir)
-    spec = CONTROLLERS[args.controller]
+    spec = {**CONTROLLERS[args.controller], **({"name": args.name} if args.name else {})}
     text = controller_yaml(design(cfg, vehicle, spec), flex_filters.vehicle_stack_blend(cfg.vehicle, vdir), spec)
     out = args.out or shipped_config_dir() / "controller" / f"{spec['name']}.yaml"
     write_text_atomic(out, text)

@@ -1,0 +1,34 @@
+"""The second vehicle, defined by config and data only: it flies to its target orbit and
+the studies run on it (slow: through the installed command)."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from test_end_to_end import run
+
+pytestmark = pytest.mark.slow
+
+VEHICLE = ["vehicle=small_launcher", "guidance=small_launcher_leo", "controller=small_pid", "sim.progress=false"]
+
+
+def test_small_launcher_reaches_its_orbit_and_the_studies_run(tmp_path):
+    proc = run(["run", *VEHICLE, f"hydra.run.dir={tmp_path}/nominal"], cwd=tmp_path)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    s = json.loads((tmp_path / "nominal" / "summary.json").read_text())
+    assert s["status"] == "complete" and "target orbital energy" in s["message"]
+    assert 180.0 < s["perigee_altitude_km"] < 220.0 and 280.0 < s["apogee_altitude_km"] < 320.0  # target 200 x 300
+    assert abs(s["inclination_deg"] - 40.0) < 0.2
+    assert s["max_dynamic_pressure_Pa"] < 30e3 and s["max_gimbal_deg"] < 6.0  # inside its 6 deg gimbal
+    lin = run(["run", *VEHICLE, "study=linear", "study.times=[55,300]", "output.plots=false",
+               f"hydra.run.dir={tmp_path}/linear"], cwd=tmp_path)
+    assert lin.returncode == 0, lin.stdout + lin.stderr
+    margins = json.loads((tmp_path / "linear" / "summary.json").read_text())["margins"]
+    assert {m["time_s"] for m in margins} == {55.0, 300.0}
+    assert any(m["kind"] == "gain" and m["value"] < 0 and m["time_s"] == 55.0 for m in margins)  # aero-unstable
+    mc = run(["run", *VEHICLE, "study=montecarlo_small_launcher", "study.n_runs=4", "output.plots=false",
+              f"hydra.run.dir={tmp_path}/mc"], cwd=tmp_path)
+    assert mc.returncode == 0, mc.stdout + mc.stderr
+    assert json.loads((tmp_path / "mc" / "summary.json").read_text())["n_runs_present"] == 4
