@@ -76,6 +76,16 @@ class LinearRequirements:
     slosh: MarginRequirement = field(default_factory=MarginRequirement)
     flex: MarginRequirement = field(default_factory=MarginRequirement)
 
+    def by_band(self) -> dict[str, tuple[float, float]]:
+        """Band (``rigid/aero``, ``slosh``, ``flex``) → (gain margin dB, phase margin deg)."""
+        return {band: (r.gain_dB, r.phase_deg) for band, r in
+                (("rigid/aero", self.rigid_aero), ("slosh", self.slosh), ("flex", self.flex))}
+
+    def required(self, band: str, kind: str) -> float:
+        """The required margin of a band for a ``gain`` (dB) or ``phase`` (deg) crossing."""
+        gain, phase = self.by_band()[band]
+        return gain if kind == "gain" else phase
+
 
 @dataclass
 class LinearStudyConfig:

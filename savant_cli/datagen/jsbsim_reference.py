@@ -38,11 +38,9 @@ from savant_cli import constants as C
 
 SAVANT_OVERRIDES = ["phase=first_stage", "winds=none", "environment.gravity_order=2",
                     "guidance.command_file=vertical_hold_commands.csv"]
-FT = 0.3048
-LBF = 4.4482216152605
-LBM = 0.45359237
+FT, LBF, LBM = C.FT, C.LBF, C.LBM
 PSF = LBF / FT**2
-SLUG_FT3 = 14.593902937206 / FT**3
+SLUG_FT3 = C.SLUG / FT**3
 DT = 1.0 / 200.0
 OUTPUT_EVERY = 20  # steps: the reference is written at 10 Hz
 COLUMNS = (("time_s", "simulation/sim-time-sec", 1.0), ("altitude_m", "position/geod-alt-ft", FT),

@@ -13,19 +13,23 @@ from savant_cli.plots.montecarlo import _bin_count, _figure, _file_stem, _save, 
 
 
 def plot_history_overlays(time_s: np.ndarray, histories: Mapping[str, Mapping[str, np.ndarray]], folder: Path,
-                          units: Mapping[str, str] | None = None) -> list[Path]:
-    """One PNG per signal, ``flyoff_<signal>.png``: each controller's nominal history.
+                          units: Mapping[str, str] | None = None, prefix: str = "flyoff",
+                          title: str = "fly-off, nominal run") -> list[Path]:
+    """One PNG per signal, ``<prefix>_<signal>.png``: several variants' histories
+    overlaid (the fly-off: each controller's nominal run).
 
     Parameters
     ----------
     time_s : numpy.ndarray
         Common time grid (s).
     histories : mapping
-        signal → controller → nominal history on ``time_s`` (NaN after the run ended).
+        signal → variant (legend label) → history on ``time_s`` (NaN after the run ended).
     folder : pathlib.Path
         Output folder.
     units : mapping, optional
         signal → unit label.
+    prefix, title : str
+        File-name prefix and figure title.
     """
     paths = []
     for name, per_controller in histories.items():
@@ -38,8 +42,8 @@ def plot_history_overlays(time_s: np.ndarray, histories: Mapping[str, Mapping[st
         ax.set_xlabel("time (s)", fontsize=8)
         ax.set_ylabel(f"{name} [{unit}]" if unit else name, fontsize=8)
         ax.legend(fontsize=7, loc="best")
-        fig.suptitle(f"fly-off, nominal run: {name}", fontsize=10)
-        paths.append(_save(fig, folder / f"flyoff_{_file_stem(name)}.png"))
+        fig.suptitle(f"{title}: {name}", fontsize=10)
+        paths.append(_save(fig, folder / f"{prefix}_{_file_stem(name)}.png"))
     return paths
 
 

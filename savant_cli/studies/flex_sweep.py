@@ -57,12 +57,6 @@ def variant(model: SimModel, parameter: str, level: float, modes: list[int]) -> 
     return out
 
 
-def _requirement(study: FlexSweepStudyConfig, band: str, kind: str) -> float:
-    req = {"rigid/aero": study.requirements.rigid_aero, "slosh": study.requirements.slosh,
-           "flex": study.requirements.flex}[band]
-    return req.gain_dB if kind == "gain" else req.phase_deg
-
-
 def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
     """Fly, sweep, write ``flex_sweep.csv``, ``summary.json`` and the Nichols charts."""
     study: FlexSweepStudyConfig = cfg.study
@@ -97,7 +91,7 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
             for r in margin_rows:
                 rows.append({"time_s": t, "parameter": prm, "level": lvl, "axis": r.axis, "kind": r.kind,
                              "band": r.band, "value": r.value, "frequency_hz": r.frequency_hz,
-                             "meets_requirement": bool(abs(r.value) >= _requirement(study, r.band, r.kind)),
+                             "meets_requirement": bool(abs(r.value) >= study.requirements.required(r.band, r.kind)),
                              "closed_loop_stable": bool(extra["closed_loop_stable"])})
             bar.advance(task)
     out_dir.mkdir(parents=True, exist_ok=True)

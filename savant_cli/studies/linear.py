@@ -107,14 +107,11 @@ def analyse(model, snap, study: LinearStudyConfig, dt: float) -> tuple[LinearPoi
 
 
 def _table(rows: list[MarginRow], study: LinearStudyConfig) -> Table:
-    req = {"rigid/aero": study.requirements.rigid_aero, "slosh": study.requirements.slosh,
-           "flex": study.requirements.flex}
     tb = Table(title="stability margins (loop at a time; gain dB, phase deg)")
     for col in ("t (s)", "axis", "kind", "margin", "freq (Hz)", "band", "meets req."):
         tb.add_column(col, justify="right" if col in ("t (s)", "margin", "freq (Hz)") else "left")
     for r in rows:
-        need = req[r.band].gain_dB if r.kind == "gain" else req[r.band].phase_deg
-        ok = abs(r.value) >= need
+        ok = abs(r.value) >= study.requirements.required(r.band, r.kind)
         tb.add_row(f"{r.time_s:.1f}", r.axis, r.kind, f"{r.value:.2f}", f"{r.frequency_hz:.3f}", r.band,
                    "yes" if ok else "[red]NO[/red]")
     return tb
@@ -194,7 +191,5 @@ def _plots(record: RunRecord, points: list[LinearPoint], rows: list[MarginRow], 
         for pt in points:
             plot_linear_point(pt.time_s, pt.loops, pt.closed, [r for r in rows if r.time_s == pt.time_s],
                               folder / "linear", exclusion_zones=study.exclusion_zones)
-    req = {"rigid/aero": (study.requirements.rigid_aero.gain_dB, study.requirements.rigid_aero.phase_deg),
-           "slosh": (study.requirements.slosh.gain_dB, study.requirements.slosh.phase_deg),
-           "flex": (study.requirements.flex.gain_dB, study.requirements.flex.phase_deg)}
+    req = study.requirements.by_band()
     plot_margin_envelope(rows, folder / "linear" / "margin_envelope.png", requirements=req)

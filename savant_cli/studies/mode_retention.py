@@ -224,8 +224,7 @@ def _plots(folder: Path, results: list[CountResult]) -> None:
     t = results[-1].time_s
     hist = {name: {f"{r.n_modes} modes": r.histories[name] for r in results if name in r.histories}
             for name in sorted(results[0].histories)}
-    for p in plot_history_overlays(t, hist, folder):
-        p.rename(p.with_name(p.name.replace("flyoff_", "mode_retention_")))
+    plot_history_overlays(t, hist, folder, prefix="mode_retention", title="attitude-command step response")
     keys = sorted({k for r in results for k in r.margins if k[3] == "all"})
     fig = _figure(8.0, 4.5)
     axes = [fig.add_subplot(1, 2, i + 1) for i in range(2)]
