@@ -33,6 +33,8 @@ from typing import Any
 import numpy as np
 
 from savant_cli.errors import ConfigError
+from savant_cli.models.aero import COEFFICIENTS
+from savant_cli.models.configurations import CONFIG_NAMES
 
 try:
     from savant_cli import constants as _C
@@ -53,8 +55,7 @@ UNITS: dict[str, tuple[str, float]] = {
     "Pa": ("pressure", 1.0), "psf": ("pressure", _LBF / _FT**2),
     "mps": ("speed", 1.0), "fps": ("speed", _FT),
 }
-AERO_COEFFS = ("CA", "CY", "CN", "Cl", "Cm", "Cn")
-CONFIG_NAMES = ("stack", "upper_les", "upper")
+AERO_COEFFS = COEFFICIENTS
 _INERTIA = ("ixx", "iyy", "izz", "ixy", "ixz", "iyz")
 
 #: table kind -> required columns (base name, dimension); ``None`` = dimensionless

@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from savant_cli import constants as C
+from savant_cli.models import actuator, aero as aero_model, earth, flex, gravity, propulsion, rcs, slosh
 from savant_cli.models.atmosphere import upper_atmosphere_table
 from savant_cli.sim import layout as L
 from savant_cli.sim.plant import PlantTables
@@ -34,26 +35,28 @@ def tables(mass: float = 1000.0, inertia=(100.0, 400.0, 400.0, 0.0, 0.0, 0.0),
 
 def parameters(gravity_order: int = 0, aero: bool = False, thrust: bool = False) -> np.ndarray:
     p = np.zeros(L.N_PARAM)
-    p[L.P_MU] = C.MU_EARTH
-    p[L.P_RE] = C.WGS84_A
-    p[L.P_J2], p[L.P_J3], p[L.P_J4] = C.EGM2008_J2, C.EGM2008_J3, C.EGM2008_J4
-    p[L.P_OMEGA_E] = C.OMEGA_EARTH
-    p[L.P_E2] = C.WGS84_E2
-    p[L.P_FS_ISP_VAC] = p[L.P_FS_ISP_SL] = p[L.P_US_ISP] = 300.0
-    p[L.P_US_MR] = 5.0
-    p[L.P_FS_THRUST_SCALE] = 1.0
-    p[L.P_FS_GIMBAL_LIMIT] = p[L.P_US_GIMBAL_LIMIT] = 0.1
-    p[L.P_FS_GIMBAL_X] = p[L.P_US_GIMBAL_X] = 10.0
-    p[L.P_RCS_RAMP_UP] = p[L.P_RCS_RAMP_DOWN] = 0.05
-    for base in (L.P_ACT_FS_WA, L.P_ACT_US_WA):
-        p[base:base + 4] = [20.0, 60.0, 0.7, 1.0]
-    p[L.P_AERO_ON] = 1.0 if aero else 0.0
-    p[L.P_THRUST_ON] = 1.0 if thrust else 0.0
-    p[L.P_GRAVITY_ORDER] = gravity_order
-    p[L.P_VALVE_OFF] = p[L.P_SLOSH_OFF] = p[L.P_FLEX_OFF] = -1.0  # optional blocks absent
-    p[L.P_FS_PROP_FULL] = p[L.P_US_PROP_FULL] = 1.0
-    p[L.P_SLOSH_AREF] = 9.80665
-    p[L.P_SLOSH_FREQ_SCALE] = p[L.P_SLOSH_ZETA_SCALE] = 1.0
+    p[gravity.P_MU] = C.MU_EARTH
+    p[earth.P_RE] = C.WGS84_A
+    p[gravity.P_J2], p[gravity.P_J3], p[gravity.P_J4] = C.EGM2008_J2, C.EGM2008_J3, C.EGM2008_J4
+    p[earth.P_OMEGA_E] = C.OMEGA_EARTH
+    p[earth.P_E2] = C.WGS84_E2
+    p[propulsion.P_FS_ISP] = p[propulsion.P_US_ISP] = 300.0
+    p[propulsion.P_US_MR] = 5.0
+    p[propulsion.P_FS_THRUST_SCALE] = 1.0
+    for g in (actuator.P_FS_GIMBAL, actuator.P_US_GIMBAL):
+        p[g + actuator.G_LIMIT] = 0.1
+    p[propulsion.P_FS_GIMBAL + propulsion.GIMBAL_X] = p[propulsion.P_US_GIMBAL + propulsion.GIMBAL_X] = 10.0
+    p[rcs.P_RAMP_UP] = p[rcs.P_RAMP_DOWN] = 0.05
+    for base in (actuator.P_FS_THIRD, actuator.P_US_THIRD):
+        p[base + actuator.T3_WA], p[base + actuator.T3_WN] = 20.0, 60.0
+        p[base + actuator.T3_ZETA], p[base + actuator.T3_RATE] = 0.7, 1.0
+    p[aero_model.P_ON] = 1.0 if aero else 0.0
+    p[propulsion.P_ON] = 1.0 if thrust else 0.0
+    p[gravity.P_ORDER] = gravity_order
+    p[actuator.P_VALVE_OFFSET] = p[slosh.P_OFFSET] = p[flex.P_OFFSET] = -1.0  # optional blocks absent
+    p[propulsion.P_FS_PROP_FULL] = p[propulsion.P_US_PROP_FULL] = 1.0
+    p[slosh.P_AREF] = 9.80665
+    p[slosh.P_FREQ_SCALE] = p[slosh.P_ZETA_SCALE] = 1.0
     return p
 
 

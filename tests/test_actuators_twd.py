@@ -8,8 +8,9 @@ import control as ct
 import numpy as np
 import pytest
 
+from savant_cli.models import actuator, propulsion, twd
 from savant_cli.sim import layout as L
-from savant_cli.sim.plant import actuator_simplex, actuator_third_order, derivative, pack_tables
+from savant_cli.sim.plant import derivative, pack_tables
 import synthetic
 
 J_LOAD = 8125.0  # kg m²
@@ -20,9 +21,10 @@ C_LOAD = 2 * ZETA * np.sqrt(K_LOAD * J_LOAD)
 
 
 def _simplex_params(wv: float, feedback: float, leak: float = 0.0) -> np.ndarray:
-    p = np.zeros(L.N_SPX)
-    p[:] = (30.0, wv, 0.7, 10.0, K_LOAD, C_LOAD, J_LOAD, leak, feedback)  # large rate limit: linear
-    return p
+    p = np.zeros(actuator.SPX.size)
+    p[[actuator.SX_KA, actuator.SX_WV, actuator.SX_ZV, actuator.SX_RATE, actuator.SX_K, actuator.SX_C, actuator.SX_J,
+       actuator.SX_LEAK, actuator.SX_FEEDBACK]] = (30.0, wv, 0.7, 10.0, K_LOAD, C_LOAD, J_LOAD, leak, feedback)
+    return p  # large rate limit: linear
 
 
 def _jacobian(fun, n: int, eps: float = 1e-7) -> tuple[np.ndarray, np.ndarray]:
@@ -44,7 +46,7 @@ def _simplex_ss(wv: float, feedback: float) -> ct.StateSpace:
         x = np.zeros(5)
         x[:] = x5
         out = np.zeros(5)
-        actuator_simplex(x, 0, 3, u, sp, 0, out)
+        actuator.simplex(x, 0, 3, u, sp, 0, out)
         return out
 
     a, b = _jacobian(f, 5)
@@ -71,7 +73,9 @@ def test_simplex_reduces_to_third_order_with_fast_valve_and_nozzle_feedback():
     def f3(x3, u):
         x = np.array(x3, dtype=float)
         out = np.zeros(3)
-        actuator_third_order(x, 0, u, 30.0, WN, ZETA, 10.0, out)
+        p3 = np.zeros(actuator.THIRD.size)
+        p3[[actuator.T3_WA, actuator.T3_WN, actuator.T3_ZETA, actuator.T3_RATE]] = 30.0, WN, ZETA, 10.0
+        actuator.third_order(x, 0, u, p3, 0, out)
         return out
 
     a3, b3 = _jacobian(f3, 3)
@@ -87,26 +91,26 @@ def test_simplex_reduces_to_third_order_with_fast_valve_and_nozzle_feedback():
 def test_simplex_rate_saturates_at_the_valve_limit():
     """A large step: the ram moves at the valve's flow limit once the valve settles."""
     sp = _simplex_params(2 * np.pi * 45.0, 0.0)
-    sp[3] = np.radians(5.0)
+    sp[actuator.SX_RATE] = np.radians(5.0)
     x = np.zeros(5)
     dt = 1e-4
     for _ in range(int(0.2 / dt)):  # 0.2 s into a 0.1 rad step, still slewing
         k1 = np.zeros(5)
-        actuator_simplex(x, 0, 3, 0.1, sp, 0, k1)
+        actuator.simplex(x, 0, 3, 0.1, sp, 0, k1)
         x += dt * k1
     out = np.zeros(5)
-    actuator_simplex(x, 0, 3, 0.1, sp, 0, out)
+    actuator.simplex(x, 0, 3, 0.1, sp, 0, out)
     assert out[2] == pytest.approx(np.radians(5.0), rel=1e-3)  # θ̇_p = r = rate limit
 
 
 def _twd_setup(thrust: float):
     tb = pack_tables(synthetic.tables(mass=50000.0, inertia=(1e5, 4e6, 4e6, 0.0, 0.0, 0.0), cg=(5.0, 0.0, 0.0)))
     p = synthetic.parameters(thrust=True)
-    p[L.P_US_THRUST] = thrust
-    p[L.P_US_GIMBAL_LIMIT] = 0.2
-    p[L.P_US_GIMBAL_X:L.P_US_GIMBAL_X + 3] = (25.0, 0.0, 0.0)
-    p[L.P_US_ENG_M:L.P_US_ENG_M + 3] = (2500.0, 1.5, 8125.0)
-    p[L.P_TWD_ON] = 1.0
+    p[propulsion.P_US_THRUST] = thrust
+    p[actuator.P_US_GIMBAL + actuator.G_LIMIT] = 0.2
+    p[propulsion.P_US_GIMBAL:propulsion.P_US_GIMBAL + 3] = (25.0, 0.0, 0.0)
+    p[twd.P_US_ENGINE:twd.P_US_ENGINE + 3] = (2500.0, 1.5, 8125.0)
+    p[twd.P_ON] = 1.0
     u = synthetic.coast_inputs()
     u[L.U_ENGINE] = L.ENGINE_UPPER
     u[L.U_T_IGN] = -100.0  # long after the start transient
@@ -132,11 +136,11 @@ def test_tail_wags_dog_moment_closed_form_and_zero_pair():
             d, dd, ddd = amp * np.sin(w * tt), amp * w * np.cos(w * tt), -amp * w * w * np.sin(w * tt)
             x[L.ACT_P:L.ACT_P + 3] = d, dd, ddd
             derivative(0.0, x, u, p, tb, aux, np.zeros(L.N_STATE))
-            total = aux[L.A_MTHRUST + 1] + aux[L.A_TWD + 1]
+            total = aux[propulsion.A_MOMENT + 1] + aux[twd.A_MOMENT + 1]
             expected = thrust * l_c * np.sin(d) + jj * ddd
             assert total == pytest.approx(expected, rel=1e-9, abs=1e-6 * thrust * l_c * amp)
             if w == w_twd:  # cancellation to small-angle accuracy
                 assert abs(total) < 1e-4 * thrust * l_c * amp
-    p[L.P_TWD_ON] = 0.0
+    p[twd.P_ON] = 0.0
     derivative(0.0, x, u, p, tb, aux, np.zeros(L.N_STATE))
-    assert aux[L.A_TWD + 1] == 0.0
+    assert aux[twd.A_MOMENT + 1] == 0.0

@@ -17,10 +17,14 @@ from savant_cli.errors import ConfigError
 from savant_cli.linear.plant import SENSOR_NAMES, linearize_plant
 from savant_cli.models.sensors import misalignment
 from savant_cli.sim import engine as E
+from savant_cli.models import actuator, propulsion, sensors
 from savant_cli.sim import layout as L
 from savant_cli.sim.plant import derivative, pack_tables
 from savant_cli.sim.run import log_columns, simulate
 from savant_cli.sim.setup import prepare
+
+FS_BIAS = actuator.P_FS_GIMBAL + actuator.G_BIAS_PITCH  # pitch, then yaw
+US_BIAS = actuator.P_US_GIMBAL + actuator.G_BIAS_PITCH
 
 THRUST = 2.0e6
 L_C = 10.0 - 5.0  # synthetic gimbal station minus CG station, m
@@ -49,7 +53,7 @@ def _first_stage_point():
 def _thrust_moment(tb, p, u, x) -> tuple[np.ndarray, np.ndarray]:
     aux = np.zeros(L.N_AUX)
     derivative(0.5, x, u, p, tb, aux, np.zeros(L.N_STATE))
-    return aux[L.A_MTHRUST:L.A_MTHRUST + 3].copy(), aux
+    return aux[propulsion.A_MOMENT:propulsion.A_MOMENT + 3].copy(), aux
 
 
 def test_gimbal_bias_turns_the_thrust_line():
@@ -60,28 +64,28 @@ def test_gimbal_bias_turns_the_thrust_line():
     delta, b = 0.03, 0.01
     x[L.ACT_P] = delta
     m0, _ = _thrust_moment(tb, p, u, x)
-    p[L.P_FS_GIMBAL_BIAS] = b
-    p[L.P_US_GIMBAL_BIAS:L.P_US_GIMBAL_BIAS + 2] = 0.05, -0.05  # inactive stage
+    p[FS_BIAS] = b
+    p[US_BIAS:US_BIAS + 2] = 0.05, -0.05  # inactive stage
     m1, aux = _thrust_moment(tb, p, u, x)
     assert m0[1] == pytest.approx(THRUST * L_C * np.sin(delta), rel=1e-12)
     assert m1[1] == pytest.approx(THRUST * L_C * np.sin(delta + b), rel=1e-12)
     assert m1[1] - m0[1] == pytest.approx(THRUST * L_C * b * np.cos(delta), rel=1e-3)  # ≈ T l_c b
-    assert aux[L.A_DP] == delta  # logged actuator angle, bias excluded
+    assert aux[actuator.A_ANGLES] == delta  # logged actuator angle, bias excluded
 
     # both axes against an independent cross product
-    p[L.P_FS_GIMBAL_BIAS + 1] = -0.02
+    p[FS_BIAS + 1] = -0.02
     x[L.ACT_Y] = 0.015
     m2, aux = _thrust_moment(tb, p, u, x)
     a, c = delta + b, 0.015 - 0.02
     t_hat = np.array([np.cos(a) * np.cos(c), -np.sin(c), np.sin(a) * np.cos(c)])
     np.testing.assert_allclose(m2, np.cross([-L_C, 0.0, 0.0], THRUST * t_hat), rtol=1e-12, atol=1e-9)
-    assert aux[L.A_DY] == 0.015
+    assert aux[actuator.A_ANGLES + 1] == 0.015
 
     # the actuator at its stop: the thrust line is the limit plus the bias
     x[L.ACT_P], x[L.ACT_Y] = 0.5, 0.0
     m3, aux = _thrust_moment(tb, p, u, x)
-    lim = p[L.P_FS_GIMBAL_LIMIT]
-    assert aux[L.A_DP] == lim
+    lim = p[actuator.P_FS_GIMBAL + actuator.G_LIMIT]
+    assert aux[actuator.A_ANGLES] == lim
     assert m3[1] == pytest.approx(THRUST * L_C * np.sin(lim + b) * np.cos(-0.02), rel=1e-12)
 
 
@@ -210,11 +214,14 @@ def test_limits_are_accepted_and_reach_the_parameters_in_radians():
                                              "sensors.misalignment_deg.rate_gyro_upper_stage=[0.1,0.2,0.3]",
                                              "sensors.misalignment_deg.rate_gyro_first_stage=[-0.1,0.0,1.0]"]))).model
     p = model.p
-    np.testing.assert_allclose(p[L.P_FS_GIMBAL_BIAS:L.P_FS_GIMBAL_BIAS + 2], np.radians([2.0, -1.0]))
-    np.testing.assert_allclose(p[L.P_US_GIMBAL_BIAS:L.P_US_GIMBAL_BIAS + 2], np.radians([-2.0, 0.5]))
-    np.testing.assert_allclose(p[L.P_IMU_MISALIGN:L.P_IMU_MISALIGN + 3], np.radians([1.0, -1.0, 0.25]))
-    np.testing.assert_allclose(p[L.P_GYRO_US_MISALIGN:L.P_GYRO_US_MISALIGN + 3], np.radians([0.1, 0.2, 0.3]))
-    np.testing.assert_allclose(p[L.P_GYRO_FS_MISALIGN:L.P_GYRO_FS_MISALIGN + 3], np.radians([-0.1, 0.0, 1.0]))
-    assert p.size == L.N_PARAM == L.P_GYRO_FS_MISALIGN + 3
+    np.testing.assert_allclose(p[FS_BIAS:FS_BIAS + 2], np.radians([2.0, -1.0]))
+    np.testing.assert_allclose(p[US_BIAS:US_BIAS + 2], np.radians([-2.0, 0.5]))
+    np.testing.assert_allclose(p[sensors.P_IMU_MISALIGN:sensors.P_IMU_MISALIGN + 3], np.radians([1.0, -1.0, 0.25]))
+    np.testing.assert_allclose(p[sensors.P_GYRO_US_MISALIGN:sensors.P_GYRO_US_MISALIGN + 3], np.radians([0.1, 0.2, 0.3]))
+    np.testing.assert_allclose(p[sensors.P_GYRO_FS_MISALIGN:sensors.P_GYRO_FS_MISALIGN + 3], np.radians([-0.1, 0.0, 1.0]))
+    assert p.size == L.N_PARAM
     default = prepare(validate(compose_config([]))).model.p
-    assert not np.any(default[L.P_FS_GIMBAL_BIAS:L.N_PARAM])  # nominal: every error source 0
+    error_sources = [*range(FS_BIAS, FS_BIAS + 2), *range(US_BIAS, US_BIAS + 2)] + [
+        base + i for base in (sensors.P_IMU_MISALIGN, sensors.P_GYRO_US_MISALIGN, sensors.P_GYRO_FS_MISALIGN)
+        for i in range(3)]
+    assert not np.any(default[error_sources])  # nominal: every error source 0

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from savant_cli import constants as C
+from savant_cli.models import propulsion
 from savant_cli.sim import layout as L
 from savant_cli.sim.engine import rk4, work_array
 from savant_cli.sim.plant import derivative, pack_tables
@@ -83,7 +84,7 @@ def test_gimbal_moment_sign_and_magnitude():
     the CG; δy > 0 a positive yawing moment (docs/architecture.md)."""
     tb, u = pack_tables(synthetic.tables(cg=(5.0, 0.0, 0.0))), synthetic.coast_inputs()
     p = synthetic.parameters(thrust=True)
-    p[L.P_US_THRUST] = 1000.0
+    p[propulsion.P_US_THRUST] = 1000.0
     u[L.U_ENGINE] = L.ENGINE_UPPER
     x = _orbit_state()
     aux = np.zeros(L.N_AUX)
@@ -91,7 +92,7 @@ def test_gimbal_moment_sign_and_magnitude():
     x[L.ACT_P] = delta
     derivative(0.0, x, u, p, tb, aux, np.zeros(L.N_STATE))
     arm = 10.0 - 5.0  # gimbal station minus CG station
-    assert aux[L.A_MTHRUST + 1] == pytest.approx(1000.0 * arm * np.sin(delta), rel=1e-9)
+    assert aux[propulsion.A_MOMENT + 1] == pytest.approx(1000.0 * arm * np.sin(delta), rel=1e-9)
     x[L.ACT_P], x[L.ACT_Y] = 0.0, delta
     derivative(0.0, x, u, p, tb, aux, np.zeros(L.N_STATE))
-    assert aux[L.A_MTHRUST + 2] == pytest.approx(1000.0 * arm * np.sin(delta), rel=1e-9)
+    assert aux[propulsion.A_MOMENT + 2] == pytest.approx(1000.0 * arm * np.sin(delta), rel=1e-9)

@@ -123,27 +123,3 @@ def test_relative_velocity_of_earth_fixed_point_is_zero():
     np.testing.assert_allclose(E.velocity_relative_eci(r_eci, v_eci, W), 0.0, atol=1e-6)
     # and an inertially fixed point moves at −ω ẑ × r relative to the Earth
     np.testing.assert_allclose(E.velocity_relative_eci(r_eci, np.zeros(3), W), -v_eci, rtol=1e-8)
-
-
-def test_wind_ned_interpolation_and_clamping():
-    alt = np.array([0.0, 1000.0, 5000.0])
-    north = np.array([0.0, 10.0, 30.0])
-    east = np.array([5.0, -5.0, 15.0])
-    np.testing.assert_allclose(E.wind_ned(3000.0, alt, north, east, 1.0), [20.0, 5.0, 0.0])
-    np.testing.assert_allclose(E.wind_ned(500.0, alt, north, east, 2.0), [10.0, 0.0, 0.0])
-    np.testing.assert_allclose(E.wind_ned(-100.0, alt, north, east, 1.0), [0.0, 5.0, 0.0])
-    np.testing.assert_allclose(E.wind_ned(9e4, alt, north, east, 0.5), [15.0, 7.5, 0.0])
-    np.testing.assert_allclose(E.wind_ned(3000.0, alt, north, east, 0.0), [0.0, 0.0, 0.0])
-
-
-def test_wind_eci():
-    w = np.array([3.0, 4.0, 0.0])
-    r = np.array([A, 0.0, 0.0])
-    # at t = 0 on the equator/Greenwich, north is ECI +Z and east is ECI +Y
-    np.testing.assert_allclose(E.wind_eci(r, 0.0, W, 0.0, 0.0, w), [0.0, 4.0, 3.0], atol=1e-15)
-    # general case: the same vector through explicit frames
-    lat, lon, t = np.radians(40.0), np.radians(-100.0), 777.0
-    expect = E.dcm_eci_to_ecef(t, W).T @ (E.dcm_ecef_to_ned(lat, lon).T @ w)
-    got = E.wind_eci(r, t, W, lat, lon, w)
-    np.testing.assert_allclose(got, expect, atol=1e-14)
-    assert np.linalg.norm(got) == pytest.approx(5.0, rel=1e-15)

@@ -17,9 +17,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from savant_cli.models import flex, propulsion, rcs, rigid_body, twd as twd_model
 from savant_cli.sim import layout as L
 from savant_cli.sim.engine import rk4, work_array
-from savant_cli.sim.plant import derivative, flex_point, pack_tables
+from savant_cli.models.flex import flex_point
+from savant_cli.sim.plant import derivative, pack_tables
 import synthetic
 
 N_SETS = len(L.FLEX_SETS)
@@ -37,9 +39,9 @@ def _flex_tables(freq: np.ndarray, zeta: np.ndarray, shapes: np.ndarray, **kw):
 def _flex_params(n_modes: int, switch: int = 0, **kw) -> tuple[np.ndarray, L.StateLayout]:
     lay = L.StateLayout(n_modes=n_modes)
     p = synthetic.parameters(**kw)
-    p[L.P_FLEX_OFF] = lay.flex
-    p[L.P_N_MODES] = n_modes
-    p[L.P_FLEX_SWITCH] = switch
+    p[flex.P_OFFSET] = lay.flex
+    p[flex.P_N_MODES] = n_modes
+    p[flex.P_SWITCH] = switch
     return p, lay
 
 
@@ -148,8 +150,8 @@ def test_flex_point_rotation_and_rate_at_every_point(config, switch, sets, weigh
     tb = pack_tables(_flex_tables(np.full((N_SETS, nd), 10.0), np.zeros(nd), shapes))
     nm = n_used
     p, lay = _flex_params(nm, switch=switch)
-    p[L.P_FS_PROP_FULL] = 4.0e5
-    p[L.P_US_PROP_FULL] = 1.0e5
+    p[propulsion.P_FS_PROP_FULL] = 4.0e5
+    p[propulsion.P_US_PROP_FULL] = 1.0e5
     x = _orbit_state(lay)
     x[L.MFS] = 0.75 * 4.0e5
     x[L.MLOX], x[L.MLH2] = 0.4 * 1.0e5 * 5 / 6, 0.4 * 1.0e5 / 6
@@ -170,7 +172,7 @@ def test_flex_point_rotation_and_rate_at_every_point(config, switch, sets, weigh
         flex_point(x, config, p, tb, pt, False, out)
         np.testing.assert_allclose(out, expected_rot, rtol=1e-12, atol=1e-18)
     # flex off: zero
-    p[L.P_FLEX_OFF] = -1
+    p[flex.P_OFFSET] = -1
     flex_point(x, config, p, tb, L.PT_IMU, True, out)
     np.testing.assert_array_equal(out, 0.0)
 
@@ -251,11 +253,11 @@ def _thrust_setup(engine: int, rng, nm: int = 2, twd: bool = False):
     thrust = 2.0e6
     tables = tables._replace(fs_time=np.array([0.0, 1.0e3]), fs_thrust=np.array([thrust, thrust]))
     p, lay = _flex_params(nm, thrust=True)
-    p[L.P_US_THRUST] = thrust
+    p[propulsion.P_US_THRUST] = thrust
     if twd:
-        p[L.P_TWD_ON] = 1.0
-        p[L.P_FS_ENG_M:L.P_FS_ENG_M + 3] = (7000.0, 2.0, 35000.0)
-        p[L.P_US_ENG_M:L.P_US_ENG_M + 3] = (2500.0, 1.5, 8125.0)
+        p[twd_model.P_ON] = 1.0
+        p[twd_model.P_FS_ENGINE:twd_model.P_FS_ENGINE + 3] = (7000.0, 2.0, 35000.0)  # mass, arm, inertia
+        p[twd_model.P_US_ENGINE:twd_model.P_US_ENGINE + 3] = (2500.0, 1.5, 8125.0)
     u = synthetic.coast_inputs()
     if engine == L.ENGINE_FIRST:
         u[L.U_CONFIG], u[L.U_ENGINE] = L.CONFIG_STACK, L.ENGINE_FIRST
@@ -312,14 +314,14 @@ def test_modal_acceleration_is_thrust_at_the_gimbal_turned_by_flex(engine, plane
 
     aux, xd = np.zeros(L.N_AUX), np.zeros(lay.n)
     derivative(0.0, x, u, p, tb, aux, xd)
-    assert aux[L.A_THRUST] == pytest.approx(thrust, rel=1e-12)
+    assert aux[propulsion.A_THRUST] == pytest.approx(thrust, rel=1e-12)
     np.testing.assert_allclose(xd[fo:fo + nm], qd, rtol=1e-15)
     gen_scale = np.abs(phi).max() * thrust
     tol = 1e-12 if plane != "both" else 2.0 * np.abs(theta).max() * (abs(dp) + abs(dy) + np.abs(theta).max())
     np.testing.assert_allclose(xd[fo + nm:fo + 2 * nm], expected, rtol=0, atol=tol * gen_scale)
-    np.testing.assert_allclose(aux[L.A_FLEX_GIMBAL:L.A_FLEX_GIMBAL + 3], theta, rtol=1e-12, atol=1e-18)
+    np.testing.assert_allclose(aux[flex.A_GIMBAL_ROTATION:flex.A_GIMBAL_ROTATION + 3], theta, rtol=1e-12, atol=1e-18)
     # the rigid body feels the same turned thrust (force along body axes / mass)
-    np.testing.assert_allclose(aux[L.A_ACCEL:L.A_ACCEL + 3], force / 1000.0, rtol=0,
+    np.testing.assert_allclose(aux[rigid_body.A_ACCEL:rigid_body.A_ACCEL + 3], force / 1000.0, rtol=0,
                                atol=tol * thrust / 1000.0)
     # the other stage's gimbal carries no load: moving its shapes changes nothing
     sh2 = shapes.copy()
@@ -337,7 +339,7 @@ def test_engine_inertia_reaction_loads_the_modes_at_the_gimbal(engine):
     M = I_R (0, δ̈_p, δ̈_y), so q̈_i = φ_i(g)·F + σ_i(g)·M − 2ζωq̇ − ω²q."""
     rng = np.random.default_rng(11 + engine)
     tables, shapes, w, zeta, thrust, p, lay, u, x = _thrust_setup(engine, rng, twd=True)
-    p[L.P_THRUST_ON] = 0.0
+    p[propulsion.P_ON] = 0.0
     tb = pack_tables(tables)
     nm = 2
     fo = lay.flex
@@ -354,7 +356,7 @@ def test_engine_inertia_reaction_loads_the_modes_at_the_gimbal(engine):
     expected = shapes[sa, :, pg, :3] @ force + shapes[sa, :, pg, 3:] @ moment - w**2 * q
     aux, xd = np.zeros(L.N_AUX), np.zeros(lay.n)
     derivative(0.0, x, u, p, tb, aux, xd)
-    assert aux[L.A_THRUST] == 0.0
+    assert aux[propulsion.A_THRUST] == 0.0
     np.testing.assert_allclose(xd[fo + nm:fo + 2 * nm], expected, rtol=1e-12)
 
 
@@ -363,10 +365,10 @@ def test_roll_jet_torque_loads_the_modes_at_the_rcs_point():
     Q_i = σ_x,i(RCS)·T_x."""
     rng = np.random.default_rng(13)
     tables, shapes, w, zeta, thrust, p, lay, u, x = _thrust_setup(L.ENGINE_UPPER, rng)
-    p[L.P_THRUST_ON] = 0.0
+    p[propulsion.P_ON] = 0.0
     f_jet = 3100.0
     tables = tables._replace(rcs_alt=np.array([0.0, 1.0e7]), rcs_thrust=np.array([f_jet, f_jet]))
-    p[L.P_RCS_N], p[L.P_RCS_ARM] = 2.0, 2.75
+    p[rcs.P_N], p[rcs.P_ARM] = 2.0, 2.75
     tb = pack_tables(tables)
     x[L.RCS_POS] = 1.0
     fo = lay.flex
@@ -374,5 +376,5 @@ def test_roll_jet_torque_loads_the_modes_at_the_rcs_point():
     expected = shapes[2, :, L.PT_RCS, 3] * torque
     aux, xd = np.zeros(L.N_AUX), np.zeros(lay.n)
     derivative(0.0, x, u, p, tb, aux, xd)
-    assert aux[L.A_RCS_TORQUE] == pytest.approx(torque, rel=1e-12)
+    assert aux[rcs.A_TORQUE] == pytest.approx(torque, rel=1e-12)
     np.testing.assert_allclose(xd[fo + 2:fo + 4], expected, rtol=1e-12)

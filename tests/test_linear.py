@@ -15,6 +15,7 @@ from savant_cli.config import validate
 from savant_cli.linear.loops import assemble
 from savant_cli.linear.margins import Bands, loop_margins
 from savant_cli.linear.plant import linearize_plant
+from savant_cli.models import actuator, aero, atmosphere, mass as mass_model, propulsion, rigid_body, slosh, twd
 from savant_cli.sim import layout as L
 from savant_cli.sim.engine import rk4, work_array
 from savant_cli.sim.plant import derivative
@@ -91,10 +92,11 @@ def test_tail_wags_dog_zero_pair():
     # is a polynomial; find the zeros by evaluating on the imaginary axis
     aux = np.zeros(L.N_AUX)
     derivative(snap.t, snap.x, snap.u, model.p, model.packed_tables, aux, np.zeros(snap.x.size))
-    thrust = aux[L.A_THRUST]
-    cg_x = aux[L.A_CG]  # total CG (no slosh): the rigid CG
-    l_c = model.p[L.P_FS_GIMBAL_X] - cg_x
-    jj = model.p[L.P_FS_ENG_I] + model.p[L.P_FS_ENG_M] * model.p[L.P_FS_ENG_L] * l_c
+    thrust = aux[propulsion.A_THRUST]
+    cg_x = aux[mass_model.A_CG]  # total CG (no slosh): the rigid CG
+    l_c = model.p[propulsion.P_FS_GIMBAL] - cg_x
+    engine = model.p[twd.P_FS_ENGINE:twd.P_FS_ENGINE + twd.ENGINE.size]
+    jj = engine[twd.E_INERTIA] + engine[twd.E_MASS] * engine[twd.E_ARM] * l_c
     w_expected = np.sqrt(thrust * l_c / jj)
     w = np.linspace(0.5 * w_expected, 1.5 * w_expected, 4001)
     mag = []
@@ -113,7 +115,7 @@ def test_slosh_and_flex_poles_at_their_model_frequencies():
     wn = np.abs(poles[poles.imag > 0])
     aux = np.zeros(L.N_AUX)
     derivative(snap.t, snap.x, snap.u, model.p, model.packed_tables, aux, np.zeros(snap.x.size))
-    for w_model in (*aux[L.A_SLOSH_W:L.A_SLOSH_W + 2], *model.tables.flex_freq[0, :2]):
+    for w_model in (*aux[slosh.A_FREQUENCY:slosh.A_FREQUENCY + 2], *model.tables.flex_freq[0, :2]):
         assert np.min(np.abs(wn - w_model) / w_model) < 0.03, (w_model, np.sort(wn))
 
 
@@ -139,9 +141,9 @@ def test_closed_form_rigid_pitch_loop_margins(maxq):
     aux = np.zeros(L.N_AUX)
     derivative(snap.t, snap.x, snap.u, model.p, model.packed_tables, aux, np.zeros(snap.x.size))
     tb = model.tables
-    qbar, v, mass, thrust = aux[L.A_QBAR], aux[L.A_VREL], aux[L.A_MASS], aux[L.A_THRUST]
-    cg, mach, a0, rho, sos = aux[L.A_CG], aux[L.A_MACH], aux[L.A_ALPHA], aux[L.A_RHO], aux[L.A_SOS]
-    f_bx0, f_bz0 = aux[L.A_ACCEL], aux[L.A_ACCEL + 2]  # specific force, body
+    qbar, v, mass, thrust = aux[aero.A_QBAR], aux[aero.A_VREL], aux[mass_model.A_MASS], aux[propulsion.A_THRUST]
+    cg, mach, a0, rho, sos = aux[mass_model.A_CG], aux[aero.A_MACH], aux[aero.A_ALPHA], aux[atmosphere.A_RHO], aux[atmosphere.A_SOS]
+    f_bx0, f_bz0 = aux[rigid_body.A_ACCEL], aux[rigid_body.A_ACCEL + 2]  # specific force, body
     axes = (tb.aero_mach, tb.aero_alpha, tb.aero_beta)
     grid = [RegularGridInterpolator(axes, tb.aero_coef[0, k]) for k in range(tb.aero_coef.shape[1])]
     h = 1e-5  # the local slope of the tables' cell, as the plant's Jacobian sees it
@@ -171,8 +173,9 @@ def test_closed_form_rigid_pitch_loop_margins(maxq):
     m_y = (s_ref * (l_ref * cm0 + dx * cn0) * qbar_row
            + qbar * s_ref * ((l_ref * d_alpha(4) + dx * d_alpha(2)) * alpha_row
                              + (l_ref * d_mach(4) + dx * d_mach(2)) * mach_row)) / iyy
-    mu_c = thrust * (model.p[L.P_FS_GIMBAL_X] - cg) / iyy
-    wa, wn, zeta = model.p[L.P_ACT_FS_WA], model.p[L.P_ACT_FS_WN], model.p[L.P_ACT_FS_ZETA]
+    mu_c = thrust * (model.p[propulsion.P_FS_GIMBAL] - cg) / iyy
+    third = model.p[actuator.P_FS_THIRD:actuator.P_FS_THIRD + actuator.THIRD.size]
+    wa, wn, zeta = third[actuator.T3_WA], third[actuator.T3_WN], third[actuator.T3_ZETA]
     # states δu, δw (inertial, frozen body axes), θ, q, δ, δ̇, δ̈
     a = np.zeros((7, 7))
     a[0, :3] = f_x + np.array([0.0, 0.0, f_bz0])  # δv̇ = δf_b + θ × f_b0

@@ -12,8 +12,9 @@ from scipy.interpolate import RegularGridInterpolator
 from conftest import compose_config
 from savant_cli.config import validate
 from savant_cli.models import quaternion as qt
+from savant_cli.models import aero, atmosphere, earth, mass, propulsion, winds
 from savant_cli.sim import layout as L
-from savant_cli.sim.plant import derivative, pack_tables, T_AERO_COEF
+from savant_cli.sim.plant import derivative, pack_tables
 from savant_cli.sim.setup import prepare
 
 
@@ -30,7 +31,7 @@ def test_pack_layout_round_trips_every_table(model):
         np.testing.assert_array_equal(flat[off:off + n], np.asarray(arr, float).ravel())
     last = len(model.tables) - 1
     assert int(flat[2 * last]) + int(flat[2 * last + 1]) == flat.size
-    assert int(flat[2 * T_AERO_COEF + 1]) == model.tables.aero_coef.size
+    assert int(flat[2 * aero.T_COEF + 1]) == model.tables.aero_coef.size
 
 
 def _state_in_flight(model, alt_m: float, speed_mps: float, alpha_deg: float, beta_deg: float, prop_kg: float):
@@ -42,7 +43,7 @@ def _state_in_flight(model, alt_m: float, speed_mps: float, alpha_deg: float, be
     a, b = np.radians(alpha_deg), np.radians(beta_deg)
     v_body = speed_mps * np.array([np.cos(a) * np.cos(b), np.sin(b), np.sin(a) * np.cos(b)])
     c_b2i = qt.dcm(x[L.Q:L.Q + 4])
-    omega = np.array([0.0, 0.0, model.p[L.P_OMEGA_E]])
+    omega = np.array([0.0, 0.0, model.p[earth.P_OMEGA_E]])
     x[L.V:L.V + 3] = c_b2i @ v_body + np.cross(omega, x[L.R:L.R + 3])  # no wind below
     x[L.MFS] = prop_kg
     return x
@@ -56,30 +57,30 @@ def _state_in_flight(model, alt_m: float, speed_mps: float, alpha_deg: float, be
 def test_plant_reads_aero_mass_and_thrust_tables_as_independent_lookups(model, alt_m, speed, alpha, beta, prop_frac):
     tb = model.tables
     p = model.p.copy()
-    p[L.P_WIND_SCALE] = 0.0
+    p[winds.P_SCALE] = 0.0
     u = model.u0.copy()
     prop = prop_frac * tb.mass_prop[L.CONFIG_STACK, tb.mass_len[L.CONFIG_STACK] - 1]
     x = _state_in_flight(model, alt_m, speed, alpha, beta, prop)
     aux = np.zeros(L.N_AUX)
     t = 40.0
     derivative(t, x, u, p, model.packed_tables, aux, np.zeros(L.N_STATE))
-    assert np.degrees(aux[L.A_ALPHA]) == pytest.approx(alpha, abs=1e-6)
-    assert np.degrees(aux[L.A_BETA]) == pytest.approx(beta, abs=1e-6)
+    assert np.degrees(aux[aero.A_ALPHA]) == pytest.approx(alpha, abs=1e-6)
+    assert np.degrees(aux[aero.A_BETA]) == pytest.approx(beta, abs=1e-6)
 
     c = L.CONFIG_STACK
     n = tb.mass_len[c]
     data = tb.mass_data[c, :n]
-    for col, key in ((0, L.A_MASS), (1, L.A_CG)):
+    for col, key in ((0, mass.A_MASS), (1, mass.A_CG)):
         assert aux[key] == pytest.approx(np.interp(prop, tb.mass_prop[c, :n], data[:, col]), rel=1e-12)
 
-    point = np.array([[aux[L.A_MACH], aux[L.A_ALPHA], aux[L.A_BETA]]])
+    point = np.array([[aux[aero.A_MACH], aux[aero.A_ALPHA], aux[aero.A_BETA]]])
     axes = (tb.aero_mach, tb.aero_alpha, tb.aero_beta)
     ca, cy, cn = (RegularGridInterpolator(axes, tb.aero_coef[c, k])(point)[0] for k in range(3))
     nb = tb.base_len[c]
     f_base = np.interp(t, tb.base_time[c, :nb], tb.base_force[c, :nb])
-    qs = aux[L.A_QBAR] * tb.aero_ref[c, 0]
-    np.testing.assert_allclose(aux[L.A_FAERO:L.A_FAERO + 3], [-qs * ca + f_base, qs * cy, -qs * cn],
+    qs = aux[aero.A_QBAR] * tb.aero_ref[c, 0]
+    np.testing.assert_allclose(aux[aero.A_FORCE:aero.A_FORCE + 3], [-qs * ca + f_base, qs * cy, -qs * cn],
                                rtol=1e-10, atol=1e-6)
 
-    f_vac = np.interp(t, tb.fs_time, tb.fs_thrust) * p[L.P_FS_THRUST_SCALE]
-    assert aux[L.A_THRUST] == pytest.approx(f_vac - aux[L.A_PRES] * p[L.P_FS_EXIT_AREA], rel=1e-12)
+    f_vac = np.interp(t, tb.fs_time, tb.fs_thrust) * p[propulsion.P_FS_THRUST_SCALE]
+    assert aux[propulsion.A_THRUST] == pytest.approx(f_vac - aux[atmosphere.A_PRES] * p[propulsion.P_FS_EXIT_AREA], rel=1e-12)

@@ -8,6 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from savant_cli.models import gravity, propulsion, slosh
 from savant_cli.sim import layout as L
 from savant_cli.sim.engine import rk4, work_array
 from savant_cli.sim.plant import pack_tables
@@ -22,14 +23,14 @@ def _setup(w_ref: float, zeta: float, m_s: float, accel: float, inertia: float =
     row = [w_ref, zeta, m_s, 1.0]
     tables = tables._replace(slosh_level=np.tile(level, (2, 1)), slosh_data=np.tile(row, (2, 2, 1)))
     p = synthetic.parameters(thrust=True)
-    p[L.P_US_THRUST] = accel * 1.0e6
-    p[L.P_US_ISP] = 1e12  # no mass flow: constant acceleration
-    p[L.P_US_GIMBAL_X:L.P_US_GIMBAL_X + 3] = (40.0, 0.0, 0.0)
+    p[propulsion.P_US_THRUST] = accel * 1.0e6
+    p[propulsion.P_US_ISP] = 1e12  # no mass flow: constant acceleration
+    p[propulsion.P_US_GIMBAL:propulsion.P_US_GIMBAL + 3] = (40.0, 0.0, 0.0)
     lay = L.StateLayout(slosh=True)
-    p[L.P_SLOSH_OFF] = lay.slosh_offset
-    p[L.P_SLOSH_AREF] = A_REF
+    p[slosh.P_OFFSET] = lay.slosh_offset
+    p[slosh.P_AREF] = A_REF
     for j, bottom in enumerate((30.0, 15.0)):
-        p[L.P_TANK + 3 * j:L.P_TANK + 3 * j + 3] = (2.75, bottom, 1000.0)
+        p[slosh.P_TANKS + slosh.N_TANK_FIELDS * j:slosh.P_TANKS + slosh.N_TANK_FIELDS * j + 3] = (2.75, bottom, 1000.0)
     u = synthetic.coast_inputs()
     u[L.U_ENGINE] = L.ENGINE_UPPER
     u[L.U_T_IGN] = -100.0
@@ -74,7 +75,7 @@ def test_slosh_force_is_the_reaction_on_the_vehicle():
     force; RK4 keeps linear invariants). The body is made practically non-rotating so the
     thrust keeps its direction."""
     tb, p, u, x, lay = _setup(2 * np.pi * 0.4, 0.01, 5.0e3, A_REF, inertia=1e20)
-    p[L.P_MU] = 0.0  # no gravity gradient acting on the drifting rigid body
+    p[gravity.P_MU] = 0.0  # no gravity gradient acting on the drifting rigid body
     so = lay.slosh_offset
     x[so] = 0.2
     m_r = 1.0e6 - 2 * 5.0e3

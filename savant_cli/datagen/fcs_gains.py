@@ -33,11 +33,8 @@ import numpy as np
 from savant_cli import constants as C
 from savant_cli.datagen import flex_filters
 from savant_cli.datagen.guidance_commands import _compose, solve
-from savant_cli.models import earth
-from savant_cli.models.atmosphere import atmosphere
-from savant_cli.models.interp import locate, trilinear
-from savant_cli.sim.layout import CONFIG_STACK, CONFIG_UPPER
-from savant_cli.sim.plant import mass_properties
+from savant_cli.models import aero, atmosphere as atm, earth, mass as mass_model
+from savant_cli.models.configurations import CONFIG_STACK, CONFIG_UPPER
 
 DESIGN = {
     "name": "msfc_pid",
@@ -64,28 +61,24 @@ CONTROLLERS = {"msfc_pid": DESIGN, "larc_pd": LARC_PD}
 
 def pitch_coefficients(ref, t: float, y: np.ndarray, config: int) -> tuple[float, float]:
     """μα and μc (1/s²) of the rigid pitch plane at reference time ``t``."""
-    tb = ref.tb
+    tb, packed = ref.tb, ref.packed
     v = ref.vehicle
     prop = y[6] if config == CONFIG_STACK else y[7] + y[8]
-    _, cg, inertia = mass_properties(tb, config, max(prop, 0.0))
+    _, cg, inertia = mass_model.inertia_tensor(packed, config, max(prop, 0.0))
     iyy = inertia[1, 1]
     r, vel = y[0:3], y[3:6]
     c_i2e = earth.dcm_eci_to_ecef(t, C.OMEGA_EARTH)
     _, _, alt = earth.ecef_to_geodetic(c_i2e @ r, C.WGS84_A, C.WGS84_E2)
-    _, pres, rho, sos = atmosphere(alt, tb.atm_alt, tb.atm_lnp, tb.atm_lnrho)
+    _, pres, rho, sos = atm.air_at_packed(alt, packed)
     vv = np.linalg.norm(earth.velocity_relative_eci(r, vel, C.OMEGA_EARTH))
     qbar = 0.5 * rho * vv * vv
-    ref_row = tb.aero_ref[config]
-    arm = -(ref_row[4] - cg[0])  # body-X arm of the MRP from the CG (structure X is aft)
+    ref_row = aero.reference(packed, config)
+    arm = -(ref_row[aero.REF_MRP_X] - cg[0])  # body-X arm of the MRP from the CG (structure X is aft)
 
     def m_cg(alpha):
-        im, wm = locate(tb.aero_mach, tb.aero_mach.size, vv / sos)
-        ia, wa = locate(tb.aero_alpha, tb.aero_alpha.size, alpha)
-        ib, wb = locate(tb.aero_beta, tb.aero_beta.size, 0.0)
-        cn = trilinear(tb.aero_coef[config, 2], im, wm, ia, wa, ib, wb)
-        cm = trilinear(tb.aero_coef[config, 4], im, wm, ia, wa, ib, wb)
+        _, _, cn, _, cm, _ = aero.coefficients_at(packed, config, vv / sos, alpha, 0.0)
         # M_y about CG = qS l Cm + (r_mrp × F)_y with F_z = −qS CN
-        return qbar * ref_row[0] * (ref_row[2] * cm + arm * cn)
+        return qbar * ref_row[aero.REF_AREA] * (ref_row[aero.REF_LY] * cm + arm * cn)
 
     da = np.radians(1.0)
     mu_alpha = (m_cg(da) - m_cg(-da)) / (2 * da) / iyy

@@ -45,13 +45,11 @@ from scipy.spatial.transform import Rotation
 
 from savant_cli import constants as C
 from savant_cli.config import SavantConfig
-from savant_cli.models import earth, quaternion as qt
-from savant_cli.models.atmosphere import atmosphere
+from savant_cli.models import aero, atmosphere as atm, earth, mass as mass_model, quaternion as qt
+from savant_cli.models.configurations import CONFIG_STACK, CONFIG_UPPER, CONFIG_UPPER_LES
 from savant_cli.models.gravity import gravity_zonal
-from savant_cli.models.interp import locate, trilinear
 from savant_cli.sim import build
-from savant_cli.sim.layout import CONFIG_STACK, CONFIG_UPPER, CONFIG_UPPER_LES
-from savant_cli.sim.plant import PlantTables, mass_properties
+from savant_cli.sim.plant import PlantTables, pack_tables
 from savant_cli.vehicle import Vehicle
 
 G0 = C.G0
@@ -99,6 +97,7 @@ class Reference:
         self.vehicle = vehicle
         self.prog = prog
         self.tb: PlantTables = build.plant_tables(cfg, vehicle)
+        self.packed = pack_tables(self.tb)  # the plant's own kernels read these
         self.r0, self.v0, self.q0 = build.pad_state(cfg, vehicle)
         ls = cfg.guidance.launch_site
         lat, lon = np.radians(ls.latitude_deg), np.radians(ls.longitude_deg)
@@ -197,12 +196,12 @@ class Reference:
         tb = self.tb
         cfg_i = self._config(t)
         prop = y[6] if cfg_i == CONFIG_STACK else y[7] + y[8]
-        mass = mass_properties(tb, cfg_i, max(prop, 0.0))[0]
+        mass = mass_model.mass_properties(self.packed, cfg_i, max(prop, 0.0))[0]
         c_b2i = self.attitude(t, y, azimuth, steer, turn)
         x_b = c_b2i[:, 0]
         c_i2e = earth.dcm_eci_to_ecef(t, C.OMEGA_EARTH)
         lat, lon, alt = earth.ecef_to_geodetic(c_i2e @ r, C.WGS84_A, C.WGS84_E2)
-        _, pres, rho, sos = atmosphere(alt, tb.atm_alt, tb.atm_lnp, tb.atm_lnrho)
+        _, pres, rho, sos = atm.air_at_packed(alt, self.packed)
         g = gravity_zonal(r, C.MU_EARTH, C.WGS84_A, C.EGM2008_J2, C.EGM2008_J3, C.EGM2008_J4)
         v_rel = earth.velocity_relative_eci(r, v, C.OMEGA_EARTH)
         f = np.zeros(3)
@@ -212,12 +211,8 @@ class Reference:
             qbar = 0.5 * rho * vv * vv
             cos_a = np.clip(np.dot(x_b, v_rel) / vv, -1.0, 1.0)
             alpha_t = np.arccos(cos_a)
-            im, wm = locate(tb.aero_mach, tb.aero_mach.size, vv / sos)
-            ia, wa = locate(tb.aero_alpha, tb.aero_alpha.size, alpha_t)
-            ib, wb = locate(tb.aero_beta, tb.aero_beta.size, 0.0)
-            ca = trilinear(tb.aero_coef[cfg_i, 0], im, wm, ia, wa, ib, wb)
-            cn = trilinear(tb.aero_coef[cfg_i, 2], im, wm, ia, wa, ib, wb)
-            s_ref = tb.aero_ref[cfg_i, 0]
+            ca, _, cn, _, _, _ = aero.coefficients_at(self.packed, cfg_i, vv / sos, alpha_t, 0.0)
+            s_ref = aero.reference(self.packed, cfg_i)[aero.REF_AREA]
             f += -qbar * s_ref * ca * x_b
             n_dir = v_rel / vv - cos_a * x_b  # normal force pushes against the crossflow
             nn = np.linalg.norm(n_dir)

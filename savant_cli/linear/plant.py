@@ -23,11 +23,12 @@ from dataclasses import dataclass
 import control as ct
 import numpy as np
 
-from savant_cli.models import quaternion as qt
+from savant_cli.models import actuator, aero, quaternion as qt, sensors
 from savant_cli.models.sensors import misalignment
 from savant_cli.sim import layout as L
 from savant_cli.sim.build import SimModel
-from savant_cli.sim.plant import derivative, flex_point
+from savant_cli.models.flex import flex_point
+from savant_cli.sim.plant import derivative
 from savant_cli.sim.run import Snapshot
 
 #: Perturbation scale per kind of state (SI): position m, velocity m/s, angle rad, rate
@@ -132,7 +133,7 @@ def _outputs(model: SimModel, t: float, x: np.ndarray, x0: np.ndarray, u: np.nda
     config = int(u[L.U_CONFIG])
     rot = np.zeros(3)
     flex_point(x, config, p, tb, L.PT_IMU, False, rot)
-    q_imu = misalignment(p[L.P_IMU_MISALIGN:L.P_IMU_MISALIGN + 3])[0]
+    q_imu = misalignment(p[sensors.P_IMU_MISALIGN:sensors.P_IMU_MISALIGN + 3])[0]
     dq = qt.qmul(qt.qconj(qt.qmul(x0[L.Q:L.Q + 4], q_imu)), qt.qmul(x[L.Q:L.Q + 4], q_imu))
     y = [2.0 * dq[1:4] + rot]
     for pt, pm in zip(L.GYRO_POINTS, L.GYRO_MISALIGN, strict=True):
@@ -141,7 +142,7 @@ def _outputs(model: SimModel, t: float, x: np.ndarray, x0: np.ndarray, u: np.nda
         y.append(misalignment(p[pm:pm + 3])[1] @ (x[L.W:L.W + 3] + fr))
     aux = np.zeros(L.N_AUX)
     derivative(t, x, u, model.p, tb, aux, np.zeros(x.size))
-    y.append(np.array([aux[L.A_DP], aux[L.A_DY], aux[L.A_ALPHA], aux[L.A_BETA]]))
+    y.append(np.array([aux[actuator.A_ANGLES], aux[actuator.A_ANGLES + 1], aux[aero.A_ALPHA], aux[aero.A_BETA]]))
     return np.concatenate(y)
 
 

@@ -52,7 +52,18 @@ import math
 import numpy as np
 from numba import njit
 
-from savant_cli.models.interp import locate, locate_at
+from savant_cli.models import blocks
+from savant_cli.models.interp import locate, locate_at, tab, tab_offset
+
+_TABLES = blocks.TABLES.block("atmosphere")
+T_ALT = _TABLES.table("atm_alt", "m", "geometric altitudes of the 86–1000 km table")
+T_LNP = _TABLES.table("atm_lnp", "ln Pa", "natural log of pressure at T_ALT")
+T_LNRHO = _TABLES.table("atm_lnrho", "ln(kg/m^3)", "natural log of density at T_ALT")
+_AUX = blocks.DIAGNOSTICS.block("atmosphere")
+A_RHO = _AUX.scalar("density", "kg/m^3", "air density")
+A_PRES = _AUX.scalar("pressure", "Pa", "static pressure")
+A_TEMP = _AUX.scalar("temperature", "K", "kinetic temperature")
+A_SOS = _AUX.scalar("speed_of_sound", "m/s", "speed of sound")
 
 from savant_cli.constants import G0, GAMMA_AIR, M0, P0, R0_US76, R_STAR, T0
 
@@ -405,3 +416,22 @@ def us76_profile(alt_m: np.ndarray) -> dict[str, np.ndarray]:
     shape = z.shape
     return {"alt_m": z.copy(), "T_K": res[:, 0].reshape(shape), "p_Pa": res[:, 1].reshape(shape),
             "rho_kgm3": res[:, 2].reshape(shape), "a_mps": res[:, 3].reshape(shape)}
+
+
+def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarray]) -> None:
+    """The integrated upper-atmosphere table (built once per process)."""
+    alt, lnp, lnrho = upper_atmosphere_table()
+    tables.update(atm_alt=alt, atm_lnp=lnp, atm_lnrho=lnrho)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def air_at(alt_m: float, tb: np.ndarray) -> tuple[float, float, float, float]:
+    """US76 ``(T K, p Pa, ρ kg/m³, a m/s)`` at a geometric altitude, from the packed tables."""
+    o_atm, n_atm = tab(tb, T_ALT)
+    return atmosphere_at(alt_m, tb, o_atm, tab_offset(tb, T_LNP), tab_offset(tb, T_LNRHO), n_atm)
+
+
+@njit(cache=True, error_model="numpy")
+def air_at_packed(alt_m: float, tb: np.ndarray) -> tuple[float, float, float, float]:
+    """:func:`air_at` for Python callers (the data generators)."""
+    return air_at(alt_m, tb)

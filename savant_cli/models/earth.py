@@ -1,4 +1,4 @@
-"""Earth rotation, frames (ECI, ECEF, geodetic, NED) and the wind kernel.
+"""Earth rotation, shape and frames (ECI, ECEF, geodetic, NED).
 
 Conventions (docs/architecture.md): ECI has Z on the spin axis and X through the
 Greenwich meridian at t = 0; ECEF rotates about Z at ``omega`` (rad/s), so
@@ -11,6 +11,26 @@ from __future__ import annotations
 
 import numpy as np
 from numba import njit
+
+from savant_cli import constants as C
+from savant_cli.models import blocks
+
+_PARAMS = blocks.PARAMETERS.block("earth")
+P_RE = _PARAMS.scalar("equatorial_radius", "m", "WGS84 semi-major axis")
+P_E2 = _PARAMS.scalar("eccentricity_squared", "1", "WGS84 first eccentricity squared")
+P_OMEGA_E = _PARAMS.scalar("rotation_rate", "rad/s", "Earth rotation rate about ECI Z")
+_AUX = blocks.DIAGNOSTICS.block("earth")
+A_ALT = _AUX.scalar("altitude", "m", "WGS84 geodetic altitude of the CG")
+A_LAT = _AUX.scalar("latitude", "rad", "geodetic latitude")
+A_LON = _AUX.scalar("longitude", "rad", "longitude, east positive")
+A_VEARTH = _AUX.scalar("earth_relative_speed", "m/s", "Earth-relative speed (no wind)")
+
+
+def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarray]) -> None:
+    """WGS84 shape and the Earth rate (``savant_cli.constants``)."""
+    p[P_RE] = C.WGS84_A
+    p[P_E2] = C.WGS84_E2
+    p[P_OMEGA_E] = C.OMEGA_EARTH
 
 
 @njit(cache=True, error_model="numpy")
@@ -236,62 +256,25 @@ def velocity_relative_eci(r_eci: np.ndarray, v_eci: np.ndarray, omega: float) ->
     return out
 
 
-@njit(cache=True, error_model="numpy")
-def wind_ned(alt_m: float, table_alt_m: np.ndarray, table_north_mps: np.ndarray,
-             table_east_mps: np.ndarray, scale: float) -> np.ndarray:
-    """Horizontal wind from an altitude table, in NED axes.
-
-    Parameters
-    ----------
-    alt_m : float
-        Geodetic height, m.
-    table_alt_m : ndarray
-        Increasing table altitudes, m.
-    table_north_mps, table_east_mps : ndarray
-        Wind velocity (air moving towards) north and east, m/s, at ``table_alt_m``.
-    scale : float
-        Multiplier applied to the interpolated wind (0 disables, 1 nominal).
+@njit(cache=True, error_model="numpy", inline="always")
+def geodetic_of_eci(t: float, rx: float, ry: float, rz: float, p: np.ndarray):
+    """Geodetic position of an ECI point at mission time ``t`` (s).
 
     Returns
     -------
-    ndarray, shape (3,)
-        Wind velocity relative to the Earth, m/s, NED; the down component is 0.
-        Linear interpolation, held constant beyond the table ends.
+    tuple of float
+        ``(lat, lon, h, sin lat, cos lat, sin lon, cos lon, cos ωt, sin ωt)``: rad, rad,
+        m, then the sines and cosines the NED↔ECI rotations need.
     """
-    out = np.empty(3)
-    out[0] = scale * np.interp(alt_m, table_alt_m, table_north_mps)
-    out[1] = scale * np.interp(alt_m, table_alt_m, table_east_mps)
-    out[2] = 0.0
-    return out
+    th = p[P_OMEGA_E] * t
+    ct, st = np.cos(th), np.sin(th)
+    lat, lon, alt, sl, cl, so, co = geodetic_xyz_sc(ct * rx + st * ry, -st * rx + ct * ry, rz, p[P_RE], p[P_E2])
+    return lat, lon, alt, sl, cl, so, co, ct, st
 
 
-@njit(cache=True, error_model="numpy")
-def wind_eci(r_eci: np.ndarray, t_s: float, omega: float, lat: float, lon: float,
-             wind_ned: np.ndarray) -> np.ndarray:
-    """Rotate a NED wind vector into ECI axes.
-
-    Parameters
-    ----------
-    r_eci : ndarray, shape (3,)
-        Vehicle position, m, ECI. Unused (the local frame is fixed by ``lat``/``lon``);
-        kept so the call site documents where the wind applies.
-    t_s : float
-        Time since the ECI epoch, s.
-    omega : float
-        Earth rotation rate, rad/s.
-    lat, lon : float
-        Geodetic latitude and longitude of the vehicle, rad.
-    wind_ned : ndarray, shape (3,)
-        Wind velocity relative to the Earth, m/s, NED.
-
-    Returns
-    -------
-    ndarray, shape (3,)
-        The same wind vector in ECI axes, m/s (a direction change only: add it to the
-        Earth-relative velocity expressed in ECI axes, not to the inertial velocity).
-    """
-    c = dcm_ecef_to_ned(lat, lon)
-    w_ecef = np.empty(3)
-    for i in range(3):                        # C^T @ wind_ned, NED -> ECEF
-        w_ecef[i] = c[0, i] * wind_ned[0] + c[1, i] * wind_ned[1] + c[2, i] * wind_ned[2]
-    return ecef_to_eci(w_ecef, t_s, omega)
+@njit(cache=True, error_model="numpy", inline="always")
+def earth_relative_velocity(rx: float, ry: float, vx: float, vy: float, vz: float,
+                            p: np.ndarray) -> tuple[float, float, float]:
+    """``v − ω_E ẑ × r``: velocity relative to the rotating Earth, ECI axes, m/s."""
+    omega_e = p[P_OMEGA_E]
+    return vx + omega_e * ry, vy - omega_e * rx, vz

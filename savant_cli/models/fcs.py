@@ -28,12 +28,24 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from savant_cli.models import quaternion as qt
+from savant_cli.models import blocks, quaternion as qt
+from savant_cli.models.guidance import D_QS, D_VS
 from savant_cli.models.interp import locate, rows
-from savant_cli.sim.layout import (
-    D_CMD_P, D_CMD_RCS, D_CMD_Y, D_ERR, D_FILT, D_FLEX_NAV, D_GAINS, D_GYRO_Y, D_INT_ATT, D_INT_RATE,
-    D_QS, D_RATE_CMD_B, D_RATE_ERR, D_ROLL_FILT, D_VS,
-)
+from savant_cli.models.sensors import D_GYRO_Y
+
+_DISCRETE = blocks.DISCRETE.block("fcs")
+D_ERR = _DISCRETE.array("attitude_error", 3, "rad", "attitude error roll, pitch, yaw")
+D_RATE_ERR = _DISCRETE.array("rate_error", 3, "rad/s", "blended rate error")
+D_INT_ATT = _DISCRETE.array("attitude_integral", 2, "rad*s", "integral of pitch, yaw attitude error")
+D_INT_RATE = _DISCRETE.array("rate_integral", 2, "rad", "integrated (gyro − command) rate, pitch, yaw")
+D_FILT = _DISCRETE.array("flex_filters", 32, "rad/s, rad", "flex filter states: 2 axes x 2 paths x 2 sections x 4")
+D_ROLL_FILT = _DISCRETE.array("roll_filter", 8, "rad/s", "roll rate-error filter: 2 sections x 4")
+D_GAINS = _DISCRETE.array("gains", 8, "1, 1/s, s, 1", "scheduled Kp, Ki, Kd, Kir, pitch then yaw")
+D_CMD_P = _DISCRETE.scalar("pitch_command", "rad", "pitch gimbal command")
+D_CMD_Y = _DISCRETE.scalar("yaw_command", "rad", "yaw gimbal command")
+D_CMD_RCS = _DISCRETE.scalar("roll_jet_command", "1", "roll jet command +1, 0, −1")
+D_RATE_CMD_B = _DISCRETE.array("rate_command_body", 3, "rad/s", "rate command in body axes")
+D_FLEX_NAV = _DISCRETE.array("flex_nav", 3, "rad", "flex rotation at the navigation unit, added to the errors")
 
 # flight-control phases (also the gain-table index)
 FCS_STACK = 0

@@ -19,6 +19,27 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from savant_cli import constants as C
+from savant_cli.models import blocks
+
+_PARAMS = blocks.PARAMETERS.block("gravity")
+P_MU = _PARAMS.scalar("mu", "m^3/s^2", "Earth gravitational parameter")
+P_J2 = _PARAMS.scalar("j2", "1", "unnormalised zonal coefficient J2 (EGM2008)")
+P_J3 = _PARAMS.scalar("j3", "1", "unnormalised zonal coefficient J3 (EGM2008)")
+P_J4 = _PARAMS.scalar("j4", "1", "unnormalised zonal coefficient J4 (EGM2008)")
+P_ORDER = _PARAMS.scalar("order", "1", "highest zonal term used: 0 point mass, 2, 3 or 4")
+_AUX = blocks.DIAGNOSTICS.block("gravity")
+A_GRAV = _AUX.array("acceleration", 3, "m/s^2", "gravitational acceleration, ECI")
+
+
+def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarray]) -> None:
+    """EGM2008 zonal coefficients; ``environment.gravity_order``."""
+    p[P_MU] = C.MU_EARTH
+    p[P_J2] = C.EGM2008_J2
+    p[P_J3] = C.EGM2008_J3
+    p[P_J4] = C.EGM2008_J4
+    p[P_ORDER] = inputs.cfg.environment.gravity_order
+
 
 @njit(cache=True, error_model="numpy")
 def gravity_zonal(r_eci: np.ndarray, mu: float, re: float, j2: float, j3: float,
@@ -106,3 +127,12 @@ def gravity_potential(r: np.ndarray, mu: float, re: float, j2: float, j3: float,
     p3 = 0.5 * (5.0 * s2 - 3.0) * s
     p4 = 0.125 * ((35.0 * s2 - 30.0) * s2 + 3.0)
     return mu / rn * (1.0 - q * q * (j2 * p2 + q * (j3 * p3 + q * j4 * p4)))
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def gravity_at(rx: float, ry: float, rz: float, p: np.ndarray, re: float) -> tuple[float, float, float]:
+    """Gravity (m/s², ECI) at an ECI position (m) with the configured zonal order; ``re``
+    is the harmonics' reference radius (the WGS84 equatorial radius)."""
+    order = p[P_ORDER]
+    return gravity_zonal_xyz(rx, ry, rz, p[P_MU], re, p[P_J2] if order >= 2 else 0.0,
+                             p[P_J3] if order >= 3 else 0.0, p[P_J4] if order >= 4 else 0.0)

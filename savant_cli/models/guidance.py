@@ -18,7 +18,14 @@ import numpy as np
 from numba import njit
 
 from savant_cli.models import quaternion as qt
-from savant_cli.sim.layout import D_QG, D_QS, D_TG, D_VG, D_VS
+from savant_cli.models import blocks
+
+_DISCRETE = blocks.DISCRETE.block("guidance")
+D_QG = _DISCRETE.array("command_quaternion", 4, "1", "latest guidance quaternion q_c2i")
+D_VG = _DISCRETE.array("command_rate", 3, "rad/s", "guidance (eigenaxis) rate, command frame")
+D_TG = _DISCRETE.scalar("command_time", "s", "time of the latest guidance sample")
+D_QS = _DISCRETE.array("smoothed_quaternion", 4, "1", "smoothed quaternion command")
+D_VS = _DISCRETE.array("smoothed_rate", 3, "rad/s", "smoothed rate command, command frame")
 
 
 @njit(cache=True, error_model="numpy")

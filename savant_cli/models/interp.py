@@ -119,3 +119,16 @@ def trilinear_at(a: np.ndarray, base: int, si: int, sj: int, i: int, wi: float, 
     c0 = c00 * (1.0 - wj) + c10 * wj
     c1 = c01 * (1.0 - wj) + c11 * wj
     return c0 * (1.0 - wk) + c1 * wk
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def tab(tb: np.ndarray, field: int) -> tuple[int, int]:
+    """Offset and element count of field number ``field`` of a packed table array
+    (:func:`savant_cli.models.blocks.pack`)."""
+    return int(tb[2 * field]), int(tb[2 * field + 1])
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def tab_offset(tb: np.ndarray, field: int) -> int:
+    """Offset of field number ``field``'s data in a packed table array."""
+    return int(tb[2 * field])

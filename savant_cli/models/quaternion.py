@@ -53,20 +53,22 @@ def qnormalize(q: np.ndarray) -> np.ndarray:
     return out
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def dcm_xyz(q0: float, q1: float, q2: float, q3: float):
+    """Direction cosines of a unit quaternion (scalar first) as nine scalars, row by row:
+    ``m_ij`` of the matrix that maps vectors of the rotated frame into the reference
+    frame (body→ECI for q_b2i)."""
+    return (1.0 - 2.0 * (q2 * q2 + q3 * q3), 2.0 * (q1 * q2 - q0 * q3), 2.0 * (q1 * q3 + q0 * q2),
+            2.0 * (q1 * q2 + q0 * q3), 1.0 - 2.0 * (q1 * q1 + q3 * q3), 2.0 * (q2 * q3 - q0 * q1),
+            2.0 * (q1 * q3 - q0 * q2), 2.0 * (q2 * q3 + q0 * q1), 1.0 - 2.0 * (q1 * q1 + q2 * q2))
+
+
 @njit(cache=True, error_model="numpy")
 def dcm(q: np.ndarray) -> np.ndarray:
     """Direction-cosine matrix of ``q``: ``v_i = dcm(q) @ v_b`` for ``q = q_b2i``."""
-    w, x, y, z = q[0], q[1], q[2], q[3]
     m = np.empty((3, 3))
-    m[0, 0] = 1.0 - 2.0 * (y * y + z * z)
-    m[0, 1] = 2.0 * (x * y - w * z)
-    m[0, 2] = 2.0 * (x * z + w * y)
-    m[1, 0] = 2.0 * (x * y + w * z)
-    m[1, 1] = 1.0 - 2.0 * (x * x + z * z)
-    m[1, 2] = 2.0 * (y * z - w * x)
-    m[2, 0] = 2.0 * (x * z - w * y)
-    m[2, 1] = 2.0 * (y * z + w * x)
-    m[2, 2] = 1.0 - 2.0 * (x * x + y * y)
+    (m[0, 0], m[0, 1], m[0, 2], m[1, 0], m[1, 1], m[1, 2],
+     m[2, 0], m[2, 1], m[2, 2]) = dcm_xyz(q[0], q[1], q[2], q[3])
     return m
 
 
@@ -149,15 +151,23 @@ def to_rotation_vector(q: np.ndarray) -> np.ndarray:
     return v * (ang / s)
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def rate_xyz(q0: float, q1: float, q2: float, q3: float, wx: float, wy: float,
+             wz: float) -> tuple[float, float, float, float]:
+    """``q̇ = ½ q ⊗ [0, ω]`` on scalars: q scalar first, ω the body rate (rad/s, body
+    axes). The one copy of the kinematics (the plant's attitude equation calls it)."""
+    return (0.5 * (-q1 * wx - q2 * wy - q3 * wz),
+            0.5 * (q0 * wx + q2 * wz - q3 * wy),
+            0.5 * (q0 * wy - q1 * wz + q3 * wx),
+            0.5 * (q0 * wz + q1 * wy - q2 * wx))
+
+
 @njit(cache=True, error_model="numpy")
 def derivative(q: np.ndarray, omega_body: np.ndarray) -> np.ndarray:
     """``q̇ = ½ q ⊗ [0, ω]`` with ω the body angular rate (rad/s, body axes)."""
     out = np.empty(4)
-    wx, wy, wz = omega_body[0], omega_body[1], omega_body[2]
-    out[0] = 0.5 * (-q[1] * wx - q[2] * wy - q[3] * wz)
-    out[1] = 0.5 * (q[0] * wx + q[2] * wz - q[3] * wy)
-    out[2] = 0.5 * (q[0] * wy - q[1] * wz + q[3] * wx)
-    out[3] = 0.5 * (q[0] * wz + q[1] * wy - q[2] * wx)
+    out[0], out[1], out[2], out[3] = rate_xyz(q[0], q[1], q[2], q[3], omega_body[0], omega_body[1],
+                                              omega_body[2])
     return out
 
 

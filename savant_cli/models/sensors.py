@@ -18,7 +18,30 @@ import numpy as np
 from numba import njit
 from scipy.linalg import expm
 
-from savant_cli.models import quaternion as qt
+from savant_cli.models import blocks, quaternion as qt
+from savant_cli.models.flex import PT_GYRO_FS, PT_GYRO_US, PT_IMU
+
+N_GYROS = 3  # in the flight software's order: upper-stage gyro, IMU, first-stage gyro
+GYRO_POINTS = (PT_GYRO_US, PT_IMU, PT_GYRO_FS)  # their flex points, same order
+
+_DISCRETE = blocks.DISCRETE.block("sensors")
+D_GYRO_X = _DISCRETE.array("gyro_filters", 18, "rad/s", "rate-gyro filter states: [gyro][axis][2]")
+D_GYRO_Y = _DISCRETE.array("gyro_outputs", 9, "rad/s", "gyro outputs, each in its own axes: [gyro][axis]")
+
+_PARAMS = blocks.PARAMETERS.block("sensors")
+P_IMU_MISALIGN = _PARAMS.array("imu_misalignment", 3, "rad",
+                               "navigation-unit (and IMU gyro) mounting: rotation vector body→sensor")
+P_GYRO_US_MISALIGN = _PARAMS.array("upper_stage_gyro_misalignment", 3, "rad", "upper-stage rate-gyro mounting")
+P_GYRO_FS_MISALIGN = _PARAMS.array("first_stage_gyro_misalignment", 3, "rad", "first-stage rate-gyro mounting")
+GYRO_MISALIGN = (P_GYRO_US_MISALIGN, P_IMU_MISALIGN, P_GYRO_FS_MISALIGN)  # in the gyro order
+
+
+def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarray]) -> None:
+    """Mounting misalignments of the ``sensors`` group."""
+    mis = inputs.cfg.sensors.misalignment_deg
+    for base, eps in ((P_IMU_MISALIGN, mis.imu), (P_GYRO_US_MISALIGN, mis.rate_gyro_upper_stage),
+                      (P_GYRO_FS_MISALIGN, mis.rate_gyro_first_stage)):
+        p[base:base + 3] = np.radians(eps)
 
 
 def gyro_discrete(natural_frequency_hz: float, damping: float, dt_s: float):

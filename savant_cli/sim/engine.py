@@ -20,18 +20,20 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from savant_cli.models import earth, quaternion as qt
+from savant_cli.models import actuator, earth, flex, quaternion as qt, slosh
+from savant_cli.models.earth import A_ALT, P_E2, P_OMEGA_E, P_RE
 from savant_cli.models.fcs import FCS_COAST, FCS_STACK, FCS_UPPER, FcsTables, fcs_step, reset_phase
+from savant_cli.models.gravity import P_MU
 from savant_cli.models.guidance import guidance_sample, smoother_step
-from savant_cli.models.sensors import gyro_step, misalignment
-from savant_cli.sim.layout import (
-    A_ALT, ACT_P, ACT_Y, CONFIG_UPPER, CONFIG_UPPER_LES, D_CMD_P, D_CMD_RCS, D_CMD_Y,
-    D_GYRO_X, D_GYRO_Y, ENGINE_OFF, ENGINE_UPPER, MFS, MLH2, MLOX, N_AUX, N_STATE,
-    P_E2, P_MU, P_OMEGA_E, P_RE, Q, R, RCS_NEG, RCS_POS, U_CONFIG, U_DPC, U_DYC,
-    U_ENGINE, U_RCS, U_T_IGN, V, W,
+from savant_cli.models.sensors import (
+    GYRO_MISALIGN, GYRO_POINTS, N_GYROS, P_IMU_MISALIGN, gyro_step, misalignment,
 )
-from savant_cli.sim import layout as L
-from savant_cli.sim.plant import derivative, flex_point
+from savant_cli.sim.layout import (
+    ACT_P, ACT_Y, CONFIG_UPPER, CONFIG_UPPER_LES, D_CMD_P, D_CMD_RCS, D_CMD_Y,
+    D_FLEX_NAV, D_GYRO_X, D_GYRO_Y, ENGINE_OFF, ENGINE_UPPER, MFS, MLH2, MLOX, N_AUX, N_STATE,
+    Q, R, RCS_NEG, RCS_POS, U_CONFIG, U_DPC, U_DYC, U_ENGINE, U_RCS, U_T_IGN, V, W,
+)
+from savant_cli.sim.plant import derivative
 
 # status codes returned by advance()
 RUNNING = 0
@@ -138,12 +140,12 @@ def handle_events(t: float, x: np.ndarray, u: np.ndarray, d: np.ndarray,
         x[MFS] = 0.0
         x[ACT_P:ACT_P + 3] = 0.0  # the upper-stage nozzle starts at null
         x[ACT_Y:ACT_Y + 3] = 0.0
-        vo = int(p[L.P_VALVE_OFF])
+        vo = int(p[actuator.P_VALVE_OFFSET])
         if vo >= 0:
-            x[vo:vo + L.N_VALVE] = 0.0
-        fo = int(p[L.P_FLEX_OFF])
+            x[vo:vo + actuator.N_VALVE] = 0.0
+        fo = int(p[flex.P_OFFSET])
         if fo >= 0:  # new modal set: its modes start at rest (paper: liftoff → ignition set)
-            x[fo:fo + 2 * int(p[L.P_N_MODES])] = 0.0
+            x[fo:fo + 2 * int(p[flex.P_N_MODES])] = 0.0
         reset_phase(d)
     t_sep = events[EV_SEPARATION]
     if not np.isnan(t_sep) and np.isnan(events[EV_IGNITION]) and t >= t_sep + sched[S_T_IGN_DELAY]:
@@ -160,21 +162,6 @@ def handle_events(t: float, x: np.ndarray, u: np.ndarray, d: np.ndarray,
             events[EV_CUTOFF] = t
             return STOP_DEPLETION
     return RUNNING
-
-
-@njit(cache=True, error_model="numpy")
-def slosh_wall(x: np.ndarray, k: int, radius: float) -> None:
-    """Keep a slosh mass ``x[k:k+4] = [y, z, ẏ, ż]`` inside its tank: at the wall it
-    stops (its outward velocity is removed), the paper's only wall interaction."""
-    r = np.sqrt(x[k] ** 2 + x[k + 1] ** 2)
-    if r > radius:
-        ny, nz = x[k] / r, x[k + 1] / r
-        x[k] = radius * ny
-        x[k + 1] = radius * nz
-        vr = x[k + 2] * ny + x[k + 3] * nz
-        if vr > 0.0:
-            x[k + 2] -= vr * ny
-            x[k + 3] -= vr * nz
 
 
 @njit(cache=True, error_model="numpy")
@@ -201,13 +188,12 @@ def advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0:
     n_cols = log.shape[1]
     flex3 = np.zeros(3)
     # sensor mounting misalignment: each gyro reads R(ε)ᵀ ω, the nav unit q_b2i ⊗ q_s2b
-    c_gyro = np.empty((3, 3, 3))  # body → sensor axes, per gyro (FCS order)
-    for g in range(3):
-        c_gyro[g] = misalignment(p[L.GYRO_MISALIGN[g]:L.GYRO_MISALIGN[g] + 3])[1]
-    q_imu = misalignment(p[L.P_IMU_MISALIGN:L.P_IMU_MISALIGN + 3])[0]
+    c_gyro = np.empty((N_GYROS, 3, 3))  # body → sensor axes, per gyro (FCS order)
+    for g in range(N_GYROS):
+        c_gyro[g] = misalignment(p[GYRO_MISALIGN[g]:GYRO_MISALIGN[g] + 3])[1]
+    q_imu = misalignment(p[P_IMU_MISALIGN:P_IMU_MISALIGN + 3])[0]
     q_nav = np.empty(4)
-    so = int(p[L.P_SLOSH_OFF])
-    has_flex = int(p[L.P_FLEX_OFF]) >= 0
+    has_flex = int(p[flex.P_OFFSET]) >= 0
     for j in range(n_steps):
         k = k0 + j
         t = k * dt
@@ -225,9 +211,9 @@ def advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0:
             guidance_sample(d, t, gt.time, gt.quat, gt.rate, k == 0)
         config = int(u[U_CONFIG])
         if k % rates.n_sensor == 0:
-            for g in range(3):  # each gyro reads rigid plus flex rate at its node, in its own axes
+            for g in range(N_GYROS):  # each gyro reads rigid plus flex rate at its node, in its own axes
                 if has_flex:
-                    flex_point(x, config, p, tb, L.GYRO_POINTS[g], True, flex3)
+                    flex.flex_point(x, config, p, tb, GYRO_POINTS[g], True, flex3)
                 wbx, wby, wbz = x[W] + flex3[0], x[W + 1] + flex3[1], x[W + 2] + flex3[2]
                 for ax in range(3):
                     s = D_GYRO_X + 6 * g + 2 * ax
@@ -243,8 +229,8 @@ def advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0:
                 v_rel = earth.velocity_relative_eci(x[R:R + 3], x[V:V + 3], p[P_OMEGA_E])
                 sched_var = np.sqrt(v_rel[0] ** 2 + v_rel[1] ** 2 + v_rel[2] ** 2)
             if has_flex:
-                flex_point(x, config, p, tb, L.PT_IMU, False, flex3)  # flex rotation at the nav unit
-                d[L.D_FLEX_NAV:L.D_FLEX_NAV + 3] = flex3
+                flex.flex_point(x, config, p, tb, flex.PT_IMU, False, flex3)  # flex rotation at the nav unit
+                d[D_FLEX_NAV:D_FLEX_NAV + 3] = flex3
             qt.qmul_into(x[Q:Q + 4], q_imu, q_nav)  # sensed attitude q_b2i ⊗ q_s2b
             fcs_step(d, q_nav, phase, sched_var, dt_fcs, ft)
             u[U_DPC] = d[D_CMD_P]
@@ -271,9 +257,7 @@ def advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0:
                 x[i] = 0.0
         for i in (RCS_POS, RCS_NEG):
             x[i] = min(max(x[i], 0.0), 1.0)
-        if so >= 0:
-            for j in range(L.N_TANKS):
-                slosh_wall(x, so + L.N_SLOSH_PER_TANK * j, p[L.P_TANK + 3 * j])
+        slosh.contain(x, p)
 
         finite = True
         for i in range(x.size):  # no temporary array, this runs every step

@@ -11,7 +11,10 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
 from savant_cli import constants as C
 from savant_cli.io.record import Signal
-from savant_cli.models import earth, quaternion as qt
+from savant_cli.models import (
+    actuator, aero, atmosphere, earth, flex, gravity, mass, propulsion, quaternion as qt, rcs, rigid_body, slosh, twd,
+    winds,
+)
 from savant_cli.sim import engine as E
 from savant_cli.sim import layout as L
 from savant_cli.sim.build import SimModel
@@ -166,7 +169,7 @@ def signals(result: SimResult, model: SimModel) -> dict[str, Signal]:
     qc = d[:, L.D_QS:L.D_QS + 4]
     euler = qt.euler_321(np.einsum("ij,njk->nik", c_launch, qt.dcm_array(q))) if len(t) else np.zeros((0, 3))
     euler_c = qt.euler_321(np.einsum("ij,njk->nik", c_launch, qt.dcm_array(qc))) if len(t) else np.zeros((0, 3))
-    thrust = aux[:, L.A_THRUST]
+    thrust = aux[:, propulsion.A_THRUST]
     config = np.full(len(t), 0.0)
     ev = result.events
     if not np.isnan(ev[E.EV_SEPARATION]):
@@ -177,20 +180,20 @@ def signals(result: SimResult, model: SimModel) -> dict[str, Signal]:
         "time": Signal(t, "s", "mission time from liftoff"),
         "position_eci": Signal(x[:, L.R:L.R + 3], "m", "CG position", xyz, "ECI"),
         "velocity_eci": Signal(x[:, L.V:L.V + 3], "m/s", "CG inertial velocity", xyz, "ECI"),
-        "gravity_eci": Signal(aux[:, L.A_GRAV:L.A_GRAV + 3], "m/s^2", "gravitational acceleration (J2-J4 zonal model)", xyz, "ECI"),
-        "altitude": Signal(aux[:, L.A_ALT], "m", "WGS84 geodetic altitude of the CG"),
-        "latitude": Signal(aux[:, L.A_LAT], "rad", "WGS84 geodetic latitude"),
-        "longitude": Signal(aux[:, L.A_LON], "rad", "longitude (east positive)"),
-        "velocity_relative": Signal(aux[:, L.A_VREL], "m/s", "air-relative speed (Earth-relative minus wind)"),
-        "velocity_earth_relative": Signal(aux[:, L.A_VEARTH], "m/s", "Earth-relative speed, no wind"),
-        "mach": Signal(aux[:, L.A_MACH], "1", "Mach number"),
-        "dynamic_pressure": Signal(aux[:, L.A_QBAR], "Pa", "dynamic pressure"),
-        "density": Signal(aux[:, L.A_RHO], "kg/m^3", "air density (US76)"),
-        "pressure": Signal(aux[:, L.A_PRES], "Pa", "static pressure (US76)"),
-        "temperature": Signal(aux[:, L.A_TEMP], "K", "kinetic temperature (US76)"),
-        "speed_of_sound": Signal(aux[:, L.A_SOS], "m/s", "speed of sound (US76)"),
-        "alpha": Signal(aux[:, L.A_ALPHA], "rad", "angle of attack"),
-        "beta": Signal(aux[:, L.A_BETA], "rad", "sideslip angle"),
+        "gravity_eci": Signal(aux[:, gravity.A_GRAV:gravity.A_GRAV + 3], "m/s^2", "gravitational acceleration (J2-J4 zonal model)", xyz, "ECI"),
+        "altitude": Signal(aux[:, earth.A_ALT], "m", "WGS84 geodetic altitude of the CG"),
+        "latitude": Signal(aux[:, earth.A_LAT], "rad", "WGS84 geodetic latitude"),
+        "longitude": Signal(aux[:, earth.A_LON], "rad", "longitude (east positive)"),
+        "velocity_relative": Signal(aux[:, aero.A_VREL], "m/s", "air-relative speed (Earth-relative minus wind)"),
+        "velocity_earth_relative": Signal(aux[:, earth.A_VEARTH], "m/s", "Earth-relative speed, no wind"),
+        "mach": Signal(aux[:, aero.A_MACH], "1", "Mach number"),
+        "dynamic_pressure": Signal(aux[:, aero.A_QBAR], "Pa", "dynamic pressure"),
+        "density": Signal(aux[:, atmosphere.A_RHO], "kg/m^3", "air density (US76)"),
+        "pressure": Signal(aux[:, atmosphere.A_PRES], "Pa", "static pressure (US76)"),
+        "temperature": Signal(aux[:, atmosphere.A_TEMP], "K", "kinetic temperature (US76)"),
+        "speed_of_sound": Signal(aux[:, atmosphere.A_SOS], "m/s", "speed of sound (US76)"),
+        "alpha": Signal(aux[:, aero.A_ALPHA], "rad", "angle of attack"),
+        "beta": Signal(aux[:, aero.A_BETA], "rad", "sideslip angle"),
         "body_rate": Signal(x[:, L.W:L.W + 3], "rad/s", "body angular rate relative to ECI", ("p", "q", "r"), "body"),
         "quaternion": Signal(q, "1", "attitude q_b2i (body to ECI, scalar first)", ("w", "x", "y", "z"), "ECI"),
         "quaternion_command": Signal(qc, "1", "smoothed guidance command q_c2i (commanded body to ECI)", ("w", "x", "y", "z"), "ECI"),
@@ -200,24 +203,24 @@ def signals(result: SimResult, model: SimModel) -> dict[str, Signal]:
         "rate_error": Signal(d[:, L.D_RATE_ERR:L.D_RATE_ERR + 3], "rad/s", "blended rate error", ("p", "q", "r"), "body"),
         "attitude_euler": Signal(euler, "rad", "body attitude, 3-2-1 Euler angles relative to the launch frame (pad NED frozen at liftoff)", rpy, "launch"),
         "attitude_euler_command": Signal(euler_c, "rad", "smoothed command attitude, 3-2-1 Euler angles relative to the launch frame", rpy, "launch"),
-        "gimbal_angle": Signal(aux[:, [L.A_DP, L.A_DY]], "rad", "engine gimbal angles (limited)", pq, "body"),
+        "gimbal_angle": Signal(aux[:, actuator.A_ANGLES:actuator.A_ANGLES + 2], "rad", "engine gimbal angles (limited)", pq, "body"),
         "gimbal_command": Signal(d[:, [L.D_CMD_P, L.D_CMD_Y]], "rad", "flight-control gimbal commands", pq, "body"),
         "gimbal_rate": Signal(x[:, [L.ACT_P + 1, L.ACT_Y + 1]], "rad/s", "nozzle angular rates", pq, "body"),
-        "gimbal_acceleration": Signal(aux[:, L.A_DDP:L.A_DDP + 2], "rad/s^2", "nozzle angular accelerations "
+        "gimbal_acceleration": Signal(aux[:, actuator.A_ACCEL:actuator.A_ACCEL + 2], "rad/s^2", "nozzle angular accelerations "
                                       "(zero while held at a gimbal stop)", pq, "body"),
-        "twd_moment": Signal(aux[:, L.A_TWD:L.A_TWD + 3], "N*m", "engine-inertia (tail-wags-dog) moment about the CG "
+        "twd_moment": Signal(aux[:, twd.A_MOMENT:twd.A_MOMENT + 3], "N*m", "engine-inertia (tail-wags-dog) moment about the CG "
                              "(zero with twd=off)", xyz, "body"),
         "rcs_command": Signal(d[:, L.D_CMD_RCS], "1", "roll jet command (+1 positive roll torque, 0, -1)"),
-        "rcs_torque": Signal(aux[:, L.A_RCS_TORQUE], "N*m", "roll-jet torque about body X"),
-        "mass": Signal(aux[:, L.A_MASS], "kg", "vehicle mass"),
+        "rcs_torque": Signal(aux[:, rcs.A_TORQUE], "N*m", "roll-jet torque about body X"),
+        "mass": Signal(aux[:, mass.A_MASS], "kg", "vehicle mass"),
         "propellant_remaining": Signal(x[:, [L.MFS, L.MLOX, L.MLH2]], "kg", "propellant remaining", ("first_stage", "lox", "lh2")),
         "thrust": Signal(thrust, "N", "engine thrust (vacuum minus back-pressure loss)"),
-        "wind_ned": Signal(aux[:, L.A_WIND_N:L.A_WIND_N + 3], "m/s", "wind velocity", ("north", "east", "down"), "NED"),
-        "cg_structure": Signal(aux[:, L.A_CG:L.A_CG + 3], "m", "CG location", xyz, "structure"),
-        "aero_force": Signal(aux[:, L.A_FAERO:L.A_FAERO + 3], "N", "aerodynamic force incl. base force", xyz, "body"),
-        "aero_moment": Signal(aux[:, L.A_MAERO:L.A_MAERO + 3], "N*m", "aerodynamic moment about the CG", xyz, "body"),
-        "thrust_moment": Signal(aux[:, L.A_MTHRUST:L.A_MTHRUST + 3], "N*m", "thrust moment about the CG", xyz, "body"),
-        "sensed_acceleration": Signal(aux[:, L.A_ACCEL:L.A_ACCEL + 3], "m/s^2", "non-gravitational acceleration", xyz, "body"),
+        "wind_ned": Signal(aux[:, winds.A_WIND:winds.A_WIND + 3], "m/s", "wind velocity", ("north", "east", "down"), "NED"),
+        "cg_structure": Signal(aux[:, mass.A_CG:mass.A_CG + 3], "m", "CG location", xyz, "structure"),
+        "aero_force": Signal(aux[:, aero.A_FORCE:aero.A_FORCE + 3], "N", "aerodynamic force incl. base force", xyz, "body"),
+        "aero_moment": Signal(aux[:, aero.A_MOMENT:aero.A_MOMENT + 3], "N*m", "aerodynamic moment about the CG", xyz, "body"),
+        "thrust_moment": Signal(aux[:, propulsion.A_MOMENT:propulsion.A_MOMENT + 3], "N*m", "thrust moment about the CG", xyz, "body"),
+        "sensed_acceleration": Signal(aux[:, rigid_body.A_ACCEL:rigid_body.A_ACCEL + 3], "m/s^2", "non-gravitational acceleration", xyz, "body"),
         "sensed_rate": Signal(d[:, L.D_GYRO_Y:L.D_GYRO_Y + 9], "rad/s", "rate-gyro outputs (rigid plus flex rate "
                               "at each gyro's node, through the gyro dynamics)",
                               tuple(f"{g}_{a}" for g in ("upper", "imu", "first") for a in ("p", "q", "r")), "body"),
@@ -235,21 +238,23 @@ def signals(result: SimResult, model: SimModel) -> dict[str, Signal]:
     if lay.slosh:
         so = lay.slosh_offset
         yz = ("lox_y", "lox_z", "lh2_y", "lh2_z")
-        s["slosh_position"] = Signal(x[:, [so, so + 1, so + 4, so + 5]], "m",
+        lox, lh2 = so, so + slosh.N_PER_TANK
+        s["slosh_position"] = Signal(x[:, [lox + slosh.S_Y, lox + slosh.S_Z, lh2 + slosh.S_Y, lh2 + slosh.S_Z]], "m",
                                      "slosh-mass displacement from the tank centerline", yz, "body")
-        s["slosh_velocity"] = Signal(x[:, [so + 2, so + 3, so + 6, so + 7]], "m/s", "slosh-mass lateral velocity",
+        s["slosh_velocity"] = Signal(x[:, [lox + slosh.S_YDOT, lox + slosh.S_ZDOT, lh2 + slosh.S_YDOT, lh2 + slosh.S_ZDOT]],
+                                     "m/s", "slosh-mass lateral velocity",
                                      yz, "body")
-        s["slosh_frequency"] = Signal(aux[:, L.A_SLOSH_W:L.A_SLOSH_W + 2] / (2.0 * np.pi), "Hz",
+        s["slosh_frequency"] = Signal(aux[:, slosh.A_FREQUENCY:slosh.A_FREQUENCY + 2] / (2.0 * np.pi), "Hz",
                                       "slosh natural frequency at the current acceleration", ("lox", "lh2"))
-        s["liquid_level"] = Signal(aux[:, L.A_LEVEL:L.A_LEVEL + 2], "m", "liquid level above the tank bottom",
+        s["liquid_level"] = Signal(aux[:, slosh.A_LEVEL:slosh.A_LEVEL + 2], "m", "liquid level above the tank bottom",
                                    ("lox", "lh2"))
-        s["slosh_force"] = Signal(aux[:, L.A_SLOSH_F:L.A_SLOSH_F + 6], "N", "force of the slosh masses on the vehicle",
+        s["slosh_force"] = Signal(aux[:, slosh.A_FORCE:slosh.A_FORCE + 6], "N", "force of the slosh masses on the vehicle",
                                   ("lox_x", "lox_y", "lox_z", "lh2_x", "lh2_y", "lh2_z"), "body")
     if lay.n_modes:
         fo, n = lay.flex, lay.n_modes
         modes = tuple(f"mode_{i + 1}" for i in range(n))
         s["flex_q"] = Signal(x[:, fo:fo + n], "kg^0.5*m", "modal coordinates (unit generalized mass)", modes)
         s["flex_qdot"] = Signal(x[:, fo + n:fo + 2 * n], "kg^0.5*m/s", "modal velocities", modes)
-        s["flex_gimbal_rotation"] = Signal(aux[:, L.A_FLEX_GIMBAL:L.A_FLEX_GIMBAL + 3], "rad",
+        s["flex_gimbal_rotation"] = Signal(aux[:, flex.A_GIMBAL_ROTATION:flex.A_GIMBAL_ROTATION + 3], "rad",
                                            "flex rotation at the active gimbal (turns the thrust)", rpy, "body")
     return s

@@ -31,6 +31,7 @@ from savant_cli.linear.margins import Bands, MarginRow, bandwidth_hz, disk_margi
 from savant_cli.linear.plant import linearize_plant
 from savant_cli.linear.response import FastResponse
 from savant_cli.linear.store import write_linear_group, write_margins_csv, write_mat
+from savant_cli.models import slosh as slosh_model
 from savant_cli.sim import layout as L
 from savant_cli.sim.engine import EVENT_NAMES
 from savant_cli.sim.plant import derivative
@@ -78,7 +79,7 @@ def bands_at(model, snap) -> Bands:
     if lay.slosh:
         aux = np.zeros(L.N_AUX)
         derivative(snap.t, snap.x, snap.u, model.p, model.packed_tables, aux, np.zeros(snap.x.size))
-        f = aux[L.A_SLOSH_W:L.A_SLOSH_W + 2] / (2 * np.pi)
+        f = aux[slosh_model.A_FREQUENCY:slosh_model.A_FREQUENCY + 2] / (2 * np.pi)
         if np.all(f > 0):
             slosh = (float(f.min()), float(f.max()))
     return Bands(flex_from, slosh)

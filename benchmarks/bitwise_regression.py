@@ -1,0 +1,289 @@
+"""Bitwise regression of a restructuring: the outputs of this checkout against the outputs
+of a reference commit, flown case by case through the installed command line.
+
+    python benchmarks/bitwise_regression.py --ref a15cafb            # reference from git
+    python benchmarks/bitwise_regression.py --ref-dir /tmp/ref_out   # reuse recorded outputs
+    python benchmarks/bitwise_regression.py --record DIR             # only record this checkout
+
+The cases are the acceptance set of issue 11: all 16 combinations of ``flex``, ``slosh``,
+``twd`` and ``actuator`` (nominal flights), ``study=linear`` at the paper's four times with
+full fidelity, and a 20-run full-fidelity Monte Carlo. Each case runs as its own
+``python -m savant_cli.cli run ...`` process with ``PYTHONPATH`` set to the source tree
+under test, so the reference is the reference commit's own code, not an import of it.
+
+What is compared, exactly (``numpy.array_equal`` with NaNs equal, byte equality for
+strings): every dataset and every attribute of ``savant.h5`` except the provenance root
+attributes (host, time, versions, wall time) and the stored config text; every key of
+``summary.json`` except the wall-clock ones; and the bytes of every CSV the study writes.
+A difference is printed with its location and the largest absolute deviation.
+"""
+
+from __future__ import annotations
+
+import argparse
+import itertools
+import json
+import os
+import subprocess
+import sys
+import tempfile
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+FULL = ["flex=on", "flex.n_modes=4", "slosh=on", "twd=on", "actuator=third_order"]
+COMMON = ["output.plots=false", "sim.progress=false"]
+
+#: Summary keys and root attributes that measure the machine, not the flight.
+WALL_CLOCK_KEYS = ("process_wall_time_s", "sim_wall_time_s", "realtime_factor", "wall_time_s", "wall_s",
+                   "simulation_wall_time_s", "elapsed_s", "runs_per_minute")
+PROVENANCE_ATTRS = ("savant_version", "git_commit", "git_dirty", "python", "numba", "numpy", "scipy",
+                    "control", "h5py", "hydra", "host", "platform", "created_utc", "wall_time_s",
+                    "command", "cwd", "user")
+
+
+def cases() -> dict[str, list[str]]:
+    """Case name → command-line overrides."""
+    out: dict[str, list[str]] = {}
+    for flex, slosh, twd, act in itertools.product(("off", "on"), ("off", "on"), ("off", "on"),
+                                                   ("third_order", "simplex")):
+        extra = ["flex.n_modes=4"] if flex == "on" else []
+        out[f"nominal_flex-{flex}_slosh-{slosh}_twd-{twd}_{act}"] = [
+            f"flex={flex}", f"slosh={slosh}", f"twd={twd}", f"actuator={act}", *extra]
+    # a run that diverges with slosh on: its divergence time is the one named fix of issue 11
+    out["diverging_slosh"] = ["slosh=on", "sim.max_body_rate_deg_s=1.0"]
+    out["linear_full"] = ["study=linear", "study.charts=none", *FULL]
+    out["montecarlo_full_20"] = ["study=montecarlo", "study.n_runs=20", "study.workers=2", *FULL]
+    return out
+
+
+def record(source: Path, out_dir: Path, jobs: int = 2) -> None:
+    """Fly every case with the code of ``source`` into ``out_dir/<case>``."""
+    env = dict(os.environ, PYTHONPATH=str(source))
+    env.pop("SAVANT_SOURCE_DIR", None)
+
+    def one(item: tuple[str, list[str]]) -> str:
+        name, overrides = item
+        run_dir = out_dir / name
+        cmd = [sys.executable, "-m", "savant_cli.cli", "run", *overrides, *COMMON, f"hydra.run.dir={run_dir}"]
+        proc = subprocess.run(cmd, cwd=source, env=env, capture_output=True, text=True)
+        (out_dir / f"{name}.log").write_text(proc.stdout + proc.stderr)
+        return f"{name}: exit {proc.returncode}"
+
+    out_dir.mkdir(parents=True, exist_ok=True)
+    with ThreadPoolExecutor(jobs) as pool:
+        for line in pool.map(one, cases().items()):
+            print(line, flush=True)
+
+
+def _equal(a: np.ndarray, b: np.ndarray) -> bool:
+    if a.shape != b.shape or a.dtype.kind != b.dtype.kind:
+        return False
+    if a.dtype.kind == "f":
+        return bool(np.array_equal(a, b, equal_nan=True))
+    return bool(np.array_equal(a, b))
+
+
+def _deviation(a: np.ndarray, b: np.ndarray) -> str:
+    if a.shape == b.shape and a.dtype.kind in "fiu" and b.dtype.kind in "fiu":
+        with np.errstate(invalid="ignore"):
+            d = np.abs(a.astype(float) - b.astype(float))
+        return f"max |Δ| = {np.nanmax(d) if d.size else 0.0:.3e}"
+    return f"shape {a.shape} vs {b.shape}, dtype {a.dtype} vs {b.dtype}"
+
+
+def _attrs(obj: h5py.HLObject, skip: tuple[str, ...] = ()) -> dict[str, np.ndarray]:
+    return {k: np.asarray(v) for k, v in obj.attrs.items() if k not in skip}
+
+
+def compare_h5(a: Path, b: Path) -> list[str]:
+    """Differences between two run files (empty: bitwise identical)."""
+    diffs: list[str] = []
+    with h5py.File(a, "r") as fa, h5py.File(b, "r") as fb:
+        names_a, names_b = [], []
+        fa.visit(names_a.append)
+        fb.visit(names_b.append)
+        for only, side in ((set(names_a) - set(names_b), "reference"), (set(names_b) - set(names_a), "new")):
+            diffs += [f"{n}: only in the {side} file" for n in sorted(only)]
+        for name in [n for n in names_a if n in set(names_b)]:
+            oa, ob = fa[name], fb[name]
+            if name == "config":
+                continue  # the resolved config text (key order, new schema keys) is not an output
+            skip = WALL_CLOCK_KEYS if name.endswith("summary") else ()
+            at_a, at_b = _attrs(oa, skip), _attrs(ob, skip)
+            for at in (at_a, at_b):  # provenance of a group (e.g. the Monte Carlo's): the machine, not the flight
+                for k in [k for k in at if k.startswith("provenance_")]:
+                    del at[k]
+            for k in sorted(set(at_a) | set(at_b)):
+                if k not in at_a or k not in at_b:
+                    diffs.append(f"{name}@{k}: attribute only in one file")
+                elif not _equal(at_a[k], at_b[k]):
+                    diffs.append(f"{name}@{k}: {_deviation(at_a[k], at_b[k])}")
+            if isinstance(oa, h5py.Dataset):
+                if name.endswith("wall_time_s"):
+                    continue
+                da, db = oa[()], ob[()]
+                da, db = np.asarray(da), np.asarray(db)
+                if not _equal(da, db):
+                    diffs.append(f"{name}: {_deviation(da, db)}")
+        skip_root = ("format", "format_version") + PROVENANCE_ATTRS
+        ra, rb = _attrs(fa, skip_root), _attrs(fb, skip_root)
+        for k in sorted(set(ra) | set(rb)):
+            if k in ("complete", "status", "message") and (k not in ra or k not in rb or not _equal(ra[k], rb[k])):
+                diffs.append(f"/@{k}: {ra.get(k)} vs {rb.get(k)}")
+    return diffs
+
+
+def compare_json(a: Path, b: Path) -> list[str]:
+    ja, jb = json.loads(a.read_text()), json.loads(b.read_text())
+    diffs = []
+
+    def walk(x, y, path):
+        if isinstance(x, dict) and isinstance(y, dict):
+            for k in sorted(set(x) | set(y)):
+                if k in WALL_CLOCK_KEYS:
+                    continue
+                if k not in x or k not in y:
+                    diffs.append(f"{path}{k}: key only in one file")
+                else:
+                    walk(x[k], y[k], f"{path}{k}.")
+        elif x != y and not (isinstance(x, float) and isinstance(y, float) and x != x and y != y):
+            diffs.append(f"{path.rstrip('.')}: {x!r} vs {y!r}")
+
+    walk(ja, jb, "")
+    return diffs
+
+
+def compare_dirs(ref: Path, new: Path) -> dict[str, list[str]]:
+    """Case → differences, for every case of :func:`cases`."""
+    out: dict[str, list[str]] = {}
+    for name in cases():
+        a, b = ref / name, new / name
+        diffs: list[str] = []
+        if not a.is_dir() or not b.is_dir():
+            out[name] = [f"missing run folder ({a.is_dir()=}, {b.is_dir()=})"]
+            continue
+        files_a = {p.relative_to(a) for p in a.rglob("*") if p.is_file() and ".hydra" not in p.parts}
+        files_b = {p.relative_to(b) for p in b.rglob("*") if p.is_file() and ".hydra" not in p.parts}
+        for rel in sorted(files_a - files_b):
+            diffs.append(f"{rel}: only in the reference")
+        for rel in sorted(files_a & files_b):
+            if rel.suffix == ".h5":
+                diffs += [f"{rel}: {d}" for d in compare_h5(a / rel, b / rel)]
+            elif rel.suffix == ".json":
+                diffs += [f"{rel}: {d}" for d in compare_json(a / rel, b / rel)]
+            elif rel.suffix == ".csv" and (a / rel).read_bytes() != (b / rel).read_bytes():
+                diffs.append(f"{rel}: bytes differ")
+            elif rel.suffix == ".npz":
+                diffs += [f"{rel}: {d}" for d in compare_npz(a / rel, b / rel)]
+        out[name] = diffs
+    return out
+
+
+def compare_npz(a: Path, b: Path) -> list[str]:
+    """Differences between two Monte Carlo journal records (wall-clock keys excepted)."""
+    with np.load(a, allow_pickle=False) as za, np.load(b, allow_pickle=False) as zb:
+        keys = (set(za.files) | set(zb.files)) - set(WALL_CLOCK_KEYS)
+        return [f"{k}: {'only in one file' if k not in za.files or k not in zb.files else _deviation(za[k], zb[k])}"
+                for k in sorted(keys) if k not in za.files or k not in zb.files or not _equal(za[k], zb[k])]
+
+
+def divergence_fix_only(ref: Path, new: Path) -> str | None:
+    """The named difference of issue 11: the time a diverging run reports.
+
+    Before the fix, the engine's step counter was reused by the slosh wall loop, so a
+    run diverging with slosh on stopped its clock at the wrong step and closed its
+    history with the final state at that wrong time. Returns a note when every
+    difference between the two folders is that: a nominal run diverged in both with
+    histories identical up to the divergence, or Monte Carlo runs that differ only where
+    they diverged in both. ``None`` otherwise.
+    """
+    fa, fb = ref / "savant.h5", new / "savant.h5"
+    if not (fa.is_file() and fb.is_file()):
+        return None
+    with h5py.File(fa, "r") as ha, h5py.File(fb, "r") as hb:
+        if "montecarlo" in ha and "montecarlo" in hb:
+            ra, rb = ha["montecarlo/runs"], hb["montecarlo/runs"]
+            diverged = {i for i, (x, y) in enumerate(zip(ra["status"][()], rb["status"][()]))
+                        if x == y == b"diverged"}
+            differing = set()
+            for group in ("montecarlo/runs", "montecarlo/summary"):
+                for k in ha[group]:
+                    if k in WALL_CLOCK_KEYS:
+                        continue
+                    x, y = np.asarray(ha[group][k][()]), np.asarray(hb[group][k][()])
+                    same = (x == y) | ((x != x) & (y != y)) if x.dtype.kind == "f" else (x == y)
+                    differing |= set(np.nonzero(~same)[0].tolist())
+            for rec in sorted((ref / "runs").glob("run_*.npz")):
+                run = int(rec.stem.split("_")[1])
+                if run not in diverged and compare_npz(rec, new / "runs" / rec.name):
+                    differing.add(run)  # a journal record of a run that did not diverge
+            if differing and differing <= diverged:
+                msgs = [f"run {i}: {ra['message'][i].decode()} → {rb['message'][i].decode()}" for i in sorted(differing)]
+                return "only diverged runs differ, in their divergence time: " + "; ".join(msgs)
+            return None
+        if not (ha.attrs.get("status") == hb.attrs.get("status") == "diverged"):
+            return None
+        ta, tb = ha["time_history/time"][()], hb["time_history/time"][()]
+        n = min(ta.size, tb.size) - 1
+        for k in ha["time_history"]:
+            if not _equal(ha["time_history"][k][()][:n], hb["time_history"][k][()][:n]):
+                return None
+        return (f"histories identical to t = {ta[n - 1]:.2f} s; {ha.attrs['message']} → {hb.attrs['message']}")
+
+
+def reference_outputs(commit: str, work: Path) -> Path:
+    """Record the reference commit's outputs (a detached git worktree of it)."""
+    tree = work / "ref_tree"
+    subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", str(tree), commit], check=True,
+                   capture_output=True)
+    try:
+        record(tree, work / "ref_out")
+    finally:
+        subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force", str(tree)], capture_output=True)
+    return work / "ref_out"
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--ref", help="reference commit (recorded in a temporary git worktree)")
+    ap.add_argument("--ref-dir", type=Path, help="outputs already recorded for the reference")
+    ap.add_argument("--record", type=Path, help="only record this checkout's outputs into this folder")
+    ap.add_argument("--keep", type=Path, help="keep the recorded outputs in this folder")
+    ap.add_argument("--new-dir", type=Path, help="outputs already recorded for this checkout (skip recording)")
+    args = ap.parse_args(argv)
+    if args.record:
+        record(ROOT, args.record)
+        return 0
+    if not (args.ref or args.ref_dir):
+        ap.error("give --ref COMMIT or --ref-dir DIR")
+    work = args.keep or Path(tempfile.mkdtemp(prefix="savant_bitwise_"))
+    work.mkdir(parents=True, exist_ok=True)
+    ref = args.ref_dir or reference_outputs(args.ref, work)
+    new = args.new_dir or work / "new_out"
+    if not args.new_dir:
+        record(ROOT, new)
+    result = compare_dirs(ref, new)
+    n_same = n_fix = 0
+    for name, diffs in result.items():
+        note = divergence_fix_only(ref / name, new / name) if diffs else None
+        if not diffs:
+            print(f"identical  {name}")
+            n_same += 1
+        elif note:
+            print(f"identical but for the divergence-time fix  {name}\n    {note}")
+            n_fix += 1
+        else:
+            print(f"DIFFERENT  {name}")
+            for d in diffs[:20]:
+                print(f"    {d}")
+    print(f"{n_same} of {len(result)} cases bitwise identical, {n_fix} identical but for the divergence-time fix, "
+          f"{len(result) - n_same - n_fix} different (wall-clock keys excepted)")
+    return 0 if n_same + n_fix == len(result) else 1
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,197 @@
+"""TVC actuators: the third-order model and the simplex (electro-hydraulic) model.
+
+States ``x[ACT_P:ACT_P+3]`` (pitch) and ``x[ACT_Y:ACT_Y+3]`` (yaw); the simplex model adds
+a power-valve block ``[r, ṙ]`` per axis (offset ``P_VALVE_OFFSET``). The command is
+clipped to the stage's gimbal limit; while the nozzle sits at or beyond the limit its
+angular acceleration (the tail-wags-dog input) is zero, and the thrust line uses the
+clipped angle.
+
+Third order (``actuator=third_order``), states ``[δ, δ̇, δ̈]``::
+
+    v = sat(ω_a (δ_c − δ), ±rate_limit)        commanded rate
+    δ⃛ = ω_n² (v − δ̇) − 2 ζ ω_n δ̈              second-order load
+
+Unsaturated: δ/δ_c = ω_a ω_n² / (s (s² + 2ζω_n s + ω_n²) + ω_a ω_n²).
+
+Simplex (``actuator=simplex``), states ``[δ, δ̇, θ_p]`` and ``[r, ṙ]``: position loop, power
+valve, hydraulic ram and a compliant nozzle mount::
+
+    v   = sat(K_a (δ_c − δ_fb), ±rate_limit)     position loop, valve stops
+    r̈   = ω_v² (v − r) − 2 ζ_v ω_v ṙ              power valve (flow as no-load ram rate)
+    θ̇_p = r − c_l K (θ_p − δ)                     ram: flow minus leakage
+    J δ̈ = K (θ_p − δ) − C δ̇                       nozzle on a compliant mount
+
+``δ_fb`` is the ram position (LVDT, ``feedback: piston``) or the nozzle angle. With
+ω_v → ∞, c_l = 0 and nozzle feedback this is the third-order model with ω_a = K_a,
+ω_n² = K/J, 2ζω_n = C/J. Source: SAVANT §III, "TVC actuator" (the paper's simplex
+model); ``docs/models.md``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from savant_cli.models import blocks
+from savant_cli.models.configurations import ENGINE_FIRST
+
+THIRD_ORDER = 0
+SIMPLEX = 1
+N_VALVE = 4  # simplex power valves: pitch [r, ṙ], yaw [r, ṙ]
+
+_STATE = blocks.STATE.block("actuator")
+ACT_P = _STATE.array("pitch", 3, "rad, rad/s, rad/s^2 or rad",
+                     "pitch actuator: third order [δ, δ̇, δ̈]; simplex [δ, δ̇, θ_piston]")
+ACT_Y = _STATE.array("yaw", 3, "rad, rad/s, rad/s^2 or rad", "yaw actuator, as pitch")
+STATE_NAMES = ("dp", "dp_dot", "dp_ddot", "dy", "dy_dot", "dy_ddot")
+
+THIRD = blocks.Record(
+    "third-order actuator",
+    ("loop_gain", "rad/s", "position-loop gain ω_a"),
+    ("natural_frequency", "rad/s", "load natural frequency ω_n"),
+    ("damping", "1", "load damping ratio ζ"),
+    ("rate_limit", "rad/s", "commanded-rate limit"),
+)
+T3_WA, T3_WN, T3_ZETA, T3_RATE = THIRD.offsets
+SPX = blocks.Record(
+    "simplex actuator",
+    ("loop_gain", "1/s", "position-loop gain K_a"),
+    ("valve_frequency", "rad/s", "power-valve natural frequency ω_v"),
+    ("valve_damping", "1", "power-valve damping ratio ζ_v"),
+    ("rate_limit", "rad/s", "valve flow saturation as no-load ram rate"),
+    ("stiffness", "N*m/rad", "mount stiffness K"),
+    ("damping", "N*m*s/rad", "mount damping C"),
+    ("load_inertia", "kg*m^2", "nozzle inertia about its gimbal J"),
+    ("leakage", "rad/s/(N*m)", "leakage coefficient c_l"),
+    ("nozzle_feedback", "1", "1: the loop feeds back the nozzle angle; 0: the ram LVDT"),
+)
+SX_KA, SX_WV, SX_ZV, SX_RATE, SX_K, SX_C, SX_J, SX_LEAK, SX_FEEDBACK = SPX.offsets
+STAGE = blocks.Record(
+    "gimbal",
+    ("limit", "rad", "gimbal angle limit, per axis"),
+    ("bias_pitch", "rad", "nozzle null bias (thrust-line misalignment), pitch"),
+    ("bias_yaw", "rad", "nozzle null bias, yaw"),
+)
+G_LIMIT, G_BIAS_PITCH, G_BIAS_YAW = STAGE.offsets
+
+_PARAMS = blocks.PARAMETERS.block("actuator")
+P_KIND = _PARAMS.scalar("kind", "1", "0 third order, 1 simplex")
+P_VALVE_OFFSET = _PARAMS.scalar("valve_offset", "1", "offset of the simplex valve states in x (−1: none)")
+P_FS_GIMBAL = _PARAMS.record("first_stage", STAGE, "first-stage gimbal")
+P_US_GIMBAL = _PARAMS.record("upper_stage", STAGE, "upper-stage gimbal")
+P_FS_THIRD = _PARAMS.record("first_stage.third_order", THIRD, "first-stage third-order actuator")
+P_US_THIRD = _PARAMS.record("upper_stage.third_order", THIRD, "upper-stage third-order actuator")
+P_FS_SPX = _PARAMS.record("first_stage.simplex", SPX, "first-stage simplex actuator")
+P_US_SPX = _PARAMS.record("upper_stage.simplex", SPX, "upper-stage simplex actuator")
+_AUX = blocks.DIAGNOSTICS.block("actuator")
+A_ANGLES = _AUX.array("angles", 2, "rad", "limited actuator angles pitch, yaw (null bias not included)")
+A_ACCEL = _AUX.array("accelerations", 2, "rad/s^2", "nozzle angular accelerations pitch, yaw")
+
+
+def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarray]) -> None:
+    """The ``actuator`` group (both variants' records are filled; ``kind`` selects one)
+    and the vehicle's gimbal limits."""
+    cfg, v = inputs.cfg, inputs.vehicle
+    p[P_KIND] = SIMPLEX if cfg.actuator.name == "simplex" else THIRD_ORDER
+    p[P_VALVE_OFFSET] = inputs.layout.valve
+    stages = (("first_stage", v.first_stage, P_FS_GIMBAL, P_FS_THIRD, P_FS_SPX),
+              ("upper_stage", v.upper_stage, P_US_GIMBAL, P_US_THIRD, P_US_SPX))
+    for name, stage, pg, p3, px in stages:
+        a = getattr(cfg.actuator, name)
+        p[pg + G_LIMIT] = stage.gimbal_limit_rad
+        p[pg + G_BIAS_PITCH], p[pg + G_BIAS_YAW] = np.radians(a.null_bias_deg)
+        p[p3 + T3_WA] = a.loop_gain_rad_s
+        p[p3 + T3_WN] = 2.0 * np.pi * a.natural_frequency_hz
+        p[p3 + T3_ZETA] = a.damping
+        p[p3 + T3_RATE] = np.radians(a.rate_limit_deg_s)
+        p[px:px + SPX.size] = (a.loop_gain_rad_s, 2.0 * np.pi * a.valve_frequency_hz, a.valve_damping,
+                               np.radians(a.rate_limit_deg_s), a.stiffness_Nm_per_rad, a.damping_Nms_per_rad,
+                               stage.engine.inertia_about_gimbal_kgm2, a.leakage_rad_s_per_Nm,
+                               1.0 if a.feedback == "nozzle" else 0.0)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def clip(x: float, lim: float) -> float:
+    """``x`` limited to ``[−lim, lim]``."""
+    if x > lim:
+        return lim
+    if x < -lim:
+        return -lim
+    return x
+
+
+@njit(cache=True, error_model="numpy")
+def third_order(x: np.ndarray, k: int, cmd: float, p: np.ndarray, base: int, out: np.ndarray) -> None:
+    """Third-order actuator: states ``x[k:k+3] = [δ, δ̇, δ̈]``, derivatives into
+    ``out[k:k+3]``; ``cmd`` is δ_c (rad); ``p[base:]`` a :data:`THIRD` record."""
+    wn = p[base + T3_WN]
+    rate_limit = p[base + T3_RATE]
+    v = p[base + T3_WA] * (cmd - x[k])
+    if v > rate_limit:
+        v = rate_limit
+    elif v < -rate_limit:
+        v = -rate_limit
+    out[k] = x[k + 1]
+    out[k + 1] = x[k + 2]
+    out[k + 2] = wn * wn * (v - x[k + 1]) - 2.0 * p[base + T3_ZETA] * wn * x[k + 2]
+
+
+@njit(cache=True, error_model="numpy")
+def simplex(x: np.ndarray, k: int, kv: int, cmd: float, p: np.ndarray, base: int, out: np.ndarray) -> float:
+    """Simplex actuator: states ``x[k:k+3] = [δ, δ̇, θ_p]`` and valve ``x[kv:kv+2] = [r, ṙ]``,
+    derivatives into ``out``; ``p[base:]`` a :data:`SPX` record. Returns δ̈ (rad/s²)."""
+    d, dd, th = x[k], x[k + 1], x[k + 2]
+    fb = d if p[base + SX_FEEDBACK] > 0.5 else th
+    rl = p[base + SX_RATE]
+    v = p[base + SX_KA] * (cmd - fb)
+    if v > rl:
+        v = rl
+    elif v < -rl:
+        v = -rl
+    torque = p[base + SX_K] * (th - d)
+    ddd = (torque - p[base + SX_C] * dd) / p[base + SX_J]
+    wv = p[base + SX_WV]
+    out[k] = dd
+    out[k + 1] = ddd
+    out[k + 2] = x[kv] - p[base + SX_LEAK] * torque
+    out[kv] = x[kv + 1]
+    out[kv + 1] = wv * wv * (v - x[kv]) - 2.0 * p[base + SX_ZV] * wv * x[kv + 1]
+    return ddd
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def gimbal_stage(p: np.ndarray, engine: int) -> int:
+    """Offset of the active stage's :data:`STAGE` record (upper stage from separation on)."""
+    return P_FS_GIMBAL if engine == ENGINE_FIRST else P_US_GIMBAL
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def actuator_rates(x: np.ndarray, p: np.ndarray, engine: int, pitch_cmd: float, yaw_cmd: float,
+                   xd: np.ndarray) -> tuple[float, float]:
+    """Write the actuator state derivatives into ``xd``; return the nozzle angular
+    accelerations δ̈ pitch, yaw (rad/s²), zero while the nozzle is at its limit."""
+    lim = p[gimbal_stage(p, engine) + G_LIMIT]
+    first = engine == ENGINE_FIRST
+    if int(p[P_KIND]) == SIMPLEX:
+        vo = int(p[P_VALVE_OFFSET])
+        sp = P_FS_SPX if first else P_US_SPX
+        ddp = simplex(x, ACT_P, vo, clip(pitch_cmd, lim), p, sp, xd)
+        ddy = simplex(x, ACT_Y, vo + 2, clip(yaw_cmd, lim), p, sp, xd)
+    else:
+        t3 = P_FS_THIRD if first else P_US_THIRD
+        third_order(x, ACT_P, clip(pitch_cmd, lim), p, t3, xd)
+        third_order(x, ACT_Y, clip(yaw_cmd, lim), p, t3, xd)
+        ddp, ddy = x[ACT_P + 2], x[ACT_Y + 2]
+    if abs(x[ACT_P]) >= lim:  # held at the stop: no nozzle acceleration
+        ddp = 0.0
+    if abs(x[ACT_Y]) >= lim:
+        ddy = 0.0
+    return ddp, ddy
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def gimbal_angles(x: np.ndarray, p: np.ndarray, engine: int) -> tuple[float, float, float, float]:
+    """Limited actuator angles δp, δy and the active stage's null biases pitch, yaw (rad)."""
+    g = gimbal_stage(p, engine)
+    lim = p[g + G_LIMIT]
+    return clip(x[ACT_P], lim), clip(x[ACT_Y], lim), p[g + G_BIAS_PITCH], p[g + G_BIAS_YAW]

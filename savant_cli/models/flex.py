@@ -1,0 +1,181 @@
+"""Flexible body: retained bending modes in modal coordinates, blended between the modal
+sets of a stage, loaded by the forces and moments at the plant's points.
+
+Each mode ``i`` (unit generalized mass, SI: q in √kg·m) obeys::
+
+    q̈_i + 2 ζ_i ω_i q̇_i + ω_i² q_i = Σ_points (φ_i(pt) · F(pt) + σ_i(pt) · M(pt))
+
+with φ the translation and σ the rotation mode shape at a point (body axes). Loaded
+points: the active gimbal (thrust plus the tail-wags-dog force, and the tail-wags-dog
+torque), the roll jets (their torque) and the two slosh masses (their forces). The
+structure's rotation at a point is ``Σ σ_i(pt) q_i``: at the gimbal it turns the thrust
+line (follower thrust), at the navigation unit and the rate gyros it is what the
+sensors see on top of the rigid motion.
+
+Four modal sets, two per stage (first-stage liftoff and burnout, second-stage ignition
+and burnout). With ``flex.switching: event`` (the paper's assumption) the liftoff set is
+used until separation and the ignition set after it; with ``propellant`` the frequencies
+and shapes are blended linearly with the stage's burned-propellant fraction. Source:
+SAVANT §III, "Flexible body"; the default modal data come from a beam model
+(``datagen/ares_i_flex.py``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from savant_cli.models import blocks
+from savant_cli.models.configurations import CONFIG_STACK
+from savant_cli.models.interp import tab_offset
+from savant_cli.models.propulsion import MFS, MLH2, MLOX, P_FS_PROP_FULL, P_US_PROP_FULL
+
+# Points where the plant and the sensors use mode shapes, and the vehicle YAML key
+# (``flex.nodes.<key>``) of each; a point may average several nodes.
+PT_IMU = 0  # navigation unit (its rotation enters the attitude errors) and IMU gyros
+PT_GYRO_US = 1
+PT_GYRO_FS = 2
+PT_RCS = 3
+PT_GIMBAL_FS = 4
+PT_GIMBAL_US = 5
+PT_SLOSH_LOX = 6
+PT_SLOSH_LH2 = 7
+N_POINTS = 8
+POINT_KEYS = ("imu", "rate_gyro_upper_stage", "rate_gyro_first_stage", "rcs", "gimbal_first_stage",
+              "gimbal_upper_stage", "slosh_lox", "slosh_lh2")
+FIRST_STAGE_POINTS = (PT_GYRO_FS, PT_GIMBAL_FS)  # absent from the upper-stage modal sets
+# modal data sets, in this order in the packed tables
+FLEX_SETS = ("first_stage_liftoff", "first_stage_burnout", "second_stage_ignition", "second_stage_burnout")
+SHAPE = blocks.Record(
+    "mode shape at a point",
+    ("phi_x", "1/sqrt(kg)", "translation per unit modal coordinate, body X"),
+    ("phi_y", "1/sqrt(kg)", "translation, body Y"),
+    ("phi_z", "1/sqrt(kg)", "translation, body Z"),
+    ("sigma_x", "rad/(sqrt(kg)*m)", "rotation per unit modal coordinate, body X"),
+    ("sigma_y", "rad/(sqrt(kg)*m)", "rotation, body Y"),
+    ("sigma_z", "rad/(sqrt(kg)*m)", "rotation, body Z"),
+)
+PHI_X, PHI_Y, PHI_Z, SIGMA_X, SIGMA_Y, SIGMA_Z = SHAPE.offsets
+N_SHAPE = SHAPE.size
+
+_PARAMS = blocks.PARAMETERS.block("flex")
+P_OFFSET = _PARAMS.scalar("state_offset", "1", "offset of q₁…q_N, q̇₁…q̇_N in x (−1: flex off)")
+P_N_MODES = _PARAMS.scalar("n_modes", "1", "retained modes")
+P_SWITCH = _PARAMS.scalar("switching", "1", "0: liftoff set then ignition set; 1: blend by propellant")
+_TABLES = blocks.TABLES.block("flex")
+T_FREQ = _TABLES.table("flex_freq", "rad/s", "(4 FLEX_SETS, n_modes) modal frequencies")
+T_ZETA = _TABLES.table("flex_zeta", "1", "(n_modes,) modal damping ratios")
+T_SHAPE = _TABLES.table("flex_shape", "SI", "(4, n_modes, N_POINTS, SHAPE) mode shapes at the points, body axes")
+_AUX = blocks.DIAGNOSTICS.block("flex")
+A_GIMBAL_ROTATION = _AUX.array("gimbal_rotation", 3, "rad", "flex rotation at the active gimbal, body")
+
+
+def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarray]) -> None:
+    """The ``flex`` group and the vehicle's modal sets (placeholders when off)."""
+    f = inputs.cfg.flex
+    p[P_OFFSET] = inputs.layout.flex
+    p[P_N_MODES] = inputs.layout.n_modes
+    p[P_SWITCH] = 1.0 if f.switching == "propellant" else 0.0
+    if f.enabled:
+        from savant_cli.flex_slosh import load_flex
+
+        fx = load_flex(inputs.vehicle, f, inputs.cfg.sim.plant_rate_hz)
+        tables.update(flex_freq=fx.frequency_rad_s, flex_zeta=fx.damping, flex_shape=fx.shapes)
+    else:
+        tables.update(flex_freq=np.zeros((4, 1)), flex_zeta=np.zeros(1), flex_shape=np.zeros((4, 1, N_POINTS, N_SHAPE)))
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def flex_sets(x: np.ndarray, config: int, p: np.ndarray) -> tuple[int, int, float]:
+    """The two modal sets of the current stage and the blend weight toward the second.
+
+    Stack: first-stage liftoff → burnout; upper stage: ignition → burnout. With
+    ``switching: event`` (the source paper's assumption) the weight is 0: the liftoff
+    set until separation, the ignition set after. With ``propellant`` the weight is the
+    fraction of the stage's propellant burned.
+    """
+    if config == CONFIG_STACK:
+        a, frac = 0, x[MFS] / p[P_FS_PROP_FULL]
+    else:
+        a, frac = 2, (x[MLOX] + x[MLH2]) / p[P_US_PROP_FULL]
+    if p[P_SWITCH] == 0.0:
+        return a, a + 1, 0.0
+    return a, a + 1, 1.0 - min(max(frac, 0.0), 1.0)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def rotation_at(x: np.ndarray, config: int, p: np.ndarray, tb: np.ndarray, pt: int,
+                rate: bool) -> tuple[float, float, float]:
+    """Flex rotation (``rate`` False, rad) or rotation rate (True, rad/s) at point ``pt``,
+    body axes: ``Σ_i σ_i(pt) q_i`` (or ``q̇_i``). Zero when flex is off."""
+    rx = ry = rz = 0.0
+    fo = int(p[P_OFFSET])
+    if fo < 0:
+        return rx, ry, rz
+    nm = int(p[P_N_MODES])
+    sa, sb, w = flex_sets(x, config, p)
+    o_sh = tab_offset(tb, T_SHAPE)
+    nd = int(tb[2 * T_ZETA + 1])  # modes in the data
+    for i in range(nm):
+        qi = x[fo + nm + i] if rate else x[fo + i]
+        ia = o_sh + ((sa * nd + i) * N_POINTS + pt) * N_SHAPE + SIGMA_X
+        ib = o_sh + ((sb * nd + i) * N_POINTS + pt) * N_SHAPE + SIGMA_X
+        rx += ((1.0 - w) * tb[ia] + w * tb[ib]) * qi
+        ry += ((1.0 - w) * tb[ia + 1] + w * tb[ib + 1]) * qi
+        rz += ((1.0 - w) * tb[ia + 2] + w * tb[ib + 2]) * qi
+    return rx, ry, rz
+
+
+@njit(cache=True, error_model="numpy")
+def flex_point(x: np.ndarray, config: int, p: np.ndarray, tb: np.ndarray, pt: int, rate: bool,
+               out: np.ndarray) -> None:
+    """:func:`rotation_at` into ``out[0:3]`` (the sensors' call)."""
+    out[0], out[1], out[2] = rotation_at(x, config, p, tb, pt, rate)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def point_work(tb: np.ndarray, base_a: int, base_b: int, w: float, pt: int, f0: float, f1: float, f2: float,
+               m0: float, m1: float, m2: float) -> float:
+    """``φ·F + σ·M`` of one mode at point ``pt``, blended between two sets (``base_*``: the
+    mode's first shape entry in each set)."""
+    ia = base_a + pt * N_SHAPE
+    ib = base_b + pt * N_SHAPE
+    return (((1.0 - w) * tb[ia + PHI_X] + w * tb[ib + PHI_X]) * f0
+            + ((1.0 - w) * tb[ia + PHI_Y] + w * tb[ib + PHI_Y]) * f1
+            + ((1.0 - w) * tb[ia + PHI_Z] + w * tb[ib + PHI_Z]) * f2
+            + ((1.0 - w) * tb[ia + SIGMA_X] + w * tb[ib + SIGMA_X]) * m0
+            + ((1.0 - w) * tb[ia + SIGMA_Y] + w * tb[ib + SIGMA_Y]) * m1
+            + ((1.0 - w) * tb[ia + SIGMA_Z] + w * tb[ib + SIGMA_Z]) * m2)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def modal_rates(x: np.ndarray, config: int, p: np.ndarray, tb: np.ndarray, gimbal_pt: int,
+                fgx: float, fgy: float, fgz: float, tgy: float, tgz: float, rcs_torque: float,
+                f_lox_x: float, f_lox_y: float, f_lox_z: float, f_lh2_x: float, f_lh2_y: float, f_lh2_z: float,
+                xd: np.ndarray) -> None:
+    """Modal equations into ``xd``: the force ``fg`` (N) and torque ``(0, tgy, tgz)`` (N·m)
+    at the active gimbal point, the roll-jet torque (N·m) at the jets and the slosh
+    forces (N) at the slosh masses, all body axes. Nothing when flex is off."""
+    fo = int(p[P_OFFSET])
+    if fo < 0:
+        return
+    nmod = int(p[P_N_MODES])
+    sa, sb, w = flex_sets(x, config, p)
+    o_sh = tab_offset(tb, T_SHAPE)
+    o_fz = tab_offset(tb, T_ZETA)
+    o_ff = tab_offset(tb, T_FREQ)
+    nd = int(tb[2 * T_ZETA + 1])
+    for i in range(nmod):
+        wi = (1.0 - w) * tb[o_ff + sa * nd + i] + w * tb[o_ff + sb * nd + i]
+        base_a = o_sh + (sa * nd + i) * N_POINTS * N_SHAPE
+        base_b = o_sh + (sb * nd + i) * N_POINTS * N_SHAPE
+        # generalized force over the loaded points, in point order (jets, gimbal, LOX, LH2)
+        gen = 0.0
+        gen += point_work(tb, base_a, base_b, w, PT_RCS, 0.0, 0.0, 0.0, rcs_torque, 0.0, 0.0)
+        gen += point_work(tb, base_a, base_b, w, gimbal_pt, fgx, fgy, fgz, 0.0, tgy, tgz)
+        gen += point_work(tb, base_a, base_b, w, PT_SLOSH_LOX, f_lox_x, f_lox_y, f_lox_z, 0.0, 0.0, 0.0)
+        gen += point_work(tb, base_a, base_b, w, PT_SLOSH_LH2, f_lh2_x, f_lh2_y, f_lh2_z, 0.0, 0.0, 0.0)
+        qi = x[fo + i]
+        qdi = x[fo + nmod + i]
+        xd[fo + i] = qdi
+        xd[fo + nmod + i] = gen - 2.0 * tb[o_fz + i] * wi * qdi - wi * wi * qi

@@ -1,0 +1,103 @@
+"""Mass properties: mass, CG and inertia of each configuration against propellant remaining.
+
+Each configuration (stack, upper stage with LES, upper stage) has a table of the
+vehicle's mass (kg), CG (structure frame, m) and inertia about the CG (body axes,
+kg·m²: moments Ixx, Iyy, Izz and products Ixy, Ixz, Iyz, tensor off-diagonals being the
+negative products) against the propellant remaining of the burning stage (kg,
+ascending). Rows are interpolated linearly and held beyond the table. Source: SAVANT
+§III, "Mass properties"; the default tables are generated (``datagen/ares_i_tables.py``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from savant_cli.models import blocks
+from savant_cli.models.configurations import CONFIG_NAMES, N_CONFIG
+from savant_cli.models.interp import locate_at, tab, tab_offset
+
+COLUMNS = blocks.Record(
+    "mass-properties row",
+    ("mass", "kg", "vehicle mass"),
+    ("cg_x", "m", "CG, structure x"),
+    ("cg_y", "m", "CG, structure y"),
+    ("cg_z", "m", "CG, structure z"),
+    ("ixx", "kg*m^2", "moment of inertia about body X through the CG"),
+    ("iyy", "kg*m^2", "moment of inertia about body Y"),
+    ("izz", "kg*m^2", "moment of inertia about body Z"),
+    ("ixy", "kg*m^2", "product of inertia Ixy (tensor element −Ixy)"),
+    ("ixz", "kg*m^2", "product of inertia Ixz"),
+    ("iyz", "kg*m^2", "product of inertia Iyz"),
+)
+M_MASS, M_CG_X, M_CG_Y, M_CG_Z, M_IXX, M_IYY, M_IZZ, M_IXY, M_IXZ, M_IYZ = COLUMNS.offsets
+N_COLUMNS = COLUMNS.size
+
+_TABLES = blocks.TABLES.block("mass")
+T_PROP = _TABLES.table("mass_prop", "kg", "(3 configurations, n) propellant remaining, ascending (padded)")
+T_DATA = _TABLES.table("mass_data", "kg, m, kg*m^2", "(3, n, COLUMNS) mass-properties rows")
+T_LEN = _TABLES.table("mass_len", "1", "(3,) valid rows per configuration")
+_AUX = blocks.DIAGNOSTICS.block("mass")
+A_MASS = _AUX.scalar("mass", "kg", "vehicle mass (slosh masses included)")
+A_CG = _AUX.array("cg", 3, "m", "vehicle CG, structure frame (slosh masses included)")
+A_PROP = _AUX.scalar("propellant", "kg", "propellant remaining of the burning configuration")
+
+
+def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarray]) -> None:
+    """The vehicle's three mass-properties tables, stacked."""
+    masses = [inputs.vehicle.configurations[n].mass for n in CONFIG_NAMES]
+    prop, n = blocks.stack_padded([m.propellant_kg for m in masses])
+    data, _ = blocks.stack_padded([np.column_stack([m.mass_kg, m.cg_m, m.inertia_kgm2]) for m in masses])
+    tables.update(mass_prop=prop, mass_data=data, mass_len=n)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def mass_properties(tb: np.ndarray, config: int, prop_kg: float):
+    """Mass properties of ``config`` holding ``prop_kg`` of propellant.
+
+    Returns
+    -------
+    tuple of float
+        ``(m kg, cg_x, cg_y, cg_z m (structure), Ixx, Iyy, Izz, Ixy, Ixz, Iyz kg·m²)``,
+        the last three as inertia-tensor elements (the negative products of inertia).
+    """
+    o_mp, n_mp = tab(tb, T_PROP)
+    nm = n_mp // N_CONFIG  # padded rows per configuration
+    i0, w = locate_at(tb, o_mp + config * nm, int(tb[tab_offset(tb, T_LEN) + config]), prop_kg)
+    r0 = tab_offset(tb, T_DATA) + (config * nm + i0) * N_COLUMNS
+    r1 = r0 + N_COLUMNS
+    a = 1.0 - w
+    return (a * tb[r0 + M_MASS] + w * tb[r1 + M_MASS],
+            a * tb[r0 + M_CG_X] + w * tb[r1 + M_CG_X],
+            a * tb[r0 + M_CG_Y] + w * tb[r1 + M_CG_Y],
+            a * tb[r0 + M_CG_Z] + w * tb[r1 + M_CG_Z],
+            a * tb[r0 + M_IXX] + w * tb[r1 + M_IXX],
+            a * tb[r0 + M_IYY] + w * tb[r1 + M_IYY],
+            a * tb[r0 + M_IZZ] + w * tb[r1 + M_IZZ],
+            -(a * tb[r0 + M_IXY] + w * tb[r1 + M_IXY]),
+            -(a * tb[r0 + M_IXZ] + w * tb[r1 + M_IXZ]),
+            -(a * tb[r0 + M_IYZ] + w * tb[r1 + M_IYZ]))
+
+
+@njit(cache=True, error_model="numpy")
+def inertia_tensor(tb: np.ndarray, config: int, prop_kg: float):
+    """:func:`mass_properties` as arrays, for Python callers: mass (kg), CG (structure,
+    m, shape (3,)) and the inertia tensor about the CG (body, kg·m², shape (3, 3))."""
+    m, cx, cy, cz, ixx, iyy, izz, ixy, ixz, iyz = mass_properties(tb, config, prop_kg)
+    cg = np.empty(3)
+    cg[0], cg[1], cg[2] = cx, cy, cz
+    inertia = np.empty((3, 3))
+    inertia[0, 0], inertia[1, 1], inertia[2, 2] = ixx, iyy, izz
+    inertia[0, 1] = inertia[1, 0] = ixy
+    inertia[0, 2] = inertia[2, 0] = ixz
+    inertia[1, 2] = inertia[2, 1] = iyz
+    return m, cg, inertia
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def minus_point_mass(ixx: float, iyy: float, izz: float, ixy: float, ixz: float, iyz: float,
+                     m: float, dx: float, dy: float, dz: float):
+    """Inertia tensor elements minus those of a point mass ``m`` (kg) at body offset ``d``
+    (m): ``I − m (|d|² E − d dᵀ)`` (off-diagonal elements are tensor elements)."""
+    return (ixx - m * (dy * dy + dz * dz), iyy - m * (dx * dx + dz * dz), izz - m * (dx * dx + dy * dy),
+            ixy + m * dx * dy, ixz + m * dx * dz, iyz + m * dy * dz)

@@ -1,0 +1,145 @@
+"""Propulsion: first-stage motor and upper-stage engine thrust, mass flow, propellant
+states, and the thrust force and moment of a gimbaled nozzle.
+
+First stage (solid motor): vacuum thrust ``F_vac(t)`` from a table against mission
+time, × ``thrust_scale`` (dispersions); mass flow ``ṁ = F_vac / (g0 Isp_vac)`` while
+propellant remains. Upper stage (J-2X class): ``F_vac = F_rated f(t − t_ign)`` with the
+start-up thrust fraction ``f`` from a table; ``ṁ = F_vac / (g0 Isp)``, split LOX : LH2 by
+the mixture ratio. Delivered thrust ``F = max(F_vac − p_amb A_exit, 0)``.
+
+The thrust acts at the active stage's gimbal along the nozzle axis, turned by the
+actuator angles plus the nozzle's null bias, minus the structure's flex rotation at the
+gimbal (follower thrust)::
+
+    F_b = F (cos δp cos δy, −sin δy, sin δp cos δy),     M_cg = r_cg→gimbal × F_b
+
+with ``r_cg→gimbal = diag(−1, 1, −1)(gimbal − cg)`` (structure → body axes). Source:
+SAVANT §III, "Propulsion" and "Thrust vector control".
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from savant_cli import constants as C
+from savant_cli.models import blocks
+from savant_cli.models.configurations import CONFIG_STACK, ENGINE_FIRST, ENGINE_UPPER
+from savant_cli.models.interp import interp1_at, tab, tab_offset
+
+G0 = C.G0
+
+_STATE = blocks.STATE.block("propulsion")
+MFS = _STATE.scalar("first_stage_propellant", "kg", "first-stage propellant remaining")
+MLOX = _STATE.scalar("lox", "kg", "upper-stage LOX remaining")
+MLH2 = _STATE.scalar("lh2", "kg", "upper-stage LH2 remaining")
+STATE_NAMES = ("prop_first_stage", "prop_lox", "prop_lh2")
+
+GIMBAL = blocks.Record("gimbal point", ("x", "m", "structure x"), ("y", "m", "structure y"),
+                       ("z", "m", "structure z"))
+GIMBAL_X, GIMBAL_Y, GIMBAL_Z = GIMBAL.offsets
+
+_PARAMS = blocks.PARAMETERS.block("propulsion")
+P_ON = _PARAMS.scalar("on", "1", "1: thrust applied (environment.thrust)")
+P_FS_ISP = _PARAMS.scalar("first_stage.isp_vac", "s", "first-stage vacuum specific impulse")
+P_FS_EXIT_AREA = _PARAMS.scalar("first_stage.exit_area", "m^2", "first-stage nozzle exit area")
+P_FS_THRUST_SCALE = _PARAMS.scalar("first_stage.thrust_scale", "1", "multiplier of the thrust table")
+P_FS_PROP_FULL = _PARAMS.scalar("first_stage.propellant_full", "kg", "first-stage propellant at liftoff")
+P_US_THRUST = _PARAMS.scalar("upper_stage.thrust_vac", "N", "upper-stage rated vacuum thrust")
+P_US_ISP = _PARAMS.scalar("upper_stage.isp_vac", "s", "upper-stage vacuum specific impulse")
+P_US_MR = _PARAMS.scalar("upper_stage.mixture_ratio", "1", "LOX : LH2 mass ratio")
+P_US_EXIT_AREA = _PARAMS.scalar("upper_stage.exit_area", "m^2", "upper-stage nozzle exit area")
+P_US_PROP_FULL = _PARAMS.scalar("upper_stage.propellant_full", "kg", "upper-stage LOX + LH2 at ignition")
+P_FS_GIMBAL = _PARAMS.record("first_stage.gimbal", GIMBAL, "first-stage gimbal point")
+P_US_GIMBAL = _PARAMS.record("upper_stage.gimbal", GIMBAL, "upper-stage gimbal point")
+
+_TABLES = blocks.TABLES.block("propulsion")
+T_FS_TIME = _TABLES.table("fs_time", "s", "first-stage thrust table, mission time")
+T_FS_THRUST = _TABLES.table("fs_thrust", "N", "first-stage vacuum thrust at T_FS_TIME")
+T_US_START_TIME = _TABLES.table("us_start_time", "s", "upper-stage start transient, time since ignition")
+T_US_START_FRAC = _TABLES.table("us_start_frac", "1", "fraction of rated thrust at T_US_START_TIME")
+_AUX = blocks.DIAGNOSTICS.block("propulsion")
+A_THRUST = _AUX.scalar("thrust", "N", "delivered thrust")
+A_MOMENT = _AUX.array("moment", 3, "N*m", "thrust moment about the CG, body")
+
+
+def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarray]) -> None:
+    """Engine data of the vehicle; ``environment.thrust``."""
+    fs, us = inputs.vehicle.first_stage, inputs.vehicle.upper_stage
+    p[P_ON] = 1.0 if inputs.cfg.environment.thrust else 0.0
+    p[P_FS_ISP] = fs.isp_vac_s
+    p[P_FS_EXIT_AREA] = fs.nozzle_exit_area_m2
+    p[P_FS_THRUST_SCALE] = 1.0
+    p[P_FS_PROP_FULL] = fs.propellant_kg
+    p[P_US_THRUST] = us.thrust_vac_N
+    p[P_US_ISP] = us.isp_vac_s
+    p[P_US_MR] = us.mixture_ratio
+    p[P_US_EXIT_AREA] = us.nozzle_exit_area_m2
+    p[P_US_PROP_FULL] = us.lox_kg + us.lh2_kg
+    p[P_FS_GIMBAL:P_FS_GIMBAL + GIMBAL.size] = fs.gimbal_m
+    p[P_US_GIMBAL:P_US_GIMBAL + GIMBAL.size] = us.gimbal_m
+    tables.update(fs_time=fs.thrust_time_s, fs_thrust=fs.thrust_vac_N, us_start_time=us.startup_time_s,
+                  us_start_frac=us.startup_fraction)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def propellant_remaining(x: np.ndarray, config: int) -> float:
+    """Propellant of the burning configuration (kg): first stage on the stack, LOX + LH2
+    after separation (the mass tables' argument)."""
+    return x[MFS] if config == CONFIG_STACK else x[MLOX] + x[MLH2]
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def thrust_and_flow(x: np.ndarray, tb: np.ndarray, p: np.ndarray, engine: int, t: float, t_ign: float,
+                    pres: float) -> tuple[float, float, float]:
+    """Delivered thrust (N) and the first- and upper-stage mass flows (kg/s).
+
+    ``engine`` is the engine phase, ``t`` mission time (s), ``t_ign`` the upper-stage
+    ignition time (s), ``pres`` the ambient pressure (Pa).
+    """
+    thrust = 0.0
+    mdot_fs = 0.0
+    mdot_us = 0.0
+    if engine == ENGINE_FIRST:
+        o_ft, n_ft = tab(tb, T_FS_TIME)
+        f_vac = p[P_FS_THRUST_SCALE] * interp1_at(tb, o_ft, tab_offset(tb, T_FS_THRUST), n_ft, t)
+        if x[MFS] > 0.0 and f_vac > 0.0:
+            mdot_fs = f_vac / (G0 * p[P_FS_ISP])
+            thrust = max(f_vac - pres * p[P_FS_EXIT_AREA], 0.0)
+    elif engine == ENGINE_UPPER and x[MLOX] > 0.0 and x[MLH2] > 0.0:
+        o_st, n_st = tab(tb, T_US_START_TIME)
+        f_vac = interp1_at(tb, o_st, tab_offset(tb, T_US_START_FRAC), n_st, t - t_ign) * p[P_US_THRUST]
+        mdot_us = f_vac / (G0 * p[P_US_ISP])
+        thrust = max(f_vac - pres * p[P_US_EXIT_AREA], 0.0)
+    if p[P_ON] == 0.0:
+        thrust = 0.0
+    return thrust, mdot_fs, mdot_us
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def propellant_rates(p: np.ndarray, mdot_fs: float, mdot_us: float) -> tuple[float, float, float]:
+    """Derivatives of the first-stage, LOX and LH2 propellant states (kg/s)."""
+    mr = p[P_US_MR]
+    return -mdot_fs, -mdot_us * mr / (1.0 + mr), -mdot_us / (1.0 + mr)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def gimbal_arm(p: np.ndarray, engine: int, cgx: float, cgy: float, cgz: float) -> tuple[float, float, float]:
+    """``r_cg→gimbal`` of the active stage in body axes (m); the CG in structure axes (m).
+    The upper-stage gimbal is active from separation on (coast included)."""
+    g = P_FS_GIMBAL if engine == ENGINE_FIRST else P_US_GIMBAL
+    return -(p[g + GIMBAL_X] - cgx), p[g + GIMBAL_Y] - cgy, -(p[g + GIMBAL_Z] - cgz)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def thrust_loads(thrust: float, pitch: float, yaw: float, rgx: float, rgy: float, rgz: float):
+    """Thrust force (N) and its moment about the CG (N·m), body axes, for nozzle angles
+    ``pitch``, ``yaw`` (rad, the thrust-line angles) at the arm ``r_cg→gimbal`` (m)."""
+    if not thrust > 0.0:
+        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    cdp, sdp = np.cos(pitch), np.sin(pitch)
+    cdy, sdy = np.cos(yaw), np.sin(yaw)
+    ftx = thrust * cdp * cdy
+    fty = -thrust * sdy
+    ftz = thrust * sdp * cdy
+    return ftx, fty, ftz, rgy * ftz - rgz * fty, rgz * ftx - rgx * ftz, rgx * fty - rgy * ftx

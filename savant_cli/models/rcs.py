@@ -1,0 +1,75 @@
+"""Roll reaction-control jets: thrust-fraction ramps and the roll torque.
+
+Each direction (positive, negative roll) has ``n`` jets on a moment arm ``l``; the
+commanded direction's thrust fraction ramps linearly to 1 in ``ramp_up`` s, the other to
+0 in ``ramp_down`` s. Jet thrust ``F_jet = max(F_vac(h) − p_amb A_exit, 0)`` from a vacuum
+thrust table against altitude. Roll torque about body X::
+
+    L = (f₊ − f₋) n F_jet l
+
+Source: SAVANT §III, "Roll control system".
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from savant_cli.models import blocks
+from savant_cli.models.interp import interp1_at, tab, tab_offset
+
+_STATE = blocks.STATE.block("rcs")
+RCS_POS = _STATE.scalar("positive", "1", "thrust fraction of the positive-roll jets (0..1)")
+RCS_NEG = _STATE.scalar("negative", "1", "thrust fraction of the negative-roll jets (0..1)")
+STATE_NAMES = ("rcs_pos", "rcs_neg")
+
+_PARAMS = blocks.PARAMETERS.block("rcs")
+P_EXIT_AREA = _PARAMS.scalar("exit_area", "m^2", "nozzle exit area of one jet")
+P_N = _PARAMS.scalar("jets_per_direction", "1", "jets firing together for one roll direction")
+P_ARM = _PARAMS.scalar("moment_arm", "m", "roll moment arm of each jet")
+P_RAMP_UP = _PARAMS.scalar("ramp_up", "s", "time from closed to full thrust")
+P_RAMP_DOWN = _PARAMS.scalar("ramp_down", "s", "time from full thrust to closed")
+_TABLES = blocks.TABLES.block("rcs")
+T_ALT = _TABLES.table("rcs_alt", "m", "altitudes of the jet thrust table")
+T_THRUST = _TABLES.table("rcs_thrust", "N", "vacuum thrust of one jet at T_ALT")
+_AUX = blocks.DIAGNOSTICS.block("rcs")
+A_TORQUE = _AUX.scalar("torque", "N*m", "roll-jet torque about body X")
+
+
+def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarray]) -> None:
+    """The vehicle's roll jets."""
+    rcs = inputs.vehicle.rcs
+    p[P_EXIT_AREA] = rcs.exit_area_m2
+    p[P_N] = rcs.jets_per_direction
+    p[P_ARM] = rcs.moment_arm_m
+    p[P_RAMP_UP] = rcs.ramp_up_s
+    p[P_RAMP_DOWN] = rcs.ramp_down_s
+    tables.update(rcs_alt=rcs.altitude_m, rcs_thrust=rcs.thrust_vac_N)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def jet_ramp(frac: float, on: bool, ramp_up_s: float, ramp_down_s: float) -> float:
+    """Rate of the jet thrust fraction (1/s): linear ramp up to 1 when open, down to 0
+    when shut."""
+    if on:
+        return 1.0 / ramp_up_s if frac < 1.0 else 0.0
+    return -1.0 / ramp_down_s if frac > 0.0 else 0.0
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def jet_rates(x: np.ndarray, p: np.ndarray, command: float) -> tuple[float, float]:
+    """Derivatives of the positive and negative thrust fractions for a jet command
+    (+1 positive roll, −1 negative, 0 off)."""
+    return (jet_ramp(x[RCS_POS], command > 0.5, p[P_RAMP_UP], p[P_RAMP_DOWN]),
+            jet_ramp(x[RCS_NEG], command < -0.5, p[P_RAMP_UP], p[P_RAMP_DOWN]))
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def roll_torque(x: np.ndarray, tb: np.ndarray, p: np.ndarray, alt_m: float, pres: float) -> float:
+    """Roll torque of the jets about body X (N·m) at altitude ``alt_m`` (m) and ambient
+    pressure ``pres`` (Pa)."""
+    o_ra, n_ra = tab(tb, T_ALT)
+    f_jet = interp1_at(tb, o_ra, tab_offset(tb, T_THRUST), n_ra, alt_m) - pres * p[P_EXIT_AREA]
+    if f_jet < 0.0:
+        f_jet = 0.0
+    return (x[RCS_POS] - x[RCS_NEG]) * p[P_N] * f_jet * p[P_ARM]

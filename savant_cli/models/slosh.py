@@ -1,0 +1,200 @@
+"""Propellant slosh: one spring-mass pendulum analogue per upper-stage tank (LOX, LH2).
+
+Each tank's first lateral slosh mode is a point mass ``m_s`` on the tank centerline at
+the height ``h_s`` above the tank bottom, on a lateral spring and damper, with the
+frequency ``ω_s``, damping ``ζ_s``, mass and height read from a table against the liquid
+level (SP-106 data; ``datagen/ares_i_slosh.py``). The level of a flat-bottomed
+cylindrical tank is ``m_liquid / (ρ π R²)``. The frequency scales with the square root
+of the axial specific force: ``ω = ω_ref √(a / a_ref)``.
+
+The rigid part of the vehicle leaves the slosh masses out: its mass, CG and inertia are
+the configuration's minus the point masses on the centerlines. The force of a slosh mass
+on the tank (body axes, lateral displacement ``(y, z)`` from the centerline)::
+
+    F_y = m_s (ω² y + 2 ζ ω ẏ),   F_z = m_s (ω² z + 2 ζ ω ż),   F_x = −m_s f_x
+
+(``f_x``: the axial specific force; the masses ride axially with the tank), and the mass
+moves relative to the tank under the specific force of its attachment point::
+
+    ÿ = −2ζω ẏ − ω² y − a_y,  a = f/m + α × r + ω × (ω × r) + 2 ω × v_rel  (lateral parts)
+
+At the tank wall (``|(y, z)| = R``) the mass stops: the engine clamps it there and
+removes its outward velocity (the paper's only wall interaction). Source: SAVANT §III,
+"Slosh"; NASA SP-106 (Abramson, 1966).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from savant_cli.models import blocks
+from savant_cli.models.interp import locate_at, tab, tab_offset
+from savant_cli.models.mass import minus_point_mass
+
+N_TANKS = 2  # 0 LOX, 1 LH2
+TANK_NAMES = ("lox", "lh2")
+STATE = blocks.Record(
+    "slosh mass",
+    ("y", "m", "lateral displacement from the tank centerline, body Y"),
+    ("z", "m", "lateral displacement, body Z"),
+    ("y_dot", "m/s", "displacement rate, body Y"),
+    ("z_dot", "m/s", "displacement rate, body Z"),
+)
+S_Y, S_Z, S_YDOT, S_ZDOT = STATE.offsets
+N_PER_TANK = STATE.size
+COLUMNS = blocks.Record(
+    "slosh table row",
+    ("frequency", "rad/s", "slosh frequency at the reference acceleration"),
+    ("damping", "1", "damping ratio"),
+    ("mass", "kg", "slosh mass"),
+    ("height", "m", "slosh-mass height above the tank bottom"),
+)
+C_FREQ, C_ZETA, C_MASS, C_HEIGHT = COLUMNS.offsets
+N_COLUMNS = COLUMNS.size
+TANK = blocks.Record(
+    "tank",
+    ("radius", "m", "tank radius"),
+    ("bottom_station", "m", "tank bottom, structure x"),
+    ("density", "kg/m^3", "liquid density"),
+)
+K_RADIUS, K_BOTTOM, K_DENSITY = TANK.offsets
+N_TANK_FIELDS = TANK.size
+
+_PARAMS = blocks.PARAMETERS.block("slosh")
+P_OFFSET = _PARAMS.scalar("state_offset", "1", "offset of the slosh states in x (−1: slosh off)")
+P_AREF = _PARAMS.scalar("reference_accel", "m/s^2", "axial acceleration of the frequency tables")
+P_FREQ_SCALE = _PARAMS.scalar("frequency_scale", "1", "multiplier of the tabulated frequencies")
+P_ZETA_SCALE = _PARAMS.scalar("damping_scale", "1", "multiplier of the tabulated damping")
+P_TANKS = _PARAMS.record("lox", TANK, "LOX tank")
+_PARAMS.record("lh2", TANK, "LH2 tank (follows the LOX record)")
+_TABLES = blocks.TABLES.block("slosh")
+T_LEVEL = _TABLES.table("slosh_level", "m", "(2 tanks, n) liquid level, increasing (padded)")
+T_DATA = _TABLES.table("slosh_data", "rad/s, 1, kg, m", "(2, n, COLUMNS) slosh parameters at T_LEVEL")
+T_LEN = _TABLES.table("slosh_len", "1", "(2,) valid rows per tank")
+_AUX = blocks.DIAGNOSTICS.block("slosh")
+A_FREQUENCY = _AUX.array("frequency", 2, "rad/s", "slosh frequency per tank")
+A_LEVEL = _AUX.array("level", 2, "m", "liquid level per tank")
+A_FORCE = _AUX.array("force", 6, "N", "force of each slosh mass on the vehicle, body (LOX xyz, LH2 xyz)")
+
+
+def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarray]) -> None:
+    """The ``slosh`` group and the vehicle's slosh tables (placeholders when off)."""
+    s = inputs.cfg.slosh
+    p[P_OFFSET] = inputs.layout.slosh_offset
+    p[P_FREQ_SCALE] = s.frequency_scale
+    p[P_ZETA_SCALE] = s.damping_scale
+    p[P_AREF] = 1.0
+    sl = inputs.slosh
+    if sl is None:
+        tables.update(slosh_level=np.tile([0.0, 1.0], (2, 1)), slosh_data=np.zeros((2, 2, N_COLUMNS)),
+                      slosh_len=np.array([2, 2]))
+        return
+    p[P_AREF] = sl.reference_accel_mps2
+    for j, tank in enumerate(sl.tanks):
+        base = P_TANKS + j * N_TANK_FIELDS
+        p[base + K_RADIUS], p[base + K_BOTTOM], p[base + K_DENSITY] = (tank.radius_m, tank.bottom_station_m,
+                                                                        tank.density_kgm3)
+    level, n = blocks.stack_padded([t.level_m for t in sl.tanks])
+    data, _ = blocks.stack_padded([np.column_stack([t.frequency_rad_s, t.damping, t.mass_kg, t.height_m])
+                                   for t in sl.tanks])
+    tables.update(slosh_level=level, slosh_data=data, slosh_len=n)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def slosh_tank(tb: np.ndarray, p: np.ndarray, j: int, liquid_kg: float):
+    """Level (m), slosh ω at the reference acceleration (rad/s), ζ, slosh mass (kg) and
+    slosh-mass station (structure x, m) of tank ``j`` holding ``liquid_kg``."""
+    base = P_TANKS + j * N_TANK_FIELDS
+    radius, density = p[base + K_RADIUS], p[base + K_DENSITY]
+    level = max(liquid_kg, 0.0) / (density * np.pi * radius * radius)
+    o_l, n_l = tab(tb, T_LEVEL)
+    ns = n_l // N_TANKS
+    i, w = locate_at(tb, o_l + j * ns, int(tb[tab_offset(tb, T_LEN) + j]), level)
+    r0 = tab_offset(tb, T_DATA) + (j * ns + i) * N_COLUMNS
+    r1 = r0 + N_COLUMNS
+    a = 1.0 - w
+    w_ref = (a * tb[r0 + C_FREQ] + w * tb[r1 + C_FREQ]) * p[P_FREQ_SCALE]
+    zeta = (a * tb[r0 + C_ZETA] + w * tb[r1 + C_ZETA]) * p[P_ZETA_SCALE]
+    mass = a * tb[r0 + C_MASS] + w * tb[r1 + C_MASS]
+    height = a * tb[r0 + C_HEIGHT] + w * tb[r1 + C_HEIGHT]
+    return level, w_ref, zeta, mass, p[base + K_BOTTOM] - height
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def rigid_part(mass, cgx, cgy, cgz, ixx, iyy, izz, ixy, ixz, iyz, ms0, xs0, ms1, xs1):
+    """Mass (kg), CG (structure, m) and inertia about its own CG (body, kg·m², tensor
+    elements) of the vehicle without the two slosh masses ``ms`` at stations ``xs`` on
+    the tank centerlines."""
+    m_r = mass - ms0 - ms1
+    cgx_r = (mass * cgx - ms0 * xs0 - ms1 * xs1) / m_r
+    cgy_r = mass * cgy / m_r
+    cgz_r = mass * cgz / m_r
+    # remove each slosh mass (offset from the total CG), then move to the rigid CG
+    ixx, iyy, izz, ixy, ixz, iyz = minus_point_mass(ixx, iyy, izz, ixy, ixz, iyz, ms0, -(xs0 - cgx), -cgy, cgz)
+    ixx, iyy, izz, ixy, ixz, iyz = minus_point_mass(ixx, iyy, izz, ixy, ixz, iyz, ms1, -(xs1 - cgx), -cgy, cgz)
+    ixx, iyy, izz, ixy, ixz, iyz = minus_point_mass(ixx, iyy, izz, ixy, ixz, iyz, m_r, -(cgx_r - cgx),
+                                                    cgy_r - cgy, -(cgz_r - cgz))
+    return m_r, cgx_r, cgy_r, cgz_r, ixx, iyy, izz, ixy, ixz, iyz
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def frequency_ratio(p: np.ndarray, fex: float, fey: float, fez: float, mass_total: float) -> float:
+    """``√(a / a_ref)`` for the external non-gravitational force ``fe`` (N, body) on the
+    whole vehicle of mass ``mass_total`` (kg)."""
+    f_mag = np.sqrt(fex * fex + fey * fey + fez * fez) / mass_total
+    return np.sqrt(f_mag / p[P_AREF])
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def tank_force(x: np.ndarray, k: int, m: float, w: float, zeta: float, station: float, fx_spec: float,
+               cgx: float, cgy: float, cgz: float):
+    """Force of one slosh mass on the vehicle (N, body) and its moment about the rigid CG
+    (N·m): states ``x[k:k+4]``, mass ``m`` (kg), ω (rad/s), ζ, station (structure x, m),
+    axial specific force ``fx_spec`` (m/s²), rigid CG (structure, m)."""
+    fy = m * (w * w * x[k + S_Y] + 2.0 * zeta * w * x[k + S_YDOT])
+    fz = m * (w * w * x[k + S_Z] + 2.0 * zeta * w * x[k + S_ZDOT])
+    fx = -m * fx_spec
+    rx, ry, rz = -(station - cgx), x[k + S_Y] - cgy, x[k + S_Z] + cgz  # rigid CG → slosh mass, body
+    return fx, fy, fz, ry * fz - rz * fy, rz * fx - rx * fz, rx * fy - ry * fx
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def tank_rates(x: np.ndarray, k: int, w: float, zeta: float, station: float, cgx: float, cgy: float,
+               cgz: float, aby: float, abz: float, wx: float, wy: float, wz: float, alx: float,
+               aly: float, alz: float, xd: np.ndarray) -> None:
+    """Slosh-mass equations of one tank into ``xd[k:k+4]``: the rigid body's lateral
+    specific force ``ab`` (m/s², body), rate ω (rad/s) and angular acceleration α (rad/s²)."""
+    rx, ry, rz = -(station - cgx), x[k + S_Y] - cgy, x[k + S_Z] + cgz
+    vy, vz = x[k + S_YDOT], x[k + S_ZDOT]
+    # specific force of the point of the rigid body where the mass sits, plus Coriolis:
+    # f + α × r + ω × (ω × r) + 2 ω × v_rel   (lateral components)
+    wdr = wx * rx + wy * ry + wz * rz
+    w2 = wx * wx + wy * wy + wz * wz
+    acc_y = aby + (alz * rx - alx * rz) + (wy * wdr - w2 * ry) + 2.0 * (-wx * vz)
+    acc_z = abz + (alx * ry - aly * rx) + (wz * wdr - w2 * rz) + 2.0 * (wx * vy)
+    xd[k + S_Y] = vy
+    xd[k + S_Z] = vz
+    xd[k + S_YDOT] = -2.0 * zeta * w * vy - w * w * x[k + S_Y] - acc_y
+    xd[k + S_ZDOT] = -2.0 * zeta * w * vz - w * w * x[k + S_Z] - acc_z
+
+
+@njit(cache=True, error_model="numpy")
+def contain(x: np.ndarray, p: np.ndarray) -> None:
+    """Keep every slosh mass inside its tank: at the wall it stops (its outward velocity
+    is removed), the paper's only wall interaction. Nothing when slosh is off."""
+    so = int(p[P_OFFSET])
+    if so < 0:
+        return
+    for tank in range(N_TANKS):
+        k = so + N_PER_TANK * tank
+        radius = p[P_TANKS + tank * N_TANK_FIELDS + K_RADIUS]
+        r = np.sqrt(x[k + S_Y] ** 2 + x[k + S_Z] ** 2)
+        if r > radius:
+            ny, nz = x[k + S_Y] / r, x[k + S_Z] / r
+            x[k + S_Y] = radius * ny
+            x[k + S_Z] = radius * nz
+            vr = x[k + S_YDOT] * ny + x[k + S_ZDOT] * nz
+            if vr > 0.0:
+                x[k + S_YDOT] -= vr * ny
+                x[k + S_ZDOT] -= vr * nz
