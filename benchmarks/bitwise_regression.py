@@ -14,7 +14,9 @@ under test, so the reference is the reference commit's own code, not an import o
 What is compared, exactly (``numpy.array_equal`` with NaNs equal, byte equality for
 strings): every dataset and every attribute of ``savant.h5`` except the provenance root
 attributes (host, time, versions, wall time) and the stored config text; every key of
-``summary.json`` except the wall-clock ones; and the bytes of every CSV the study writes.
+every JSON file except the wall-clock ones and the Monte Carlo journal's config
+fingerprint; every array of the journal's run records; and the bytes of every CSV the
+study writes.
 A difference is printed with its location and the largest absolute deviation.
 """
 
@@ -37,8 +39,11 @@ ROOT = Path(__file__).resolve().parents[1]
 FULL = ["flex=on", "flex.n_modes=4", "slosh=on", "twd=on", "actuator=third_order"]
 COMMON = ["output.plots=false", "sim.progress=false"]
 
+#: Keys that hash the configuration's layout, not the flight (the Monte Carlo journal's
+#: resume fingerprint changes whenever the config schema does).
+CONFIG_HASH_KEYS = ("fingerprint",)
 #: Summary keys and root attributes that measure the machine, not the flight.
-WALL_CLOCK_KEYS = ("process_wall_time_s", "sim_wall_time_s", "realtime_factor", "wall_time_s", "wall_s",
+WALL_CLOCK_KEYS = ("study_wall_time_s", "process_wall_time_s", "sim_wall_time_s", "realtime_factor", "wall_time_s", "wall_s",
                    "simulation_wall_time_s", "elapsed_s", "runs_per_minute")
 PROVENANCE_ATTRS = ("savant_version", "git_commit", "git_dirty", "python", "numba", "numpy", "scipy",
                     "control", "h5py", "hydra", "host", "platform", "created_utc", "wall_time_s",
@@ -144,7 +149,7 @@ def compare_json(a: Path, b: Path) -> list[str]:
     def walk(x, y, path):
         if isinstance(x, dict) and isinstance(y, dict):
             for k in sorted(set(x) | set(y)):
-                if k in WALL_CLOCK_KEYS:
+                if k in WALL_CLOCK_KEYS or k in CONFIG_HASH_KEYS:
                     continue
                 if k not in x or k not in y:
                     diffs.append(f"{path}{k}: key only in one file")

@@ -82,8 +82,29 @@ def _run_hydra(argv: list[str]) -> None:
         # unknown key, bad override syntax) with exit status 1 before our task runs: those
         # are configuration errors, status 2.
         if exc.code == 1 and not _task_started:
+            hint = _variant_hint(argv)
+            if hint:
+                Console(stderr=True).print(f"[bold red]configuration error[/]: {hint}")
             raise SystemExit(ConfigError.exit_code) from None
         raise
+
+
+def _variant_hint(argv: list[str]) -> str:
+    """Our explanation of an override Hydra refused because it names a key of another
+    option of its group (the shipped defaults say which option is chosen)."""
+    from omegaconf import OmegaConf
+
+    from savant_cli.config import variant_key_hint
+    from savant_cli.paths import shipped_config_dir
+
+    try:
+        defaults = {}
+        for entry in OmegaConf.to_container(OmegaConf.load(shipped_config_dir() / "config.yaml")).get("defaults", []):
+            if isinstance(entry, dict):
+                defaults.update({str(k): str(v) for k, v in entry.items()})
+        return variant_key_hint([a for a in argv if "=" in a and not a.startswith("-")], defaults)
+    except Exception:  # noqa: BLE001 - a hint must never hide Hydra's own message
+        return ""
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -126,16 +147,21 @@ def _compare_command(rest: list[str]) -> int:
     import argparse
 
     err = Console(stderr=True)
-    ap = argparse.ArgumentParser(prog="savant compare", add_help=False)
-    ap.add_argument("run_dir", type=Path)
-    ap.add_argument("reference", type=Path)
-    ap.add_argument("--map", type=Path, required=True, dest="mapping")
-    ap.add_argument("--out", type=Path, default=None)
-    ap.add_argument("--no-plots", action="store_true")
+    ap = argparse.ArgumentParser(
+        prog="savant compare", description="Compare a run's time histories with another simulation's "
+        "(CSV or HDF5): overlay and difference plots, statistics and tolerances (docs/design_studies.md).")
+    ap.add_argument("run_dir", type=Path, help="run folder holding savant.h5")
+    ap.add_argument("reference", type=Path, help="the other simulation's history, CSV or HDF5")
+    ap.add_argument("--map", type=Path, required=True, dest="mapping",
+                    help="YAML mapping of names, units, window and tolerances (e.g. references/jsbsim_names.yaml)")
+    ap.add_argument("--out", type=Path, default=None, help="output folder (default: RUN_DIR/compare_<reference>)")
+    ap.add_argument("--no-plots", action="store_true", help="statistics only")
+    if any(a in ("-h", "--help") for a in rest):
+        ap.print_help()
+        return 0
     try:
         args = ap.parse_args(rest)
-    except SystemExit:
-        err.print("usage: savant compare RUN_DIR REFERENCE --map MAP.yaml [--out DIR] [--no-plots]")
+    except SystemExit:  # argparse printed the usage and the problem
         return 2
     if not (args.run_dir / "savant.h5").is_file():
         err.print(f"[bold red]error[/]: {args.run_dir} holds no savant.h5")

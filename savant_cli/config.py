@@ -10,6 +10,7 @@ what is allowed; the command line turns it into exit status 2.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -136,6 +137,17 @@ class CorrelationGroup:
 
 
 @dataclass
+class DispersionSetConfig:
+    """A vehicle's dispersion set (the ``dispersions`` group, selected by the vehicle
+    config): what ``study=montecarlo`` and ``study=flyoff`` disperse. Other studies fly
+    the nominal vehicle and do not read it."""
+
+    name: str = "none"
+    items: dict[str, DispersionSpec] = field(default_factory=dict)
+    correlations: list[CorrelationGroup] = field(default_factory=list)
+
+
+@dataclass
 class HistoriesSpec:
     """Decimated time histories kept for every run (empty list: none)."""
 
@@ -153,8 +165,6 @@ class MonteCarloStudyConfig:
     workers: int = 0  # processes; 0: all cores
     shards: int = 1  # split the batch into this many shards …
     shard: int = 0  # … and fly this one (Hydra multirun: study.shard='range(0,N)')
-    dispersions: dict[str, DispersionSpec] = field(default_factory=dict)
-    correlations: list[CorrelationGroup] = field(default_factory=list)
     histories: HistoriesSpec = field(default_factory=HistoriesSpec)
     linear_times: list[float] = field(default_factory=list)  # s: margins of every run at these times
     requirements: LinearRequirements = field(default_factory=LinearRequirements)
@@ -221,36 +231,85 @@ class WindsConfig:
 
 
 @dataclass
-class ActuatorStage:
-    """One stage's TVC actuator. ``third_order`` uses the first four keys; ``simplex``
-    uses loop gain and rate limit plus the valve and load keys (load inertia is the
-    vehicle's engine inertia about the gimbal)."""
+class ActuatorStageCommon:
+    """Keys of one stage's TVC actuator common to both variants."""
 
     loop_gain_rad_s: float = 25.0
+    rate_limit_deg_s: float = 10.0
+    # thrust-line misalignment from the actuator null, pitch and yaw, deg
+    null_bias_deg: list[float] = field(default_factory=lambda: [0.0, 0.0])
+
+
+@dataclass
+class ThirdOrderStage(ActuatorStageCommon):
+    """``actuator=third_order``: position loop of gain ``loop_gain_rad_s`` driving a
+    second-order load."""
+
     natural_frequency_hz: float = 12.0
     damping: float = 0.6
-    rate_limit_deg_s: float = 10.0
+
+
+@dataclass
+class SimplexStage(ActuatorStageCommon):
+    """``actuator=simplex``: power valve, hydraulic ram and compliant nozzle mount (load
+    inertia: the vehicle's engine inertia about the gimbal)."""
+
     valve_frequency_hz: float = 50.0
     valve_damping: float = 0.7
     stiffness_Nm_per_rad: float = 2.0e8
     damping_Nms_per_rad: float = 1.0e5
     leakage_rad_s_per_Nm: float = 0.0
     feedback: str = "piston"  # piston (ram LVDT) | nozzle
-    # thrust-line misalignment from the actuator null, pitch and yaw, deg (both variants)
-    null_bias_deg: list[float] = field(default_factory=lambda: [0.0, 0.0])
 
 
 @dataclass
-class ActuatorConfig:
-    name: str = "third_order"  # third_order | simplex
-    first_stage: ActuatorStage = field(default_factory=ActuatorStage)
-    upper_stage: ActuatorStage = field(default_factory=ActuatorStage)
+class ThirdOrderActuatorConfig:
+    name: str = "third_order"
+    first_stage: ThirdOrderStage = field(default_factory=ThirdOrderStage)
+    upper_stage: ThirdOrderStage = field(default_factory=ThirdOrderStage)
 
 
 @dataclass
-class FlexConfig:
+class SimplexActuatorConfig:
+    name: str = "simplex"
+    first_stage: SimplexStage = field(default_factory=SimplexStage)
+    upper_stage: SimplexStage = field(default_factory=SimplexStage)
+
+
+def check_actuator(a: ThirdOrderActuatorConfig | SimplexActuatorConfig, plant_rate_hz: float) -> None:
+    """Physical checks of the ``actuator`` group (either variant)."""
+    for stage in ("first_stage", "upper_stage"):
+        st = getattr(a, stage)
+        names = ["loop_gain_rad_s", "rate_limit_deg_s"]
+        names += ["natural_frequency_hz", "damping"] if a.name == "third_order" else [
+            "valve_frequency_hz", "valve_damping", "stiffness_Nm_per_rad", "damping_Nms_per_rad"]
+        for name in names:
+            _positive(f"actuator.{stage}.{name}", getattr(st, name))
+        _small_angles(f"actuator.{stage}.null_bias_deg", st.null_bias_deg, 2, 2.0, "pitch, yaw")
+        if a.name == "simplex":
+            _non_negative(f"actuator.{stage}.leakage_rad_s_per_Nm", st.leakage_rad_s_per_Nm)
+            _one_of(f"actuator.{stage}.feedback", st.feedback, ("piston", "nozzle"))
+            # the valve is integrated by the plant's RK4: keep it well inside its stability
+            nyq = 0.25 * plant_rate_hz
+            if st.valve_frequency_hz >= nyq:
+                raise ConfigError(f"actuator.{stage}.valve_frequency_hz", st.valve_frequency_hz,
+                                  f"must be below a quarter of sim.plant_rate_hz ({nyq} Hz) for RK4 stability")
+
+
+@dataclass
+class FlexOffConfig:
+    """``flex=off``: the rigid vehicle."""
+
     name: str = "off"
     enabled: bool = False
+
+
+@dataclass
+class FlexOnConfig:
+    """``flex=on``: retained bending modes from the vehicle's modal data."""
+
+    name: str = "on"
+    enabled: bool = True
     n_modes: int = 4  # retained modes, lowest first
     damping: float = 0.005  # structural damping ratio of every retained mode
     damping_per_mode: list[float] = field(default_factory=list)  # overrides `damping` when given
@@ -259,18 +318,71 @@ class FlexConfig:
     shape_scale: float = 1.0
 
 
+def check_flex(f: FlexOffConfig | FlexOnConfig) -> None:
+    """Physical checks of the ``flex`` group."""
+    if not f.enabled:
+        return
+    if f.n_modes < 1:
+        raise ConfigError("flex.n_modes", f.n_modes, "must be at least 1 when flex is on (flex=off turns it off)")
+    _non_negative("flex.damping", f.damping)
+    for i, z in enumerate(f.damping_per_mode):
+        _non_negative(f"flex.damping_per_mode[{i}]", z)
+    if f.damping_per_mode and len(f.damping_per_mode) < f.n_modes:
+        raise ConfigError("flex.damping_per_mode", list(f.damping_per_mode),
+                          f"must give at least flex.n_modes = {f.n_modes} values, or be empty")
+    _one_of("flex.switching", f.switching, ("separation", "propellant"))
+    _positive("flex.frequency_scale", f.frequency_scale)
+    _non_negative("flex.shape_scale", f.shape_scale)
+
+
 @dataclass
-class SloshConfig:
+class SloshOffConfig:
+    """``slosh=off``: no propellant slosh."""
+
     name: str = "off"
     enabled: bool = False
+
+
+@dataclass
+class SloshOnConfig:
+    """``slosh=on``: LOX and LH2 spring-mass slosh from the vehicle's tables."""
+
+    name: str = "on"
+    enabled: bool = True
     frequency_scale: float = 1.0
     damping_scale: float = 1.0
 
 
+def check_slosh(s: SloshOffConfig | SloshOnConfig) -> None:
+    """Physical checks of the ``slosh`` group."""
+    if s.enabled:
+        _positive("slosh.frequency_scale", s.frequency_scale)
+        _non_negative("slosh.damping_scale", s.damping_scale)
+
+
 @dataclass
-class TwdConfig:
+class TwdOffConfig:
+    """``twd=off``: no engine-inertia reaction."""
+
     name: str = "off"
     enabled: bool = False
+
+
+@dataclass
+class TwdOnConfig:
+    """``twd=on``: the engine-inertia reaction (data: the vehicle's engines)."""
+
+    name: str = "on"
+    enabled: bool = True
+
+
+#: The schema of each option of the groups whose options carry different keys.
+GROUP_VARIANTS: dict[str, dict[str, type]] = {
+    "actuator": {"third_order": ThirdOrderActuatorConfig, "simplex": SimplexActuatorConfig},
+    "flex": {"off": FlexOffConfig, "on": FlexOnConfig},
+    "slosh": {"off": SloshOffConfig, "on": SloshOnConfig},
+    "twd": {"off": TwdOffConfig, "on": TwdOnConfig},
+}
 
 
 @dataclass
@@ -354,6 +466,8 @@ class RollControl:
 @dataclass
 class ControllerConfig:
     name: str = "msfc_pid"
+    vehicle: str = ""  # the vehicle the design is for ("": any); another is refused ...
+    allow_other_vehicle: bool = False  # ... unless this is true
     blending: Blending = field(default_factory=Blending)
     flex_filters: FilterSets = field(default_factory=FilterSets)
     gains: GainTables = field(default_factory=GainTables)
@@ -385,6 +499,8 @@ class SmootherConfig:
 @dataclass
 class GuidanceConfig:
     name: str = ""
+    vehicle: str = ""  # the vehicle the command file was generated for ("": any); another is refused ...
+    allow_other_vehicle: bool = False  # ... unless this is true
     command_file: str = ""
     launch_site: LaunchSite = field(default_factory=LaunchSite)
     target: OrbitTarget = field(default_factory=OrbitTarget)
@@ -396,14 +512,16 @@ class GuidanceConfig:
 class SavantConfig:
     vehicle: Any = None  # validated by savant_cli.vehicle.load_vehicle (tables and keys)
     phase: PhaseConfig = field(default_factory=PhaseConfig)
-    actuator: ActuatorConfig = field(default_factory=ActuatorConfig)
-    flex: FlexConfig = field(default_factory=FlexConfig)
-    slosh: SloshConfig = field(default_factory=SloshConfig)
-    twd: TwdConfig = field(default_factory=TwdConfig)
+    # typed per option in validate() (GROUP_VARIANTS)
+    actuator: Any = field(default_factory=lambda: {"name": "third_order"})
+    flex: Any = field(default_factory=lambda: {"name": "off"})
+    slosh: Any = field(default_factory=lambda: {"name": "off"})
+    twd: Any = field(default_factory=lambda: {"name": "off"})
     winds: WindsConfig = field(default_factory=WindsConfig)
     controller: ControllerConfig = field(default_factory=ControllerConfig)
     guidance: GuidanceConfig = field(default_factory=GuidanceConfig)
     sensors: SensorsConfig = field(default_factory=SensorsConfig)
+    dispersions: DispersionSetConfig = field(default_factory=DispersionSetConfig)
     study: Any = field(default_factory=lambda: {"name": "nominal"})  # typed per study in validate()
     sim: SimConfig = field(default_factory=SimConfig)
     environment: EnvironmentConfig = field(default_factory=EnvironmentConfig)
@@ -471,15 +589,23 @@ def _increasing(key: str, values: list[float]) -> None:
         raise ConfigError(key, list(values), "must be a strictly increasing list of at least 2 numbers")
 
 
+#: Documented bounds of the ``sim`` rates (Hz) and times (s): beyond them a run would not
+#: finish in reasonable time or memory (the log holds max_time_s × log_rate_hz rows).
+SIM_BOUNDS = {"plant_rate_hz": (20.0, 10000.0), "sensor_rate_hz": (1.0, 10000.0), "fcs_rate_hz": (1.0, 1000.0),
+              "guidance_rate_hz": (0.01, 100.0), "log_rate_hz": (0.1, 1000.0), "max_time_s": (1.0, 3600.0)}
+
+
 def _check_rates(sim: SimConfig) -> None:
-    for name in ("plant_rate_hz", "sensor_rate_hz", "fcs_rate_hz", "guidance_rate_hz", "log_rate_hz"):
-        _positive(f"sim.{name}", getattr(sim, name))
+    for name, (low, high) in SIM_BOUNDS.items():
+        value = getattr(sim, name)
+        _positive(f"sim.{name}", value)
+        if not low <= value <= high:
+            raise ConfigError(f"sim.{name}", value, f"must lie between {low:g} and {high:g}")
     for name in ("sensor_rate_hz", "fcs_rate_hz", "guidance_rate_hz", "log_rate_hz"):
         ratio = sim.plant_rate_hz / getattr(sim, name)
         if abs(ratio - round(ratio)) > 1e-9 or round(ratio) < 1:
             raise ConfigError(f"sim.{name}", getattr(sim, name),
                               f"must divide sim.plant_rate_hz = {sim.plant_rate_hz} into a whole number of steps")
-    _positive("sim.max_time_s", sim.max_time_s)
     _positive("sim.chunk_s", sim.chunk_s)
     _positive("sim.max_body_rate_deg_s", sim.max_body_rate_deg_s)
 
@@ -524,7 +650,21 @@ def _check_controller(c: ControllerConfig) -> None:
     _non_negative("controller.roll.lead_time_s", c.roll.lead_time_s)
 
 
-def _check_physics(cfg: SavantConfig) -> None:
+def check_vehicle_match(cfg: SavantConfig) -> None:
+    """Guidance and flight control generated for another vehicle are refused unless the
+    user says so (``guidance.allow_other_vehicle``, ``controller.allow_other_vehicle``)."""
+    flown = (cfg.vehicle or {}).get("name", "") if isinstance(cfg.vehicle, dict) else ""
+    for group, node, fix in (("guidance", cfg.guidance, "its command file"), ("controller", cfg.controller, "its gains")):
+        if node.vehicle and flown and node.vehicle != flown and not node.allow_other_vehicle:
+            raise ConfigError(f"{group}.vehicle", node.vehicle,
+                              f"{group}={node.name} was generated for vehicle {node.vehicle} ({fix} fit that vehicle "
+                              f"only) but this run flies vehicle={flown}: choose the {group} of {flown} (its vehicle "
+                              f"config selects it by default), or set {group}.allow_other_vehicle=true to fly it anyway")
+
+
+def check_physics(cfg: SavantConfig) -> None:
+    """Physical checks of a typed config (every group); raises ConfigError naming the key."""
+    check_vehicle_match(cfg)
     _check_rates(cfg.sim)
     _one_of("environment.gravity_order", cfg.environment.gravity_order, (0, 2, 3, 4))
     _one_of("phase.stop_at", cfg.phase.stop_at, ("cutoff", "separation"))
@@ -533,38 +673,9 @@ def _check_physics(cfg: SavantConfig) -> None:
         raise ConfigError("phase.stop_at", cfg.phase.stop_at, "a phase starting at staging must stop at cutoff")
     if cfg.phase.start == "staging" and not cfg.phase.staging_state_file:
         raise ConfigError("phase.staging_state_file", "", "must name a staging-state file when phase.start = staging")
-    _one_of("actuator.name", cfg.actuator.name, ("third_order", "simplex"))
-    for stage in ("first_stage", "upper_stage"):
-        a = getattr(cfg.actuator, stage)
-        for name in ("loop_gain_rad_s", "natural_frequency_hz", "damping", "rate_limit_deg_s"):
-            _positive(f"actuator.{stage}.{name}", getattr(a, name))
-        _small_angles(f"actuator.{stage}.null_bias_deg", a.null_bias_deg, 2, 2.0, "pitch, yaw")
-        if cfg.actuator.name == "simplex":
-            for name in ("valve_frequency_hz", "valve_damping", "stiffness_Nm_per_rad", "damping_Nms_per_rad"):
-                _positive(f"actuator.{stage}.{name}", getattr(a, name))
-            _non_negative(f"actuator.{stage}.leakage_rad_s_per_Nm", a.leakage_rad_s_per_Nm)
-            _one_of(f"actuator.{stage}.feedback", a.feedback, ("piston", "nozzle"))
-            # the valve is integrated by the plant's RK4: keep it well inside its stability
-            nyq = 0.25 * cfg.sim.plant_rate_hz
-            if a.valve_frequency_hz >= nyq:
-                raise ConfigError(f"actuator.{stage}.valve_frequency_hz", a.valve_frequency_hz,
-                                  f"must be below a quarter of sim.plant_rate_hz ({nyq} Hz) for RK4 stability")
-    f = cfg.flex
-    if f.enabled:
-        if f.n_modes < 1:
-            raise ConfigError("flex.n_modes", f.n_modes, "must be at least 1 when flex is on (flex=off turns it off)")
-        _non_negative("flex.damping", f.damping)
-        for i, z in enumerate(f.damping_per_mode):
-            _non_negative(f"flex.damping_per_mode[{i}]", z)
-        if f.damping_per_mode and len(f.damping_per_mode) < f.n_modes:
-            raise ConfigError("flex.damping_per_mode", list(f.damping_per_mode),
-                              f"must give at least flex.n_modes = {f.n_modes} values, or be empty")
-        _one_of("flex.switching", f.switching, ("separation", "propellant"))
-        _positive("flex.frequency_scale", f.frequency_scale)
-        _non_negative("flex.shape_scale", f.shape_scale)
-    if cfg.slosh.enabled:
-        _positive("slosh.frequency_scale", cfg.slosh.frequency_scale)
-        _non_negative("slosh.damping_scale", cfg.slosh.damping_scale)
+    check_actuator(cfg.actuator, cfg.sim.plant_rate_hz)
+    check_flex(cfg.flex)
+    check_slosh(cfg.slosh)
     _positive("sensors.rate_gyro.natural_frequency_hz", cfg.sensors.rate_gyro.natural_frequency_hz)
     _positive("sensors.rate_gyro.damping", cfg.sensors.rate_gyro.damping)
     for name in ("imu", "rate_gyro_upper_stage", "rate_gyro_first_stage"):
@@ -617,8 +728,77 @@ def validate(cfg: DictConfig) -> SavantConfig:
     merged = _strict_merge(cfg)
     typed = OmegaConf.to_object(merged)
     typed.study = _study(typed.study)
-    _check_physics(typed)
+    for group in GROUP_VARIANTS:
+        setattr(typed, group, group_option(group, getattr(typed, group)))
+    check_physics(typed)
     return typed
+
+
+def has_key(schema: type, path: list[str]) -> bool:
+    """Whether the dotted ``path`` names a field of the dataclass ``schema``."""
+    node: Any = schema
+    for part in path:
+        fields = {f.name: f for f in dataclasses.fields(node)} if dataclasses.is_dataclass(node) else {}
+        if part not in fields:
+            return False
+        default = fields[part].default_factory() if fields[part].default_factory is not dataclasses.MISSING \
+            else fields[part].default
+        node = type(default) if dataclasses.is_dataclass(default) else None
+    return True
+
+
+def group_option(group: str, node: Any) -> Any:
+    """The section of a group with per-option schemas (:data:`GROUP_VARIANTS`), merged onto
+    its option's schema: a key of another option, or of a model that is switched off, is
+    refused naming the options where it exists."""
+    variants = GROUP_VARIANTS[group]
+    if dataclasses.is_dataclass(node):
+        node = OmegaConf.to_container(OmegaConf.structured(node))
+    name = node.get("name") if isinstance(node, dict) else None
+    if name not in variants:
+        raise ConfigError(f"{group}.name", name, f"must be one of {', '.join(variants)}")
+    try:
+        merged = OmegaConf.merge(OmegaConf.structured(variants[name]), node)
+    except OmegaConfBaseException as exc:
+        sub = str(getattr(exc, "full_key", None) or "?")
+        key = f"{group}.{sub}"
+        msg = str(exc).splitlines()[0]
+        if "not in struct" in msg or ("Key '" in msg and "not in" in msg):
+            where = [opt for opt, schema in variants.items() if opt != name and has_key(schema, sub.split("."))]
+            allowed = (f"not a key of {group}={name}; it belongs to {' and '.join(f'{group}={w}' for w in where)}"
+                       if where else f"not a key of {group}={name} (nor of any other {group} option)")
+        else:
+            allowed = msg
+        value = node
+        for part in sub.split("."):
+            value = value.get(part) if isinstance(value, dict) else None
+        raise ConfigError(key, value, allowed) from None
+    return OmegaConf.to_object(merged)
+
+
+def variant_key_hint(overrides: list[str], defaults: dict[str, str]) -> str:
+    """For command-line overrides Hydra refused before validation: the first one that
+    names a key of another option of a :data:`GROUP_VARIANTS` group, explained
+    (``flex.n_modes`` with ``flex=off``); ``""`` when none does. ``defaults``: the option
+    of each group when the command line does not choose one."""
+    chosen = dict(defaults)
+    for o in overrides:
+        k, _, v = o.lstrip("+~").partition("=")
+        if k in GROUP_VARIANTS:
+            chosen[k] = v
+    for o in overrides:
+        k, _, v = o.lstrip("+~").partition("=")
+        group, _, sub = k.partition(".")
+        if group in GROUP_VARIANTS and sub and chosen.get(group) in GROUP_VARIANTS[group]:
+            flown = chosen[group]
+            if has_key(GROUP_VARIANTS[group][flown], sub.split(".")):
+                continue
+            where = [opt for opt, schema in GROUP_VARIANTS[group].items() if opt != flown
+                     and has_key(schema, sub.split("."))]
+            if where:
+                return str(ConfigError(k, v, f"not a key of {group}={flown}; it belongs to "
+                                             f"{' and '.join(f'{group}={w}' for w in where)}"))
+    return ""
 
 
 def _study(node: Any) -> Any:

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from savant_cli.config import FlexConfig, SloshConfig
+from savant_cli.config import FlexOnConfig, SloshOnConfig
 from savant_cli.errors import ConfigError
 from savant_cli.io.modal_data import ModalSet, read_modal_set, read_numeric_csv
 from savant_cli.sim import layout as L
@@ -71,7 +71,7 @@ def _modal_set(folder: Path, name: str, units: tuple[str, str], key: str) -> Mod
     return _modal_set_cached(folder, name, units, key, stamp)
 
 
-def load_flex(vehicle: Vehicle, fcfg: FlexConfig, plant_rate_hz: float) -> FlexTables:
+def load_flex(vehicle: Vehicle, fcfg: FlexOnConfig, plant_rate_hz: float) -> FlexTables:
     """Read the four modal sets, keep ``fcfg.n_modes`` and evaluate them at the points."""
     spec = _spec(vehicle, "flex")
     key = "vehicle.flex"
@@ -149,7 +149,7 @@ def _tank(name: str, node: dict, vdir: Path, load_kg: float) -> SloshTank:
                      bottom_station_m=float(node["bottom_station_m"]), density_kgm3=density)
 
 
-def load_slosh(vehicle: Vehicle, scfg: SloshConfig) -> SloshData:
+def load_slosh(vehicle: Vehicle, scfg: SloshOnConfig) -> SloshData:
     """Read the LOX and LH2 slosh tables and check they cover each tank."""
     spec = _spec(vehicle, "slosh")
     for k in spec:

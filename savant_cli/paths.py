@@ -24,6 +24,17 @@ def shipped_config_dir() -> Path:
     return here.parent / "conf"
 
 
+def shipped_reference_dir() -> Path:
+    """Directory of the reference flights of other simulations shipped for ``savant
+    compare`` (``references/`` in a source checkout, ``savant_cli.references`` when
+    installed). Kept out of ``conf/``: Hydra would list it as a config group."""
+    here = Path(__file__).resolve().parent
+    installed = here / "references"
+    if (installed / "jsbsim_names.yaml").is_file():
+        return installed
+    return here.parent / "references"
+
+
 def hydra_search_dirs() -> list[Path]:
     """File-system config directories of the running Hydra job, highest priority first;
     the shipped tree when Hydra is not running."""

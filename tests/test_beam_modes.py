@@ -173,7 +173,7 @@ def test_shipped_files_are_what_the_generator_writes(tmp_path, capsys):
 
 def named_stations_m() -> dict[int, float]:
     """Named nodes' stations from the vehicle YAML and the segment layout."""
-    y = OmegaConf.load(shipped_config_dir() / "vehicle" / "ares_i.yaml")
+    y = OmegaConf.load(shipped_config_dir() / "vehicle" / "ares_i.yaml").vehicle  # a `_global_` preset file
     assert y.sensors.rate_gyro_upper_stage_m[0] == y.sensors.imu_m[0]
     st = stations(LAYOUT)
     return {4021: y.sensors.imu_m[0], 6030: y.sensors.rate_gyro_first_stage_m[0],

@@ -171,3 +171,66 @@ def test_non_unit_command_quaternion_refused(tmp_path):
     with pytest.raises(ConfigError) as exc:
         read_guidance(bad)
     assert "unit norm" in exc.value.allowed
+
+
+# ------------------------------------------------------------ one schema per group option
+
+@pytest.mark.parametrize("overrides, key, belongs", [
+    (["actuator=third_order", "+actuator.first_stage.valve_frequency_hz=1"], "actuator.first_stage.valve_frequency_hz",
+     "actuator=simplex"),
+    (["actuator=simplex", "+actuator.upper_stage.natural_frequency_hz=9"], "actuator.upper_stage.natural_frequency_hz",
+     "actuator=third_order"),
+    (["+slosh.damping_scale=5"], "slosh.damping_scale", "slosh=on"),
+    (["+flex.n_modes=2"], "flex.n_modes", "flex=on"),
+])
+def test_a_key_of_another_option_is_refused_naming_where_it_belongs(overrides, key, belongs):
+    from conftest import compose_config
+    from savant_cli.config import validate
+
+    with pytest.raises(ConfigError) as exc:
+        validate(compose_config(overrides))
+    assert exc.value.key == key
+    assert belongs in exc.value.allowed
+
+
+def test_an_unknown_key_of_a_variant_group_is_refused():
+    from conftest import compose_config
+    from savant_cli.config import validate
+
+    with pytest.raises(ConfigError) as exc:
+        validate(compose_config(["+actuator.first_stage.bogus=1"]))
+    assert exc.value.key == "actuator.first_stage.bogus"
+    assert "nor of any other actuator option" in exc.value.allowed
+
+
+def test_each_option_is_typed_by_its_own_schema():
+    from conftest import compose_config
+    from savant_cli.config import SimplexStage, ThirdOrderStage, validate
+
+    third = validate(compose_config([]))
+    assert isinstance(third.actuator.first_stage, ThirdOrderStage) and not hasattr(third.actuator.first_stage,
+                                                                                   "valve_frequency_hz")
+    assert not hasattr(third.flex, "n_modes") and not hasattr(third.slosh, "damping_scale")
+    full = validate(compose_config(["actuator=simplex", "flex=on", "slosh=on", "twd=on"]))
+    assert isinstance(full.actuator.first_stage, SimplexStage) and not hasattr(full.actuator.first_stage, "damping")
+    assert full.flex.n_modes == 4 and full.slosh.damping_scale == 1.0 and full.twd.enabled
+
+
+def test_hydra_refusal_of_another_options_key_gets_the_same_explanation():
+    from savant_cli.config import variant_key_hint
+
+    defaults = {"flex": "off", "actuator": "third_order"}
+    assert "not a key of flex=off; it belongs to flex=on" in variant_key_hint(["flex.n_modes=3"], defaults)
+    assert variant_key_hint(["flex=on", "flex.n_modes=3"], defaults) == ""
+    assert "actuator=simplex" in variant_key_hint(["actuator.first_stage.valve_damping=0.5"], defaults)
+
+
+def test_sim_rates_have_documented_bounds():
+    from conftest import compose_config
+    from savant_cli.config import SIM_BOUNDS, validate
+
+    with pytest.raises(ConfigError) as exc:
+        validate(compose_config(["sim.plant_rate_hz=1e9"]))
+    assert exc.value.key == "sim.plant_rate_hz" and "10000" in exc.value.allowed
+    for name, (low, high) in SIM_BOUNDS.items():
+        assert 0 < low < high, name

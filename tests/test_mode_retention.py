@@ -40,9 +40,11 @@ def test_recommendation(flags, expected):
 
 def test_count_configs():
     cfg = validate(compose_config(["study=mode_retention"]))
+    assert cfg.flex.enabled and cfg.flex.n_modes == 4  # the study switches the flexible body on itself
     assert not _config(cfg, 0).flex.enabled
     three = _config(cfg, 3)
-    assert three.flex.enabled and three.flex.n_modes == 3 and not cfg.flex.enabled  # the original untouched
+    assert three.flex.enabled and three.flex.n_modes == 3 and cfg.flex.n_modes == 4  # the original untouched
+    assert _config(validate(compose_config(["study=mode_retention", "flex=off"])), 2).flex.n_modes == 2
 
 
 @pytest.mark.slow

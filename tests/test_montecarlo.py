@@ -19,11 +19,12 @@ import pytest
 from scipy import stats
 
 from conftest import compose_config
-from savant_cli.config import CorrelationGroup, DispersionSpec, validate
+from savant_cli.config import CorrelationGroup, DispersionSetConfig, DispersionSpec, validate
 from savant_cli.errors import ConfigError
 from savant_cli.montecarlo.batch import Journal, execute, read_outcome, shard_runs
 from savant_cli.montecarlo.results import inventory, ranges_text
 from savant_cli.montecarlo.spec import parse
+from savant_cli.montecarlo.targets import apply_samples
 from savant_cli.paths import shipped_config_dir
 from savant_cli.sim.setup import prepare
 from savant_cli.studies.montecarlo import make_case
@@ -38,9 +39,9 @@ def base():
 
 
 def _study(cfg, dispersions: dict, correlations=()):
-    study = dataclasses.replace(cfg.study, dispersions={k: DispersionSpec(**v) for k, v in dispersions.items()},
-                                correlations=[CorrelationGroup(*c) for c in correlations])
-    return study
+    """A dispersion set of these items and correlations."""
+    return DispersionSetConfig(name="test", items={k: DispersionSpec(**v) for k, v in dispersions.items()},
+                               correlations=[CorrelationGroup(*c) for c in correlations])
 
 
 def _draws(dset, n: int) -> np.ndarray:
@@ -60,7 +61,7 @@ def test_each_distribution_has_its_moments(base):
         "k": {"target": "tables.aero.Cm", "apply": "scale", "dist": "constant", "value": 1.1},
         "w": {"target": "winds", "apply": "value", "dist": "choice", "values": ["ksc_mean_annual", "none"]},
     }
-    dset = parse(_study(cfg, spec), cfg, vehicle, [shipped_config_dir()])
+    dset = parse(_study(cfg, spec), cfg.study.seed, cfg, vehicle, [shipped_config_dir()])
     n = 12000
     x = _draws(dset, n)
     col = {name: x[:, i] for i, name in enumerate(dset.names)}
@@ -90,45 +91,64 @@ def test_correlation_is_honoured(base):
             "d": {"target": "tables.aero.Cm", "dist": "uniform", "low": 0.0, "high": 2.0}}
     rho = 0.7
     dset = parse(_study(cfg, spec, [(["a", "b"], [[1, rho], [rho, 1]]), (["c", "d"], [[1, -rho], [-rho, 1]])]),
-                 cfg, vehicle, [shipped_config_dir()])
+                 cfg.study.seed, cfg, vehicle, [shipped_config_dir()])
     x = _draws(dset, 10000)
     tol = 4 * (1 - rho**2) / np.sqrt(10000)
     assert np.corrcoef(x[:, 0], x[:, 1])[0, 1] == pytest.approx(rho, abs=tol)
     assert np.corrcoef(x[:, 2], x[:, 3])[0, 1] == pytest.approx(6 / np.pi * np.arcsin(-rho / 2), abs=tol)
     assert abs(np.corrcoef(x[:, 0], x[:, 2])[0, 1]) < 4 / np.sqrt(10000)  # groups independent
     # a run's draws do not depend on which other dispersions exist
-    both = parse(_study(cfg, {"a": spec["a"], "c": spec["c"]}), cfg, vehicle, [shipped_config_dir()])
-    alone = parse(_study(cfg, {"a": spec["a"]}), cfg, vehicle, [shipped_config_dir()])
+    both = parse(_study(cfg, {"a": spec["a"], "c": spec["c"]}), cfg.study.seed, cfg, vehicle, [shipped_config_dir()])
+    alone = parse(_study(cfg, {"a": spec["a"]}), cfg.study.seed, cfg, vehicle, [shipped_config_dir()])
     assert both.normals(5)[0] == alone.normals(5)[0] and both.normals(5)[1] != both.normals(6)[1]
 
 
 @pytest.mark.parametrize("spec, corr, key, words", [
-    ({"x": {"target": "winds.nope"}}, [], "study.dispersions.x.target", "unknown target"),
-    ({"x": {"target": "tables.aero.CQ"}}, [], "study.dispersions.x.target", "unknown table target"),
-    ({"x": {"target": "winds.enabled"}}, [], "study.dispersions.x.target", "must name a number"),
-    ({"x": {"target": "winds.scale", "sigma": -0.1}}, [], "study.dispersions.x.sigma", "zero or positive"),
-    ({"x": {"target": "winds.scale", "dist": "uniform", "low": 2.0, "high": 1.0}}, [], "study.dispersions.x.low",
+    ({"x": {"target": "winds.nope"}}, [], "dispersions.items.x.target", "unknown target"),
+    ({"x": {"target": "tables.aero.CQ"}}, [], "dispersions.items.x.target", "unknown table target"),
+    ({"x": {"target": "winds.enabled"}}, [], "dispersions.items.x.target", "must name a number"),
+    ({"x": {"target": "winds.scale", "sigma": -0.1}}, [], "dispersions.items.x.sigma", "zero or positive"),
+    ({"x": {"target": "winds.scale", "dist": "uniform", "low": 2.0, "high": 1.0}}, [], "dispersions.items.x.low",
      "must not exceed"),
     ({"x": {"target": "winds.scale", "dist": "uniform", "low": 0.0, "high": 1.0, "sigma": 0.1}}, [],
-     "study.dispersions.x.sigma", "not used by dist uniform"),
+     "dispersions.items.x.sigma", "not used by dist uniform"),
     ({"x": {"target": "winds.scale", "dist": "choice", "values": [1.0, 2.0], "weights": [1.0]}}, [],
-     "study.dispersions.x.weights", "non-negative"),
+     "dispersions.items.x.weights", "non-negative"),
     ({"x": {"target": "winds", "apply": "value", "dist": "choice", "values": ["ksc_mean_annual", "hurricane"]}}, [],
-     "study.dispersions.x.values", "unknown winds options"),
-    ({"x": {"target": "tables.first_stage.thrust", "apply": "offset", "sigma": 0.1}}, [], "study.dispersions.x.apply",
+     "dispersions.items.x.values", "unknown winds options"),
+    ({"x": {"target": "tables.first_stage.thrust", "apply": "offset", "sigma": 0.1}}, [], "dispersions.items.x.apply",
      "takes apply: scale"),
     ({"a": {"target": "tables.aero.CA", "sigma": 0.1}, "b": {"target": "tables.aero.CN", "sigma": 0.1},
       "c": {"target": "tables.aero.CY", "sigma": 0.1}},
-     [(["a", "b", "c"], [[1, 0.9, -0.9], [0.9, 1, 0.9], [-0.9, 0.9, 1]])], "study.correlations[0].matrix",
+     [(["a", "b", "c"], [[1, 0.9, -0.9], [0.9, 1, 0.9], [-0.9, 0.9, 1]])], "dispersions.correlations[0].matrix",
      "positive semi-definite"),
     ({"a": {"target": "tables.aero.CA", "sigma": 0.1}}, [(["a", "zz"], [[1, 0], [0, 1]])],
-     "study.correlations[0].names", "not a dispersion"),
+     "dispersions.correlations[0].names", "not a dispersion"),
 ])
 def test_bad_specs_are_refused_before_anything_runs(base, spec, corr, key, words):
     cfg, vehicle = base
     with pytest.raises(ConfigError) as err:
-        parse(_study(cfg, spec, corr), cfg, vehicle, [shipped_config_dir()])
+        parse(_study(cfg, spec, corr), cfg.study.seed, cfg, vehicle, [shipped_config_dir()])
     assert err.value.key == key and words in str(err.value)
+
+
+def test_a_key_of_a_model_switched_off_is_an_inactive_dispersion(base):
+    """flex.damping with flex=off, a third-order key with the simplex actuator: drawn and
+    recorded, applied to nothing, and named as such; the other dispersions' draws do
+    not change."""
+    cfg, vehicle = base
+    spec = {"fl": {"target": "flex.damping", "sigma": 0.1}, "w": {"target": "winds.scale", "sigma": 0.1}}
+    dset = parse(_study(cfg, spec), cfg.study.seed, cfg, vehicle, [shipped_config_dir()])
+    fl = dset.items[0]
+    assert fl.target.kind == "inactive" and "flex=on" in fl.target.note and "flex=off" in fl.target.note
+    alone = parse(_study(cfg, {"w": spec["w"]}), cfg.study.seed, cfg, vehicle, [shipped_config_dir()])
+    assert dset.sample(3)[1] == alone.sample(3)[0]
+    applied = apply_samples(cfg, vehicle, dset.triples(dset.sample(3)), {})
+    assert applied.cfg.flex == cfg.flex and applied.cfg.winds.scale == pytest.approx(cfg.winds.scale * dset.sample(3)[1])
+    simplex = validate(compose_config([*SHORT, "actuator=simplex"]))
+    act = parse(_study(simplex, {"a": {"target": "actuator.first_stage.natural_frequency_hz", "sigma": 0.05}}),
+                simplex.study.seed, simplex, vehicle, [shipped_config_dir()]).items[0]
+    assert act.target.kind == "inactive" and "actuator=third_order" in act.target.note
 
 
 def test_study_keys_are_checked_by_compose():
@@ -139,8 +159,8 @@ def test_study_keys_are_checked_by_compose():
         validate(compose_config(SHORT + ["study.shards=4", "study.shard=4"]))
     assert err.value.key == "study.shard"
     with pytest.raises(ConfigError) as err:
-        validate(compose_config(SHORT + ["+study.dispersions.bad.wrong_key=1"]))
-    assert "study.dispersions.bad.wrong_key" in err.value.key
+        validate(compose_config(SHORT + ["+dispersions.items.bad.wrong_key=1"]))
+    assert "dispersions.items.bad.wrong_key" in err.value.key
 
 
 @pytest.fixture(scope="module")
@@ -178,12 +198,11 @@ def test_results_are_bit_identical_for_workers_and_shards(case, tmp_path):
 def test_failing_runs_are_recorded_and_the_batch_goes_on(tmp_path):
     cfg = validate(compose_config(SHORT + ["study.n_runs=8", "study.histories.signals=[]"]))
     # a destabilizing pitch moment in some runs, an invalid gyro damping in others
-    cfg.study.dispersions = {
+    cfg.dispersions = DispersionSetConfig(name="failing", items={
         "cm": DispersionSpec(target="tables.aero.Cm", dist="choice", values=[1.0, 200.0], weights=[0.5, 0.5]),
         "gyro": DispersionSpec(target="sensors.rate_gyro.damping", apply="value", dist="choice", values=[0.7, -1.0],
                                weights=[0.75, 0.25]),
-    }
-    cfg.study.correlations = []
+    })
     case, _ = make_case(cfg)
     out = _fly(case, tmp_path / "runs", range(8), 2)
     status = {r: o.status for r, o in out.items()}

@@ -11,7 +11,8 @@ from test_end_to_end import run
 
 pytestmark = pytest.mark.slow
 
-VEHICLE = ["vehicle=small_launcher", "guidance=small_launcher_leo", "controller=small_pid", "sim.progress=false"]
+# the vehicle config alone selects its guidance, controller, sensors and dispersion set
+VEHICLE = ["vehicle=small_launcher", "sim.progress=false"]
 
 
 def test_small_launcher_reaches_its_orbit_and_the_studies_run(tmp_path):
@@ -28,7 +29,17 @@ def test_small_launcher_reaches_its_orbit_and_the_studies_run(tmp_path):
     margins = json.loads((tmp_path / "linear" / "summary.json").read_text())["margins"]
     assert {m["time_s"] for m in margins} == {55.0, 300.0}
     assert any(m["kind"] == "gain" and m["value"] < 0 and m["time_s"] == 55.0 for m in margins)  # aero-unstable
-    mc = run(["run", *VEHICLE, "study=montecarlo_small_launcher", "study.n_runs=4", "output.plots=false",
+    mc = run(["run", *VEHICLE, "study=montecarlo", "study.n_runs=4", "output.plots=false",
               f"hydra.run.dir={tmp_path}/mc"], cwd=tmp_path)
     assert mc.returncode == 0, mc.stdout + mc.stderr
     assert json.loads((tmp_path / "mc" / "summary.json").read_text())["n_runs_present"] == 4
+    config = (tmp_path / "mc" / ".hydra" / "config.yaml").read_text()
+    assert "name: small_launcher" in config.split("dispersions:", 1)[1].split("\n", 2)[1]  # its own set
+
+
+def test_another_vehicles_guidance_or_controller_is_refused_unless_forced(tmp_path):
+    for group, option in (("guidance", "ares_i_iss"), ("controller", "msfc_pid")):
+        bad = run(["run", "vehicle=small_launcher", f"{group}={option}", f"hydra.run.dir={tmp_path}/{group}"],
+                  cwd=tmp_path)
+        assert bad.returncode == 2 and f"{group}.vehicle" in bad.stderr + bad.stdout
+        assert f"{group}.allow_other_vehicle=true" in (bad.stderr + bad.stdout).replace("\n", "")

@@ -41,12 +41,12 @@ MASS_TOL, CG_TOL, INERTIA_TOL = 0.02, 0.02, 0.05
 
 
 def _cfg() -> dict:
-    return OmegaConf.to_container(OmegaConf.load(VEHICLE_YAML), resolve=True)
+    return OmegaConf.to_container(OmegaConf.load(VEHICLE_YAML).vehicle, resolve=True)  # a `_global_` preset
 
 
 @pytest.fixture(scope="module")
 def vehicle() -> Vehicle:
-    return load_vehicle(OmegaConf.load(VEHICLE_YAML), DATA_DIR)
+    return load_vehicle(OmegaConf.load(VEHICLE_YAML).vehicle, DATA_DIR)
 
 
 def _state(v: Vehicle, config: str, full: bool):

@@ -17,13 +17,13 @@ flies a point-mass-like model generated here from the same vehicle data:
 
 Only the vehicle data and the initial state (the CG's position on the pad) come from
 savant; the dynamics, gravity, atmosphere and Earth model are JSBSim's. The result is
-``conf/compare/jsbsim_vertical_ascent.csv`` (SI units, JSBSim property names in the
-header comment), compared by ``conf/compare/jsbsim_names.yaml``::
+``references/jsbsim_vertical_ascent.csv`` (SI units, JSBSim property names in the
+header comment), compared by ``references/jsbsim_names.yaml``::
 
     python -m savant_cli.datagen.jsbsim_reference
     savant run phase=first_stage winds=none environment.gravity_order=2 \\
         guidance.command_file=vertical_hold_commands.csv hydra.run.dir=runs/vertical
-    savant compare runs/vertical conf/compare/jsbsim_vertical_ascent.csv --map conf/compare/jsbsim_names.yaml
+    savant compare runs/vertical references/jsbsim_vertical_ascent.csv --map references/jsbsim_names.yaml
 """
 
 from __future__ import annotations
@@ -200,10 +200,10 @@ def fly(out_csv: Path) -> Path:
 
 
 def main(argv: list[str] | None = None) -> None:
-    from savant_cli.paths import shipped_config_dir
+    from savant_cli.paths import shipped_reference_dir
 
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--out", type=Path, default=shipped_config_dir() / "compare" / "jsbsim_vertical_ascent.csv")
+    ap.add_argument("--out", type=Path, default=shipped_reference_dir() / "jsbsim_vertical_ascent.csv")
     args = ap.parse_args(argv)
     print(f"wrote {fly(args.out)}")
 

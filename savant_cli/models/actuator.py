@@ -89,8 +89,8 @@ A_ACCEL = _AUX.array("accelerations", 2, "rad/s^2", "nozzle angular acceleration
 
 
 def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarray]) -> None:
-    """The ``actuator`` group (both variants' records are filled; ``kind`` selects one)
-    and the vehicle's gimbal limits."""
+    """The ``actuator`` group (the record of its variant; ``kind`` selects it) and the
+    vehicle's gimbal limits."""
     cfg, v = inputs.cfg, inputs.vehicle
     p[P_KIND] = SIMPLEX if cfg.actuator.name == "simplex" else THIRD_ORDER
     p[P_VALVE_OFFSET] = inputs.layout.valve
@@ -100,14 +100,16 @@ def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarra
         a = getattr(cfg.actuator, name)
         p[pg + G_LIMIT] = stage.gimbal_limit_rad
         p[pg + G_BIAS_PITCH], p[pg + G_BIAS_YAW] = np.radians(a.null_bias_deg)
-        p[p3 + T3_WA] = a.loop_gain_rad_s
-        p[p3 + T3_WN] = 2.0 * np.pi * a.natural_frequency_hz
-        p[p3 + T3_ZETA] = a.damping
-        p[p3 + T3_RATE] = np.radians(a.rate_limit_deg_s)
-        p[px:px + SPX.size] = (a.loop_gain_rad_s, 2.0 * np.pi * a.valve_frequency_hz, a.valve_damping,
-                               np.radians(a.rate_limit_deg_s), a.stiffness_Nm_per_rad, a.damping_Nms_per_rad,
-                               stage.engine.inertia_about_gimbal_kgm2, a.leakage_rad_s_per_Nm,
-                               1.0 if a.feedback == "nozzle" else 0.0)
+        if cfg.actuator.name == "simplex":
+            p[px:px + SPX.size] = (a.loop_gain_rad_s, 2.0 * np.pi * a.valve_frequency_hz, a.valve_damping,
+                                   np.radians(a.rate_limit_deg_s), a.stiffness_Nm_per_rad, a.damping_Nms_per_rad,
+                                   stage.engine.inertia_about_gimbal_kgm2, a.leakage_rad_s_per_Nm,
+                                   1.0 if a.feedback == "nozzle" else 0.0)
+        else:
+            p[p3 + T3_WA] = a.loop_gain_rad_s
+            p[p3 + T3_WN] = 2.0 * np.pi * a.natural_frequency_hz
+            p[p3 + T3_ZETA] = a.damping
+            p[p3 + T3_RATE] = np.radians(a.rate_limit_deg_s)
 
 
 @njit(cache=True, error_model="numpy", inline="always")

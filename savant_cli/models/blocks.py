@@ -218,3 +218,16 @@ TABLES = Tables()
 def all_fields() -> list[Field]:
     """Every declared field of every vector (the models must be imported)."""
     return [*STATE.fields, *PARAMETERS.fields, *DIAGNOSTICS.fields, *DISCRETE.fields, *INPUTS.fields, *TABLES.fields]
+
+
+def field_reference() -> str:
+    """Markdown table of every declared field (``docs/models.md`` carries it; a test keeps
+    the two equal). Regenerate with ``python -m savant_cli.models``."""
+    import savant_cli.models  # noqa: F401  (every model declares its fields on import)
+    import savant_cli.sim.layout  # noqa: F401  (the held inputs)
+
+    lines = ["| vector | field | size | units | description |", "|---|---|---|---|---|"]
+    for f in all_fields():
+        size = "table" if f.vector == "tb" else str(f.size)
+        lines.append(f"| `{f.vector}` | `{f.key}` | {size} | {f.units} | {f.description} |")
+    return "\n".join(lines)

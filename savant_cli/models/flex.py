@@ -75,7 +75,7 @@ def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarra
     f = inputs.cfg.flex
     p[P_OFFSET] = inputs.layout.flex
     p[P_N_MODES] = inputs.layout.n_modes
-    p[P_SWITCH] = 1.0 if f.switching == "propellant" else 0.0
+    p[P_SWITCH] = 1.0 if f.enabled and f.switching == "propellant" else 0.0
     if f.enabled:
         from savant_cli.flex_slosh import load_flex
 

@@ -82,8 +82,8 @@ def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarra
     """The ``slosh`` group and the vehicle's slosh tables (placeholders when off)."""
     s = inputs.cfg.slosh
     p[P_OFFSET] = inputs.layout.slosh_offset
-    p[P_FREQ_SCALE] = s.frequency_scale
-    p[P_ZETA_SCALE] = s.damping_scale
+    p[P_FREQ_SCALE] = s.frequency_scale if s.enabled else 1.0
+    p[P_ZETA_SCALE] = s.damping_scale if s.enabled else 1.0
     p[P_AREF] = 1.0
     sl = inputs.slosh
     if sl is None:

@@ -38,7 +38,7 @@ from savant_cli.sim.run import simulate, signals
 from savant_cli.sim.summary import summarize
 
 #: summary keys that vary from machine to machine, kept out of the run tables
-WALL_KEYS = ("sim_wall_time_s", "realtime_factor", "process_wall_time_s")
+WALL_KEYS = ("sim_wall_time_s", "realtime_factor", "study_wall_time_s")
 AXIS_CODES = ("pitch", "yaw")
 KIND_CODES = ("gain", "phase")
 BAND_CODES = ("rigid/aero", "slosh", "flex")

@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 from scipy.special import ndtr, ndtri
 
-from savant_cli.config import DispersionSpec, MonteCarloStudyConfig, SavantConfig
+from savant_cli.config import DispersionSetConfig, DispersionSpec, SavantConfig
 from savant_cli.errors import ConfigError
 from savant_cli.montecarlo.targets import TABLE_TARGETS, Target, apply_samples, load_group_option, resolve
 from savant_cli.vehicle import Vehicle
@@ -212,12 +212,12 @@ def _one(key: str, spec: DispersionSpec, target: Target) -> Dispersion:
     return Dispersion(**kw)
 
 
-def _correlations(study: MonteCarloStudyConfig, items: list[Dispersion]) -> list[tuple[np.ndarray, np.ndarray]]:
+def _correlations(dispersions: DispersionSetConfig, items: list[Dispersion]) -> list[tuple[np.ndarray, np.ndarray]]:
     index = {d.name: i for i, d in enumerate(items)}
     seen: set[str] = set()
     out = []
-    for g, group in enumerate(study.correlations):
-        key = f"study.correlations[{g}]"
+    for g, group in enumerate(dispersions.correlations):
+        key = f"dispersions.correlations[{g}]"
         names = list(group.names)
         for n in names:
             if n not in index:
@@ -242,7 +242,8 @@ def _correlations(study: MonteCarloStudyConfig, items: list[Dispersion]) -> list
     return out
 
 
-def parse(study: MonteCarloStudyConfig, cfg: SavantConfig, vehicle: Vehicle, search_dirs: list[Path]) -> DispersionSet:
+def parse(dispersions: DispersionSetConfig, seed: int, cfg: SavantConfig, vehicle: Vehicle,
+          search_dirs: list[Path]) -> DispersionSet:
     """Check the whole spec against the config and the loaded vehicle.
 
     Raises
@@ -252,8 +253,8 @@ def parse(study: MonteCarloStudyConfig, cfg: SavantConfig, vehicle: Vehicle, sea
         positive semi-definite, a field the distribution does not read, …
     """
     items = []
-    for name, spec in study.dispersions.items():
-        key = f"study.dispersions.{name}"
+    for name, spec in dispersions.items.items():
+        key = f"dispersions.items.{name}"
         if not spec.target:
             raise ConfigError(f"{key}.target", spec.target, "must name what to disperse")
         target = resolve(f"{key}.target", spec.target, cfg, vehicle, search_dirs)
@@ -263,7 +264,7 @@ def parse(study: MonteCarloStudyConfig, cfg: SavantConfig, vehicle: Vehicle, sea
         if d.target.kind == "group":
             for option in (d.values or (d.constant,)):
                 sections[option] = load_group_option(d.target.key, option, search_dirs)
-    dset = DispersionSet(seed=study.seed, items=items, groups=_correlations(study, items), group_sections=sections)
+    dset = DispersionSet(seed=seed, items=items, groups=_correlations(dispersions, items), group_sections=sections)
     # one trial application with every dispersion at a central value, so a target that
     # cannot take a value fails here rather than in every run
     if items:

@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 from omegaconf import OmegaConf
 
-from savant_cli.config import ControllerConfig, SavantConfig, WindsConfig, _check_physics
+from savant_cli.config import GROUP_VARIANTS, ControllerConfig, SavantConfig, WindsConfig, has_key, check_physics
 from savant_cli.errors import ConfigError
 from savant_cli.sim.build import SimModel, build_model
 from savant_cli.vehicle import AERO_COEFFS, Vehicle
@@ -68,7 +68,11 @@ class Target:
     key : str
         As written in the spec.
     kind : str
-        ``config``, ``vehicle``, ``tables`` or ``group``.
+        ``config``, ``vehicle``, ``tables``, ``group``, or ``inactive``: a key of a model
+        variant that this configuration does not fly (``flex.damping`` with ``flex=off``,
+        a third-order actuator key with ``actuator=simplex``). An inactive dispersion is
+        drawn like the others (the streams of the rest do not depend on it) and recorded,
+        but changes nothing; ``note`` says why.
     path : tuple
         Attribute names and list indices from the root (config and vehicle targets).
     nominal : float or None
@@ -88,6 +92,7 @@ class Target:
     units: str = ""
     integer: bool = False
     choices: tuple = ()
+    note: str = ""
 
 
 def parse_path(key: str, text: str) -> tuple:
@@ -142,6 +147,10 @@ def resolve(key: str, text: str, cfg: SavantConfig, vehicle: Vehicle, search_dir
     try:
         value = _walk(root, shown)
     except (KeyError, IndexError, TypeError):
+        inactive = _inactive_variant_key(path, cfg)
+        if inactive:
+            name = next((e for e in reversed(path) if isinstance(e, str)), "")
+            return Target(text, "inactive", tuple(shown), units=_units(name), note=inactive)
         where = "the loaded vehicle's attributes (see savant_cli/vehicle.py)" if kind == "vehicle" else \
             "the config (see `savant run --cfg job`)"
         raise ConfigError(key, text, f"unknown target: no such key in {where}, and not a tables.* or group target") from None
@@ -149,6 +158,18 @@ def resolve(key: str, text: str, cfg: SavantConfig, vehicle: Vehicle, search_dir
         raise ConfigError(key, text, f"must name a number, not {type(value).__name__} ({value!r})")
     name = next((e for e in reversed(path) if isinstance(e, str)), "")
     return Target(text, kind, tuple(shown), float(value), _units(name), integer=isinstance(value, (int, np.integer)))
+
+
+def _inactive_variant_key(path: tuple, cfg: SavantConfig) -> str:
+    """Why a config path that the flown config lacks is a key of another option of its
+    group (``""`` when it is not)."""
+    group = path[0] if path and isinstance(path[0], str) else None
+    if group not in GROUP_VARIANTS:
+        return ""
+    names = [e for e in path[1:] if isinstance(e, str)]
+    flown = getattr(cfg, group).name
+    where = [opt for opt, schema in GROUP_VARIANTS[group].items() if opt != flown and has_key(schema, names)]
+    return f"a key of {' and '.join(f'{group}={w}' for w in where)}; this batch flies {group}={flown}" if where else ""
 
 
 GROUP_SCHEMAS = {"winds": WindsConfig, "controller": ControllerConfig}
@@ -281,7 +302,7 @@ def apply_samples(cfg: SavantConfig, vehicle: Vehicle, items: list[tuple[Target,
                 aero[AERO_COEFFS.index(target.key.rsplit(".", 1)[1])] *= float(sample)
             else:
                 vehicle = _apply_table(vehicle, target.key, float(sample))
-    _check_physics(cfg)
+    check_physics(cfg)
     return Applied(cfg, vehicle, aero)
 
 

@@ -46,7 +46,7 @@ def _on_time(t: np.ndarray, command: np.ndarray) -> float:
     return float(np.sum(dt[np.abs(command) >= 0.5]))
 
 
-def summarize(result: SimResult, sig: dict[str, Signal], process_wall_s: float | None = None) -> dict:
+def summarize(result: SimResult, sig: dict[str, Signal], study_wall_s: float | None = None) -> dict:
     """Summary scalars of a run (SI units named in the keys)."""
     t = sig["time"].data
     out: dict[str, float | int | str | None] = {"status": result.status, "message": result.message}
@@ -91,6 +91,6 @@ def summarize(result: SimResult, sig: dict[str, Signal], process_wall_s: float |
         "sim_wall_time_s": result.sim_wall_time_s,
         "realtime_factor": float(result.t_final / result.sim_wall_time_s) if result.sim_wall_time_s > 0 else None,
     })
-    if process_wall_s is not None:
-        out["process_wall_time_s"] = process_wall_s
+    if study_wall_s is not None:
+        out["study_wall_time_s"] = study_wall_s
     return out

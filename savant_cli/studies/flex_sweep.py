@@ -105,7 +105,7 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
         "study": "flex_sweep", "times_s": times, "parameters": list(study.parameters), "levels": list(study.levels),
         "modes": list(study.modes) or list(range(1, cfg.flex.n_modes + 1)), "cases": worst,
         "unstable_cases": [c for c in worst if not c["closed_loop_stable"]],
-        "process_wall_time_s": time.perf_counter() - t_start})
+        "study_wall_time_s": time.perf_counter() - t_start})
     if cfg.output.plots:
         from savant_cli.plots.linear import plot_nichols_overlay
 

@@ -2,8 +2,8 @@
 runs (source paper §IV), compared metric by metric, the winner of each marked.
 
 Each controller (a member of the ``controller`` config group) flies the batch of the
-study's Monte Carlo keys (``study.n_runs``, ``study.dispersions``, ``study.seed`` …;
-``n_runs: 1`` is the nominal alone) into ``<out>/<controller>/`` with every Monte Carlo
+study's Monte Carlo keys (``study.n_runs``, ``study.seed`` …; ``n_runs: 1`` is the
+nominal alone) with the vehicle's dispersion set (``dispersions``) into ``<out>/<controller>/`` with every Monte Carlo
 output there. The same seed and dispersion names give every controller exactly the same
 dispersed vehicles. The comparison: ``flyoff.csv`` and ``summary.json`` (per metric and
 controller the nominal value and the 99.865 / 0.135 percentile over the runs, and the
@@ -24,7 +24,7 @@ from omegaconf import DictConfig, OmegaConf
 from rich.console import Console
 from rich.table import Table
 
-from savant_cli.config import FlyoffStudyConfig, SavantConfig, _check_physics
+from savant_cli.config import FlyoffStudyConfig, SavantConfig, check_physics
 from savant_cli.errors import ConfigError
 from savant_cli.io.atomic import write_json_atomic, write_text_atomic
 from savant_cli.montecarlo.results import PERCENTILES
@@ -121,7 +121,7 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
     for name, ctrl in controllers.items():
         c = copy.deepcopy(cfg)
         c.controller = ctrl
-        _check_physics(c)
+        check_physics(c)
         cfgs[name] = c
     stopped = False
     for name, c in cfgs.items():

@@ -158,10 +158,10 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
                            "frequency_hz": r.frequency_hz, "band": r.band} for r in rows]
     summary["linear_points"] = scalars
     summary["linear_note"] = "roll (on/off RCS) is left out of the linear analysis"
-    summary["process_wall_time_s"] = time.perf_counter() - t_start
+    summary["study_wall_time_s"] = time.perf_counter() - t_start
     record = RunRecord(signals=sig, events=list(events.items()), summary=summary,
                        config_yaml=OmegaConf.to_yaml(raw_cfg, resolve=True),
-                       provenance=collect_provenance(wall_time_s=summary["process_wall_time_s"]),
+                       provenance=collect_provenance(wall_time_s=summary["study_wall_time_s"]),
                        complete=result.status == "complete", status=result.status, message=result.message)
     out_dir.mkdir(parents=True, exist_ok=True)
     hdf_summary = {k: v for k, v in summary.items() if not isinstance(v, list)}

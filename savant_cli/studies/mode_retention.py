@@ -25,6 +25,7 @@ response by at most ``study.response_tolerance`` and the margins by at most
 from __future__ import annotations
 
 import copy
+import dataclasses
 import csv
 import io
 import time
@@ -38,7 +39,9 @@ from omegaconf import DictConfig
 from rich.console import Console
 from rich.table import Table
 
-from savant_cli.config import LinearStudyConfig, ModeRetentionStudyConfig, SavantConfig, _check_physics
+from savant_cli.config import (
+    FlexOffConfig, FlexOnConfig, LinearStudyConfig, ModeRetentionStudyConfig, SavantConfig, check_physics,
+)
 from savant_cli.errors import ConfigError
 from savant_cli.io.atomic import write_json_atomic, write_text_atomic
 from savant_cli.sim.run import simulate
@@ -58,11 +61,12 @@ class CountResult:
 
 
 def _config(cfg: SavantConfig, n: int) -> SavantConfig:
+    """``cfg`` with ``n`` retained modes (``flex=off`` for none; the other flex keys of
+    ``cfg``'s own ``flex=on`` section are kept)."""
     c = copy.deepcopy(cfg)
-    c.flex.enabled = n > 0
-    c.flex.name = "on" if n > 0 else "off"
-    c.flex.n_modes = max(n, 1)
-    _check_physics(c)
+    on = c.flex if c.flex.enabled else FlexOnConfig()
+    c.flex = dataclasses.replace(on, n_modes=n) if n > 0 else FlexOffConfig()
+    check_physics(c)
     return c
 
 
@@ -194,7 +198,7 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
         "note": note, "steps": rows, "critical_margins": margins,
         "tolerances": {"response": study.response_tolerance, "gain_dB": study.margin_tolerance_dB,
                        "phase_deg": study.margin_tolerance_deg},
-        "process_wall_time_s": time.perf_counter() - t0})
+        "study_wall_time_s": time.perf_counter() - t0})
     if cfg.output.plots:
         _plots(out_dir / "plots", results)
     console.print(_table(rows, study))

@@ -1,7 +1,7 @@
 """``study=montecarlo``: dispersed ascents, reproducible, resumable, shardable.
 
 ``savant run study=montecarlo`` flies runs 0 … n−1 (run 0 the nominal) of the configured
-vehicle with the dispersions of ``study.dispersions`` (docs/montecarlo.md), on
+vehicle with the dispersions of its dispersion set (``dispersions``, docs/montecarlo.md), on
 ``study.workers`` processes, journaling each finished run in ``<out>/runs/``. Restarting
 the same command into the same folder (``hydra.run.dir=…``) skips the runs already
 there. With ``study.shards``/``study.shard`` one job flies one block of run numbers;
@@ -56,7 +56,7 @@ def make_case(cfg: SavantConfig, search_dirs: list[Path] | None = None) -> tuple
     study: MonteCarloStudyConfig = cfg.study
     dirs = search_dirs or hydra_search_dirs()
     prep = prepare(cfg, dirs)
-    dset = parse(study, cfg, prep.vehicle, dirs)
+    dset = parse(cfg.dispersions, study.seed, cfg, prep.vehicle, dirs)
     staging = None
     if cfg.phase.start == "staging":
         staging = partial(start_from_staging, path=resolve_data_path("phase.staging_state_file", "phase",
@@ -78,6 +78,8 @@ def dispersion_table(dset: DispersionSet) -> list[dict[str, Any]]:
                "units": "1" if d.apply == "scale" else units, "source": d.source}
         if d.target.kind == "group":
             row["choices"] = list(d.values) or [d.constant]  # the recorded number is the index
+        if d.target.kind == "inactive":
+            row["inactive"] = d.target.note  # drawn and recorded, applied to nothing
         rows.append(row)
     return rows
 
@@ -91,6 +93,9 @@ def fly_batch(cfg: SavantConfig, config_yaml: str, out_dir: Path, console: Conso
     t0 = time.perf_counter()
     case, names = make_case(cfg)
     journal = Journal(out_dir / "runs", cfg, case.dispersions.names)
+    inactive = [f"{d.name} ({d.target.note})" for d in case.dispersions.items if d.target.kind == "inactive"]
+    if inactive:
+        console.print(f"inactive dispersions, drawn but applied to nothing: {'; '.join(inactive)}")
     mine = shard_runs(study.n_runs, study.shards, study.shard)
     done = journal.done()
     todo = [r for r in mine if r not in done]

@@ -31,7 +31,7 @@ def fly(cfg: SavantConfig, raw_cfg: DictConfig, progress: bool | None = None) ->
     sig = signals(result, prep.model)
     summary = summarize(result, sig)
     events = [(name, float(t)) for name, t in zip(EVENT_NAMES, result.events) if t == t]
-    summary["process_wall_time_s"] = time.perf_counter() - t_start
+    summary["study_wall_time_s"] = time.perf_counter() - t_start
     staging = None
     if result.stop_code == STOP_SEPARATION:
         staging = StagingState(vehicle=cfg.vehicle["name"], guidance=cfg.guidance.name, dt_s=prep.model.rates.dt,
@@ -40,7 +40,7 @@ def fly(cfg: SavantConfig, raw_cfg: DictConfig, progress: bool | None = None) ->
     return RunRecord(
         signals=sig, events=events, summary=summary,
         config_yaml=OmegaConf.to_yaml(raw_cfg, resolve=True),
-        provenance=collect_provenance(wall_time_s=summary["process_wall_time_s"]),
+        provenance=collect_provenance(wall_time_s=summary["study_wall_time_s"]),
         complete=result.status == "complete", status=result.status, message=result.message,
     ), staging
 

@@ -1,0 +1,46 @@
+"""Every field the models declare in the plant's vectors has units and a description,
+the vectors are laid out without gaps or overlaps, and docs/models.md lists every field
+exactly as declared."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import savant_cli.models  # noqa: F401  (declares every field)
+from savant_cli.models import blocks
+from savant_cli.sim import layout as L
+
+DOCS = Path(__file__).resolve().parents[1] / "docs" / "models.md"
+
+
+def test_every_field_has_units_and_a_description():
+    for f in blocks.all_fields():
+        assert f.units.strip(), f.key
+        assert len(f.description.strip()) > 3, f.key
+
+
+def test_vectors_are_contiguous_and_sized_as_the_layout_says():
+    for vector, size in ((blocks.STATE, L.N_STATE), (blocks.PARAMETERS, L.N_PARAM), (blocks.DIAGNOSTICS, L.N_AUX),
+                         (blocks.DISCRETE, L.N_DISC), (blocks.INPUTS, L.N_INPUT)):
+        pos = 0
+        for f in vector.fields:
+            assert f.index == pos, f"{vector.name}: {f.key} at {f.index}, expected {pos}"
+            pos += f.size
+        assert pos == size == vector.size
+    assert [f.index for f in blocks.TABLES.fields] == list(range(len(blocks.TABLES.fields)))
+
+
+def test_core_state_order_is_the_staging_file_order():
+    """The staging-state files and the logged histories name the core states in this
+    order; a model imported out of order would silently move them."""
+    assert L.STATE_NAMES[:L.W + 3][-3:] == ["p", "q", "r"]
+    assert (L.R, L.V, L.Q, L.W, L.MFS, L.MLOX, L.MLH2, L.ACT_P, L.ACT_Y, L.RCS_POS, L.RCS_NEG) == (
+        0, 3, 6, 10, 13, 14, 15, 16, 19, 22, 23)
+
+
+def test_docs_list_every_field_as_declared():
+    text = DOCS.read_text(encoding="utf-8")
+    begin, end = "<!-- field reference: begin -->\n", "\n<!-- field reference: end -->"
+    assert begin in text and end in text
+    documented = text.split(begin, 1)[1].split(end, 1)[0]
+    assert documented == blocks.field_reference(), "docs/models.md is stale: run `python -m savant_cli.models`"
