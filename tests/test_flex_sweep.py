@@ -89,7 +89,7 @@ def test_bad_grids_are_refused(overrides, key):
 @pytest.mark.slow
 def test_flex_sweep_end_to_end(tmp_path):
     out = tmp_path / "fs"
-    proc = run(["run", "study=flex_sweep", "flex=on", "flex.n_modes=2", "study.times=[55,180]",
+    proc = run(["run", "study=flex_sweep", "flex.n_modes=2", "study.times=[55,180]",  # flex=on by itself
                 "study.levels=[0.8,1.0,1.2]", "sim.progress=false", f"hydra.run.dir={out}"], cwd=tmp_path)
     assert proc.returncode == 0, proc.stdout + proc.stderr
     rows = list(csv.DictReader(open(out / "flex_sweep.csv")))
@@ -100,5 +100,5 @@ def test_flex_sweep_end_to_end(tmp_path):
     for t in ("0055.0", "0180.0"):
         for prm in ("frequency", "shape"):
             assert (out / "plots" / "flex_sweep" / f"nichols_pitch_{prm}_t{t}.png").is_file()
-    off = run(["run", "study=flex_sweep", f"hydra.run.dir={tmp_path}/off"], cwd=tmp_path)
-    assert off.returncode == 2 and "flex=on" in off.stderr + off.stdout
+    off = run(["run", "study=flex_sweep", "flex=off", f"hydra.run.dir={tmp_path}/off"], cwd=tmp_path)
+    assert off.returncode == 2 and "flex=on" in off.stderr + off.stdout  # the user's flex=off is refused

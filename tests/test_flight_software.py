@@ -83,7 +83,7 @@ def test_gyro_discretization_matches_continuous_step_at_samples():
     fn, zeta, dt = 25.0, 0.7, 0.005
     ad, bd, cd, dd = gyro_discrete(fn, zeta, dt)
     state = np.zeros(2)
-    out = np.array([gyro_step(state, 1.0, ad, bd, cd, dd) for _ in range(40)])
+    out = np.array([gyro_step(state, 0, 1.0, ad, bd, cd, dd) for _ in range(40)])
     wn = 2 * np.pi * fn
     t = np.arange(40) * dt
     _, y = signal.step(signal.TransferFunction([wn**2], [1, 2 * zeta * wn, wn**2]), T=t)

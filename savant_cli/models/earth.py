@@ -161,17 +161,31 @@ def geodetic_xyz(x: float, y: float, z: float, a: float, e2: float) -> tuple[flo
 def geodetic_xyz_sc(x: float, y: float, z: float, a: float, e2: float):
     """Geodetic latitude, longitude (rad), height (m) and their sines and cosines.
 
-    Bowring's iteration on the parametric latitude, written with normalised vectors in
-    place of ``arctan2``/``sin``/``cos`` pairs (the same numbers, a third of the cost on
-    the plant's hot path, which also needs the sines and cosines for the wind rotation).
-
     Returns
     -------
     tuple of float
         ``(lat, lon, h, sin lat, cos lat, sin lon, cos lon)``.
     """
+    h, sl, cl, slon, clon, num, den = geodetic_height_sc(x, y, z, a, e2)
+    return np.arctan2(num, den), np.arctan2(y, x), h, sl, cl, slon, clon
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def geodetic_height_sc(x: float, y: float, z: float, a: float, e2: float):
+    """Height above the ellipsoid (m) and the sines and cosines of the geodetic latitude
+    and longitude of an ECEF point (m), without the angles themselves.
+
+    Bowring's iteration on the parametric latitude, written with normalised vectors in
+    place of ``arctan2``/``sin``/``cos`` pairs (the same numbers, a third of the cost on
+    the plant's hot path, which needs the sines and cosines for the wind rotation but the
+    angles only for its diagnostics). The latitude is ``atan2(num, den)``.
+
+    Returns
+    -------
+    tuple of float
+        ``(h, sin lat, cos lat, sin lon, cos lon, num, den)``.
+    """
     p = np.sqrt(x * x + y * y)
-    lon = np.arctan2(y, x)
     if p > 0.0:
         slon, clon = y / p, x / p
     else:
@@ -194,9 +208,8 @@ def geodetic_xyz_sc(x: float, y: float, z: float, a: float, e2: float):
         yb, xb = sqrt1me2 * sl, cl
         nb = np.sqrt(yb * yb + xb * xb)
         sb, cb = yb / nb, xb / nb
-    lat = np.arctan2(num, den)
     h = p * cl + z * sl - a * np.sqrt(1.0 - e2 * sl * sl)
-    return lat, lon, h, sl, cl, slon, clon
+    return h, sl, cl, slon, clon, num, den
 
 
 @njit(cache=True, error_model="numpy")
@@ -263,13 +276,21 @@ def geodetic_of_eci(t: float, rx: float, ry: float, rz: float, p: np.ndarray):
     Returns
     -------
     tuple of float
-        ``(lat, lon, h, sin lat, cos lat, sin lon, cos lon, cos ωt, sin ωt)``: rad, rad,
-        m, then the sines and cosines the NED↔ECI rotations need.
+        ``(h, sin lat, cos lat, sin lon, cos lon, cos ωt, sin ωt, x, y, num, den)``: the
+        height (m), the sines and cosines the NED↔ECI rotations need, and what
+        :func:`latitude_longitude` turns into the angles (only diagnostics need them).
     """
     th = p[P_OMEGA_E] * t
     ct, st = np.cos(th), np.sin(th)
-    lat, lon, alt, sl, cl, so, co = geodetic_xyz_sc(ct * rx + st * ry, -st * rx + ct * ry, rz, p[P_RE], p[P_E2])
-    return lat, lon, alt, sl, cl, so, co, ct, st
+    xe, ye = ct * rx + st * ry, -st * rx + ct * ry
+    alt, sl, cl, so, co, num, den = geodetic_height_sc(xe, ye, rz, p[P_RE], p[P_E2])
+    return alt, sl, cl, so, co, ct, st, xe, ye, num, den
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def latitude_longitude(xe: float, ye: float, num: float, den: float) -> tuple[float, float]:
+    """Geodetic latitude and longitude (rad) from :func:`geodetic_of_eci`'s by-products."""
+    return np.arctan2(num, den), np.arctan2(ye, xe)
 
 
 @njit(cache=True, error_model="numpy", inline="always")

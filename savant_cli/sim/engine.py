@@ -33,7 +33,7 @@ from savant_cli.sim.layout import (
     D_FLEX_NAV, D_GYRO_X, D_GYRO_Y, ENGINE_OFF, ENGINE_UPPER, MFS, MLH2, MLOX, N_AUX, N_STATE,
     Q, R, RCS_NEG, RCS_POS, U_CONFIG, U_DPC, U_DYC, U_ENGINE, U_RCS, U_T_IGN, V, W,
 )
-from savant_cli.sim.plant import derivative
+from savant_cli.sim.plant import derivative, derivative_state
 
 # status codes returned by advance()
 RUNNING = 0
@@ -99,23 +99,26 @@ def fcs_phase(events: np.ndarray) -> int:
 
 @njit(cache=True, error_model="numpy")
 def rk4(t: float, x: np.ndarray, u: np.ndarray, dt: float, p: np.ndarray, tb: np.ndarray,
-        aux: np.ndarray, work: np.ndarray) -> None:
+        aux: np.ndarray, work: np.ndarray, diagnostics: bool = True) -> None:
     """One classical Runge–Kutta step of ``x`` in place; ``aux`` receives the diagnostics
-    at ``t``. ``work`` is a (6, ≥ max(x.size, N_AUX)) scratch array (k1..k4, stage state,
-    aux scratch)."""
+    at ``t`` (``diagnostics`` False: only the altitude, for steps nothing logs). ``work``
+    is a (6, ≥ max(x.size, N_AUX)) scratch array (k1..k4, stage state, aux scratch)."""
     n = x.size
     k1, k2, k3, k4, xs = work[0], work[1], work[2], work[3], work[4]
     scratch = work[5]
-    derivative(t, x, u, p, tb, aux, k1)
+    if diagnostics:
+        derivative(t, x, u, p, tb, aux, k1)
+    else:
+        derivative_state(t, x, u, p, tb, aux, k1)
     for i in range(n):
         xs[i] = x[i] + 0.5 * dt * k1[i]
-    derivative(t + 0.5 * dt, xs, u, p, tb, scratch, k2)
+    derivative_state(t + 0.5 * dt, xs, u, p, tb, scratch, k2)
     for i in range(n):
         xs[i] = x[i] + 0.5 * dt * k2[i]
-    derivative(t + 0.5 * dt, xs, u, p, tb, scratch, k3)
+    derivative_state(t + 0.5 * dt, xs, u, p, tb, scratch, k3)
     for i in range(n):
         xs[i] = x[i] + dt * k3[i]
-    derivative(t + dt, xs, u, p, tb, scratch, k4)
+    derivative_state(t + dt, xs, u, p, tb, scratch, k4)
     h6 = dt / 6.0
     for i in range(n):
         x[i] += h6 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
@@ -218,7 +221,7 @@ def advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0:
                 for ax in range(3):
                     s = D_GYRO_X + 6 * g + 2 * ax
                     w_in = c_gyro[g, ax, 0] * wbx + c_gyro[g, ax, 1] * wby + c_gyro[g, ax, 2] * wbz
-                    d[D_GYRO_Y + 3 * g + ax] = gyro_step(d[s:s + 2], w_in, gyro.ad, gyro.bd, gyro.cd, gyro.dd)
+                    d[D_GYRO_Y + 3 * g + ax] = gyro_step(d, s, w_in, gyro.ad, gyro.bd, gyro.cd, gyro.dd)
         if k % rates.n_fcs == 0:
             dt_fcs = rates.n_fcs * dt
             smoother_step(d, t, dt_fcs, sched[S_SMOOTH_ZETA], sched[S_SMOOTH_WN])
@@ -237,13 +240,13 @@ def advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0:
             u[U_DYC] = d[D_CMD_Y]
             u[U_RCS] = d[D_CMD_RCS]
 
-        if k % rates.n_log == 0 and log_row < log.shape[0]:
-            x_log = x.copy()
-        rk4(t, x, u, dt, p, tb, aux, work)
-        if k % rates.n_log == 0 and log_row < log.shape[0]:
+        logging = k % rates.n_log == 0 and log_row < log.shape[0]
+        if logging:  # the state before the step, the diagnostics of its first stage
             row = log[log_row]
             row[0] = t
-            row[1:1 + nx] = x_log
+            row[1:1 + nx] = x
+        rk4(t, x, u, dt, p, tb, aux, work, logging)
+        if logging:
             row[1 + nx:1 + nx + N_AUX] = aux
             row[1 + nx + N_AUX:n_cols] = d
             log_row += 1

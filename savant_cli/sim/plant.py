@@ -41,6 +41,23 @@ def pack_tables(tb: PlantTables) -> np.ndarray:
 @njit(cache=True, error_model="numpy")
 def derivative(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarray,
                aux: np.ndarray, xd: np.ndarray) -> None:
+    """Time derivative of the continuous state into ``xd`` and every diagnostic into
+    ``aux`` (see :func:`compose` for the arguments)."""
+    compose(t, x, u, p, tb, aux, xd, True)
+
+
+@njit(cache=True, error_model="numpy")
+def derivative_state(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarray,
+                     aux: np.ndarray, xd: np.ndarray) -> None:
+    """:func:`derivative` without the diagnostics only a log reads (latitude, longitude,
+    Earth-relative speed): ``xd`` is bit for bit the same; of ``aux`` only the altitude
+    is written (the engine's ground check)."""
+    compose(t, x, u, p, tb, aux, xd, False)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def compose(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarray,
+            aux: np.ndarray, xd: np.ndarray, diagnostics: bool) -> None:
     """Time derivative of the continuous state, written into ``xd``.
 
     Parameters
@@ -59,6 +76,8 @@ def derivative(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.nda
         Filled with diagnostics of this evaluation.
     xd : ndarray (n_state,)
         Output: the state derivative.
+    diagnostics : bool
+        Fill every entry of ``aux`` (False: only the altitude).
 
     Notes
     -----
@@ -74,7 +93,8 @@ def derivative(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.nda
     m00, m01, m02, m10, m11, m12, m20, m21, m22 = qt.dcm_xyz(q0, q1, q2, q3)  # body → ECI
 
     # ------------------------------------------------------------ environment
-    lat, lon, alt, sin_lat, cos_lat, sin_lon, cos_lon, cos_et, sin_et = earth.geodetic_of_eci(t, rx, ry, rz, p)
+    alt, sin_lat, cos_lat, sin_lon, cos_lon, cos_et, sin_et, x_ecef, y_ecef, lat_num, lat_den = earth.geodetic_of_eci(
+        t, rx, ry, rz, p)
     temp, pres, rho, sos = atmosphere.air_at(alt, tb)
     gx, gy, gz = gravity.gravity_at(rx, ry, rz, p, p[earth.P_RE])
     ex, ey, ez = earth.earth_relative_velocity(rx, ry, vx, vy, vz, p)
@@ -171,6 +191,9 @@ def derivative(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.nda
 
     # ------------------------------------------------------------ diagnostics
     aux[earth.A_ALT] = alt
+    if not diagnostics:
+        return
+    lat, lon = earth.latitude_longitude(x_ecef, y_ecef, lat_num, lat_den)
     aux[earth.A_LAT] = lat
     aux[earth.A_LON] = lon
     aux[earth.A_VEARTH] = np.sqrt(ex * ex + ey * ey + ez * ez)
