@@ -1,7 +1,7 @@
 """What a dispersion acts on, and how one run's samples become its config, vehicle and
 numeric model.
 
-Four kinds of target (``study.dispersions.<name>.target``):
+Four kinds of target (``dispersions.items.<name>.target``), and a fifth state:
 
 ``config``
     Any numeric leaf of the validated config, list elements by index:
@@ -16,6 +16,9 @@ Four kinds of target (``study.dispersions.<name>.target``):
     A vehicle-table quantity, see :data:`TABLE_TARGETS`.
 ``group``
     A config group whose option is drawn: ``winds`` (``dist: choice`` of option names).
+``inactive``
+    A config key of another option of its group than the one flown (``flex.damping``
+    with ``flex=off``): drawn and recorded, applied to nothing.
 
 The model of a run is built by :func:`savant_cli.sim.build.build_model` from the
 dispersed config and vehicle (so every derived quantity, such as the separation time

@@ -30,7 +30,7 @@ from savant_cli.config import FlexSweepStudyConfig, LinearStudyConfig, SavantCon
 from savant_cli.errors import ConfigError
 from savant_cli.io.atomic import write_json_atomic, write_text_atomic
 from savant_cli.sim.build import SimModel
-from savant_cli.sim.engine import EVENT_NAMES
+from savant_cli.studies import flight as flight_mod
 from savant_cli.sim.run import simulate
 from savant_cli.sim.setup import prepare
 from savant_cli.studies.linear import analyse, check_times
@@ -70,9 +70,9 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
     model = prepare(cfg).model
     rt = model.rates
     dt = rt.dt * rt.n_fcs
-    steps = tuple(int(round(t / dt)) * rt.n_fcs for t in study.times)
+    steps = flight_mod.control_steps(cfg, study.times)
     result = simulate(model, progress=cfg.sim.progress, chunk_s=cfg.sim.chunk_s, snapshot_steps=steps)
-    events = {n: float(t) for n, t in zip(EVENT_NAMES, result.events) if t == t}
+    events = dict(flight_mod.events_of(result))
     times = check_times(sorted({k * rt.dt for k in steps}), result.t_final, events, study, skip=False)
     lin = LinearStudyConfig(times=times)
     cases = [(t, prm, lvl) for t in times for prm in study.parameters for lvl in study.levels]

@@ -14,18 +14,14 @@ import warnings
 from pathlib import Path
 
 import numpy as np
-from omegaconf import DictConfig, OmegaConf
+from omegaconf import DictConfig
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
 from savant_cli.config import LinearStudyConfig, SavantConfig
 from savant_cli.errors import ConfigError
-from savant_cli.io.atomic import write_json_atomic
 from savant_cli.io.console import print_run_summary
-from savant_cli.io.hdf5 import write_run
-from savant_cli.io.provenance import collect_provenance
-from savant_cli.io.record import RunRecord
 from savant_cli.linear.loops import AXES, LinearPoint, assemble
 from savant_cli.linear.margins import Bands, MarginRow, bandwidth_hz, disk_margins, loop_margins
 from savant_cli.linear.plant import linearize_plant
@@ -33,11 +29,8 @@ from savant_cli.linear.response import FastResponse
 from savant_cli.linear.store import write_linear_group, write_margins_csv, write_mat
 from savant_cli.models import slosh as slosh_model
 from savant_cli.sim import layout as L
-from savant_cli.sim.engine import EVENT_NAMES
 from savant_cli.sim.plant import derivative
-from savant_cli.sim.run import simulate, signals
-from savant_cli.sim.setup import prepare
-from savant_cli.sim.summary import summarize
+from savant_cli.studies import flight as flight_mod
 
 MAX_CHART_POINTS = 20
 
@@ -123,19 +116,16 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
     study: LinearStudyConfig = cfg.study
     console = Console()
     t_start = time.perf_counter()
-    prep = prepare(cfg)
-    model = prep.model
-    rt = model.rates
     t_end = cfg.sim.max_time_s
     for i, t in enumerate(study.times if study.every == 0 else []):
         if t >= t_end:
             raise ConfigError(f"study.times[{i}]", t, f"must lie inside the flight (before sim.max_time_s = {t_end})")
     wanted = requested_times(study, t_end)
-    steps = tuple(int(round(t / (rt.dt * rt.n_fcs))) * rt.n_fcs for t in wanted)  # on control cycles
-    result = simulate(model, progress=cfg.sim.progress, chunk_s=cfg.sim.chunk_s, snapshot_steps=steps)
-    sig = signals(result, model)
-    summary = summarize(result, sig)
-    events = {n: float(t) for n, t in zip(EVENT_NAMES, result.events) if t == t}
+    steps = flight_mod.control_steps(cfg, wanted)
+    flight = flight_mod.fly(cfg, snapshot_steps=steps)
+    model, result, sig, summary = flight.prep.model, flight.result, flight.signals, flight.summary
+    rt = model.rates
+    events = dict(flight_mod.events_of(result))
     times = check_times([k * rt.dt for k in steps], result.t_final, events, study, skip=study.every > 0)
     snaps = [result.snapshots[int(round(t / rt.dt))] for t in times]
 
@@ -159,20 +149,14 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
     summary["linear_points"] = scalars
     summary["linear_note"] = "roll (on/off RCS) is left out of the linear analysis"
     summary["study_wall_time_s"] = time.perf_counter() - t_start
-    record = RunRecord(signals=sig, events=list(events.items()), summary=summary,
-                       config_yaml=OmegaConf.to_yaml(raw_cfg, resolve=True),
-                       provenance=collect_provenance(wall_time_s=summary["study_wall_time_s"]),
-                       complete=result.status == "complete", status=result.status, message=result.message)
-    out_dir.mkdir(parents=True, exist_ok=True)
     hdf_summary = {k: v for k, v in summary.items() if not isinstance(v, list)}
+    record = flight_mod.record(result, sig, hdf_summary, raw_cfg, summary["study_wall_time_s"])
+    flight_mod.write(out_dir, record, cfg, json_summary=summary, extra=lambda f: write_linear_group(f, points, rows))
     if cfg.output.hdf5:
-        write_run(out_dir / "savant.h5", RunRecord(**{**record.__dict__, "summary": hdf_summary}),
-                  extra=lambda f: write_linear_group(f, points, rows))
         write_mat(out_dir / "linear.mat", points)
     write_margins_csv(out_dir / "margins.csv", rows)
-    write_json_atomic(out_dir / "summary.json", summary)
     if cfg.output.plots:
-        _plots(record, points, rows, study, out_dir / "plots")
+        _plots(points, rows, study, out_dir / "plots")
     print_run_summary({k: v for k, v in hdf_summary.items() if k != "linear_note"}, record.status, record.message,
                       console)
     console.print(_table(rows, study))
@@ -181,12 +165,10 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
     return 0 if record.complete else 1
 
 
-def _plots(record: RunRecord, points: list[LinearPoint], rows: list[MarginRow], study: LinearStudyConfig,
-           folder: Path) -> None:
-    from savant_cli.plots.ascent import plot_ascent
+def _plots(points: list[LinearPoint], rows: list[MarginRow], study: LinearStudyConfig, folder: Path) -> None:
+    """The linear charts (the ascent plots are drawn with the run's files)."""
     from savant_cli.plots.linear import plot_linear_point, plot_margin_envelope
 
-    plot_ascent(record, folder)
     charts = study.charts == "all" or (study.charts == "auto" and len(points) <= MAX_CHART_POINTS)
     if charts:
         for pt in points:

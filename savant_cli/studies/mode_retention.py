@@ -46,6 +46,7 @@ from savant_cli.errors import ConfigError
 from savant_cli.io.atomic import write_json_atomic, write_text_atomic
 from savant_cli.sim.run import simulate
 from savant_cli.sim.setup import prepare
+from savant_cli.studies import flight as flight_mod
 from savant_cli.studies.linear import analyse
 
 
@@ -74,7 +75,7 @@ def _fly(cfg: SavantConfig, n: int, study: ModeRetentionStudyConfig) -> CountRes
     model = prepare(_config(cfg, n)).model
     rt = model.rates
     dt = rt.dt * rt.n_fcs
-    steps = tuple(int(round(t / dt)) * rt.n_fcs for t in study.times)
+    steps = flight_mod.control_steps(cfg, study.times)
     res = simulate(model, progress=False, snapshot_steps=steps)
     t_resp = np.arange(0.0, study.response_duration_s + 0.5 * dt, dt)
     out = CountResult(n, t_resp, {})

@@ -155,10 +155,7 @@ def rerun(run_dir: Path, run_number: int, console: Console | None = None) -> int
     """Fly run ``run_number`` of the batch in ``run_dir`` again with its whole time
     history; write it like a nominal run into ``run_dir/rerun_<N>/`` and check it
     against the batch's record of that run."""
-    from savant_cli.io.atomic import write_json_atomic
-    from savant_cli.io.hdf5 import write_run
-    from savant_cli.io.record import RunRecord
-    from savant_cli.sim.engine import EVENT_NAMES
+    from savant_cli.studies import flight as flight_mod
 
     console = console or Console()
     cfg, raw = _load_config(run_dir)
@@ -173,16 +170,8 @@ def rerun(run_dir: Path, run_number: int, console: Console | None = None) -> int
         return 1
     model, result, sig, summ = extra
     summ["dispersions"] = dict(zip(case.dispersions.names, outcome.values.tolist()))
-    record = RunRecord(signals=sig, events=[(n, float(t)) for n, t in zip(EVENT_NAMES, result.events) if t == t],
-                       summary={k: v for k, v in summ.items() if not isinstance(v, dict)},
-                       config_yaml=OmegaConf.to_yaml(raw, resolve=True), provenance=collect_provenance(),
-                       complete=result.status == "complete", status=result.status, message=result.message)
-    write_run(out / "savant.h5", record)
-    write_json_atomic(out / "summary.json", summ)
-    if cfg.output.plots:
-        from savant_cli.plots.ascent import plot_ascent
-
-        plot_ascent(record, out / "plots")
+    record = flight_mod.record(result, sig, {k: v for k, v in summ.items() if not isinstance(v, dict)}, raw)
+    flight_mod.write(out, record, cfg, json_summary=summ)
     stored = next(iter(sorted(run_dir.rglob(f"runs/run_{run_number:06d}.npz"))), None)
     if stored is not None:
         ref = read_outcome(stored)
