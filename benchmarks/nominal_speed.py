@@ -67,14 +67,15 @@ def jsbsim_j246(repeat: int) -> float | None:
         return None
     rtfs = []
     for _ in range(repeat):
-        fdm = jsbsim.FGFDMExec(jsbsim.get_default_root_dir())
-        fdm.set_debug_level(0)
-        fdm.load_script("scripts/J2461.xml")
-        fdm.run_ic()
-        saved = os.dup(1)  # the script's event notices go to the C++ stdout
+        sys.stdout.flush()
+        saved = os.dup(1)  # JSBSim's banner and the script's event notices go to the C++ stdout
         with open(os.devnull, "w") as null:
             os.dup2(null.fileno(), 1)
             try:
+                fdm = jsbsim.FGFDMExec(jsbsim.get_default_root_dir())
+                fdm.set_debug_level(0)
+                fdm.load_script("scripts/J2461.xml")
+                fdm.run_ic()
                 t0 = time.perf_counter()
                 while fdm.run():
                     pass
