@@ -189,7 +189,7 @@ def test_engine_feeds_gyros_rigid_plus_flex_rate_and_nav_unit_flex_rotation(conf
     from savant_cli.config import validate
     from savant_cli.models.sensors import gyro_discrete
     from savant_cli.sim import engine as E
-    from savant_cli.sim.build import fcs_tables
+    from savant_cli.models.fcs import fcs_tables
     from savant_cli.sim.run import log_columns
 
     rng = np.random.default_rng(4)
@@ -215,7 +215,7 @@ def test_engine_feeds_gyros_rigid_plus_flex_rate_and_nav_unit_flex_rotation(conf
     gyro = E.GyroModel(*gyro_discrete(25.0, 0.7, dt))
     gt = E.GuidanceTable(time=np.array([0.0, 1.0e4]), quat=np.tile([1.0, 0.0, 0.0, 0.0], (2, 1)),
                          rate=np.zeros((2, 3)))
-    ft = fcs_tables(validate(compose_config()))
+    ft = fcs_tables(validate(compose_config()).controller)
     sched = np.zeros(E.N_SCHED)
     sched[E.S_T_SEP] = sched[E.S_T_MAX] = 1.0e9
     sched[E.S_ENERGY_TARGET] = 1.0e12

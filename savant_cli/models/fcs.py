@@ -23,7 +23,7 @@ rate deadbands, commanding +1 / 0 / −1 jet torque.
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 from numba import njit
@@ -32,6 +32,9 @@ from savant_cli.models import blocks, quaternion as qt
 from savant_cli.models.guidance import D_QS, D_VS
 from savant_cli.models.interp import locate, rows
 from savant_cli.models.sensors import D_GYRO_Y
+
+if TYPE_CHECKING:  # pragma: no cover
+    from savant_cli.config import ControllerConfig
 
 _DISCRETE = blocks.DISCRETE.block("fcs")
 D_ERR = _DISCRETE.array("attitude_error", 3, "rad", "attitude error roll, pitch, yaw")
@@ -75,6 +78,40 @@ class FcsTables(NamedTuple):
     gain_data: np.ndarray  # (3, n, 8)
     gain_len: np.ndarray  # (3,) int64
     roll: np.ndarray  # (3,): attitude deadband rad, rate deadband rad/s, lead time s
+
+
+def fcs_tables(c: "ControllerConfig") -> FcsTables:
+    """The builder of the flight control: the ``controller`` group's filters, blending,
+    gain schedules and roll phase plane as :class:`FcsTables` (SI)."""
+    filters = np.zeros((2, 2, 2, 2, 5))
+    roll_filters = np.zeros((2, 2, 2, 5))
+    blend = np.zeros((2, 3))
+    for s, name in enumerate(("stack", "upper")):
+        fs = getattr(c.flex_filters, name)
+        for path, sections in enumerate((fs.rate, fs.integrated_rate)):
+            for i, sec in enumerate(sections):
+                a0 = sec.a[0]
+                filters[s, path, i, 0] = np.asarray(sec.b) / a0
+                filters[s, path, i, 1] = np.asarray(sec.a) / a0
+        for i, sec in enumerate(fs.roll):
+            roll_filters[s, i, 0] = np.asarray(sec.b) / sec.a[0]
+            roll_filters[s, i, 1] = np.asarray(sec.a) / sec.a[0]
+        blend[s] = getattr(c.blending, name)
+    axes, data = [], []
+    for name in ("stack", "coast", "upper"):
+        t = getattr(c.gains, name)
+        axes.append(np.asarray(t.breakpoints, float))
+        cols = []
+        for axis in ("pitch", "yaw"):
+            g = getattr(t, axis)
+            cols += [g.kp, g.ki, g.kd, g.kir]
+        data.append(np.asarray(cols, float).T)
+    gain_axis, gain_len = blocks.stack_padded(axes)
+    gain_data, _ = blocks.stack_padded(data)
+    roll = np.array([np.radians(c.roll.attitude_deadband_deg), np.radians(c.roll.rate_deadband_deg_s),
+                     c.roll.lead_time_s])
+    return FcsTables(filters=filters, roll_filters=roll_filters, blend=blend, gain_axis=gain_axis,
+                     gain_data=gain_data, gain_len=gain_len, roll=roll)
 
 
 @njit(cache=True, error_model="numpy")

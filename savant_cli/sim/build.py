@@ -12,7 +12,7 @@ import numpy as np
 from savant_cli import constants as C
 from savant_cli.config import SavantConfig
 from savant_cli.models import PLANT_MODELS, blocks, earth, quaternion as qt
-from savant_cli.models.fcs import FcsTables
+from savant_cli.models.fcs import FcsTables, fcs_tables
 from savant_cli.models.sensors import GYRO_MISALIGN, gyro_discrete, gyro_steady_state, misalignment
 from savant_cli.sim import engine as E
 from savant_cli.sim import layout as L
@@ -80,40 +80,6 @@ def plant_tables(cfg: SavantConfig, vehicle: Vehicle, slosh: SloshData | None = 
     return plant_data(cfg, vehicle, slosh)[1]
 
 
-def fcs_tables(cfg: SavantConfig) -> FcsTables:
-    """Flight-control data: filters, blending, gain schedules, roll phase plane."""
-    c = cfg.controller
-    filters = np.zeros((2, 2, 2, 2, 5))
-    roll_filters = np.zeros((2, 2, 2, 5))
-    blend = np.zeros((2, 3))
-    for s, name in enumerate(("stack", "upper")):
-        fs = getattr(c.flex_filters, name)
-        for path, sections in enumerate((fs.rate, fs.integrated_rate)):
-            for i, sec in enumerate(sections):
-                a0 = sec.a[0]
-                filters[s, path, i, 0] = np.asarray(sec.b) / a0
-                filters[s, path, i, 1] = np.asarray(sec.a) / a0
-        for i, sec in enumerate(fs.roll):
-            roll_filters[s, i, 0] = np.asarray(sec.b) / sec.a[0]
-            roll_filters[s, i, 1] = np.asarray(sec.a) / sec.a[0]
-        blend[s] = getattr(c.blending, name)
-    axes, data = [], []
-    for name in ("stack", "coast", "upper"):
-        t = getattr(c.gains, name)
-        axes.append(np.asarray(t.breakpoints, float))
-        cols = []
-        for axis in ("pitch", "yaw"):
-            g = getattr(t, axis)
-            cols += [g.kp, g.ki, g.kd, g.kir]
-        data.append(np.asarray(cols, float).T)
-    gain_axis, gain_len = blocks.stack_padded(axes)
-    gain_data, _ = blocks.stack_padded(data)
-    roll = np.array([np.radians(c.roll.attitude_deadband_deg), np.radians(c.roll.rate_deadband_deg_s),
-                     c.roll.lead_time_s])
-    return FcsTables(filters=filters, roll_filters=roll_filters, blend=blend, gain_axis=gain_axis,
-                     gain_data=gain_data, gain_len=gain_len, roll=roll)
-
-
 def state_layout(cfg: SavantConfig) -> L.StateLayout:
     """The continuous-state layout of the models switched on in ``cfg``."""
     return L.StateLayout(simplex=cfg.actuator.name == "simplex", slosh=cfg.slosh.enabled,
@@ -171,7 +137,7 @@ def pad_state(cfg: SavantConfig, vehicle: Vehicle) -> tuple[np.ndarray, np.ndarr
 def build_model(cfg: SavantConfig, vehicle: Vehicle, guidance: GuidanceTable) -> SimModel:
     """Numeric model of one run."""
     p, tb = plant_data(cfg, vehicle)
-    ft = fcs_tables(cfg)
+    ft = fcs_tables(cfg.controller)
     rt = rates(cfg)
     ad, bd, cd, dd = gyro_discrete(cfg.sensors.rate_gyro.natural_frequency_hz,
                                    cfg.sensors.rate_gyro.damping, rt.dt * rt.n_sensor)
