@@ -162,7 +162,7 @@ def simplex(x: np.ndarray, k: int, kv: int, cmd: float, p: np.ndarray, base: int
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def gimbal_stage(p: np.ndarray, engine: int) -> int:
+def gimbal_stage(engine: int) -> int:
     """Offset of the active stage's :data:`STAGE` record (upper stage from separation on)."""
     return P_FS_GIMBAL if engine == ENGINE_FIRST else P_US_GIMBAL
 
@@ -172,7 +172,7 @@ def actuator_rates(x: np.ndarray, p: np.ndarray, engine: int, pitch_cmd: float, 
                    xd: np.ndarray) -> tuple[float, float]:
     """Write the actuator state derivatives into ``xd``; return the nozzle angular
     accelerations δ̈ pitch, yaw (rad/s²), zero while the nozzle is at its limit."""
-    lim = p[gimbal_stage(p, engine) + G_LIMIT]
+    lim = p[gimbal_stage(engine) + G_LIMIT]
     first = engine == ENGINE_FIRST
     if int(p[P_KIND]) == SIMPLEX:
         vo = int(p[P_VALVE_OFFSET])
@@ -194,6 +194,6 @@ def actuator_rates(x: np.ndarray, p: np.ndarray, engine: int, pitch_cmd: float, 
 @njit(cache=True, error_model="numpy", inline="always")
 def gimbal_angles(x: np.ndarray, p: np.ndarray, engine: int) -> tuple[float, float, float, float]:
     """Limited actuator angles δp, δy and the active stage's null biases pitch, yaw (rad)."""
-    g = gimbal_stage(p, engine)
+    g = gimbal_stage(engine)
     lim = p[g + G_LIMIT]
     return clip(x[ACT_P], lim), clip(x[ACT_Y], lim), p[g + G_BIAS_PITCH], p[g + G_BIAS_YAW]

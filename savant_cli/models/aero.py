@@ -124,7 +124,7 @@ def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarra
 
 def reference(tb: np.ndarray, config: int) -> np.ndarray:
     """The :data:`REFERENCE` record of a configuration from packed tables (Python)."""
-    start = int(tb[2 * T_REF]) + config * N_REF
+    start = tab_offset(tb, T_REF) + config * N_REF
     return tb[start:start + N_REF]
 
 

@@ -24,7 +24,7 @@ test checks that each one is documented there.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field as dataclass_field
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -172,7 +172,6 @@ class ModelInputs:
     vehicle: "Vehicle"
     layout: Any
     slosh: Any = None
-    extra: dict = dataclass_field(default_factory=dict)
 
 
 def pack(arrays: list[np.ndarray]) -> np.ndarray:

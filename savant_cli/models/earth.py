@@ -263,10 +263,15 @@ def velocity_relative_eci(r_eci: np.ndarray, v_eci: np.ndarray, omega: float) ->
         Velocity relative to the rotating Earth, m/s, in ECI axes.
     """
     out = np.empty(3)
-    out[0] = v_eci[0] + omega * r_eci[1]
-    out[1] = v_eci[1] - omega * r_eci[0]
-    out[2] = v_eci[2]
+    out[0], out[1], out[2] = earth_relative_velocity_xyz(r_eci[0], r_eci[1], v_eci[0], v_eci[1], v_eci[2], omega)
     return out
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def earth_relative_velocity_xyz(rx: float, ry: float, vx: float, vy: float, vz: float,
+                                omega: float) -> tuple[float, float, float]:
+    """:func:`velocity_relative_eci` on scalars (m, m/s; ``omega`` rad/s)."""
+    return vx + omega * ry, vy - omega * rx, vz
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -297,5 +302,4 @@ def latitude_longitude(xe: float, ye: float, num: float, den: float) -> tuple[fl
 def earth_relative_velocity(rx: float, ry: float, vx: float, vy: float, vz: float,
                             p: np.ndarray) -> tuple[float, float, float]:
     """``v − ω_E ẑ × r``: velocity relative to the rotating Earth, ECI axes, m/s."""
-    omega_e = p[P_OMEGA_E]
-    return vx + omega_e * ry, vy - omega_e * rx, vz
+    return earth_relative_velocity_xyz(rx, ry, vx, vy, vz, p[P_OMEGA_E])

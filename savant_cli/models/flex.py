@@ -27,7 +27,7 @@ from numba import njit
 
 from savant_cli.models import blocks
 from savant_cli.models.configurations import CONFIG_STACK
-from savant_cli.models.interp import tab_offset
+from savant_cli.models.interp import tab, tab_offset
 from savant_cli.models.propulsion import MFS, MLH2, MLOX, P_FS_PROP_FULL, P_US_PROP_FULL
 
 # Points where the plant and the sensors use mode shapes, and the vehicle YAML key
@@ -115,7 +115,7 @@ def rotation_at(x: np.ndarray, config: int, p: np.ndarray, tb: np.ndarray, pt: i
     nm = int(p[P_N_MODES])
     sa, sb, w = flex_sets(x, config, p)
     o_sh = tab_offset(tb, T_SHAPE)
-    nd = int(tb[2 * T_ZETA + 1])  # modes in the data
+    nd = tab(tb, T_ZETA)[1]  # modes in the data
     for i in range(nm):
         qi = x[fo + nm + i] if rate else x[fo + i]
         ia = o_sh + ((sa * nd + i) * N_POINTS + pt) * N_SHAPE + SIGMA_X
@@ -164,7 +164,7 @@ def modal_rates(x: np.ndarray, config: int, p: np.ndarray, tb: np.ndarray, gimba
     o_sh = tab_offset(tb, T_SHAPE)
     o_fz = tab_offset(tb, T_ZETA)
     o_ff = tab_offset(tb, T_FREQ)
-    nd = int(tb[2 * T_ZETA + 1])
+    nd = tab(tb, T_ZETA)[1]  # modes in the data
     for i in range(nmod):
         wi = (1.0 - w) * tb[o_ff + sa * nd + i] + w * tb[o_ff + sb * nd + i]
         base_a = o_sh + (sa * nd + i) * N_POINTS * N_SHAPE

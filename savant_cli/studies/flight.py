@@ -77,7 +77,7 @@ def write(out_dir: Path, rec: RunRecord, cfg: SavantConfig, json_summary: dict[s
     record's) and the ascent plots unless ``output.plots`` is off."""
     out_dir.mkdir(parents=True, exist_ok=True)
     if cfg.output.hdf5:
-        write_run(out_dir / "savant.h5", rec, extra=extra) if extra else write_run(out_dir / "savant.h5", rec)
+        write_run(out_dir / "savant.h5", rec, extra=extra)
     write_json_atomic(out_dir / "summary.json", rec.summary if json_summary is None else json_summary)
     if cfg.output.plots:
         from savant_cli.plots.ascent import plot_ascent
