@@ -1,20 +1,44 @@
-"""``savant report RUN_DIR``: redraw a finished run's plots and summary from ``savant.h5``."""
+"""``savant report RUN_DIR``: redraw every figure of a finished run from its ``savant.h5``
+alone, and print its summary again.
+
+What is drawn depends on what the file holds:
+
+* a time history (``study=nominal``, ``linear``, ``flex_sweep``): the ascent plots, and
+  the console summary of the flight;
+* group ``linear``: the six charts of every point that has chart data and the margin
+  envelope (``plots/linear/``);
+* group ``flex_sweep``: the Nichols overlays (``plots/flex_sweep/``);
+* group ``montecarlo`` (a Monte Carlo batch, or the folder of one fly-off controller):
+  histograms, dispersion histograms, envelopes and the margin spread;
+* group ``flyoff``: the nominal-history overlays and the metric histograms;
+* group ``mode_retention``: the step-response overlays and the margins against the count.
+
+The figures have the names, and show the data, of the ones the study drew itself.
+"""
 
 from __future__ import annotations
 
 from pathlib import Path
 
+import h5py
 from rich.console import Console
 
 from savant_cli.io.console import print_run_summary
-from savant_cli.io.hdf5 import read_run
+from savant_cli.io.hdf5 import FORMAT, STUDY_FORMAT, RunFileError, read_run
 
 RUN_FILE = "savant.h5"
 PLOTS_DIR = "plots"
 
 
+def _contents(h5: Path) -> tuple[str, set[str]]:
+    """The file's format tag and top-level groups (a Monte Carlo batch file has no tag)."""
+    with h5py.File(h5, "r") as f:
+        fmt = f.attrs.get("format", "")
+        return (fmt.decode() if isinstance(fmt, bytes) else str(fmt)), set(f)
+
+
 def report(run_dir: Path | str, console: Console | None = None) -> list[Path]:
-    """Redraw all plots of a run into ``run_dir/plots/`` and print its summary again.
+    """Redraw all figures of a run into ``run_dir/plots/`` and print its summary again.
 
     Parameters
     ----------
@@ -33,11 +57,9 @@ def report(run_dir: Path | str, console: Console | None = None) -> list[Path]:
     FileNotFoundError
         If ``run_dir`` does not exist or holds no ``savant.h5``.
     OSError
-        If ``savant.h5`` is not a readable savant run file
+        If ``savant.h5`` is not a readable savant file
         (:class:`savant_cli.io.hdf5.RunFileError` or an h5py error).
     """
-    from savant_cli.plots.ascent import plot_ascent  # matplotlib only when drawing
-
     run_dir = Path(run_dir)
     if not run_dir.is_dir():
         raise FileNotFoundError(f"run folder {run_dir} does not exist")
@@ -46,7 +68,41 @@ def report(run_dir: Path | str, console: Console | None = None) -> list[Path]:
         raise FileNotFoundError(
             f"no {RUN_FILE} in {run_dir}: not a savant run folder, or the run was made "
             f"with output.hdf5=false")
-    record = read_run(h5)
-    paths = plot_ascent(record, run_dir / PLOTS_DIR)
-    print_run_summary(record.summary, record.status, record.message, console)
+    console = console or Console()
+    fmt, groups = _contents(h5)
+    folder = run_dir / PLOTS_DIR
+    paths: list[Path] = []
+    if fmt == FORMAT:
+        from savant_cli.plots.ascent import plot_ascent  # matplotlib only when drawing
+
+        record = read_run(h5)
+        paths += plot_ascent(record, folder)
+        print_run_summary(record.summary, record.status, record.message, console)
+    elif fmt != STUDY_FORMAT and "montecarlo" not in groups:
+        raise RunFileError(f"{h5} is not a savant run file (format attribute {fmt!r})")
+    if "linear" in groups:
+        from savant_cli.linear.store import read_linear_group
+        from savant_cli.studies.linear import draw_linear
+
+        charts, rows, requirements, zones = read_linear_group(h5)
+        paths += draw_linear(charts, rows, requirements, zones, folder)
+    if "flex_sweep" in groups:
+        from savant_cli.studies import flex_sweep
+
+        paths += flex_sweep.draw(*flex_sweep.read_group(h5), folder)
+    if "montecarlo" in groups:
+        from savant_cli.montecarlo.results import redraw
+
+        paths += redraw(run_dir)
+    if "flyoff" in groups:
+        from savant_cli.studies import flyoff
+
+        paths += flyoff.draw(*flyoff.read_group(h5), folder)
+    if "mode_retention" in groups:
+        from savant_cli.studies import mode_retention
+
+        paths += mode_retention.draw(mode_retention.read_group(h5), folder)
+    studies = sorted(groups & {"linear", "flex_sweep", "montecarlo", "flyoff", "mode_retention"})
+    if studies:
+        console.print(f"redrawn from {RUN_FILE}: {', '.join(studies)}")
     return paths

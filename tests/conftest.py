@@ -38,3 +38,30 @@ def imported_names(path) -> list[str]:
     tree = ast.parse(Path(path).read_text(encoding="utf-8"))
     names = [a.name for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names]
     return names + [f"{n.module}.{a.name}" for n in ast.walk(tree) if isinstance(n, ast.ImportFrom) for a in n.names]
+
+
+def assert_report_redraws(run_dir) -> list[str]:
+    """``savant report`` on a finished study: with the study's own ``plots/`` moved away,
+    it draws every figure again from ``savant.h5`` alone, byte for byte the same PNGs
+    (same names, same pixels), and nothing else. Returns the relative names."""
+    import shutil
+    from pathlib import Path
+
+    from rich.console import Console
+
+    from savant_cli.report import report
+
+    run_dir = Path(run_dir)
+    first = run_dir.parent / f"{run_dir.name}_plots_as_drawn"
+    shutil.move(run_dir / "plots", first)
+    try:
+        paths = report(run_dir, console=Console(file=open("/dev/null", "w")))
+        drawn = sorted(str(p.relative_to(first)) for p in first.rglob("*.png"))
+        again = sorted(str(p.relative_to(run_dir / "plots")) for p in (run_dir / "plots").rglob("*.png"))
+        assert again == drawn, (set(drawn) ^ set(again))
+        assert sorted(str(p.relative_to(run_dir / "plots")) for p in paths) == drawn
+        for name in drawn:
+            assert (first / name).read_bytes() == (run_dir / "plots" / name).read_bytes(), name
+        return drawn
+    finally:
+        shutil.rmtree(first, ignore_errors=True)

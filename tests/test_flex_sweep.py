@@ -18,6 +18,7 @@ from savant_cli.sim.run import simulate
 from savant_cli.sim.setup import prepare
 from savant_cli.studies.flex_sweep import variant
 from savant_cli.studies.linear import analyse
+from conftest import assert_report_redraws
 from test_end_to_end import run
 
 T = 55.0
@@ -100,5 +101,6 @@ def test_flex_sweep_end_to_end(tmp_path):
     for t in ("0055.0", "0180.0"):
         for prm in ("frequency", "shape"):
             assert (out / "plots" / "flex_sweep" / f"nichols_pitch_{prm}_t{t}.png").is_file()
+    assert "flex_sweep/nichols_pitch_shape_t0180.0.png" in assert_report_redraws(out)
     off = run(["run", "study=flex_sweep", "flex=off", f"hydra.run.dir={tmp_path}/off"], cwd=tmp_path)
     assert off.returncode == 2 and "flex=on" in off.stderr + off.stdout  # the user's flex=off is refused

@@ -16,6 +16,7 @@ from savant_cli.config import validate
 from savant_cli.errors import ConfigError
 from savant_cli.paths import shipped_config_dir
 from savant_cli.studies.flyoff import METRICS, _controllers, compare
+from conftest import assert_report_redraws
 from test_end_to_end import run
 
 
@@ -72,6 +73,8 @@ def test_flyoff_end_to_end(tmp_path):
         assert not np.allclose(ga, gb, equal_nan=True)  # different controllers fly differently
     assert (out / "plots" / "flyoff_histograms.png").is_file()
     assert (out / "plots" / "flyoff_attitude_error_pitch.png").is_file()
+    assert "flyoff_histograms.png" in assert_report_redraws(out)
+    assert "histograms_01.png" in assert_report_redraws(out / "larc_pd")  # one controller's batch
     bad = run(["run", "study=flyoff", "study.controllers=[msfc_pid,nope]", f"hydra.run.dir={tmp_path}/bad"],
               cwd=tmp_path)
     assert bad.returncode == 2 and "study.controllers[1]" in bad.stderr + bad.stdout

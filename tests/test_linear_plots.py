@@ -11,6 +11,7 @@ bending mode's phase crossings).
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import subprocess
 import sys
@@ -22,7 +23,11 @@ import control as ct
 import numpy as np
 import pytest
 
+import h5py
+
 from conftest import PYPLOT_STUB, imported_names
+from savant_cli.linear import charts as chart_data
+from savant_cli.linear.store import read_charts, write_charts
 from savant_cli.plots import linear
 from savant_cli.plots.linear import (
     MarginRow,
@@ -134,7 +139,14 @@ def system():
 @pytest.fixture(scope="module")
 def responses(system):
     loops, _, rows = system
-    return [linear._loop_response(a, loops[a], rows) for a in ("pitch", "yaw")]
+    return [chart_data.loop_response(a, loops[a], (r.frequency_hz for r in rows if r.axis == a))
+            for a in ("pitch", "yaw")]
+
+
+@pytest.fixture(scope="module")
+def point(system):
+    loops, closed, rows = system
+    return chart_data.point_charts(55.0, loops, closed, rows)
 
 
 def test_test_loops_are_what_the_charts_expect(system):
@@ -150,27 +162,94 @@ def test_test_loops_are_what_the_charts_expect(system):
     assert any(r.kind == "phase" for r in rows)
 
 
-def test_plot_linear_point_writes_six_pngs(system, tmp_path):
-    loops, closed, rows = system
+def test_plot_linear_point_writes_six_pngs(system, point, tmp_path):
+    _, _, rows = system
     out = tmp_path / "charts"
-    paths = plot_linear_point(55.0, loops, closed, rows, out)
+    paths = plot_linear_point(point, rows, out)
     assert [p.name for p in paths] == [f"{k}_t0055.0.png" for k in KINDS]
     for p in paths:
         assert p.parent == out and p.read_bytes()[:8] == PNG_MAGIC
     assert sorted(f.name for f in out.iterdir()) == sorted(p.name for p in paths)  # no temporary files left
 
 
-def test_figures_reused_between_points_carry_nothing_over(system, tmp_path):
+def test_figures_reused_between_points_carry_nothing_over(system, point, tmp_path):
     """Charts keep their figure from one point to the next: drawing point A, then a
     different point B, then A again gives the same pixels as the first A."""
-    loops, closed, rows = system
-    first = plot_linear_point(55.0, loops, closed, rows, tmp_path / "a1")
+    _, _, rows = system
+    first = plot_linear_point(point, rows, tmp_path / "a1")
     other_loops, other_closed = build_system(yaw_mu_a=0.6)
-    plot_linear_point(80.0, other_loops, other_closed, margin_rows(other_loops, 80.0)[:2], tmp_path / "b",
-                      exclusion_zones=False)
-    again = plot_linear_point(55.0, loops, closed, rows, tmp_path / "a2")
+    other_rows = margin_rows(other_loops, 80.0)[:2]
+    other = chart_data.point_charts(80.0, other_loops, other_closed, other_rows)
+    # B's closed-loop poles sit 230 1/s farther left in the s-plane than A's (z/100 ↔
+    # s − ln(100)/dt): limits that B widened must not stay wide for A
+    pz = point.pzmap
+    other = dataclasses.replace(other, pzmap=chart_data.PoleZeroMap(pz.poles / 100.0, pz.zeros, pz.dt))
+    plot_linear_point(other, other_rows, tmp_path / "b", exclusion_zones=False)
+    again = plot_linear_point(point, rows, tmp_path / "a2")
     for p, q in zip(first, again):
         assert p.read_bytes() == q.read_bytes(), p.name
+
+
+def test_chart_data_survives_the_run_file(system, point, tmp_path):
+    """What ``savant report`` draws: the chart data written into HDF5 and read back is
+    the same data, and draws the same pixels."""
+    _, _, rows = system
+    with h5py.File(tmp_path / "c.h5", "w") as f:
+        write_charts(f.create_group("charts", track_order=True), point)
+    with h5py.File(tmp_path / "c.h5", "r") as f:
+        back = read_charts(f["charts"])
+    assert back.time_s == point.time_s
+    assert [lp.label for lp in back.loops] == ["pitch", "yaw"]
+    for a, b in zip(point.loops + point.root_loci, back.loops + back.root_loci):
+        for name in a.__dataclass_fields__:
+            x, y = getattr(a, name), getattr(b, name)
+            assert (np.array_equal(x, y) if isinstance(x, np.ndarray) else x == y), name
+    assert np.array_equal(back.pzmap.poles, point.pzmap.poles) and back.pzmap.dt == DT
+    assert back.responses.outputs == point.responses.outputs and np.array_equal(back.responses.ramp,
+                                                                                 point.responses.ramp)
+    first = plot_linear_point(point, rows, tmp_path / "direct")
+    again = plot_linear_point(back, rows, tmp_path / "reread")
+    for p, q in zip(first, again):
+        assert p.read_bytes() == q.read_bytes(), p.name
+
+
+def test_command_responses_against_a_hand_simulation(system, point):
+    """The step response against x[k+1] = A x[k] + B u[k] stepped by hand; the unit-area
+    pulse response is (s[k] − s[k−1]) / dt and the ramp response dt Σ_{i<k} s[i], both
+    consequences of linearity and time invariance."""
+    _, closed, _ = system
+    rs = point.responses
+    assert rs.commands == ("pitch_command", "yaw_command")
+    assert set(rs.outputs) == {"pitch_attitude", "yaw_attitude", "pitch_gimbal", "yaw_gimbal"}
+    n = rs.time_s.size
+    assert rs.time_s[1] == pytest.approx(DT) and rs.time_s[-1] == pytest.approx(chart_data.RESPONSE_DURATION_S)
+    for i, cmd in enumerate(rs.commands):
+        sub = closed[[closed.find_output(o) for o in rs.outputs], [closed.find_input(cmd)]]
+        x = np.zeros(sub.nstates)
+        y = np.empty((len(rs.outputs), n))
+        for k in range(n):
+            y[:, k] = sub.C @ x + sub.D[:, 0]
+            x = sub.A @ x + sub.B[:, 0]
+        np.testing.assert_allclose(rs.step[:, i], y, atol=1e-9)
+        pulse = np.diff(np.concatenate([np.zeros((len(rs.outputs), 1)), y], axis=1), axis=1) / DT
+        np.testing.assert_allclose(rs.impulse[:, i], pulse, atol=1e-7)
+        ramp = DT * np.concatenate([np.zeros((len(rs.outputs), 1)), np.cumsum(y, axis=1)[:, :-1]], axis=1)
+        np.testing.assert_allclose(rs.ramp[:, i], ramp, atol=1e-9)
+    j = rs.outputs.index("pitch_attitude")
+    assert rs.step[j, 0, -1] == pytest.approx(1.0, abs=0.1)  # tracks the step
+
+
+def test_pole_zero_map_of_the_closed_loop(system, point):
+    _, closed, _ = system
+    pz = point.pzmap
+    assert pz.dt == DT
+    np.testing.assert_allclose(np.sort_complex(pz.poles), np.sort_complex(np.linalg.eigvals(closed.A)), atol=1e-9)
+    np.testing.assert_allclose(pz.s_poles, np.log(pz.poles) / DT)
+    assert pz.zeros.size >= 4  # the PID and flex-filter zeros of both axes
+    for z in pz.zeros:  # transmission zeros of commands → attitudes: the system matrix loses rank
+        sub = closed[[closed.find_output("pitch_attitude"), closed.find_output("yaw_attitude")], [0, 1]]
+        rosenbrock = np.block([[z * np.eye(sub.nstates) - sub.A, -sub.B], [sub.C, sub.D]])
+        assert np.linalg.svd(rosenbrock, compute_uv=False)[-1] < 1e-6 * max(1.0, abs(z))
 
 
 def test_point_tag_and_margin_row():
@@ -234,22 +313,28 @@ def test_resonance_is_resolved(system, responses):
     assert lp.mag_db[near].min() == pytest.approx(dense.min(), abs=0.5)
 
 
-def test_root_locus_closed_loop_poles_at_nominal_gain(system):
+def test_root_locus_closed_loop_poles_at_nominal_gain(system, point):
     loops, closed, _ = system
     loop = loops["pitch"]
-    gains = linear.ROOT_LOCUS_GAINS
-    loci = linear._root_locus(loop, gains)
-    assert loci.shape == (gains.size, loop.nstates) and 1.0 in gains
-    exact = ct.feedback(loop, 1).poles()
-    at_one = loci[int(np.argmin(np.abs(gains - 1.0)))]
-    assert max(np.min(np.abs(at_one - p)) for p in exact) < 1e-9
-    assert np.max(np.abs(at_one)) < 1.0  # and the closed loop is stable, as closed.poles() says
+    gains = chart_data.ROOT_LOCUS_GAINS
+    rl = point.root_loci[0]
+    assert rl.label == "pitch" and np.array_equal(rl.gains, gains)
+    assert rl.branches.shape == (gains.size, loop.nstates) and 1.0 in gains
+    # the closed loop of 1 + k L = 0 at every gain: eigenvalues of A − k B C / (1 + k D)
+    for i in (0, gains.size // 2, gains.size - 1):
+        k = gains[i]
+        a_cl = loop.A - k * loop.B @ loop.C / (1.0 + k * loop.D[0, 0])
+        exact = np.linalg.eigvals(a_cl)
+        assert max(np.min(np.abs(rl.branches[i] - p)) for p in exact) < 1e-8
+    assert np.max(np.abs(rl.nominal)) < 1.0  # and the closed loop is stable, as closed.poles() says
     assert np.max(np.abs(closed.poles())) < 1.0
+    # branches are continuous: each pole moves less between successive gains than to any other
+    steps = np.abs(np.diff(rl.branches, axis=0))
+    assert np.all(steps.max(axis=0) < 0.5)
 
 
-def test_response_and_pzmap_figures(system):
-    _, closed, _ = system
-    fig = linear._response_figure(55.0, closed)
+def test_response_and_pzmap_figures(point):
+    fig = linear._response_figure(55.0, point.responses)
     assert len(fig.axes) == 6 and fig.legends and "55.0 s" in fig._suptitle.get_text()
     lefts, rights = fig.axes[:3], fig.axes[3:]  # attitude, and gimbal on twin axes
     assert all("attitude (deg)" in ax.get_ylabel() for ax in lefts)
@@ -257,16 +342,16 @@ def test_response_and_pzmap_figures(system):
     assert "(s)" in lefts[-1].get_xlabel()
     step_attitude = lefts[0].lines[1].get_ydata()  # after the dashed command
     assert step_attitude[-1] == pytest.approx(1.0, abs=0.1)  # tracks the 1° step
-    fig = linear._pzmap_figure(55.0, closed)
+    fig = linear._pzmap_figure(55.0, point.pzmap)
     assert fig.legends and "Re z" in fig.axes[0].get_xlabel() and "Hz" in fig.axes[1].get_ylabel()
 
 
 def test_bad_loops_are_refused(system, tmp_path):
     _, closed, rows = system
     with pytest.raises(ValueError, match="at least one loop"):
-        plot_linear_point(1.0, {}, closed, rows, tmp_path)
+        chart_data.point_charts(1.0, {}, closed, rows)
     with pytest.raises(ValueError, match="SISO"):
-        plot_linear_point(1.0, {"pitch": closed}, closed, rows, tmp_path)
+        chart_data.point_charts(1.0, {"pitch": closed}, closed, rows)
     assert not list(tmp_path.iterdir())
 
 
@@ -302,6 +387,7 @@ def test_no_pyplot(tmp_path):
         import warnings
         from pathlib import Path
         import control as ct
+        from savant_cli.linear.charts import point_charts
         from savant_cli.plots.linear import MarginRow, plot_linear_point, plot_margin_envelope
         warnings.simplefilter("ignore")
         plant = ct.c2d(ct.ss([[0, 1], [0.4, 0]], [[0], [1.2]], [[1, 0], [0, 1]], [[0], [0]]), 0.02, "zoh")
@@ -310,7 +396,7 @@ def test_no_pyplot(tmp_path):
         closed = ct.ss(cl.A, cl.B, cl.C, cl.D, 0.02, inputs=["pitch_command"], outputs=["pitch_attitude"])
         rows = [MarginRow(1.0, "pitch", "phase", 45.0, 0.3, "rigid/aero")]
         out = Path({str(tmp_path)!r})
-        plot_linear_point(1.0, {{"pitch": loop}}, closed, rows, out)
+        plot_linear_point(point_charts(1.0, {{"pitch": loop}}, closed, rows), rows, out)
         plot_margin_envelope(rows, out / "env.png")
         print(len(list(out.glob("*.png"))))
     """)
@@ -319,3 +405,13 @@ def test_no_pyplot(tmp_path):
                          timeout=120)
     assert res.returncode == 0, res.stderr
     assert res.stdout.strip() == "7"
+
+
+def test_plot_modules_only_draw():
+    """Physics out of the plots: no plot module imports python-control, scipy or the
+    simulation; what they draw is computed elsewhere (linear/, the studies)."""
+    for path in sorted((ROOT / "savant_cli" / "plots").glob("*.py")):
+        names = imported_names(path)
+        bad = [n for n in names if n.split(".")[0] in ("control", "scipy", "numba")
+               or n.startswith(("savant_cli.sim", "savant_cli.models", "savant_cli.studies"))]
+        assert not bad, (path.name, bad)

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 from scipy.io import loadmat
 
+from conftest import assert_report_redraws
 from test_end_to_end import run
 
 pytestmark = pytest.mark.slow
@@ -42,6 +43,16 @@ def test_margins_csv_summary_console_and_charts(linear_run):
         for t in (55.0, 180.0):
             assert f"{kind}_{point_tag(t)}.png" in charts
     assert "margin_envelope.png" in charts
+
+
+def test_report_redraws_the_linear_charts(linear_run):
+    run_dir, _ = linear_run
+    drawn = assert_report_redraws(run_dir)
+    assert "linear/rootlocus_t0180.0.png" in drawn and "altitude_mach.png" in drawn
+    with h5py.File(run_dir / "savant.h5") as f:  # the chart data an analyst can read
+        g = f["linear/t055000/charts"]
+        assert g["loop_pitch/f_hz"][0] == pytest.approx(0.01) and g["loop_pitch/response"].dtype.kind == "c"
+        assert g["root_locus_yaw/branches"].shape[1] == f["linear/t055000/open_yaw/A"].shape[0]
 
 
 def test_reloaded_point_reproduces_the_margin_table(linear_run):

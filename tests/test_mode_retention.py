@@ -11,6 +11,7 @@ import pytest
 from conftest import compose_config
 from savant_cli.config import validate
 from savant_cli.studies.mode_retention import CountResult, _config, _margin_change, _response_change, recommend
+from conftest import assert_report_redraws
 from test_end_to_end import run
 
 
@@ -58,6 +59,7 @@ def test_mode_retention_end_to_end(tmp_path):
     assert summary["recommended_n_modes"] in (0, 1, 2)
     assert (out / "mode_retention.csv").is_file() and (out / "plots" / "mode_retention_margins.png").is_file()
     assert (out / "plots" / "mode_retention_t55_pitch_attitude.png").is_file()
+    assert "mode_retention_margins.png" in assert_report_redraws(out)
     bad = run(["run", "study=mode_retention", "study.max_modes=40", "study.times=[55]",
                f"hydra.run.dir={tmp_path}/bad"], cwd=tmp_path)
     assert bad.returncode == 2 and "study.max_modes" in bad.stderr + bad.stdout

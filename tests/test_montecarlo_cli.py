@@ -11,6 +11,7 @@ import h5py
 import numpy as np
 import pytest
 
+from conftest import assert_report_redraws
 from test_end_to_end import run
 
 pytestmark = pytest.mark.slow
@@ -45,6 +46,8 @@ def test_single_batch_writes_every_output(batches):
         assert (out / name).is_file(), name
     summary = json.loads((out / "summary.json").read_text())
     assert summary["n_runs_present"] == 6 and summary["status_counts"] == {"complete": 6}
+    drawn = assert_report_redraws(out)
+    assert {"histograms_01.png", "envelope_dynamic_pressure.png", "dispersions/histograms_01.png"} <= set(drawn)
     rows = {r["variable"]: r for r in csv.DictReader(open(out / "minmax.csv"))}
     q, runs, _ = _tables(out / "savant.h5")
     k = "max_dynamic_pressure_Pa"

@@ -17,6 +17,11 @@ Layout (``format = "savant-run"``, ``format_version = 1``)::
                               str). A value of None is stored as NaN and its key listed
                               in the string-array attr ``__none__``.
 
+A study that has no single flight to store (``study=mode_retention``, ``study=flyoff``)
+writes its ``savant.h5`` with :func:`write_study_file` instead: root attrs ``format =
+"savant-study"``, ``format_version``, ``study`` and the provenance, ``/config``, and the
+study's own group.
+
 Signal order and summary order are preserved (groups are created with creation-order
 tracking). Datasets that are 2-D or longer than 1,024 samples are chunked and compressed
 with the shuffle filter and gzip level 4. The file is written through
@@ -40,6 +45,8 @@ from savant_cli.io.record import RunRecord, Signal
 
 FORMAT = "savant-run"
 FORMAT_VERSION = 1
+#: Format tag of a study file without a time history (:func:`write_study_file`).
+STUDY_FORMAT = "savant-study"
 
 #: Root attributes that are not provenance.
 RESERVED_ROOT_ATTRS = ("format", "format_version", "complete", "status", "message")
@@ -196,6 +203,34 @@ def write_run(path: Path | str, record: RunRecord, extra=None) -> None:
             _write_summary(f.create_group("summary", track_order=True), record.summary)
             if extra is not None:
                 extra(f)
+
+
+def write_study_file(path: Path | str, study: str, config_yaml: str, provenance: dict[str, Any], fill) -> None:
+    """Write a study's ``savant.h5`` that holds no time history, atomically.
+
+    Parameters
+    ----------
+    path : pathlib.Path or str
+        Destination (directory created if missing).
+    study : str
+        The study's name (root attribute ``study``).
+    config_yaml : str
+        The resolved config (dataset ``/config``).
+    provenance : dict
+        Provenance entries, one string root attribute each.
+    fill : callable
+        ``fill(h5py.File)`` writes the study's own groups inside the same atomic write.
+    """
+    with atomic_path(Path(path)) as tmp:
+        with h5py.File(tmp, "w", track_order=True) as f:
+            f.attrs["format"] = STUDY_FORMAT
+            f.attrs["format_version"] = np.int64(FORMAT_VERSION)
+            f.attrs["study"] = study
+            for key, value in provenance.items():
+                if key not in RESERVED_ROOT_ATTRS:
+                    f.attrs[key] = "" if value is None else str(value)
+            f.create_dataset("config", data=str(config_yaml), dtype=_STR)
+            fill(f)
 
 
 def _as_str(value: Any) -> str:

@@ -6,17 +6,29 @@ continuous), ``states``, ``inputs``, ``outputs`` (names), ``time_s``; ``<point>`
 ``t<time in ms>`` (e.g. ``t055000``); systems: ``plant_continuous``, ``plant`` (discrete,
 with the gyro dynamics), ``controller``, ``open_pitch`` and ``open_yaw`` (loop at a time,
 the other axis closed), ``open_pitch_only`` and ``open_yaw_only`` (other axis open),
-``open_mimo`` (2x2), ``closed_loop``. ``linear/margins`` is the margin table.
+``open_mimo`` (2x2), ``closed_loop``. ``linear/margins`` is the margin table, with the
+requirement set as attribute ``requirements`` (JSON: band → [gain dB, phase deg]) and the
+chart option ``exclusion_zones``.
+
+Chart data (:mod:`savant_cli.linear.charts`) of a point, when the study drew or was asked
+to keep its charts, sits in ``linear/<point>/charts``: ``loop_<axis>/{f_hz, response,
+mag_db, phase_deg}``, ``root_locus_<axis>/{gains, branches, poles, zeros}`` (attribute
+``dt``), ``pzmap/{poles, zeros}`` (attribute ``dt``) and ``responses/{time_s, step,
+impulse, ramp}`` (attributes ``commands``, ``outputs``). Complex arrays are HDF5
+compound (r, i) datasets, which h5py reads back as complex. ``savant report`` redraws the
+charts from there.
 """
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import control as ct
 import h5py
 import numpy as np
 
+from savant_cli.linear.charts import CommandResponses, LoopResponse, PointCharts, PoleZeroMap, RootLocus
 from savant_cli.linear.loops import LinearPoint
 from savant_cli.linear.margins import MarginRow
 
@@ -44,14 +56,36 @@ def _names(labels) -> np.ndarray:
     return np.array([str(s) for s in labels], dtype=object)
 
 
-def write_linear_group(f: h5py.File, points: list[LinearPoint], rows: list[MarginRow]) -> None:
-    """Write every point's systems and the margin table into ``f["linear"]``."""
+def write_linear_group(f: h5py.File, points: list[LinearPoint], rows: list[MarginRow],
+                       charts: dict[float, PointCharts] | None = None,
+                       requirements: dict[str, tuple[float, float]] | None = None,
+                       exclusion_zones: bool = True) -> None:
+    """Write every point's systems, chart data and the margin table into ``f["linear"]``.
+
+    Parameters
+    ----------
+    f : h5py.File
+        The run file, open for writing.
+    points : list of LinearPoint
+        The operating points' systems.
+    rows : list of MarginRow
+        The margin table of all points.
+    charts : dict of float to PointCharts, optional
+        Chart data by point time (s); points without an entry get no ``charts`` group.
+    requirements : dict of str to (float, float), optional
+        Band → (gain margin dB, phase margin deg) the charts mark.
+    exclusion_zones : bool
+        Whether the Nichols charts draw the exclusion zones.
+    """
     g = f.create_group("linear", track_order=True)
     g.attrs["note"] = "roll (on/off jets) is not part of the linear analysis"
+    charts = charts or {}
     for pt in points:
         pg = g.create_group(point_key(pt.time_s), track_order=True)
         pg.attrs["time_s"] = pt.time_s
         pg.attrs["phase"] = pt.phase
+        if pt.time_s in charts:
+            write_charts(pg.create_group("charts", track_order=True), charts[pt.time_s])
         for name, sys in systems(pt).items():
             sg = pg.create_group(name)
             for m in ("A", "B", "C", "D"):
@@ -61,12 +95,90 @@ def write_linear_group(f: h5py.File, points: list[LinearPoint], rows: list[Margi
                                  ("outputs", sys.output_labels)):
                 sg.create_dataset(attr, data=_names(labels), dtype=_STR)
     mg = g.create_group("margins")
+    mg.attrs["exclusion_zones"] = bool(exclusion_zones)
+    mg.attrs["requirements"] = json.dumps({band: list(req) for band, req in (requirements or {}).items()})
     for col in MARGIN_COLUMNS:
         vals = [getattr(r, col) for r in rows]
         if col in ("axis", "kind", "band"):
             mg.create_dataset(col, data=_names(vals), dtype=_STR)
         else:
             mg.create_dataset(col, data=np.asarray(vals, dtype=np.float64))
+
+
+def write_loop_response(g: h5py.Group, lp: LoopResponse) -> None:
+    """One loop's frequency response into group ``g`` (attribute ``label``)."""
+    g.attrs["label"] = lp.label
+    for name in ("f_hz", "response", "mag_db", "phase_deg"):
+        g.create_dataset(name, data=getattr(lp, name))
+
+
+def read_loop_response(g: h5py.Group) -> LoopResponse:
+    """The frequency response written by :func:`write_loop_response`."""
+    return LoopResponse(str(g.attrs["label"]), *(g[n][()] for n in ("f_hz", "response", "mag_db", "phase_deg")))
+
+
+def write_charts(g: h5py.Group, charts: PointCharts) -> None:
+    """Write one point's chart data into group ``g`` (layout in the module notes)."""
+    g.attrs["time_s"] = charts.time_s
+    for lp in charts.loops:
+        write_loop_response(g.create_group(f"loop_{lp.label}"), lp)
+    for rl in charts.root_loci:
+        rg = g.create_group(f"root_locus_{rl.label}")
+        rg.attrs["dt"] = 0.0 if rl.dt is None else rl.dt
+        for name in ("gains", "branches", "poles", "zeros"):
+            rg.create_dataset(name, data=getattr(rl, name))
+    pz = g.create_group("pzmap")
+    pz.attrs["dt"] = 0.0 if charts.pzmap.dt is None else charts.pzmap.dt
+    pz.create_dataset("poles", data=charts.pzmap.poles)
+    pz.create_dataset("zeros", data=charts.pzmap.zeros)
+    rs = charts.responses
+    tg = g.create_group("responses")
+    tg.attrs["commands"] = list(rs.commands)
+    tg.attrs["outputs"] = list(rs.outputs)
+    for name in ("time_s", "step", "impulse", "ramp"):
+        tg.create_dataset(name, data=getattr(rs, name))
+
+
+def _strs(values) -> tuple[str, ...]:
+    return tuple(v.decode() if isinstance(v, bytes) else str(v) for v in values)
+
+
+def _dt(attr: float) -> float | None:
+    return float(attr) if attr > 0 else None
+
+
+def read_charts(g: h5py.Group) -> PointCharts:
+    """The chart data written by :func:`write_charts`."""
+    labels = [k.removeprefix("loop_") for k in g if k.startswith("loop_")]
+    loops = tuple(read_loop_response(g[f"loop_{a}"]) for a in labels)
+    loci = tuple(RootLocus(a, *(g[f"root_locus_{a}/{n}"][()] for n in ("gains", "branches", "poles", "zeros")),
+                           _dt(g[f"root_locus_{a}"].attrs["dt"])) for a in labels)
+    pz = PoleZeroMap(g["pzmap/poles"][()], g["pzmap/zeros"][()], _dt(g["pzmap"].attrs["dt"]))
+    tg = g["responses"]
+    rs = CommandResponses(tg["time_s"][()], _strs(tg.attrs["commands"]), _strs(tg.attrs["outputs"]),
+                          tg["step"][()], tg["impulse"][()], tg["ramp"][()])
+    return PointCharts(float(g.attrs["time_s"]), loops, loci, pz, rs)
+
+
+def read_margins(g: h5py.Group) -> tuple[list[MarginRow], dict[str, tuple[float, float]], bool]:
+    """The margin table of a ``linear`` (or flex-sweep case) group, its requirement set
+    (band → gain dB, phase deg) and its ``exclusion_zones`` option."""
+    mg = g["margins"]
+    cols = {c: (mg[c].asstr()[()] if c in ("axis", "kind", "band") else mg[c][()]) for c in MARGIN_COLUMNS}
+    rows = [MarginRow(float(t), str(a), str(k), float(v), float(fz), str(b))
+            for t, a, k, v, fz, b in zip(*(cols[c] for c in MARGIN_COLUMNS))]
+    req = {band: (float(v[0]), float(v[1])) for band, v in json.loads(mg.attrs.get("requirements", "{}")).items()}
+    return rows, req, bool(mg.attrs.get("exclusion_zones", True))
+
+
+def read_linear_group(path: Path | str) -> tuple[list[PointCharts], list[MarginRow], dict[str, tuple[float, float]], bool]:
+    """What ``savant report`` draws of a linear study: the chart data of every point that
+    has it (in time order), the margin table, the requirements and ``exclusion_zones``."""
+    with h5py.File(path, "r") as f:
+        g = f["linear"]
+        charts = [read_charts(g[k]["charts"]) for k in g if k != "margins" and "charts" in g[k]]
+        rows, req, zones = read_margins(g)
+    return sorted(charts, key=lambda c: c.time_s), rows, req, zones
 
 
 def load_point(path: Path | str, time_s: float, system: str = "open_pitch") -> ct.StateSpace:

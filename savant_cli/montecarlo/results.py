@@ -112,7 +112,7 @@ def _write_tables(h5: h5py.Group, inv: Inventory, runs: list[int], history_names
     margins = []
     hist = None
     if history_names:
-        hg = h5.create_group("histories")
+        hg = h5.create_group("histories", track_order=True)
         hg.create_dataset("time", data=history_time)
         hist = {name: hg.create_dataset(name, shape=(n, history_time.size), dtype="f4", fillvalue=np.nan,
                                         chunks=(1, history_time.size), compression="gzip", compression_opts=1)
@@ -209,7 +209,8 @@ def write_outputs(out_dir: Path, inv: Inventory, expected: list[int], dispersion
         g = f.create_group("montecarlo")
         g.attrs.update({"n_runs_expected": len(expected), "n_runs_present": len(runs), "seed": inv.manifest.get("seed", -1),
                         "config_yaml": config_yaml, "percentiles": PERCENTILES,
-                        "missing_runs": ranges_text(missing)})
+                        "missing_runs": ranges_text(missing),
+                        "requirements": json.dumps({b: list(r) for b, r in (requirements or {}).items()})})
         for k, v in provenance.items():
             g.attrs[f"provenance_{k}"] = str(v)
         tb = _write_tables(g, inv, runs, history_names, history_time)
@@ -222,11 +223,11 @@ def write_outputs(out_dir: Path, inv: Inventory, expected: list[int], dispersion
         eg = g.create_group("events")
         for j, name in enumerate(EVENT_NAMES):
             eg.create_dataset(f"{name}_s", data=tb.events[:, j])
-        dg = g.create_group("dispersions")
+        dg = g.create_group("dispersions", track_order=True)
         for j, d in enumerate(dispersions):
             ds = dg.create_dataset(d["name"], data=tb.values[:, j])
             ds.attrs.update({k: json.dumps(v) if isinstance(v, (list, tuple)) else v for k, v in d.items() if k != "name"})
-        sg = g.create_group("summary")
+        sg = g.create_group("summary", track_order=True)
         for j, k in enumerate(tb.summary_keys):
             sg.create_dataset(k, data=tb.summary[:, j])
         mg = g.create_group("margins")
@@ -260,33 +261,67 @@ def write_outputs(out_dir: Path, inv: Inventory, expected: list[int], dispersion
     return summary
 
 
+def read_tables(g: h5py.Group) -> Tables:
+    """The scalar tables of a batch's ``montecarlo`` group (as :func:`write_outputs` wrote
+    them; margins re-coded)."""
+    summary_keys = list(g["summary"])
+    runs = g["runs/run"][()]
+    m = g["margins"]
+    margins = np.zeros((0, 7))
+    if m["run"].size:
+        codes = [np.array([names.index(s) for s in m[col].asstr()[()]], dtype=float)
+                 for col, names in (("axis", AXIS_CODES), ("kind", KIND_CODES), ("band", BAND_CODES))]
+        margins = np.column_stack([m["run"][()], m["time_s"][()], *codes, m["value"][()], m["frequency_hz"][()]])
+    return Tables(runs, list(g["runs/status"].asstr()[()]), list(g["runs/message"].asstr()[()]),
+                  g["runs/t_final_s"][()], g["runs/wall_time_s"][()],
+                  np.column_stack([ds[()] for ds in g["dispersions"].values()]) if len(g["dispersions"])
+                  else np.zeros((runs.size, 0)),
+                  summary_keys, np.column_stack([g["summary"][k][()] for k in summary_keys]) if summary_keys
+                  else np.zeros((runs.size, 0)),
+                  np.column_stack([g["events"][f"{n}_s"][()] for n in EVENT_NAMES]),
+                  margins, [k for k in g["histories"] if k != "time"] if "histories" in g else [])
+
+
+def redraw(out_dir: Path) -> list[Path]:
+    """Redraw a batch's plots into ``out_dir/plots`` from its ``savant.h5`` alone."""
+    with h5py.File(out_dir / "savant.h5", "r") as f:
+        g = f["montecarlo"]
+        tb = read_tables(g)
+        dispersions = [{"name": k, "units": str(ds.attrs.get("units", ""))} for k, ds in g["dispersions"].items()]
+        requirements = {b: (float(r[0]), float(r[1])) for b, r in json.loads(g.attrs.get("requirements", "{}")).items()}
+    return _plots(out_dir, tb, dispersions, requirements or None)
+
+
 def _plots(out_dir: Path, tb: Tables, dispersions: list[dict[str, Any]],
-           requirements: dict[str, tuple[float, float]] | None) -> None:
+           requirements: dict[str, tuple[float, float]] | None) -> list[Path]:
     from savant_cli.plots import montecarlo as mcp
 
     folder = out_dir / "plots"
+    paths = []
     ok = tb.ok
     nominal_row = np.nonzero(tb.runs == 0)[0]
     values = {k: tb.summary[ok, j] for j, k in enumerate(tb.summary_keys)}
     units = {k: split_unit(k)[1] for k in tb.summary_keys}
     nominal = {k: float(tb.summary[nominal_row[0], j]) for j, k in enumerate(tb.summary_keys)} if nominal_row.size else None
-    mcp.plot_histograms(values, folder, units=units, nominal=nominal)
+    paths += mcp.plot_histograms(values, folder, units=units, nominal=nominal)
     disp = {d["name"]: tb.values[tb.runs > 0, j] for j, d in enumerate(dispersions)}
     if disp:
-        mcp.plot_histograms(disp, folder / "dispersions", units={d["name"]: d.get("units", "") for d in dispersions})
+        paths += mcp.plot_histograms(disp, folder / "dispersions",
+                                     units={d["name"]: d.get("units", "") for d in dispersions})
     if tb.history_names:
         with h5py.File(out_dir / "savant.h5", "r") as f:
             hg = f["montecarlo/histories"]
             t = hg["time"][()]
             for name in tb.history_names:  # one signal in memory at a time
-                mcp.plot_envelopes(t, {name: hg[name][()]}, folder, units=None)
+                paths += mcp.plot_envelopes(t, {name: hg[name][()]}, folder, units=None)
     if tb.margins.size:
         m = tb.margins
         table = {"run": m[:, 0].astype(int), "time_s": m[:, 1],
                  "axis": np.array([AXIS_CODES[int(c)] for c in m[:, 2]]),
                  "kind": np.array([KIND_CODES[int(c)] for c in m[:, 3]]),
                  "band": np.array([BAND_CODES[int(c)] for c in m[:, 4]]), "value": m[:, 5], "frequency_hz": m[:, 6]}
-        mcp.plot_margin_spread(table, folder / "margin_spread.png", requirements=requirements)
+        paths.append(mcp.plot_margin_spread(table, folder / "margin_spread.png", requirements=requirements))
+    return paths
 
 
 def print_tables(console: Console, stats: list[dict], spread: list[dict], counts: dict[str, int],

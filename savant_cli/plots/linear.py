@@ -1,12 +1,11 @@
 """Charts of the frequency-domain stability study (the analogues of the Simulink Control
 Design / Control System Toolbox charts of NASA's SAVANT tool).
 
-The study linearizes the vehicle at a set of flight times and hands this module, per
-operating point, python-control objects and a margin table; this module only draws.
-Every control computation is python-control's: frequency responses
-(:func:`control.frequency_response`), poles and zeros (``sys.poles()``, ``sys.zeros()``),
-closed loops (:func:`control.feedback`) and time responses (:func:`control.step_response`,
-:func:`control.impulse_response`, :func:`control.forced_response`).
+This module only draws. The study computes, per operating point, the chart data of
+:mod:`savant_cli.linear.charts` (frequency responses, root loci, poles and zeros, time
+responses; the control computations and their conventions are documented there) and
+stores it in ``savant.h5``; these functions draw that data, whether it was just computed
+or read back by ``savant report``.
 
 Figures are drawn with matplotlib's object-oriented API on the Agg canvas
 (``matplotlib.figure.Figure`` + ``FigureCanvasAgg``): no pyplot, no GUI backend. Each
@@ -20,34 +19,18 @@ Files of one operating point (``tNNNN.N`` is ``f"t{time_s:06.1f}"``, e.g. ``t005
 - ``nichols_tNNNN.N.png``: gain (dB) vs phase (deg) of L, critical points, every margin
   marked and annotated with its value and frequency, optional exclusion zones;
 - ``nyquist_tNNNN.N.png``: L in the complex plane on a radius compressed beyond |L| = 1;
-- ``rootlocus_tNNNN.N.png``: closed-loop poles of 1 + k L = 0 for k in
-  :data:`ROOT_LOCUS_GAINS`, whole z-plane and a zoom near z = 1, the poles at k = 1 marked;
+- ``rootlocus_tNNNN.N.png``: closed-loop poles of 1 + k L = 0 over the gains of the data,
+  whole z-plane and a zoom near z = 1, the poles at k = 1 marked;
 - ``pzmap_tNNNN.N.png``: poles and zeros of the closed loop, z-plane and equivalent s-plane
   (σ in 1/s, frequency in Hz), stable / neutral / unstable poles coloured;
 - ``response_tNNNN.N.png``: closed-loop step, impulse and ramp responses of attitude
-  (left axis) and gimbal (right axis) to each attitude command, over 10 s.
+  (left axis) and gimbal (right axis) to each attitude command, in deg per deg.
 
-Conventions
------------
-*Open loop.* ``L`` is the SISO loop broken at one axis's actuator command with the other
-axis closed; the closed loop is ``L / (1 + L)`` (negative unity feedback), so the critical
-point is L = −1: 0 dB and −180° (mod 360°).
-
-*Frequency grid.* From :data:`F_MIN_HZ` to the Nyquist frequency ``1 / (2 dt)`` (25 Hz at
-50 Hz; :data:`F_MAX_CONTINUOUS_HZ` for a continuous loop): :data:`N_FREQUENCIES` log-spaced
-points, plus :data:`N_RESONANCE` points spread over ±8 half-power half-widths around the
-damped frequency of every pole and zero of L with damping ratio below
-:data:`RESONANCE_DAMPING` (a 0.5 % damped flex mode is 1 % wide; the log grid alone is
-0.4 % per point), plus the exact frequencies of the margin table, so the markers sit on
-the curves.
-
-*Phase.* The phase is unwrapped along the grid (continuous curve, no ±180° jumps), then
-shifted by a whole number of turns so that at the lowest-frequency gain crossover
-(|L| = 0 dB, the rigid-body crossover; the lowest grid frequency when |L| never crosses
-0 dB) it lies in (−360°, 0°]. The rigid-body phase margin is then the distance to the
-critical point drawn at −180°; the other critical points −180° ± k·360° inside the plot
-are drawn too (a flex-mode loop excursion may encircle one of them). Bode and Nichols use
-the same phase.
+Drawing conventions
+-------------------
+*Phase.* Bode and Nichols draw the same unwrapped, shifted phase of the data; the
+critical points −180° ± k·360° inside the plot are drawn (a flex-mode loop excursion may
+encircle one of them).
 
 *Nyquist.* L(e^{jωT}) for ω > 0 (solid) and its mirror image for ω < 0 (dashed), without
 the indentation at ω = 0, drawn at radius ρ = |L| inside the unit circle and
@@ -56,24 +39,8 @@ encirclements of −1 are those of L, the critical region keeps its linear shape
 low-frequency magnitude of 10⁴ stays on the page (ρ = 5); dotted rings mark |L| = 10^k
 and the ±6 dB rings |L| = 1/2 and 2.
 
-*Root locus.* The closed-loop poles for each gain k are ``control.feedback(L, k).poles()``
-(eigenvalues of the state-space closed loop L / (1 + k L)), joined into branches by
-nearest assignment between successive gains. :func:`control.root_locus_map` is not used:
-it roots the transfer-function polynomial of L, whose coefficients cannot represent the
-20–80 poles clustered near z = 1 of a 50-Hz loop: for k = 1 it put closed-loop poles at
-|z| = 2.1 on a 58-state test loop whose eigenvalues are all inside |z| < 0.9997, and at
-|z| = 2.6 on the study's 85-state loops (eigenvalues within |z| ≤ 1 + 5e-6), with or
-without slycot. A loop whose closed-loop poles equal another's at the first and last
-gain shares its locus.
-
-*Pole-zero map.* The zeros are the transmission zeros of the square block commands →
-attitudes. Poles with |σ| ≤ :data:`NEUTRAL_RATE` (σ = ln|z| / dt) are drawn as neutral:
-the rigid-body and drift integrators of a linearized vehicle sit at z = 1 ± 1e-5.
-
-*Time responses.* Commands in rad and outputs in rad; drawn in deg per deg of command
-(the system is linear). The discrete impulse is python-control's unit-area pulse (one
-sample of 1/dt); the ramp is u = t. Only the command inputs and the attitude and gimbal
-outputs are simulated (not the gust inputs).
+*Pole-zero map.* Poles with |σ| ≤ :data:`NEUTRAL_RATE` (σ = ln|z| / dt) are drawn as
+neutral: the rigid-body and drift integrators of a linearized vehicle sit at z = 1 ± 1e-5.
 
 Speed
 -----
@@ -90,13 +57,10 @@ from __future__ import annotations
 
 import math
 import threading
-import warnings
-from collections.abc import Callable, Iterable, Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
 from pathlib import Path
 
-import control as ct
 import matplotlib
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -111,28 +75,23 @@ from matplotlib.ticker import (
     NullLocator,
 )
 from PIL import Image
-from scipy.optimize import linear_sum_assignment
 
 from savant_cli.io.atomic import atomic_path
+from savant_cli.linear.charts import (
+    CommandResponses,
+    LoopResponse,
+    PointCharts,
+    PoleZeroMap,
+    RootLocus,
+    sorted_axes,
+)
 from savant_cli.linear.margins import MarginRow
 
-__all__ = ["MarginRow", "plot_linear_point", "plot_margin_envelope", "point_tag"]
+__all__ = ["MarginRow", "plot_linear_point", "plot_margin_envelope", "plot_nichols_overlay", "point_tag"]
 
 DPI = 120
 _PNG_LEVEL = 3  # zlib level of the PNGs, as in plots/ascent.py
 
-#: Lowest plotted frequency (Hz).
-F_MIN_HZ = 0.01
-#: Highest plotted frequency of a continuous-time loop (Hz); a discrete loop stops at 1/(2 dt).
-F_MAX_CONTINUOUS_HZ = 25.0
-#: Log-spaced points of the base frequency grid.
-N_FREQUENCIES = 600
-#: Extra points around each lightly damped pole or zero of the loop.
-N_RESONANCE = 31
-#: Poles and zeros with a damping ratio below this get the extra points.
-RESONANCE_DAMPING = 0.1
-#: Gains k of the root locus 1 + k L = 0 (k = 1 is the nominal loop and is always included).
-ROOT_LOCUS_GAINS = np.unique(np.concatenate([np.logspace(-2.0, 1.0, 25), [1.0]]))
 #: Launch-vehicle rigid/aero exclusion zone around each critical point: ±dB, ±deg.
 EXCLUSION_GAIN_DB = 6.0
 EXCLUSION_PHASE_DEG = 30.0
@@ -141,10 +100,7 @@ DB_LIMITS = (-80.0, 80.0)
 #: Poles with |Re s| at most this (1/s: doubling or halving in more than 690 s) are drawn as
 #: neutral: rigid-body and drift integrators of a linearized vehicle sit at z = 1 ± 1e-5.
 NEUTRAL_RATE = 1e-3
-#: Duration of the closed-loop time responses (s).
-RESPONSE_DURATION_S = 10.0
 
-_AXIS_ORDER = ("pitch", "yaw")
 _AXIS_COLORS = {"pitch": "C0", "yaw": "C1"}
 _BAND_COLORS = {"rigid/aero": "C0", "slosh": "C2", "flex": "C3"}
 _AXIS_MARKERS = {"pitch": "o", "yaw": "^"}
@@ -159,138 +115,14 @@ def point_tag(time_s: float) -> str:
     return f"t{time_s:06.1f}"
 
 
-# --------------------------------------------------------------------------- computation
-
-
-@dataclass(frozen=True)
-class _Loop:
-    """Frequency response of one open loop on its grid."""
-
-    axis: str
-    f_hz: np.ndarray
-    response: np.ndarray  # complex L(e^{jωT})
-    mag_db: np.ndarray
-    phase_deg: np.ndarray  # unwrapped and shifted (see module notes)
-
-
-def _sorted_axes(names: Iterable[str]) -> list[str]:
-    names = list(names)
-    return [a for a in _AXIS_ORDER if a in names] + sorted(a for a in names if a not in _AXIS_ORDER)
+# --------------------------------------------------------------------------- helpers
 
 
 def _color(axis: str, k: int) -> str:
     return _AXIS_COLORS.get(axis, f"C{k + 2}")
 
 
-def _sample_time(sys: ct.LTI) -> float | None:
-    """dt of a discrete system with a numeric sample time, else None."""
-    dt = sys.dt
-    if dt is None or dt is True or dt is False or not sys.isdtime():
-        return None
-    return float(dt)
-
-
-def _f_max(sys: ct.LTI) -> float:
-    dt = _sample_time(sys)
-    return 0.5 / dt if dt else F_MAX_CONTINUOUS_HZ
-
-
-def _s_plane(roots: np.ndarray, dt: float | None) -> np.ndarray:
-    """Equivalent s-plane roots ln(z)/dt (1/s) of z-plane roots; roots at z = 0 become NaN."""
-    roots = np.asarray(roots, dtype=complex)
-    if dt is None:
-        return roots
-    out = np.full(roots.shape, np.nan + 0j)
-    ok = np.isfinite(roots) & (np.abs(roots) > 1e-6)
-    out[ok] = np.log(roots[ok]) / dt
-    return out
-
-
-def _frequency_grid(sys: ct.LTI, extra_hz: Iterable[float] = ()) -> np.ndarray:
-    """Log grid from F_MIN_HZ to the Nyquist frequency, refined at resonances (Hz)."""
-    f_hi = _f_max(sys)
-    parts = [np.geomspace(F_MIN_HZ, f_hi, N_FREQUENCIES)]
-    s = _s_plane(np.concatenate([sys.poles(), sys.zeros()]), _sample_time(sys))
-    s = s[np.isfinite(s) & (s.imag > 0)]  # one of each conjugate pair
-    wn = np.abs(s)
-    zeta = -s.real / np.maximum(wn, 1e-300)
-    light = np.abs(zeta) < RESONANCE_DAMPING
-    # u = tan(θ/2) spacing: equal steps of the angle θ around the resonance circle that the
-    # mode draws in the Nyquist plane, out to ±8 half-widths (ζ f_n) on either side
-    u = np.tan(np.linspace(-np.arctan(8.0), np.arctan(8.0), N_RESONANCE))
-    for w, z, wd in zip(wn[light], zeta[light], s.imag[light]):
-        fd, half = wd / (2 * np.pi), max(abs(z), 1e-4) * w / (2 * np.pi)
-        parts.append(fd + half * u)
-    parts.append(np.asarray([f for f in extra_hz if np.isfinite(f)], dtype=float))
-    f = np.concatenate(parts)
-    f = np.clip(f, F_MIN_HZ, f_hi)
-    return np.unique(f)
-
-
-def _loop_response(axis: str, sys: ct.LTI, rows: Sequence[MarginRow]) -> _Loop:
-    if not sys.issiso():
-        raise ValueError(f"loop {axis!r} must be SISO, got {sys.ninputs} inputs and {sys.noutputs} outputs")
-    f = _frequency_grid(sys, (r.frequency_hz for r in rows if r.axis == axis))
-    resp = ct.frequency_response(sys, 2 * np.pi * f)
-    f = np.asarray(resp.omega, dtype=float) / (2 * np.pi)
-    h = np.asarray(resp.complex, dtype=complex).reshape(-1)
-    with np.errstate(divide="ignore"):
-        mag_db = 20.0 * np.log10(np.abs(h))
-    phase = np.degrees(np.unwrap(np.angle(h)))
-    sign = np.signbit(mag_db)
-    cross = np.flatnonzero(sign[1:] != sign[:-1])
-    anchor = int(cross[0]) if cross.size else 0
-    # the whole number of turns putting the anchor phase in (−360°, 0°]
-    phase = phase - 360.0 * math.ceil(phase[anchor] / 360.0)
-    return _Loop(axis, f, h, mag_db, phase)
-
-
-def _root_locus(sys: ct.LTI, gains: np.ndarray) -> np.ndarray:
-    """Closed-loop poles of 1 + k L = 0, shape (gains, n), columns continuous branches."""
-    loci = np.empty((len(gains), sys.nstates), dtype=complex)
-    for i, k in enumerate(gains):
-        # feedback(L, k) = L / (1 + k L): the poles of 1 + k L, without building k L
-        p = np.asarray(ct.feedback(sys, float(k)).poles(), dtype=complex)
-        if i == 0:
-            loci[0] = np.sort_complex(p)
-            continue
-        prev = loci[i - 1]
-        _, col = linear_sum_assignment(np.abs(prev[:, None] - p[None, :]))
-        loci[i] = p[col]
-    return loci
-
-
-def _same_poles(a: np.ndarray, b: np.ndarray, tol: float = 1e-4) -> bool:
-    """Whether two sets of poles are equal to ``tol`` (relative to max(1, |p|)): to drawing
-    accuracy (the zoom of the root-locus chart is 0.22 wide), and loose enough for the
-    eigenvalue error of the clustered poles near z = 1 (ε^(1/m) for an m-fold cluster,
-    about 3e-5 on the study's 85-state loops)."""
-    if a.shape != b.shape or not (np.all(np.isfinite(a)) and np.all(np.isfinite(b))):
-        return False
-    cost = np.abs(a[:, None] - b[None, :])
-    rows, cols = linear_sum_assignment(cost)
-    return bool(np.all(cost[rows, cols] <= tol * np.maximum(1.0, np.abs(a[rows]))))
-
-
-def _shared_locus(sys: ct.LTI, known: Sequence[np.ndarray], gains: np.ndarray) -> np.ndarray | None:
-    """A root locus of ``known`` that is also that of ``sys``, if any.
-
-    For a SISO loop the closed-loop characteristic polynomial is den(z) + k num(z) (up to a
-    factor when D ≠ 0), fixed by its roots at two gains: loops whose closed-loop poles
-    agree at the first and last gain have the same locus at every gain, to the accuracy
-    of :func:`_same_poles` (the pitch and yaw loops of an axisymmetric vehicle). Two
-    eigenvalue problems instead of one per gain.
-    """
-    if not known:
-        return None
-    ends = [np.asarray(ct.feedback(sys, float(k)).poles(), dtype=complex) for k in (gains[0], gains[-1])]
-    for loci in known:
-        if loci.shape[1] == sys.nstates and _same_poles(ends[0], loci[0]) and _same_poles(ends[1], loci[-1]):
-            return loci
-    return None
-
-
-def _margin_index(loop: _Loop, freq_hz: float) -> int | None:
+def _margin_index(loop: LoopResponse, freq_hz: float) -> int | None:
     if not np.isfinite(freq_hz):
         return None
     return int(np.argmin(np.abs(loop.f_hz - np.clip(freq_hz, loop.f_hz[0], loop.f_hz[-1]))))
@@ -346,6 +178,9 @@ def _sheet(key: tuple, layout: Callable[[], tuple[Figure, list]]) -> tuple[Figur
                 artist.remove()
         if ax.get_legend() is not None:
             ax.get_legend().remove()
+        # forget the data limits: relim() empties them (no artists are left); the flag
+        # alone is cleared by the first line that updates one direction only (axhline)
+        ax.relim()
         ax.ignore_existing_data_limits = True
         ax.set_autoscale_on(True)
     return fig, axes
@@ -421,7 +256,7 @@ def _critical_phases(lo: float, hi: float) -> list[float]:
     return [-180.0 + 360.0 * k for k in range(k0, k1 + 1)]
 
 
-def _db_limits(loops: Sequence[_Loop]) -> tuple[float, float]:
+def _db_limits(loops: Sequence[LoopResponse]) -> tuple[float, float]:
     finite = np.concatenate([lp.mag_db[np.isfinite(lp.mag_db)] for lp in loops])
     lo = max(float(finite.min()), DB_LIMITS[0]) if finite.size else -20.0
     hi = min(float(finite.max()), DB_LIMITS[1]) if finite.size else 20.0
@@ -477,7 +312,7 @@ def _bode_layout() -> tuple[Figure, list]:
     return fig, [ax_m, ax_p]
 
 
-def _bode_figure(time_s: float, loops: Sequence[_Loop], margins: Sequence[MarginRow]) -> Figure:
+def _bode_figure(time_s: float, loops: Sequence[LoopResponse], margins: Sequence[MarginRow]) -> Figure:
     """Magnitude and phase of the loops, overlaid; crossovers of the margin table marked."""
     fig, (ax_m, ax_p) = _sheet(("bode",), _bode_layout)
     plo, phi = np.inf, -np.inf
@@ -521,7 +356,7 @@ def _nichols_layout() -> tuple[Figure, list]:
     return fig, [ax]
 
 
-def _nichols_figure(time_s: float, loops: Sequence[_Loop], margins: Sequence[MarginRow],
+def _nichols_figure(time_s: float, loops: Sequence[LoopResponse], margins: Sequence[MarginRow],
                     exclusion_zones: bool = True) -> Figure:
     """Gain vs unwrapped phase of the loops, critical points, exclusion zones, margins."""
     fig, (ax,) = _sheet(("nichols",), _nichols_layout)
@@ -612,7 +447,7 @@ def _nyquist_layout() -> tuple[Figure, list]:
     return fig, [ax]
 
 
-def _nyquist_figure(time_s: float, loops: Sequence[_Loop]) -> Figure:
+def _nyquist_figure(time_s: float, loops: Sequence[LoopResponse]) -> Figure:
     """L in the complex plane, radius compressed beyond the unit circle."""
     fig, (ax,) = _sheet(("nyquist",), _nyquist_layout)
     handles = []
@@ -660,24 +495,16 @@ def _root_locus_layout(discrete: bool) -> tuple[Figure, list]:
     return fig, [ax_all, ax_zoom]
 
 
-def _root_locus_figure(time_s: float, systems: Mapping[str, ct.LTI], gains: np.ndarray = ROOT_LOCUS_GAINS) -> Figure:
+def _root_locus_figure(time_s: float, loci: Sequence[RootLocus]) -> Figure:
     """Root loci of 1 + k L = 0 of all loops, overlaid: whole plane and a zoom near z = 1 (s = 0)."""
-    names = _sorted_axes(systems)
-    discrete = all(_sample_time(systems[a]) is not None for a in names)
+    discrete = all(rl.dt is not None for rl in loci)
     fig, (ax_all, ax_zoom) = _sheet(("rootlocus", discrete), lambda: _root_locus_layout(discrete))
-    gains = np.asarray(gains, dtype=float)
-    k1 = int(np.argmin(np.abs(gains - 1.0)))
+    gains = loci[0].gains
     handles = []
     extent = 1.0
-    computed: list[np.ndarray] = []
-    for j, name in enumerate(names):
-        sys = systems[name]
-        color = _color(name, j)
-        branches = _shared_locus(sys, computed, gains)
-        if branches is None:
-            branches = _root_locus(sys, gains)
-            computed.append(branches)
-        poles, zeros, closed = sys.poles(), sys.zeros(), branches[k1]
+    for j, rl in enumerate(loci):
+        color = _color(rl.label, j)
+        branches, poles, zeros, closed = rl.branches, rl.poles, rl.zeros, rl.nominal
         finite = np.concatenate([poles, closed])
         finite = finite[np.isfinite(finite)]
         if finite.size:
@@ -689,7 +516,7 @@ def _root_locus_figure(time_s: float, systems: Mapping[str, ct.LTI], gains: np.n
             ax.plot(poles.real, poles.imag, ls="none", marker="x", ms=6, mew=1.2, color=color)
             ax.plot(zeros.real, zeros.imag, ls="none", marker="o", ms=5, mfc="none", mew=1.0, color=color)
             ax.plot(closed.real, closed.imag, ls="none", marker="s", ms=4, color=color, mec="k", mew=0.6)
-        handles.append(Line2D([], [], color=color, lw=1.0, label=f"{name}"))
+        handles.append(Line2D([], [], color=color, lw=1.0, label=f"{rl.label}"))
     handles += [Line2D([], [], ls="none", marker="x", ms=6, mew=1.2, color="0.3", label="open-loop poles"),
                 Line2D([], [], ls="none", marker="o", ms=5, mfc="none", color="0.3", label="zeros"),
                 Line2D([], [], ls="none", marker="s", ms=4, color="0.5", mec="k", mew=0.6, label="k = 1 poles")]
@@ -714,26 +541,6 @@ def _root_locus_figure(time_s: float, systems: Mapping[str, ct.LTI], gains: np.n
     return fig
 
 
-def _closed_zeros(closed: ct.StateSpace, outputs: Sequence[str], inputs: Sequence[str]) -> np.ndarray:
-    """Transmission zeros of the square block commands → attitudes (python-control without
-    slycot computes zeros of square systems only), else of the whole system."""
-    oi = [k for k in (closed.find_output(o) for o in outputs) if k is not None]
-    ii = [k for k in (closed.find_input(i) for i in inputs) if k is not None]
-    systems = [closed[oi, ii]] if oi and len(oi) == len(ii) else []
-    for sys in systems + [closed]:
-        try:
-            z = np.asarray(sys.zeros(), dtype=complex)
-        except (NotImplementedError, ValueError, np.linalg.LinAlgError):
-            continue
-        return z[np.isfinite(z)]
-    return np.zeros(0, dtype=complex)
-
-
-def _commands(closed: ct.LTI) -> list[str]:
-    found = [c for c in ("pitch_command", "yaw_command") if c in closed.input_labels]
-    return found or list(closed.input_labels)
-
-
 def _pzmap_layout(discrete: bool) -> tuple[Figure, list]:
     fig = _figure(9.6, 5.0, left=0.65, bottom=0.85, wspace=0.25)
     ax_z, ax_s = fig.subplots(1, 2)
@@ -754,14 +561,11 @@ def _pzmap_layout(discrete: bool) -> tuple[Figure, list]:
     return fig, [ax_z, ax_s]
 
 
-def _pzmap_figure(time_s: float, closed: ct.StateSpace) -> Figure:
+def _pzmap_figure(time_s: float, pz: PoleZeroMap) -> Figure:
     """Closed-loop poles and zeros: z-plane and the equivalent s-plane (Hz)."""
-    dt = _sample_time(closed)
+    dt = pz.dt
     fig, (ax_z, ax_s) = _sheet(("pzmap", dt is not None), lambda: _pzmap_layout(dt is not None))
-    poles = np.asarray(closed.poles(), dtype=complex)
-    commands = _commands(closed)
-    zeros = _closed_zeros(closed, [c.replace("_command", "_attitude") for c in commands], commands)
-    sp, sz = (_s_plane(poles, dt), _s_plane(zeros, dt)) if dt else (poles, zeros)
+    poles, zeros, sp, sz = pz.poles, pz.zeros, pz.s_poles, pz.s_zeros
     at_origin = int(np.count_nonzero(~np.isfinite(sp)))
     sigma = np.where(np.isfinite(sp), sp.real, -np.inf)
     groups = ((sigma < -NEUTRAL_RATE, "C0", "stable poles" + (f", {at_origin} at z = 0" if at_origin else "")),
@@ -799,21 +603,6 @@ def _pzmap_figure(time_s: float, closed: ct.StateSpace) -> Figure:
     return fig
 
 
-def _time_responses(sys: ct.StateSpace, t: np.ndarray) -> dict[str, np.ndarray]:
-    """Step, impulse and ramp outputs of every input of ``sys``, each (outputs, inputs, time)."""
-    shape = (sys.noutputs, sys.ninputs, t.size)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", UserWarning)
-        step = np.asarray(ct.step_response(sys, t).outputs).reshape(shape)
-        impulse = np.asarray(ct.impulse_response(sys, t).outputs).reshape(shape)
-        ramp = np.zeros(shape)
-        for i in range(sys.ninputs):
-            u = np.zeros((sys.ninputs, t.size))
-            u[i] = t
-            ramp[:, i, :] = np.asarray(ct.forced_response(sys, t, u).outputs).reshape(shape[0], -1)
-    return {"step": step, "impulse": impulse, "ramp": ramp}
-
-
 _RESPONSE_ROWS = (("step", "1° step"), ("impulse", "1°·s pulse"), ("ramp", "1°/s ramp"))
 
 
@@ -834,26 +623,20 @@ def _response_layout(named: bool, gimbal: bool) -> tuple[Figure, list]:
     return fig, axes + twins
 
 
-def _response_figure(time_s: float, closed: ct.StateSpace, duration_s: float = RESPONSE_DURATION_S) -> Figure:
+def _response_figure(time_s: float, data: CommandResponses) -> Figure:
     """Step, impulse and ramp responses (rows) to each command: attitude on the left axis,
     gimbal on the right one (a gimbal pulse is tens of times the attitude's)."""
-    dt = _sample_time(closed)
-    h = dt or duration_s / 1000.0
-    t = np.arange(0.0, duration_s + 0.5 * h, h)
-    commands = _commands(closed)
-    outputs = [o for o in closed.output_labels if o.endswith(("_attitude", "_gimbal"))] or list(closed.output_labels)
+    t, commands, outputs = data.time_s, list(data.commands), list(data.outputs)
+    duration_s = float(t[-1])
     named = any(o.endswith(("_attitude", "_gimbal")) for o in outputs)
     gimbal = any(o.endswith("_gimbal") for o in outputs)
     fig, axes = _sheet(("response", named, gimbal), lambda: _response_layout(named, gimbal))
     rows = len(_RESPONSE_ROWS)
     lefts, rights = axes[:rows], (axes[rows:] if gimbal else [None] * rows)
-    # only the commands and the drawn outputs are simulated (not the gust inputs, say)
-    sub = closed[[closed.find_output(o) for o in outputs], [closed.find_input(c) for c in commands]]
-    data = _time_responses(sub, t)
     references = {"step": np.ones_like(t), "ramp": t}
     handles: dict[str, Line2D] = {}
     for ax, right, (kind, _) in zip(lefts, rights, _RESPONSE_ROWS):
-        y = data[kind]
+        y = data.of(kind)
         if kind in references:
             handles.setdefault("command", ax.plot(t, references[kind], color="0.5", lw=0.8, ls="--")[0])
         for i, cmd in enumerate(commands):
@@ -888,7 +671,7 @@ def _envelope_figure(rows: Sequence[MarginRow], requirements: Mapping[str, tuple
     fig = _figure(9.0, 7.0, left=0.85, right=2.2, bottom=0.6, top=0.5, hspace=0.08)
     ax_g, ax_p = fig.subplots(2, 1, sharex=True)
     requirements = dict(requirements or {})
-    axes_names = _sorted_axes({r.axis for r in rows})
+    axes_names = sorted_axes({r.axis for r in rows})
     bands = list(_BAND_COLORS) + sorted({r.band for r in rows} - set(_BAND_COLORS))
     handles: list = []
     violating = False
@@ -944,25 +727,18 @@ def _envelope_figure(rows: Sequence[MarginRow], requirements: Mapping[str, tuple
 # --------------------------------------------------------------------------- public API
 
 
-def plot_linear_point(time_s: float, loops: dict[str, ct.StateSpace], closed: ct.StateSpace,
-                      margins: list[MarginRow], out_dir: Path, exclusion_zones: bool = True) -> list[Path]:
+def plot_linear_point(charts: PointCharts, margins: Sequence[MarginRow], out_dir: Path,
+                      exclusion_zones: bool = True) -> list[Path]:
     """Draw the six frequency- and time-domain charts of one operating point.
 
     Parameters
     ----------
-    time_s : float
-        Flight time of the operating point (s); in the titles and, as ``f"t{time_s:06.1f}"``,
-        in the file names.
-    loops : dict of str to control.StateSpace
-        SISO open loop of each axis (``"pitch"``, ``"yaw"``), broken at that axis's actuator
-        command (rad → rad) with the other axis closed, sign such that the closed loop is
-        L / (1 + L). Normally discrete (dt = 0.02 s); a continuous loop is drawn to
-        :data:`F_MAX_CONTINUOUS_HZ`.
-    closed : control.StateSpace
-        Closed loop with inputs ``pitch_command``, ``yaw_command`` (attitude commands, rad)
-        and outputs including ``pitch_attitude``, ``yaw_attitude``, ``pitch_gimbal``,
-        ``yaw_gimbal`` (rad); missing names are skipped.
-    margins : list of MarginRow
+    charts : savant_cli.linear.charts.PointCharts
+        The point's chart data (:func:`savant_cli.linear.charts.point_charts`, or read back
+        from ``savant.h5`` by :func:`savant_cli.linear.store.read_charts`): open-loop
+        frequency responses, root loci, closed-loop poles and zeros, time responses.
+        Its time (s) is in the titles and, as ``f"t{time_s:06.1f}"``, in the file names.
+    margins : sequence of MarginRow
         The margins of this operating point (both axes); each finite one is marked on the
         Bode and Nichols charts at its frequency.
     out_dir : pathlib.Path
@@ -980,39 +756,34 @@ def plot_linear_point(time_s: float, loops: dict[str, ct.StateSpace], closed: ct
     Raises
     ------
     ValueError
-        If ``loops`` is empty or a loop is not SISO.
+        If ``charts`` holds no loop.
 
     Notes
     -----
     Frequencies in Hz, magnitudes in dB, phases in deg (unwrapped; the shift convention
-    is in the module notes), time in s. See the module docstring for the frequency grid,
-    the Nyquist radius compression and the root-locus method.
+    is in :mod:`savant_cli.linear.charts`), time in s.
 
     Each chart's figure is kept per calling thread and reused by the next call (module
     notes, *Speed*); matplotlib's ``text.hinting`` is set to ``"none"`` during each draw
     and restored. Both are invisible to a caller that does not draw with matplotlib on
     another thread at the same time.
     """
-    if not loops:
+    if not charts.loops:
         raise ValueError("plot_linear_point needs at least one loop")
     out_dir = Path(out_dir)
+    time_s = charts.time_s
     tag = point_tag(time_s)
-    names = _sorted_axes(loops)
-    for a in names:
-        if not loops[a].issiso():
-            raise ValueError(f"loop {a!r} must be SISO, got {loops[a].ninputs} inputs and {loops[a].noutputs} outputs")
     # PNG compression on a worker thread (Pillow releases the GIL) while the next figure is
-    # drawn. Nothing else runs there: Python-level work on a second thread (the root loci
-    # were tried) slows the drawing thread by more than it saves, through the GIL.
+    # drawn. Nothing else runs there: Python-level work on a second thread slows the
+    # drawing thread by more than it saves, through the GIL.
     with ThreadPoolExecutor(max_workers=1) as worker:
-        responses = [_loop_response(a, loops[a], margins) for a in names]
         figures = (
-            (f"bode_{tag}.png", lambda: _bode_figure(time_s, responses, margins)),
-            (f"nichols_{tag}.png", lambda: _nichols_figure(time_s, responses, margins, exclusion_zones)),
-            (f"nyquist_{tag}.png", lambda: _nyquist_figure(time_s, responses)),
-            (f"rootlocus_{tag}.png", lambda: _root_locus_figure(time_s, {a: loops[a] for a in names})),
-            (f"pzmap_{tag}.png", lambda: _pzmap_figure(time_s, closed)),
-            (f"response_{tag}.png", lambda: _response_figure(time_s, closed)),
+            (f"bode_{tag}.png", lambda: _bode_figure(time_s, charts.loops, margins)),
+            (f"nichols_{tag}.png", lambda: _nichols_figure(time_s, charts.loops, margins, exclusion_zones)),
+            (f"nyquist_{tag}.png", lambda: _nyquist_figure(time_s, charts.loops)),
+            (f"rootlocus_{tag}.png", lambda: _root_locus_figure(time_s, charts.root_loci)),
+            (f"pzmap_{tag}.png", lambda: _pzmap_figure(time_s, charts.pzmap)),
+            (f"response_{tag}.png", lambda: _response_figure(time_s, charts.responses)),
         )
         jobs = [worker.submit(_write_png, _render(build()), out_dir / filename) for filename, build in figures]
         return [job.result() for job in jobs]
@@ -1047,7 +818,7 @@ def plot_margin_envelope(rows: list[MarginRow], out_path: Path,
     return _save(_envelope_figure(rows, requirements), Path(out_path))
 
 
-def plot_nichols_overlay(time_s: float, loops: Mapping[str, ct.LTI], out_path: Path, title: str = "Nichols chart",
+def plot_nichols_overlay(time_s: float, loops: Sequence[LoopResponse], out_path: Path, title: str = "Nichols chart",
                          exclusion_zones: bool = True) -> Path:
     """Overlay the Nichols curves of several variants of one loop (a parameter study).
 
@@ -1055,8 +826,9 @@ def plot_nichols_overlay(time_s: float, loops: Mapping[str, ct.LTI], out_path: P
     ----------
     time_s : float
         Flight time of the operating point (s), shown in the title.
-    loops : mapping of str to control.LTI
-        Legend label → discrete SISO open loop (negative-feedback convention).
+    loops : sequence of LoopResponse
+        One frequency response per variant (:func:`savant_cli.linear.charts.loop_response`),
+        its label the legend entry.
     out_path : pathlib.Path
         PNG file to write.
     title : str
@@ -1069,7 +841,6 @@ def plot_nichols_overlay(time_s: float, loops: Mapping[str, ct.LTI], out_path: P
     pathlib.Path
         ``out_path``.
     """
-    responses = [_loop_response(label, sys, ()) for label, sys in loops.items()]
-    fig = _nichols_figure(time_s, responses, [], exclusion_zones)
+    fig = _nichols_figure(time_s, list(loops), [], exclusion_zones)
     _title(fig, title, time_s)
     return _save(fig, Path(out_path))

@@ -8,8 +8,10 @@ scale factor of ``study.levels``, the retained modes (or ``study.modes``) are sc
 the model's flex tables, the plant is linearized about the same state and the loops are
 assembled and analysed as in ``study=linear``. Outputs: ``flex_sweep.csv`` (every margin
 of every case, flagged against the requirements), ``summary.json``, a console table of
-the worst margin per band and case with losses of stability, and one Nichols chart per
-time, parameter and chart axis with the levels overlaid (``plots/flex_sweep/``).
+the worst margin per band and case with losses of stability, ``savant.h5`` (the time
+run, and group ``flex_sweep``: the margin table and the Nichols data of every chart) and
+one Nichols chart per time, parameter and chart axis with the levels overlaid
+(``plots/flex_sweep/``), which ``savant report`` redraws from ``savant.h5``.
 """
 
 from __future__ import annotations
@@ -21,6 +23,8 @@ import time
 import warnings
 from pathlib import Path
 
+import h5py
+import numpy as np
 from omegaconf import DictConfig
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
@@ -28,11 +32,11 @@ from rich.table import Table
 
 from savant_cli.config import FlexSweepStudyConfig, LinearStudyConfig, SavantConfig
 from savant_cli.errors import ConfigError
-from savant_cli.io.atomic import write_json_atomic, write_text_atomic
+from savant_cli.io.atomic import write_text_atomic
+from savant_cli.linear.charts import LoopResponse, loop_response
+from savant_cli.linear.store import read_loop_response, write_loop_response
 from savant_cli.sim.build import SimModel
 from savant_cli.studies import flight as flight_mod
-from savant_cli.sim.run import simulate
-from savant_cli.sim.setup import prepare
 from savant_cli.studies.linear import analyse, check_times
 
 COLUMNS = ("time_s", "parameter", "level", "axis", "kind", "band", "value", "frequency_hz", "meets_requirement",
@@ -67,11 +71,11 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
     for i, m in enumerate(study.modes):
         if m > cfg.flex.n_modes:
             raise ConfigError(f"study.modes[{i}]", m, f"must be a retained mode, 1 to flex.n_modes = {cfg.flex.n_modes}")
-    model = prepare(cfg).model
+    steps = flight_mod.control_steps(cfg, study.times)
+    flight = flight_mod.fly(cfg, snapshot_steps=steps)
+    model, result = flight.prep.model, flight.result
     rt = model.rates
     dt = rt.dt * rt.n_fcs
-    steps = flight_mod.control_steps(cfg, study.times)
-    result = simulate(model, progress=cfg.sim.progress, chunk_s=cfg.sim.chunk_s, snapshot_steps=steps)
     events = dict(flight_mod.events_of(result))
     times = check_times(sorted({k * rt.dt for k in steps}), result.t_final, events, study, skip=False)
     lin = LinearStudyConfig(times=times)
@@ -87,34 +91,74 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
             pt, margin_rows, extra = analyse(variant(model, prm, lvl, list(study.modes)), snap, lin, dt)
             stable[(t, prm, lvl)] = extra["closed_loop_stable"]
             for axis in study.chart_axes:
-                charts.setdefault((t, prm, axis), {})[f"{prm} × {lvl:g}"] = pt.loops[axis]
+                charts.setdefault((t, prm, axis), []).append(loop_response(f"{prm} × {lvl:g}", pt.loops[axis]))
             for r in margin_rows:
                 rows.append({"time_s": t, "parameter": prm, "level": lvl, "axis": r.axis, "kind": r.kind,
                              "band": r.band, "value": r.value, "frequency_hz": r.frequency_hz,
                              "meets_requirement": bool(abs(r.value) >= study.requirements.required(r.band, r.kind)),
                              "closed_loop_stable": bool(extra["closed_loop_stable"])})
             bar.advance(task)
-    out_dir.mkdir(parents=True, exist_ok=True)
     buf = io.StringIO()
     w = csv.DictWriter(buf, fieldnames=list(COLUMNS), lineterminator="\n")
     w.writeheader()
     w.writerows(rows)
-    write_text_atomic(out_dir / "flex_sweep.csv", buf.getvalue())
     worst = _worst(rows, stable, study)
-    write_json_atomic(out_dir / "summary.json", {
-        "study": "flex_sweep", "times_s": times, "parameters": list(study.parameters), "levels": list(study.levels),
-        "modes": list(study.modes) or list(range(1, cfg.flex.n_modes + 1)), "cases": worst,
-        "unstable_cases": [c for c in worst if not c["closed_loop_stable"]],
-        "study_wall_time_s": time.perf_counter() - t_start})
+    wall = time.perf_counter() - t_start
+    summary = {"study": "flex_sweep", "times_s": times, "parameters": list(study.parameters),
+               "levels": list(study.levels), "modes": list(study.modes) or list(range(1, cfg.flex.n_modes + 1)),
+               "cases": worst, "unstable_cases": [c for c in worst if not c["closed_loop_stable"]],
+               "study_wall_time_s": wall}
+    rec = flight_mod.record(result, flight.signals, flight.summary, raw_cfg, wall)
+    flight_mod.write(out_dir, rec, cfg, json_summary=summary,
+                     extra=lambda f: write_group(f, rows, charts, study.exclusion_zones))
+    write_text_atomic(out_dir / "flex_sweep.csv", buf.getvalue())
     if cfg.output.plots:
-        from savant_cli.plots.linear import plot_nichols_overlay
-
-        for (t, prm, axis), loops in charts.items():
-            plot_nichols_overlay(t, loops, out_dir / "plots" / "flex_sweep" / f"nichols_{axis}_{prm}_t{t:06.1f}.png",
-                                 title=f"{axis} loop, flex {prm} scaled", exclusion_zones=study.exclusion_zones)
+        draw(charts, study.exclusion_zones, out_dir / "plots")
     console.print(_table(worst))
     console.print(f"{len(cases)} cases in {time.perf_counter() - t_start:.1f} s; outputs: {out_dir}")
     return 0 if result.status == "complete" else 1
+
+
+def write_group(f: h5py.File, rows: list[dict], charts: dict[tuple[float, str, str], list[LoopResponse]],
+                exclusion_zones: bool) -> None:
+    """Group ``flex_sweep`` of ``savant.h5``: ``cases/<column>`` (the rows of
+    ``flex_sweep.csv``) and ``nichols/<n>`` per chart (attributes ``time_s``, ``parameter``,
+    ``axis``; one ``loop_<k>`` group per level, :func:`savant_cli.linear.store.write_loop_response`)."""
+    g = f.create_group("flex_sweep", track_order=True)
+    g.attrs["exclusion_zones"] = bool(exclusion_zones)
+    cg = g.create_group("cases", track_order=True)
+    for col in COLUMNS:
+        vals = [r[col] for r in rows]
+        cg.create_dataset(col, data=np.array(vals, dtype=h5py.string_dtype()) if col in ("parameter", "axis", "kind",
+                                                                                          "band") else np.asarray(vals))
+    ng = g.create_group("nichols", track_order=True)
+    for n, ((t, prm, axis), loops) in enumerate(charts.items()):
+        chart = ng.create_group(f"{n:03d}", track_order=True)
+        chart.attrs.update({"time_s": t, "parameter": prm, "axis": axis})
+        for k, lp in enumerate(loops):
+            write_loop_response(chart.create_group(f"loop_{k:02d}"), lp)
+
+
+def read_group(path: Path) -> tuple[dict[tuple[float, str, str], list[LoopResponse]], bool]:
+    """The Nichols data of every chart and the ``exclusion_zones`` option of a flex sweep's
+    ``savant.h5``."""
+    with h5py.File(path, "r") as f:
+        g = f["flex_sweep"]
+        charts = {}
+        for chart in g["nichols"].values():
+            key = (float(chart.attrs["time_s"]), str(chart.attrs["parameter"]), str(chart.attrs["axis"]))
+            charts[key] = [read_loop_response(chart[k]) for k in chart]
+        return charts, bool(g.attrs["exclusion_zones"])
+
+
+def draw(charts: dict[tuple[float, str, str], list[LoopResponse]], exclusion_zones: bool, folder: Path) -> list[Path]:
+    """One Nichols chart per (time, parameter, axis), the levels overlaid, into
+    ``folder/flex_sweep``."""
+    from savant_cli.plots.linear import plot_nichols_overlay
+
+    return [plot_nichols_overlay(t, loops, folder / "flex_sweep" / f"nichols_{axis}_{prm}_t{t:06.1f}.png",
+                                 title=f"{axis} loop, flex {prm} scaled", exclusion_zones=exclusion_zones)
+            for (t, prm, axis), loops in charts.items()]
 
 
 def _worst(rows: list[dict], stable: dict, study: FlexSweepStudyConfig) -> list[dict]:

@@ -7,8 +7,9 @@ nominal alone) with the vehicle's dispersion set (``dispersions``) into ``<out>/
 output there. The same seed and dispersion names give every controller exactly the same
 dispersed vehicles. The comparison: ``flyoff.csv`` and ``summary.json`` (per metric and
 controller the nominal value and the 99.865 / 0.135 percentile over the runs, and the
-winner), a console table, and overlay plots of the nominal histories and of the
-dispersed distributions.
+winner), a console table, overlay plots of the nominal histories and of the dispersed
+distributions, and ``savant.h5`` (group ``flyoff``: the comparison, every run's metrics
+and each controller's nominal histories) from which ``savant report`` redraws the plots.
 """
 
 from __future__ import annotations
@@ -27,6 +28,8 @@ from rich.table import Table
 from savant_cli.config import FlyoffStudyConfig, SavantConfig, check_physics
 from savant_cli.errors import ConfigError
 from savant_cli.io.atomic import write_json_atomic, write_text_atomic
+from savant_cli.io.hdf5 import write_study_file
+from savant_cli.io.provenance import collect_provenance
 from savant_cli.montecarlo.results import PERCENTILES
 from savant_cli.montecarlo.targets import load_group_option
 from savant_cli.paths import hydra_search_dirs
@@ -136,9 +139,12 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
     tables = {name: _per_run(out_dir / name / "savant.h5") for name in cfgs}
     rows = compare(tables)
     _write(out_dir, rows, tables, study)
+    time_s, histories = _nominal_histories(out_dir, list(cfgs))
+    write_study_file(out_dir / "savant.h5", "flyoff", OmegaConf.to_yaml(raw_cfg, resolve=True), collect_provenance(),
+                     lambda f: write_group(f, rows, tables, time_s, histories))
     console.print(_table(rows, list(cfgs)))
     if cfg.output.plots:
-        _plots(out_dir, rows, tables, list(cfgs))
+        draw(rows, tables, time_s, histories, out_dir / "plots")
     console.print(f"outputs: {out_dir}")
     return 0
 
@@ -171,10 +177,9 @@ def _table(rows: list[dict], names: list[str]) -> Table:
     return tb
 
 
-def _plots(out_dir: Path, rows: list[dict], tables: dict, names: list[str]) -> None:
-    from savant_cli.plots.flyoff import plot_history_overlays, plot_metric_histograms
-
-    folder = out_dir / "plots"
+def _nominal_histories(out_dir: Path, names: list[str]) -> tuple[np.ndarray | None, dict[str, dict[str, np.ndarray]]]:
+    """The decimated histories of each controller's nominal run (run 0, or the lowest run
+    present): signal → controller → history, and their time grid (s)."""
     histories: dict[str, dict[str, np.ndarray]] = {}
     time_s = None
     for n in names:
@@ -187,8 +192,68 @@ def _plots(out_dir: Path, rows: list[dict], tables: dict, names: list[str]) -> N
             for sig in hg:
                 if sig != "time":
                     histories.setdefault(sig, {})[n] = hg[sig][row0]
+    return time_s, histories
+
+
+def write_group(f: h5py.File, rows: list[dict], tables: dict[str, dict[str, np.ndarray]],
+                time_s: np.ndarray | None, histories: dict[str, dict[str, np.ndarray]]) -> None:
+    """Group ``flyoff`` of the study's ``savant.h5``: attribute ``controllers``;
+    ``metrics/<column>`` (the rows of ``flyoff.csv``); ``runs/<controller>/{run, ok,
+    <metric>}`` (every run's metric values); ``nominal/time_s`` and
+    ``nominal/<controller>/<signal>`` (the nominal histories)."""
+    g = f.create_group("flyoff", track_order=True)
+    g.attrs["controllers"] = list(tables)
+    mg = g.create_group("metrics", track_order=True)
+    for col in rows[0]:
+        vals = [r[col] for r in rows]
+        mg.create_dataset(col, data=np.array(vals, dtype=h5py.string_dtype()) if isinstance(vals[0], str)
+                          else np.asarray(vals, dtype=float))
+    rg = g.create_group("runs", track_order=True)
+    for ctrl, t in tables.items():
+        cg = rg.create_group(ctrl, track_order=True)
+        for key, v in t.items():
+            cg.create_dataset(key, data=v)
+    ng = g.create_group("nominal", track_order=True)
+    if time_s is not None:
+        ng.create_dataset("time_s", data=time_s)
+        for ctrl in tables:
+            cg = ng.create_group(ctrl, track_order=True)
+            for sig, per in histories.items():
+                if ctrl in per:
+                    cg.create_dataset(sig, data=per[ctrl])
+
+
+def read_group(path: Path) -> tuple[list[dict], dict[str, dict[str, np.ndarray]], np.ndarray | None,
+                                    dict[str, dict[str, np.ndarray]]]:
+    """The comparison rows, per-run tables, nominal time grid and histories of a fly-off's
+    ``savant.h5`` (the inverse of :func:`write_group`)."""
+    with h5py.File(path, "r") as f:
+        g = f["flyoff"]
+        mg = g["metrics"]
+        cols = {c: (mg[c].asstr()[()] if mg[c].dtype.kind == "O" else mg[c][()]) for c in mg}
+        n = len(next(iter(cols.values())))
+        rows = [{c: (str(v[i]) if isinstance(v[i], str) else float(v[i])) for c, v in cols.items()} for i in range(n)]
+        tables = {c: {k: ds[()] for k, ds in g["runs"][c].items()} for c in g["runs"]}
+        ng = g["nominal"]
+        time_s = ng["time_s"][()] if "time_s" in ng else None
+        histories: dict[str, dict[str, np.ndarray]] = {}
+        for ctrl in (k for k in ng if k != "time_s"):
+            for sig, ds in ng[ctrl].items():
+                histories.setdefault(sig, {})[ctrl] = ds[()]
+    return rows, tables, time_s, histories
+
+
+def draw(rows: list[dict], tables: dict[str, dict[str, np.ndarray]], time_s: np.ndarray | None,
+         histories: dict[str, dict[str, np.ndarray]], folder: Path) -> list[Path]:
+    """The nominal-history overlays and the dispersed metric histograms."""
+    from savant_cli.plots.flyoff import plot_history_overlays, plot_metric_histograms
+
+    paths = []
+    names = list(tables)
     if histories and time_s is not None:
-        plot_history_overlays(time_s, histories, folder)
+        paths += plot_history_overlays(time_s, histories, folder)
     if any(t["run"].size > 1 for t in tables.values()):
         values = {r["metric"]: {n: tables[n][r["metric"]][tables[n]["ok"]] for n in names} for r in rows}
-        plot_metric_histograms(values, folder / "flyoff_histograms.png", {r["metric"]: r["winner"] for r in rows})
+        paths.append(plot_metric_histograms(values, folder / "flyoff_histograms.png",
+                                            {r["metric"]: r["winner"] for r in rows}))
+    return paths

@@ -3,8 +3,12 @@
 A time run (the nominal flight, written like ``study=nominal``) sets the operating
 points; at each, the plant is linearized (``linear/plant.py``), assembled with the
 discrete flight control (``linear/loops.py``) and analysed (``linear/margins.py``).
-Outputs: ``savant.h5`` (time history + ``linear`` group), ``linear.mat``, ``margins.csv``,
-``summary.json`` (with ``margins``), charts in ``plots/linear/`` and a console table.
+Outputs: ``savant.h5`` (time history + ``linear`` group: systems, margins, and the chart
+data of every charted point), ``linear.mat``, ``margins.csv``, ``summary.json`` (with
+``margins``), charts in ``plots/linear/`` and a console table. ``study.charts`` decides
+which points get chart data (``auto``: all when there are at most
+:data:`MAX_CHART_POINTS`); it is computed and stored with ``output.plots=false`` too, so
+``savant report`` can draw the charts later.
 """
 
 from __future__ import annotations
@@ -22,6 +26,7 @@ from rich.table import Table
 from savant_cli.config import LinearStudyConfig, SavantConfig
 from savant_cli.errors import ConfigError
 from savant_cli.io.console import print_run_summary
+from savant_cli.linear.charts import PointCharts, point_charts
 from savant_cli.linear.loops import AXES, LinearPoint, assemble
 from savant_cli.linear.margins import Bands, MarginRow, bandwidth_hz, disk_margins, loop_margins
 from savant_cli.linear.plant import linearize_plant
@@ -144,6 +149,10 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
                 scalars.append(extra)
                 bar.advance(task)
 
+    charted = study.charts == "all" or (study.charts == "auto" and len(points) <= MAX_CHART_POINTS)
+    charts = {pt.time_s: point_charts(pt.time_s, pt.loops, pt.closed, [r for r in rows if r.time_s == pt.time_s])
+              for pt in points} if charted else {}
+    requirements = study.requirements.by_band()
     summary["margins"] = [{"time_s": r.time_s, "axis": r.axis, "kind": r.kind, "value": r.value,
                            "frequency_hz": r.frequency_hz, "band": r.band} for r in rows]
     summary["linear_points"] = scalars
@@ -151,12 +160,12 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
     summary["study_wall_time_s"] = time.perf_counter() - t_start
     hdf_summary = {k: v for k, v in summary.items() if not isinstance(v, list)}
     record = flight_mod.record(result, sig, hdf_summary, raw_cfg, summary["study_wall_time_s"])
-    flight_mod.write(out_dir, record, cfg, json_summary=summary, extra=lambda f: write_linear_group(f, points, rows))
+    flight_mod.write(out_dir, record, cfg, json_summary=summary, extra=lambda f: write_linear_group(f, points, rows, charts, requirements, study.exclusion_zones))
     if cfg.output.hdf5:
         write_mat(out_dir / "linear.mat", points)
     write_margins_csv(out_dir / "margins.csv", rows)
     if cfg.output.plots:
-        _plots(points, rows, study, out_dir / "plots")
+        draw_linear(list(charts.values()), rows, requirements, study.exclusion_zones, out_dir / "plots")
     print_run_summary({k: v for k, v in hdf_summary.items() if k != "linear_note"}, record.status, record.message,
                       console)
     console.print(_table(rows, study))
@@ -165,14 +174,15 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
     return 0 if record.complete else 1
 
 
-def _plots(points: list[LinearPoint], rows: list[MarginRow], study: LinearStudyConfig, folder: Path) -> None:
-    """The linear charts (the ascent plots are drawn with the run's files)."""
+def draw_linear(charts: list[PointCharts], rows: list[MarginRow], requirements: dict[str, tuple[float, float]],
+                exclusion_zones: bool, folder: Path) -> list[Path]:
+    """The linear charts into ``folder/linear`` (the ascent plots are drawn with the run's
+    files): six per charted point and the margin envelope. Returns the PNGs written."""
     from savant_cli.plots.linear import plot_linear_point, plot_margin_envelope
 
-    charts = study.charts == "all" or (study.charts == "auto" and len(points) <= MAX_CHART_POINTS)
-    if charts:
-        for pt in points:
-            plot_linear_point(pt.time_s, pt.loops, pt.closed, [r for r in rows if r.time_s == pt.time_s],
-                              folder / "linear", exclusion_zones=study.exclusion_zones)
-    req = study.requirements.by_band()
-    plot_margin_envelope(rows, folder / "linear" / "margin_envelope.png", requirements=req)
+    paths = []
+    for c in charts:
+        paths += plot_linear_point(c, [r for r in rows if r.time_s == c.time_s], folder / "linear",
+                                   exclusion_zones=exclusion_zones)
+    paths.append(plot_margin_envelope(rows, folder / "linear" / "margin_envelope.png", requirements=requirements))
+    return paths

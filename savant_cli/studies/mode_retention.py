@@ -17,7 +17,9 @@ on) and is linearized at ``study.times``. Against the previous count:
 The recommended count is the smallest n from which every further step changes the
 response by at most ``study.response_tolerance`` and the margins by at most
 ``study.margin_tolerance_dB`` / ``_deg``. Outputs: ``mode_retention.csv``,
-``summary.json`` (the recommendation and its evidence), a console table and the plots
+``summary.json`` (the recommendation and its evidence), ``savant.h5`` (group
+``mode_retention``: every count's step responses and critical margins, from which
+``savant report`` redraws the plots), a console table and the plots
 ``plots/mode_retention_<time>_<output>.png`` (step response per count) and
 ``plots/mode_retention_margins.png`` (critical margins vs count).
 """
@@ -34,8 +36,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import control as ct
+import h5py
 import numpy as np
-from omegaconf import DictConfig
+from omegaconf import DictConfig, OmegaConf
 from rich.console import Console
 from rich.table import Table
 
@@ -44,6 +47,8 @@ from savant_cli.config import (
 )
 from savant_cli.errors import ConfigError
 from savant_cli.io.atomic import write_json_atomic, write_text_atomic
+from savant_cli.io.hdf5 import write_study_file
+from savant_cli.io.provenance import collect_provenance
 from savant_cli.sim.run import simulate
 from savant_cli.sim.setup import prepare
 from savant_cli.studies import flight as flight_mod
@@ -200,8 +205,12 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
         "tolerances": {"response": study.response_tolerance, "gain_dB": study.margin_tolerance_dB,
                        "phase_deg": study.margin_tolerance_deg},
         "study_wall_time_s": time.perf_counter() - t0})
+    if cfg.output.hdf5:
+        write_study_file(out_dir / "savant.h5", "mode_retention", OmegaConf.to_yaml(raw_cfg, resolve=True),
+                         collect_provenance(wall_time_s=time.perf_counter() - t0),
+                         lambda f: write_group(f, results, recommended, converged))
     if cfg.output.plots:
-        _plots(out_dir / "plots", results)
+        draw(results, out_dir / "plots")
     console.print(_table(rows, study))
     console.print(f"recommended: [bold]{recommended} modes[/] ({note})")
     console.print(f"outputs: {out_dir}")
@@ -222,25 +231,72 @@ def _table(rows: list[dict], study: ModeRetentionStudyConfig) -> Table:
     return tb
 
 
-def _plots(folder: Path, results: list[CountResult]) -> None:
-    from savant_cli.plots.flyoff import plot_history_overlays
-    from savant_cli.plots.montecarlo import _figure, _save, _style
+MARGIN_KEYS = ("time_s", "axis", "kind", "which")
 
+
+def write_group(f: h5py.File, results: list[CountResult], recommended: int, converged: bool) -> None:
+    """Group ``mode_retention`` of ``savant.h5``: attributes ``counts``,
+    ``recommended_n_modes``, ``converged``; ``responses/time_s`` and
+    ``responses/<name>`` (counts × time, NaN where a count lacks the response);
+    ``margins/{n_modes, time_s, axis, kind, which, value}`` (critical margins: ``which`` is
+    ``all`` or ``rigid/aero``; dB or deg); ``stable/{n_modes, time_s, closed_loop_stable}``."""
+    g = f.create_group("mode_retention", track_order=True)
+    g.attrs.update({"counts": [r.n_modes for r in results], "recommended_n_modes": recommended,
+                    "converged": bool(converged)})
+    rg = g.create_group("responses", track_order=True)
     t = results[-1].time_s
-    hist = {name: {f"{r.n_modes} modes": r.histories[name] for r in results if name in r.histories}
-            for name in sorted(results[0].histories)}
-    plot_history_overlays(t, hist, folder, prefix="mode_retention", title="attitude-command step response")
-    keys = sorted({k for r in results for k in r.margins if k[3] == "all"})
-    fig = _figure(8.0, 4.5)
-    axes = [fig.add_subplot(1, 2, i + 1) for i in range(2)]
-    for ax, kind, unit in zip(axes, ("gain", "phase"), ("dB", "deg")):
-        _style(ax)
-        for k in (k for k in keys if k[2] == kind):
-            ns = [r.n_modes for r in results if k in r.margins]
-            ax.plot(ns, [r.margins[k] for r in results if k in r.margins], marker="o", lw=1.0,
-                    label=f"{k[1]} t={k[0]:g}")
-        ax.set_xlabel("retained modes", fontsize=8)
-        ax.set_ylabel(f"critical {kind} margin ({unit})", fontsize=8)
-        ax.legend(fontsize=6)
-    fig.suptitle("critical margins vs retained modes", fontsize=10)
-    _save(fig, folder / "mode_retention_margins.png")
+    rg.create_dataset("time_s", data=t)
+    for name in sorted({k for r in results for k in r.histories}):
+        rg.create_dataset(name, data=np.array([r.histories.get(name, np.full(t.size, np.nan)) for r in results]))
+    items = [(r.n_modes, *k, v) for r in results for k, v in r.margins.items()]
+    mg = g.create_group("margins", track_order=True)
+    mg.create_dataset("n_modes", data=np.array([i[0] for i in items], dtype=np.int64))
+    for j, key in enumerate(MARGIN_KEYS, start=1):
+        vals = [i[j] for i in items]
+        mg.create_dataset(key, data=np.asarray(vals, dtype=float) if key == "time_s"
+                          else np.array(vals, dtype=h5py.string_dtype()))
+    mg.create_dataset("value", data=np.array([i[-1] for i in items], dtype=float))
+    sg = g.create_group("stable", track_order=True)
+    st = [(r.n_modes, t_s, ok) for r in results for t_s, ok in r.stable.items()]
+    sg.create_dataset("n_modes", data=np.array([s[0] for s in st], dtype=np.int64))
+    sg.create_dataset("time_s", data=np.array([s[1] for s in st], dtype=float))
+    sg.create_dataset("closed_loop_stable", data=np.array([s[2] for s in st], dtype=bool))
+
+
+def read_group(path: Path) -> list[CountResult]:
+    """Every count's responses, critical margins and stability from a mode-retention
+    ``savant.h5`` (the inverse of :func:`write_group`)."""
+    with h5py.File(path, "r") as f:
+        g = f["mode_retention"]
+        counts = [int(n) for n in g.attrs["counts"]]
+        rg = g["responses"]
+        t = rg["time_s"][()]
+        results = [CountResult(n, t, {}) for n in counts]
+        for name in rg:
+            if name == "time_s":
+                continue
+            data = rg[name][()]
+            for r, y in zip(results, data):
+                if np.isfinite(y).any():
+                    r.histories[name] = y
+        by_count = {r.n_modes: r for r in results}
+        mg = g["margins"]
+        cols = [mg[k].asstr()[()] if k != "time_s" else mg[k][()] for k in MARGIN_KEYS]
+        for n, *key, v in zip(mg["n_modes"][()], *cols, mg["value"][()]):
+            by_count[int(n)].margins[(float(key[0]), str(key[1]), str(key[2]), str(key[3]))] = float(v)
+        sg = g["stable"]
+        for n, t_s, ok in zip(sg["n_modes"][()], sg["time_s"][()], sg["closed_loop_stable"][()]):
+            by_count[int(n)].stable[float(t_s)] = bool(ok)
+    return results
+
+
+def draw(results: list[CountResult], folder: Path) -> list[Path]:
+    """The step-response overlays and the critical margins against the count."""
+    from savant_cli.plots.mode_retention import plot_mode_retention
+
+    responses = {name: {r.n_modes: r.histories[name] for r in results if name in r.histories}
+                 for name in sorted(results[0].histories)}
+    margins: dict[tuple[float, str, str], dict[int, float]] = {}
+    for key in sorted({k for r in results for k in r.margins if k[3] == "all"}):
+        margins[key[:3]] = {r.n_modes: r.margins[key] for r in results if key in r.margins}
+    return plot_mode_retention(results[-1].time_s, responses, margins, folder)
