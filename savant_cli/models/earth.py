@@ -12,6 +12,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from savant_cli.models.fused import fma
+
 from savant_cli import constants as C
 from savant_cli.models import blocks
 
@@ -59,6 +61,26 @@ def dcm_eci_to_ecef(t_s: float, omega: float) -> np.ndarray:
     m[1, 1] = c
     m[2, 2] = 1.0
     return m
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def height_of_eci(t_s: float, rx: float, ry: float, rz: float, omega: float, a: float, e2: float) -> float:
+    """Height above the ellipsoid (m) of an ECI point (m) at time ``t_s`` (s): the flight
+    software's gain-schedule altitude (``omega`` rad/s, ``a`` m, ``e2`` as
+    :func:`geodetic_height_sc`).
+
+    The point is turned into ECEF axes by ``R3(omega t) r`` summed with fused
+    multiply-adds, last column first: the arithmetic of the ``dcm_eci_to_ecef(t) @ r``
+    BLAS product it replaces, bit for bit (``savant_cli/models/fused.py``), without the
+    two arrays.
+    """
+    th = omega * t_s
+    c = np.cos(th)
+    s = np.sin(th)
+    xe = fma(c, rx, fma(s, ry, 0.0 * rz))
+    ye = fma(-s, rx, fma(c, ry, 0.0 * rz))
+    ze = fma(0.0, rx, fma(0.0, ry, 1.0 * rz))
+    return geodetic_height_sc(xe, ye, ze, a, e2)[0]
 
 
 @njit(cache=True, error_model="numpy")

@@ -30,7 +30,7 @@ from numba import njit
 
 from savant_cli.models import blocks, quaternion as qt
 from savant_cli.models.guidance import D_QS, D_VS
-from savant_cli.models.interp import locate, rows
+from savant_cli.models.interp import locate
 from savant_cli.models.sensors import D_GYRO_Y
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -174,47 +174,57 @@ def fcs_step(d: np.ndarray, q_nav: np.ndarray, phase: int, schedule_var: float,
         Altitude (m) on the stack, Earth-relative speed (m/s) afterwards.
     dt : float
         Control period, s.
+
+    Notes
+    -----
+    Scalar arithmetic, the intermediate results kept in ``d`` itself: no array is
+    created (this runs at 50 Hz).
     """
     fset = 0 if phase == FCS_STACK else 1
-    # error quaternion: rotation from the smoothed command to the body
-    q_err = qt.qmul(qt.qconj(d[D_QS:D_QS + 4]), q_nav)
-    if q_err[0] < 0.0:
-        q_err = -q_err
-    err = 2.0 * q_err[1:4] + d[D_FLEX_NAV:D_FLEX_NAV + 3]  # flex rotation at the nav unit adds
+    # error quaternion: rotation from the smoothed command to the body, qs* ⊗ q_nav
+    e0, e1, e2, e3 = qt.qmul_xyz(d[D_QS], -d[D_QS + 1], -d[D_QS + 2], -d[D_QS + 3],
+                                 q_nav[0], q_nav[1], q_nav[2], q_nav[3])
+    if e0 < 0.0:
+        e0, e1, e2, e3 = -e0, -e1, -e2, -e3
+    d[D_ERR] = 2.0 * e1 + d[D_FLEX_NAV]  # the flex rotation at the nav unit adds
+    d[D_ERR + 1] = 2.0 * e2 + d[D_FLEX_NAV + 1]
+    d[D_ERR + 2] = 2.0 * e3 + d[D_FLEX_NAV + 2]
     # rate command expressed in body axes
-    rate_cmd = qt.rotate_inverse(q_err, d[D_VS:D_VS + 3])
-    blend = np.zeros(3)
+    rc0, rc1, rc2 = qt.rotate_inverse_xyz(e0, e1, e2, e3, d[D_VS], d[D_VS + 1], d[D_VS + 2])
+    d[D_RATE_CMD_B] = rc0
+    d[D_RATE_CMD_B + 1] = rc1
+    d[D_RATE_CMD_B + 2] = rc2
+    b0 = b1 = b2 = 0.0  # blended gyro rate
     for g in range(3):
         wgt = ft.blend[fset, g]
-        for ax in range(3):
-            blend[ax] += wgt * d[D_GYRO_Y + 3 * g + ax]
-    rate_err = blend - rate_cmd
+        b0 += wgt * d[D_GYRO_Y + 3 * g]
+        b1 += wgt * d[D_GYRO_Y + 3 * g + 1]
+        b2 += wgt * d[D_GYRO_Y + 3 * g + 2]
+    d[D_RATE_ERR] = b0 - rc0
+    d[D_RATE_ERR + 1] = b1 - rc1
+    d[D_RATE_ERR + 2] = b2 - rc2
     own = GYRO_FIRST if phase == FCS_STACK else GYRO_UPPER
 
-    n = ft.gain_len[phase]
-    i, w = locate(ft.gain_axis[phase], n, schedule_var)
-    gains = rows(ft.gain_data[phase], i, w)
+    i, w = locate(ft.gain_axis[phase], ft.gain_len[phase], schedule_var)
+    for k in range(8):  # Kp, Ki, Kd, Kir of pitch then yaw
+        d[D_GAINS + k] = (1.0 - w) * ft.gain_data[phase, i, k] + w * ft.gain_data[phase, i + 1, k]
 
-    cmds = np.zeros(2)
     for c in range(2):  # 0 pitch (body y), 1 yaw (body z)
         ax = c + 1
-        d[D_INT_ATT + c] += err[ax] * dt
-        d[D_INT_RATE + c] += (d[D_GYRO_Y + 3 * own + ax] - rate_cmd[ax]) * dt
+        d[D_INT_ATT + c] += d[D_ERR + ax] * dt
+        d[D_INT_RATE + c] += (d[D_GYRO_Y + 3 * own + ax] - d[D_RATE_CMD_B + ax]) * dt
         base = D_FILT + c * 16
-        rate_f = filter_pair(d, base, ft.filters[fset, 0], rate_err[ax])
+        rate_f = filter_pair(d, base, ft.filters[fset, 0], d[D_RATE_ERR + ax])
         irate_f = filter_pair(d, base + 8, ft.filters[fset, 1], d[D_INT_RATE + c])
-        kp, ki, kd, kir = gains[4 * c], gains[4 * c + 1], gains[4 * c + 2], gains[4 * c + 3]
-        cmds[c] = -(kp * err[ax] + ki * d[D_INT_ATT + c] + kd * rate_f + kir * irate_f)
-    d[D_CMD_P] = cmds[0]
-    d[D_CMD_Y] = cmds[1]
+        g = D_GAINS + 4 * c
+        cmd = -(d[g] * d[D_ERR + ax] + d[g + 1] * d[D_INT_ATT + c] + d[g + 2] * rate_f + d[g + 3] * irate_f)
+        if c == 0:
+            d[D_CMD_P] = cmd
+        else:
+            d[D_CMD_Y] = cmd
 
-    roll_rate_f = filter_pair(d, D_ROLL_FILT, ft.roll_filters[fset], rate_err[0])
-    d[D_CMD_RCS] = roll_phase_plane(err[0], roll_rate_f, ft.roll[0], ft.roll[1], ft.roll[2])
-
-    d[D_ERR:D_ERR + 3] = err
-    d[D_RATE_ERR:D_RATE_ERR + 3] = rate_err
-    d[D_RATE_CMD_B:D_RATE_CMD_B + 3] = rate_cmd
-    d[D_GAINS:D_GAINS + 8] = gains
+    roll_rate_f = filter_pair(d, D_ROLL_FILT, ft.roll_filters[fset], d[D_RATE_ERR])
+    d[D_CMD_RCS] = roll_phase_plane(d[D_ERR], roll_rate_f, ft.roll[0], ft.roll[1], ft.roll[2])
 
 
 @njit(cache=True, error_model="numpy")

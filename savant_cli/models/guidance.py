@@ -67,15 +67,29 @@ def guidance_sample(d: np.ndarray, t: float, times: np.ndarray, quats: np.ndarra
 
 @njit(cache=True, error_model="numpy")
 def smoother_step(d: np.ndarray, t: float, dt: float, zeta: float, wn: float) -> None:
-    """Advance the smoothed command (``d[D_QS]``, ``d[D_VS]``) from ``t`` by ``dt``."""
-    v_eig = d[D_VG:D_VG + 3]
-    q_target = qt.qmul(d[D_QG:D_QG + 4], qt.from_rotation_vector(v_eig * (t - d[D_TG])))
-    q_s = d[D_QS:D_QS + 4]
-    q_err = qt.qmul(qt.qconj(q_target), q_s)
-    if q_err[0] < 0.0:  # shortest way round
-        q_err = -q_err
-    v = d[D_VS:D_VS + 3]
-    acc = -2.0 * zeta * wn * (v - v_eig) - 2.0 * wn * wn * q_err[1:4]
-    v_new = v + acc * dt
-    d[D_VS:D_VS + 3] = v_new
-    d[D_QS:D_QS + 4] = qt.qnormalize(qt.qmul(q_s, qt.from_rotation_vector(v_new * dt)))
+    """Advance the smoothed command (``d[D_QS]``, ``d[D_VS]``) from ``t`` by ``dt``.
+
+    Scalar arithmetic throughout (no array is created: this runs at 50 Hz)."""
+    vg0, vg1, vg2 = d[D_VG], d[D_VG + 1], d[D_VG + 2]
+    h = t - d[D_TG]
+    r0, r1, r2, r3 = qt.from_rotation_vector_xyz(vg0 * h, vg1 * h, vg2 * h)
+    g0, g1, g2, g3 = qt.qmul_xyz(d[D_QG], d[D_QG + 1], d[D_QG + 2], d[D_QG + 3], r0, r1, r2, r3)  # target
+    s0, s1, s2, s3 = d[D_QS], d[D_QS + 1], d[D_QS + 2], d[D_QS + 3]
+    e0, e1, e2, e3 = qt.qmul_xyz(g0, -g1, -g2, -g3, s0, s1, s2, s3)  # target* ⊗ smoothed
+    if e0 < 0.0:  # shortest way round
+        e1, e2, e3 = -e1, -e2, -e3
+    c_rate = -2.0 * zeta * wn
+    c_att = 2.0 * wn * wn
+    v0 = d[D_VS] + (c_rate * (d[D_VS] - vg0) - c_att * e1) * dt
+    v1 = d[D_VS + 1] + (c_rate * (d[D_VS + 1] - vg1) - c_att * e2) * dt
+    v2 = d[D_VS + 2] + (c_rate * (d[D_VS + 2] - vg2) - c_att * e3) * dt
+    d[D_VS] = v0
+    d[D_VS + 1] = v1
+    d[D_VS + 2] = v2
+    r0, r1, r2, r3 = qt.from_rotation_vector_xyz(v0 * dt, v1 * dt, v2 * dt)
+    m0, m1, m2, m3 = qt.qmul_xyz(s0, s1, s2, s3, r0, r1, r2, r3)
+    n0, n1, n2, n3 = qt.normalize_xyz(m0, m1, m2, m3)
+    d[D_QS] = n0
+    d[D_QS + 1] = n1
+    d[D_QS + 2] = n2
+    d[D_QS + 3] = n3

@@ -3,8 +3,10 @@
 Convention (see docs/architecture.md): an attitude quaternion ``q_b2i`` rotates body
 vectors into the inertial frame, ``v_i = q ⊗ v_b ⊗ q*``; its direction-cosine matrix
 ``dcm(q)`` is body→inertial, and the kinematics are ``q̇ = ½ q ⊗ [0, ω_body]``.
-All functions are compiled with numba and allocate only their small results
-(``qmul_into`` none).
+All functions are compiled with numba and allocate only their small results; the
+``*_xyz`` kernels take and return scalars and allocate nothing (the flight software's
+50-Hz cycle uses them). Each array function is a thin wrapper of its scalar kernel: one
+copy of every formula.
 """
 
 from __future__ import annotations
@@ -13,14 +15,25 @@ import numpy as np
 from numba import njit
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def qmul_xyz(a0: float, a1: float, a2: float, a3: float, b0: float, b1: float, b2: float,
+             b3: float) -> tuple[float, float, float, float]:
+    """Hamilton product ``a ⊗ b`` on scalars (scalar parts first)."""
+    return (a0 * b0 - a1 * b1 - a2 * b2 - a3 * b3,
+            a0 * b1 + a1 * b0 + a2 * b3 - a3 * b2,
+            a0 * b2 - a1 * b3 + a2 * b0 + a3 * b1,
+            a0 * b3 + a1 * b2 - a2 * b1 + a3 * b0)
+
+
 @njit(cache=True, error_model="numpy")
 def qmul_into(a: np.ndarray, b: np.ndarray, out: np.ndarray) -> None:
     """Hamilton product ``a ⊗ b`` written into ``out`` (no allocation; ``out`` must not
     alias ``a`` or ``b``)."""
-    out[0] = a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3]
-    out[1] = a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2]
-    out[2] = a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1]
-    out[3] = a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0]
+    p0, p1, p2, p3 = qmul_xyz(a[0], a[1], a[2], a[3], b[0], b[1], b[2], b[3])
+    out[0] = p0  # one store per element: a tuple unpacked into array items compiles slower
+    out[1] = p1
+    out[2] = p2
+    out[3] = p3
 
 
 @njit(cache=True, error_model="numpy")
@@ -42,14 +55,19 @@ def qconj(q: np.ndarray) -> np.ndarray:
     return out
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def normalize_xyz(q0: float, q1: float, q2: float, q3: float) -> tuple[float, float, float, float]:
+    """Unit quaternion in the same direction, with a non-negative scalar part (scalars)."""
+    n = np.sqrt(q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3)
+    s = 1.0 / n if q0 >= 0.0 else -1.0 / n
+    return q0 * s, q1 * s, q2 * s, q3 * s
+
+
 @njit(cache=True, error_model="numpy")
 def qnormalize(q: np.ndarray) -> np.ndarray:
     """Unit quaternion in the same direction, with a non-negative scalar part."""
-    n = np.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
-    s = 1.0 / n if q[0] >= 0.0 else -1.0 / n
     out = np.empty(4)
-    for i in range(4):
-        out[i] = q[i] * s
+    out[0], out[1], out[2], out[3] = normalize_xyz(q[0], q[1], q[2], q[3])
     return out
 
 
@@ -110,29 +128,42 @@ def rotate(q: np.ndarray, v: np.ndarray) -> np.ndarray:
     return dcm(q) @ v
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def rotate_inverse_xyz(q0: float, q1: float, q2: float, q3: float, v0: float, v1: float,
+                       v2: float) -> tuple[float, float, float]:
+    """``q* ⊗ v ⊗ q`` on scalars: inertial components → body components for ``q = q_b2i``
+    (``dcm(q)ᵀ v``, each component summed in row order)."""
+    m00, m01, m02, m10, m11, m12, m20, m21, m22 = dcm_xyz(q0, q1, q2, q3)
+    return (m00 * v0 + m10 * v1 + m20 * v2,
+            m01 * v0 + m11 * v1 + m21 * v2,
+            m02 * v0 + m12 * v1 + m22 * v2)
+
+
 @njit(cache=True, error_model="numpy")
 def rotate_inverse(q: np.ndarray, v: np.ndarray) -> np.ndarray:
     """``q* ⊗ v ⊗ q``: inertial components → body components for ``q = q_b2i``."""
-    return dcm(q).T @ v
+    out = np.empty(3)
+    out[0], out[1], out[2] = rotate_inverse_xyz(q[0], q[1], q[2], q[3], v[0], v[1], v[2])
+    return out
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def from_rotation_vector_xyz(p0: float, p1: float, p2: float) -> tuple[float, float, float, float]:
+    """Quaternion of a rotation by ``|φ|`` rad about ``φ/|φ|`` (exact exponential map),
+    scalars."""
+    ang = np.sqrt(p0 * p0 + p1 * p1 + p2 * p2)
+    if ang < 1e-12:
+        # second-order series keeps the small-rotation limit exact to round-off
+        return 1.0 - ang * ang / 8.0, 0.5 * p0, 0.5 * p1, 0.5 * p2
+    s = np.sin(0.5 * ang) / ang
+    return np.cos(0.5 * ang), p0 * s, p1 * s, p2 * s
 
 
 @njit(cache=True, error_model="numpy")
 def from_rotation_vector(phi: np.ndarray) -> np.ndarray:
     """Quaternion of a rotation by ``|phi|`` rad about ``phi/|phi|`` (exact exponential map)."""
-    ang = np.sqrt(phi[0] * phi[0] + phi[1] * phi[1] + phi[2] * phi[2])
     q = np.empty(4)
-    if ang < 1e-12:
-        # second-order series keeps the small-rotation limit exact to round-off
-        q[0] = 1.0 - ang * ang / 8.0
-        q[1] = 0.5 * phi[0]
-        q[2] = 0.5 * phi[1]
-        q[3] = 0.5 * phi[2]
-        return q
-    s = np.sin(0.5 * ang) / ang
-    q[0] = np.cos(0.5 * ang)
-    q[1] = phi[0] * s
-    q[2] = phi[1] * s
-    q[3] = phi[2] * s
+    q[0], q[1], q[2], q[3] = from_rotation_vector_xyz(phi[0], phi[1], phi[2])
     return q
 
 

@@ -33,6 +33,7 @@ from savant_cli.sim.layout import (
     D_FLEX_NAV, D_GYRO_X, D_GYRO_Y, ENGINE_OFF, ENGINE_UPPER, MFS, MLH2, MLOX, N_AUX, N_STATE,
     Q, R, RCS_NEG, RCS_POS, U_CONFIG, U_DPC, U_DYC, U_ENGINE, U_RCS, U_T_IGN, V, W,
 )
+from savant_cli.sim.borrow import borrowed
 from savant_cli.sim.plant import derivative, derivative_state
 
 # status codes returned by advance()
@@ -184,10 +185,23 @@ def advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0:
     ``x``, ``d``, ``u`` and ``events`` are updated in place; logged rows are written to
     ``log`` from row ``log_row``. Returns ``(status, steps_done, next_log_row, detail)``.
     """
-    dt = rates.dt
     aux = np.zeros(N_AUX)
+    work = work_array(x.size)
+    # the loop runs on reference-count-free views (sim/borrow.py): every array it borrows
+    # is held here, or by the caller, until it returns
+    return _advance(x, d, u, events, k0, n_steps, rates, p, tb, ft, gyro, gt, sched, log, log_row, aux, work)
+
+
+@njit(cache=True, error_model="numpy")
+def _advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0: int,
+             n_steps: int, rates: Rates, p: np.ndarray, tb: np.ndarray, ft: FcsTables,
+             gyro: GyroModel, gt: GuidanceTable, sched: np.ndarray, log: np.ndarray,
+             log_row: int, aux: np.ndarray, work: np.ndarray) -> tuple[int, int, int, str]:
+    """:func:`advance` with its scratch arrays (``aux``: diagnostics, ``work``: RK4)."""
+    x, d, u, p, tb, log = borrowed(x), borrowed(d), borrowed(u), borrowed(p), borrowed(tb), borrowed(log)
+    aux, work = borrowed(aux), borrowed(work)
+    dt = rates.dt
     nx = x.size
-    work = work_array(nx)
     n_cols = log.shape[1]
     flex3 = np.zeros(3)
     # sensor mounting misalignment: each gyro reads R(ε)ᵀ ω, the nav unit q_b2i ⊗ q_s2b
@@ -225,12 +239,12 @@ def advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0:
         if k % rates.n_fcs == 0:
             dt_fcs = rates.n_fcs * dt
             smoother_step(d, t, dt_fcs, sched[S_SMOOTH_ZETA], sched[S_SMOOTH_WN])
-            if phase == FCS_STACK:
-                r_ecef = earth.dcm_eci_to_ecef(t, p[P_OMEGA_E]) @ x[R:R + 3]
-                sched_var = earth.ecef_to_geodetic(r_ecef, p[P_RE], p[P_E2])[2]
+            if phase == FCS_STACK:  # schedules: geodetic height, then Earth-relative speed
+                sched_var = earth.height_of_eci(t, x[R], x[R + 1], x[R + 2], p[P_OMEGA_E], p[P_RE], p[P_E2])
             else:
-                v_rel = earth.velocity_relative_eci(x[R:R + 3], x[V:V + 3], p[P_OMEGA_E])
-                sched_var = np.sqrt(v_rel[0] ** 2 + v_rel[1] ** 2 + v_rel[2] ** 2)
+                ex, ey, ez = earth.earth_relative_velocity_xyz(x[R], x[R + 1], x[V], x[V + 1], x[V + 2],
+                                                               p[P_OMEGA_E])
+                sched_var = np.sqrt(ex ** 2 + ey ** 2 + ez ** 2)
             if has_flex:
                 flex.flex_point(x, config, p, tb, flex.PT_IMU, False, flex3)  # flex rotation at the nav unit
                 d[D_FLEX_NAV:D_FLEX_NAV + 3] = flex3
