@@ -256,8 +256,8 @@ class SimplexStage(ActuatorStageCommon):
 
     valve_frequency_hz: float = 50.0
     valve_damping: float = 0.7
-    stiffness_Nm_per_rad: float = 2.0e8
-    damping_Nms_per_rad: float = 1.0e5
+    stiffness_Nm_per_rad: float = 1.99e8  # the first stage's: ω_n = 12 Hz with J = 35,000 kg m²
+    damping_Nms_per_rad: float = 3.17e6  # ζ = C / (2 √(K J)) = 0.6 with that J
     leakage_rad_s_per_Nm: float = 0.0
     feedback: str = "piston"  # piston (ram LVDT) | nozzle
 

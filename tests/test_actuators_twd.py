@@ -46,7 +46,7 @@ def _simplex_ss(wv: float, feedback: float) -> ct.StateSpace:
         x = np.zeros(5)
         x[:] = x5
         out = np.zeros(5)
-        actuator.simplex(x, 0, 3, u, sp, 0, out)
+        actuator.simplex(x, 0, 3, u, sp, 0, 1.0, out)
         return out
 
     a, b = _jacobian(f, 5)
@@ -75,7 +75,7 @@ def test_simplex_reduces_to_third_order_with_fast_valve_and_nozzle_feedback():
         out = np.zeros(3)
         p3 = np.zeros(actuator.THIRD.size)
         p3[[actuator.T3_WA, actuator.T3_WN, actuator.T3_ZETA, actuator.T3_RATE]] = 30.0, WN, ZETA, 10.0
-        actuator.third_order(x, 0, u, p3, 0, out)
+        actuator.third_order(x, 0, u, p3, 0, 1.0, out)
         return out
 
     a3, b3 = _jacobian(f3, 3)
@@ -89,18 +89,21 @@ def test_simplex_reduces_to_third_order_with_fast_valve_and_nozzle_feedback():
 
 
 def test_simplex_rate_saturates_at_the_valve_limit():
-    """A large step: the ram moves at the valve's flow limit once the valve settles."""
+    """A large step: the spool sits on its stop and the ram moves at the flow limit."""
     sp = _simplex_params(2 * np.pi * 45.0, 0.0)
     sp[actuator.SX_RATE] = np.radians(5.0)
     x = np.zeros(5)
     dt = 1e-4
     for _ in range(int(0.2 / dt)):  # 0.2 s into a 0.1 rad step, still slewing
         k1 = np.zeros(5)
-        actuator.simplex(x, 0, 3, 0.1, sp, 0, k1)
+        actuator.simplex(x, 0, 3, 0.1, sp, 0, 1.0, k1)
         x += dt * k1
+        if x[3] > sp[actuator.SX_RATE]:  # the stop (the engine's actuator.contain)
+            x[3], x[4] = sp[actuator.SX_RATE], min(x[4], 0.0)
     out = np.zeros(5)
-    actuator.simplex(x, 0, 3, 0.1, sp, 0, out)
-    assert out[2] == pytest.approx(np.radians(5.0), rel=1e-3)  # θ̇_p = r = rate limit
+    actuator.simplex(x, 0, 3, 0.1, sp, 0, 1.0, out)
+    assert x[3] == np.radians(5.0) and out[3] == 0.0 and out[4] == 0.0  # held on the stop
+    assert out[2] == pytest.approx(np.radians(5.0), rel=1e-12)  # θ̇_p = r = rate limit
 
 
 def _twd_setup(thrust: float):

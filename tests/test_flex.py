@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from savant_cli.models import flex, propulsion, rcs, rigid_body, twd as twd_model
+from savant_cli.models import flex, mass as mass_model, propulsion, rcs, rigid_body, twd as twd_model
 from savant_cli.sim import layout as L
 from savant_cli.sim.engine import rk4, work_array
 from savant_cli.models.flex import flex_point
@@ -378,3 +378,44 @@ def test_roll_jet_torque_loads_the_modes_at_the_rcs_point():
     derivative(0.0, x, u, p, tb, aux, xd)
     assert aux[rcs.A_TORQUE] == pytest.approx(torque, rel=1e-12)
     np.testing.assert_allclose(xd[fo + 2:fo + 4], expected, rtol=1e-12)
+
+
+@pytest.mark.parametrize("engine", [L.ENGINE_FIRST, L.ENGINE_UPPER])
+def test_thrust_and_engine_reaction_act_at_the_displaced_gimbal(engine):
+    """One pitch-plane mode (φ_x, φ_z, σ_y at the gimbal), nozzle at null: the thrust
+    T R(σ_y q) x̂ acts at r_g + φ q, so the modal-to-rigid pitch moment per unit q is,
+    by hand, ∂M_y/∂q = T (φ_z + r_gx σ_y) (the turned thrust on the arm, plus the axial
+    thrust on the displacement; the old plant had only T r_gx σ_y). The tail-wags-dog force
+    F = m_R l_R (0, 0, δ̈_p) at the same point adds ∂M_y/∂q = −φ_x m_R l_R δ̈_p."""
+    rng = np.random.default_rng(21 + engine)
+    tables, shapes, w, zeta, thrust, p, lay, u, x = _thrust_setup(engine, rng, nm=1, twd=True)
+    pg = L.PT_GIMBAL_FS if engine == L.ENGINE_FIRST else L.PT_GIMBAL_US
+    sa = 0 if engine == L.ENGINE_FIRST else 2
+    shapes[...] = 0.0
+    phi_x, phi_z, sigma_y = 4.0e-4, 2.5e-3, -3.0e-4
+    shapes[:, 0, pg, flex.PHI_X], shapes[:, 0, pg, flex.PHI_Z], shapes[:, 0, pg, flex.SIGMA_Y] = phi_x, phi_z, sigma_y
+    tb = pack_tables(tables._replace(flex_shape=shapes))
+    fo = lay.flex
+    acc_p = 3.0  # rad/s², the third-order nozzle acceleration state
+    x[L.ACT_P:L.ACT_P + 3] = 0.0, 0.0, acc_p
+    x[L.ACT_Y:L.ACT_Y + 3] = 0.0
+
+    def moments(q: float) -> tuple[float, float]:
+        xs = x.copy()
+        xs[fo] = q
+        aux, xd = np.zeros(L.N_AUX), np.zeros(lay.n)
+        derivative(0.0, xs, u, p, tb, aux, xd)
+        return aux[propulsion.A_MOMENT + 1], aux[twd_model.A_MOMENT + 1]
+
+    # the arm at q = 0 from the plant's own CG (aux) and the vehicle's gimbal station
+    aux0, xd0 = np.zeros(L.N_AUX), np.zeros(lay.n)
+    derivative(0.0, x, u, p, tb, aux0, xd0)
+    cg = aux0[mass_model.A_CG:mass_model.A_CG + 3]
+    r_gx = propulsion.gimbal_arm(p, int(u[L.U_ENGINE]), *cg)[0]
+    assert r_gx < -1.0  # the gimbal is aft of the CG
+    h = 1e-3
+    (mp, wp), (mm, wm) = moments(h), moments(-h)
+    e = twd_model.P_FS_ENGINE if engine == L.ENGINE_FIRST else twd_model.P_US_ENGINE
+    m_l = p[e + twd_model.E_MASS] * p[e + twd_model.E_ARM]
+    assert (mp - mm) / (2 * h) == pytest.approx(thrust * (phi_z + r_gx * sigma_y), rel=1e-6)
+    assert (wp - wm) / (2 * h) == pytest.approx(-phi_x * m_l * acc_p, rel=1e-6)

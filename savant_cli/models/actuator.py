@@ -2,13 +2,11 @@
 
 States ``x[ACT_P:ACT_P+3]`` (pitch) and ``x[ACT_Y:ACT_Y+3]`` (yaw); the simplex model adds
 a power-valve block ``[r, ṙ]`` per axis (offset ``P_VALVE_OFFSET``). The command is
-clipped to the stage's gimbal limit; while the nozzle sits at or beyond the limit its
-angular acceleration (the tail-wags-dog input) is zero, and the thrust line uses the
-clipped angle.
+clipped to the stage's gimbal limit.
 
 Third order (``actuator=third_order``), states ``[δ, δ̇, δ̈]``::
 
-    v = sat(ω_a (δ_c − δ), ±rate_limit)        commanded rate
+    v = sat(ω_a (δ_c − δ), ±R)                 commanded rate
     δ⃛ = ω_n² (v − δ̇) − 2 ζ ω_n δ̈              second-order load
 
 Unsaturated: δ/δ_c = ω_a ω_n² / (s (s² + 2ζω_n s + ω_n²) + ω_a ω_n²).
@@ -16,15 +14,30 @@ Unsaturated: δ/δ_c = ω_a ω_n² / (s (s² + 2ζω_n s + ω_n²) + ω_a ω_n²
 Simplex (``actuator=simplex``), states ``[δ, δ̇, θ_p]`` and ``[r, ṙ]``: position loop, power
 valve, hydraulic ram and a compliant nozzle mount::
 
-    v   = sat(K_a (δ_c − δ_fb), ±rate_limit)     position loop, valve stops
-    r̈   = ω_v² (v − r) − 2 ζ_v ω_v ṙ              power valve (flow as no-load ram rate)
+    v   = K_a (δ_c − δ_fb)                        position loop (valve command)
+    r̈   = ω_v² (v − r) − 2 ζ_v ω_v ṙ,  |r| ≤ R     power valve: spool (flow as no-load
+                                                   ram rate) against its stops
     θ̇_p = r − c_l K (θ_p − δ)                     ram: flow minus leakage
     J δ̈ = K (θ_p − δ) − C δ̇                       nozzle on a compliant mount
 
 ``δ_fb`` is the ram position (LVDT, ``feedback: piston``) or the nozzle angle. With
 ω_v → ∞, c_l = 0 and nozzle feedback this is the third-order model with ω_a = K_a,
-ω_n² = K/J, 2ζω_n = C/J. Source: SAVANT §III, "TVC actuator" (the paper's simplex
-model); ``docs/models.md``.
+ω_n² = K/J, 2ζω_n = C/J.
+
+Limits bound the hardware, not only the command (issue 12):
+
+* **Rate limit.** The third-order nozzle rate δ̇ and the simplex spool r are integrator
+  states held at ±R by a hard stop: while one sits at its limit and is driven outward its
+  derivative is zero (so the third-order δ̈, and the tail-wags-dog load with it, is zero
+  during a constant-rate slew), and after every plant step :func:`contain` puts it back
+  on the limit and clears the outward rate of change it would carry (anti-windup:
+  δ̈ for the third order, ṙ for the spool). The simplex nozzle may exceed R only through
+  its mount compliance.
+* **Gimbal stop.** δ is held at ±limit the same way for both models: at the stop the
+  nozzle neither moves nor accelerates outward, and :func:`contain` clears an outward
+  δ̇ (an inelastic stop, no run-through).
+
+Source: SAVANT §III, "TVC actuator" (the paper's simplex model); ``docs/models.md``.
 """
 
 from __future__ import annotations
@@ -122,43 +135,103 @@ def clip(x: float, lim: float) -> float:
     return x
 
 
-@njit(cache=True, error_model="numpy")
-def third_order(x: np.ndarray, k: int, cmd: float, p: np.ndarray, base: int, out: np.ndarray) -> None:
+@njit(cache=True, error_model="numpy", inline="always")
+def held(value: float, limit: float, push: float) -> bool:
+    """Whether a state at ``value`` is held by its stop at ±``limit`` against a push of
+    sign ``push`` (at or beyond the stop and driven outward)."""
+    return (value >= limit and push > 0.0) or (value <= -limit and push < 0.0)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def third_order(x: np.ndarray, k: int, cmd: float, p: np.ndarray, base: int, limit: float,
+                out: np.ndarray) -> float:
     """Third-order actuator: states ``x[k:k+3] = [δ, δ̇, δ̈]``, derivatives into
-    ``out[k:k+3]``; ``cmd`` is δ_c (rad); ``p[base:]`` a :data:`THIRD` record."""
+    ``out[k:k+3]``; ``cmd`` is δ_c (rad), ``limit`` the gimbal stop (rad); ``p[base:]`` a
+    :data:`THIRD` record. Returns the nozzle angular acceleration (rad/s²): δ̈, or 0 while
+    the rate limit or the stop holds the nozzle."""
     wn = p[base + T3_WN]
     rate_limit = p[base + T3_RATE]
-    v = p[base + T3_WA] * (cmd - x[k])
-    if v > rate_limit:
-        v = rate_limit
-    elif v < -rate_limit:
-        v = -rate_limit
-    out[k] = x[k + 1]
-    out[k + 1] = x[k + 2]
-    out[k + 2] = wn * wn * (v - x[k + 1]) - 2.0 * p[base + T3_ZETA] * wn * x[k + 2]
+    d, rate, acc = x[k], x[k + 1], x[k + 2]
+    v = clip(p[base + T3_WA] * (cmd - d), rate_limit)
+    out[k + 2] = wn * wn * (v - rate) - 2.0 * p[base + T3_ZETA] * wn * acc
+    if held(rate, rate_limit, acc):
+        acc = 0.0
+    if held(d, limit, rate):
+        rate = 0.0
+    if held(d, limit, acc):
+        acc = 0.0
+    out[k] = rate
+    out[k + 1] = acc
+    return acc
 
 
-@njit(cache=True, error_model="numpy")
-def simplex(x: np.ndarray, k: int, kv: int, cmd: float, p: np.ndarray, base: int, out: np.ndarray) -> float:
+@njit(cache=True, error_model="numpy", inline="always")
+def simplex(x: np.ndarray, k: int, kv: int, cmd: float, p: np.ndarray, base: int, limit: float,
+            out: np.ndarray) -> float:
     """Simplex actuator: states ``x[k:k+3] = [δ, δ̇, θ_p]`` and valve ``x[kv:kv+2] = [r, ṙ]``,
-    derivatives into ``out``; ``p[base:]`` a :data:`SPX` record. Returns δ̈ (rad/s²)."""
-    d, dd, th = x[k], x[k + 1], x[k + 2]
+    derivatives into ``out``; ``limit`` the gimbal stop (rad); ``p[base:]`` a :data:`SPX`
+    record. Returns the nozzle angular acceleration δ̈ (rad/s²; 0 while the stop holds it)."""
+    d, rate, th = x[k], x[k + 1], x[k + 2]
+    r, r_dot = x[kv], x[kv + 1]
     fb = d if p[base + SX_FEEDBACK] > 0.5 else th
     rl = p[base + SX_RATE]
     v = p[base + SX_KA] * (cmd - fb)
-    if v > rl:
-        v = rl
-    elif v < -rl:
-        v = -rl
-    torque = p[base + SX_K] * (th - d)
-    ddd = (torque - p[base + SX_C] * dd) / p[base + SX_J]
     wv = p[base + SX_WV]
-    out[k] = dd
-    out[k + 1] = ddd
-    out[k + 2] = x[kv] - p[base + SX_LEAK] * torque
-    out[kv] = x[kv + 1]
-    out[kv + 1] = wv * wv * (v - x[kv]) - 2.0 * p[base + SX_ZV] * wv * x[kv + 1]
-    return ddd
+    r_acc = wv * wv * (v - r) - 2.0 * p[base + SX_ZV] * wv * r_dot
+    if held(r, rl, r_dot):  # the spool on its stop: the flow holds at the limit
+        r_dot = 0.0
+    if held(r, rl, r_acc):
+        r_acc = 0.0
+    torque = p[base + SX_K] * (th - d)
+    acc = (torque - p[base + SX_C] * rate) / p[base + SX_J]
+    if held(d, limit, rate):
+        rate = 0.0
+    if held(d, limit, acc):
+        acc = 0.0
+    out[k] = rate
+    out[k + 1] = acc
+    out[k + 2] = r - p[base + SX_LEAK] * torque
+    out[kv] = r_dot
+    out[kv + 1] = r_acc
+    return acc
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _stop(x: np.ndarray, i: int, limit: float) -> bool:
+    """Put ``x[i]`` back on its stop at ±``limit`` and clear an outward rate of change at
+    ``x[i + 1]``; whether it was at the stop."""
+    if x[i] >= limit:
+        x[i] = limit
+        if x[i + 1] > 0.0:
+            x[i + 1] = 0.0
+        return True
+    if x[i] <= -limit:
+        x[i] = -limit
+        if x[i + 1] < 0.0:
+            x[i + 1] = 0.0
+        return True
+    return False
+
+
+@njit(cache=True, error_model="numpy")
+def contain(x: np.ndarray, p: np.ndarray, engine: int) -> None:
+    """After a plant step: the active stage's gimbal stop on δ, and the rate stop (the
+    third-order δ̇, the simplex spool r), each with its outward rate of change cleared."""
+    first = engine == ENGINE_FIRST
+    lim = p[gimbal_stage(engine) + G_LIMIT]
+    if int(p[P_KIND]) == SIMPLEX:
+        rl = p[(P_FS_SPX if first else P_US_SPX) + SX_RATE]
+        vo = int(p[P_VALVE_OFFSET])
+        for kv in (vo, vo + 2):
+            _stop(x, kv, rl)
+        for k in (ACT_P, ACT_Y):
+            _stop(x, k, lim)
+    else:
+        rl = p[(P_FS_THIRD if first else P_US_THIRD) + T3_RATE]
+        for k in (ACT_P, ACT_Y):
+            _stop(x, k + 1, rl)
+            if _stop(x, k, lim) and x[k + 2] * x[k] > 0.0:
+                x[k + 2] = 0.0  # no outward acceleration at the stop
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -171,23 +244,18 @@ def gimbal_stage(engine: int) -> int:
 def actuator_rates(x: np.ndarray, p: np.ndarray, engine: int, pitch_cmd: float, yaw_cmd: float,
                    xd: np.ndarray) -> tuple[float, float]:
     """Write the actuator state derivatives into ``xd``; return the nozzle angular
-    accelerations δ̈ pitch, yaw (rad/s²), zero while the nozzle is at its limit."""
+    accelerations pitch, yaw (rad/s²; zero while a stop holds the nozzle)."""
     lim = p[gimbal_stage(engine) + G_LIMIT]
     first = engine == ENGINE_FIRST
     if int(p[P_KIND]) == SIMPLEX:
         vo = int(p[P_VALVE_OFFSET])
         sp = P_FS_SPX if first else P_US_SPX
-        ddp = simplex(x, ACT_P, vo, clip(pitch_cmd, lim), p, sp, xd)
-        ddy = simplex(x, ACT_Y, vo + 2, clip(yaw_cmd, lim), p, sp, xd)
+        ddp = simplex(x, ACT_P, vo, clip(pitch_cmd, lim), p, sp, lim, xd)
+        ddy = simplex(x, ACT_Y, vo + 2, clip(yaw_cmd, lim), p, sp, lim, xd)
     else:
         t3 = P_FS_THIRD if first else P_US_THIRD
-        third_order(x, ACT_P, clip(pitch_cmd, lim), p, t3, xd)
-        third_order(x, ACT_Y, clip(yaw_cmd, lim), p, t3, xd)
-        ddp, ddy = x[ACT_P + 2], x[ACT_Y + 2]
-    if abs(x[ACT_P]) >= lim:  # held at the stop: no nozzle acceleration
-        ddp = 0.0
-    if abs(x[ACT_Y]) >= lim:
-        ddy = 0.0
+        ddp = third_order(x, ACT_P, clip(pitch_cmd, lim), p, t3, lim, xd)
+        ddy = third_order(x, ACT_Y, clip(yaw_cmd, lim), p, t3, lim, xd)
     return ddp, ddy
 
 

@@ -8,9 +8,11 @@ Each mode ``i`` (unit generalized mass, SI: q in √kg·m) obeys::
 with φ the translation and σ the rotation mode shape at a point (body axes). Loaded
 points: the active gimbal (thrust plus the tail-wags-dog force, and the tail-wags-dog
 torque), the roll jets (their torque) and the two slosh masses (their forces). The
-structure's rotation at a point is ``Σ σ_i(pt) q_i``: at the gimbal it turns the thrust
-line (follower thrust), at the navigation unit and the rate gyros it is what the
-sensors see on top of the rigid motion.
+structure's rotation at a point is ``Σ σ_i(pt) q_i`` and its displacement
+``Σ φ_i(pt) q_i``: at the gimbal the rotation turns the thrust line (follower thrust) and
+the displacement moves the point the thrust and the tail-wags-dog force act at (their
+moment arm about the CG is ``r_g + Σ φ_i(g) q_i``); at the navigation unit and the rate
+gyros the rotation is what the sensors see on top of the rigid motion.
 
 Four modal sets, two per stage (first-stage liftoff and burnout, second-stage ignition
 and burnout). With ``flex.switching: event`` (the paper's assumption) the liftoff set is
@@ -104,10 +106,11 @@ def flex_sets(x: np.ndarray, config: int, p: np.ndarray) -> tuple[int, int, floa
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def rotation_at(x: np.ndarray, config: int, p: np.ndarray, tb: np.ndarray, pt: int,
-                rate: bool) -> tuple[float, float, float]:
-    """Flex rotation (``rate`` False, rad) or rotation rate (True, rad/s) at point ``pt``,
-    body axes: ``Σ_i σ_i(pt) q_i`` (or ``q̇_i``). Zero when flex is off."""
+def _shape_sum(x: np.ndarray, config: int, p: np.ndarray, tb: np.ndarray, pt: int, rate: bool,
+               component: int) -> tuple[float, float, float]:
+    """``Σ_i s_i(pt) q_i`` (or ``q̇_i``) for the three shape entries from ``component``
+    (``PHI_X``: translation, ``SIGMA_X``: rotation) at point ``pt``, blended between the
+    stage's two modal sets; zero when flex is off."""
     rx = ry = rz = 0.0
     fo = int(p[P_OFFSET])
     if fo < 0:
@@ -118,12 +121,28 @@ def rotation_at(x: np.ndarray, config: int, p: np.ndarray, tb: np.ndarray, pt: i
     nd = tab(tb, T_ZETA)[1]  # modes in the data
     for i in range(nm):
         qi = x[fo + nm + i] if rate else x[fo + i]
-        ia = o_sh + ((sa * nd + i) * N_POINTS + pt) * N_SHAPE + SIGMA_X
-        ib = o_sh + ((sb * nd + i) * N_POINTS + pt) * N_SHAPE + SIGMA_X
+        ia = o_sh + ((sa * nd + i) * N_POINTS + pt) * N_SHAPE + component
+        ib = o_sh + ((sb * nd + i) * N_POINTS + pt) * N_SHAPE + component
         rx += ((1.0 - w) * tb[ia] + w * tb[ib]) * qi
         ry += ((1.0 - w) * tb[ia + 1] + w * tb[ib + 1]) * qi
         rz += ((1.0 - w) * tb[ia + 2] + w * tb[ib + 2]) * qi
     return rx, ry, rz
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def rotation_at(x: np.ndarray, config: int, p: np.ndarray, tb: np.ndarray, pt: int,
+                rate: bool) -> tuple[float, float, float]:
+    """Flex rotation (``rate`` False, rad) or rotation rate (True, rad/s) at point ``pt``,
+    body axes: ``Σ_i σ_i(pt) q_i`` (or ``q̇_i``). Zero when flex is off."""
+    return _shape_sum(x, config, p, tb, pt, rate, SIGMA_X)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def displacement_at(x: np.ndarray, config: int, p: np.ndarray, tb: np.ndarray,
+                    pt: int) -> tuple[float, float, float]:
+    """Flex displacement at point ``pt`` (m, body axes): ``Σ_i φ_i(pt) q_i``. Zero when
+    flex is off."""
+    return _shape_sum(x, config, p, tb, pt, False, PHI_X)
 
 
 @njit(cache=True, error_model="numpy")

@@ -2,7 +2,8 @@
 
 Each direction (positive, negative roll) has ``n`` jets on a moment arm ``l``; the
 commanded direction's thrust fraction ramps linearly to 1 in ``ramp_up`` s, the other to
-0 in ``ramp_down`` s. Jet thrust ``F_jet = max(F_vac(h) − p_amb A_exit, 0)`` from a vacuum
+0 in ``ramp_down`` s; a ramp time of 0 is an instantaneous step, applied by
+:func:`step_jets` when the flight software's command changes. Jet thrust ``F_jet = max(F_vac(h) − p_amb A_exit, 0)`` from a vacuum
 thrust table against altitude. Roll torque about body X::
 
     L = (f₊ − f₋) n F_jet l
@@ -50,10 +51,10 @@ def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarra
 @njit(cache=True, error_model="numpy", inline="always")
 def jet_ramp(frac: float, on: bool, ramp_up_s: float, ramp_down_s: float) -> float:
     """Rate of the jet thrust fraction (1/s): linear ramp up to 1 when open, down to 0
-    when shut."""
+    when shut; 0 for a ramp time of 0 (:func:`step_jets` steps the fraction instead)."""
     if on:
-        return 1.0 / ramp_up_s if frac < 1.0 else 0.0
-    return -1.0 / ramp_down_s if frac > 0.0 else 0.0
+        return 1.0 / ramp_up_s if frac < 1.0 and ramp_up_s > 0.0 else 0.0
+    return -1.0 / ramp_down_s if frac > 0.0 and ramp_down_s > 0.0 else 0.0
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -62,6 +63,17 @@ def jet_rates(x: np.ndarray, p: np.ndarray, command: float) -> tuple[float, floa
     (+1 positive roll, −1 negative, 0 off)."""
     return (jet_ramp(x[RCS_POS], command > 0.5, p[P_RAMP_UP], p[P_RAMP_DOWN]),
             jet_ramp(x[RCS_NEG], command < -0.5, p[P_RAMP_UP], p[P_RAMP_DOWN]))
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def step_jets(x: np.ndarray, p: np.ndarray, command: float) -> None:
+    """At a new jet command (+1, 0, −1): the thrust fractions whose ramp time is 0 jump
+    to their end value (1 for the commanded direction, 0 for the other)."""
+    for i, on in ((RCS_POS, command > 0.5), (RCS_NEG, command < -0.5)):
+        if on and p[P_RAMP_UP] <= 0.0:
+            x[i] = 1.0
+        elif not on and p[P_RAMP_DOWN] <= 0.0:
+            x[i] = 0.0
 
 
 @njit(cache=True, error_model="numpy", inline="always")

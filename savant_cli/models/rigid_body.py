@@ -12,14 +12,17 @@ States (SI)::
 reactions), ``M`` the moment about its CG. The inertia tensor is frozen over a step: the
 İω term of a variable-mass body is left out, as in the source paper (SAVANT §III; the
 jet-damping and mass-flow terms are small for the rates of a controlled ascent). The
-reference point is the CG of the current configuration (``docs/models.md``).
+reference point is the CG of the current configuration (of its rigid part with slosh on,
+``docs/models.md``); when that CG moves in the structure (separation, LES jettison, the
+start with slosh on) :func:`move_reference` moves ``r`` and ``v`` with it, so every point
+of the structure keeps its position and velocity.
 """
 
 from __future__ import annotations
 
 from numba import njit
 
-from savant_cli.models import blocks
+from savant_cli.models import blocks, quaternion as qt
 
 _STATE = blocks.STATE.block("rigid_body")
 R = _STATE.array("position", 3, "m", "CG position, ECI")
@@ -81,3 +84,21 @@ def inertial_acceleration(m00, m01, m02, m10, m11, m12, m20, m21, m22, abx, aby,
     return (m00 * abx + m01 * aby + m02 * abz + gx,
             m10 * abx + m11 * aby + m12 * abz + gy,
             m20 * abx + m21 * aby + m22 * abz + gz)
+
+
+@njit(cache=True, error_model="numpy")
+def move_reference(x, dsx: float, dsy: float, dsz: float) -> None:
+    """Move the state's reference point by ``(dsx, dsy, dsz)`` (m, structure axes: x aft,
+    y, z as the vehicle data): ``r += C_b2i Δ`` and ``v += C_b2i (ω × Δ)`` with
+    ``Δ = (−dsx, dsy, −dsz)`` in body axes, so the structure's points keep their
+    positions and velocities (a rigid body's velocity field)."""
+    dbx, dby, dbz = -dsx, dsy, -dsz
+    m00, m01, m02, m10, m11, m12, m20, m21, m22 = qt.dcm_xyz(x[Q], x[Q + 1], x[Q + 2], x[Q + 3])
+    wx, wy, wz = x[W], x[W + 1], x[W + 2]
+    ux, uy, uz = wy * dbz - wz * dby, wz * dbx - wx * dbz, wx * dby - wy * dbx  # ω × Δ
+    x[R] += m00 * dbx + m01 * dby + m02 * dbz
+    x[R + 1] += m10 * dbx + m11 * dby + m12 * dbz
+    x[R + 2] += m20 * dbx + m21 * dby + m22 * dbz
+    x[V] += m00 * ux + m01 * uy + m02 * uz
+    x[V + 1] += m10 * ux + m11 * uy + m12 * uz
+    x[V + 2] += m20 * ux + m21 * uy + m22 * uz

@@ -11,14 +11,14 @@ import numpy as np
 
 from savant_cli import constants as C
 from savant_cli.config import SavantConfig
-from savant_cli.models import PLANT_MODELS, blocks, earth, quaternion as qt
+from savant_cli.models import PLANT_MODELS, blocks, earth, quaternion as qt, rigid_body
 from savant_cli.models.fcs import FcsTables, fcs_tables
 from savant_cli.models.sensors import GYRO_MISALIGN, gyro_discrete, gyro_steady_state, misalignment
 from savant_cli.sim import engine as E
 from savant_cli.sim import layout as L
 from savant_cli.sim.engine import GuidanceTable, GyroModel, Rates
 from savant_cli.flex_slosh import SloshData, load_slosh
-from savant_cli.sim.plant import PlantTables, pack_tables
+from savant_cli.sim.plant import PlantTables, mass_state, pack_tables
 from savant_cli.vehicle import Vehicle
 
 
@@ -154,6 +154,10 @@ def build_model(cfg: SavantConfig, vehicle: Vehicle, guidance: GuidanceTable) ->
     x0[L.MFS] = vehicle.configurations["stack"].mass.propellant_kg[-1]
     x0[L.MLOX] = vehicle.upper_stage.lox_kg
     x0[L.MLH2] = vehicle.upper_stage.lh2_kg
+    # the pad state is the whole vehicle's CG; with slosh on the state's reference point
+    # is the rigid part's (the slosh masses left out): move it there
+    _, whole, rigid, _, _ = mass_state(x0, p, pack_tables(tb), L.CONFIG_STACK)
+    rigid_body.move_reference(x0, rigid[1] - whole[1], rigid[2] - whole[2], rigid[3] - whole[3])
 
     d0 = np.zeros(L.N_DISC)
     for g in range(3):

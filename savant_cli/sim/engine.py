@@ -20,7 +20,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from savant_cli.models import actuator, earth, flex, quaternion as qt, slosh
+from savant_cli.models import actuator, earth, flex, quaternion as qt, rcs, rigid_body, slosh
 from savant_cli.models.earth import A_ALT, P_E2, P_OMEGA_E, P_RE
 from savant_cli.models.fcs import FCS_COAST, FCS_STACK, FCS_UPPER, FcsTables, fcs_step, reset_phase
 from savant_cli.models.gravity import P_MU
@@ -29,12 +29,12 @@ from savant_cli.models.sensors import (
     GYRO_MISALIGN, GYRO_POINTS, N_GYROS, P_IMU_MISALIGN, gyro_step, misalignment,
 )
 from savant_cli.sim.layout import (
-    ACT_P, ACT_Y, CONFIG_UPPER, CONFIG_UPPER_LES, D_CMD_P, D_CMD_RCS, D_CMD_Y,
+    ACT_P, ACT_Y, CONFIG_STACK, CONFIG_UPPER, CONFIG_UPPER_LES, D_CMD_P, D_CMD_RCS, D_CMD_Y,
     D_FLEX_NAV, D_GYRO_X, D_GYRO_Y, ENGINE_OFF, ENGINE_UPPER, MFS, MLH2, MLOX, N_AUX, N_STATE,
     Q, R, RCS_NEG, RCS_POS, U_CONFIG, U_DPC, U_DYC, U_ENGINE, U_RCS, U_T_IGN, V, W,
 )
 from savant_cli.sim.borrow import borrowed
-from savant_cli.sim.plant import derivative, derivative_state
+from savant_cli.sim.plant import derivative, derivative_state, reference_cg
 
 # status codes returned by advance()
 RUNNING = 0
@@ -132,13 +132,24 @@ def work_array(n_state: int = N_STATE) -> np.ndarray:
 
 
 @njit(cache=True, error_model="numpy")
+def move_reference(x: np.ndarray, old: tuple[float, float, float], new: tuple[float, float, float]) -> None:
+    """The reference point from CG ``old`` to CG ``new`` (structure axes, m) of the same
+    structure (:func:`savant_cli.models.rigid_body.move_reference`)."""
+    rigid_body.move_reference(x, new[0] - old[0], new[1] - old[1], new[2] - old[2])
+
+
+@njit(cache=True, error_model="numpy")
 def handle_events(t: float, x: np.ndarray, u: np.ndarray, d: np.ndarray,
-                  events: np.ndarray, sched: np.ndarray, p: np.ndarray) -> int:
-    """Apply time- and condition-triggered events at a step boundary; return a stop code."""
+                  events: np.ndarray, sched: np.ndarray, p: np.ndarray, tb: np.ndarray) -> int:
+    """Apply time- and condition-triggered events at a step boundary; return a stop code.
+
+    At separation and at LES jettison the state's reference point moves to the new
+    configuration's CG (position and velocity of every structural point unchanged)."""
     if np.isnan(events[EV_SEPARATION]) and t >= sched[S_T_SEP]:
         events[EV_SEPARATION] = t
         if sched[S_STOP_AT_SEP] != 0.0:
             return STOP_SEPARATION
+        cg_stack = reference_cg(x, p, tb, CONFIG_STACK)
         u[U_CONFIG] = CONFIG_UPPER_LES
         u[U_ENGINE] = ENGINE_OFF
         x[MFS] = 0.0
@@ -150,6 +161,7 @@ def handle_events(t: float, x: np.ndarray, u: np.ndarray, d: np.ndarray,
         fo = int(p[flex.P_OFFSET])
         if fo >= 0:  # new modal set: its modes start at rest (paper: liftoff → ignition set)
             x[fo:fo + 2 * int(p[flex.P_N_MODES])] = 0.0
+        move_reference(x, cg_stack, reference_cg(x, p, tb, CONFIG_UPPER_LES))
         reset_phase(d)
     t_sep = events[EV_SEPARATION]
     if not np.isnan(t_sep) and np.isnan(events[EV_IGNITION]) and t >= t_sep + sched[S_T_IGN_DELAY]:
@@ -160,7 +172,9 @@ def handle_events(t: float, x: np.ndarray, u: np.ndarray, d: np.ndarray,
     t_ign = events[EV_IGNITION]
     if not np.isnan(t_ign) and np.isnan(events[EV_LES]) and t >= t_ign + sched[S_T_LES_DELAY]:
         events[EV_LES] = t
+        cg_les = reference_cg(x, p, tb, CONFIG_UPPER_LES)
         u[U_CONFIG] = CONFIG_UPPER
+        move_reference(x, cg_les, reference_cg(x, p, tb, CONFIG_UPPER))
     if int(u[U_ENGINE]) == ENGINE_UPPER:
         if x[MLOX] <= 0.0 or x[MLH2] <= 0.0:
             events[EV_CUTOFF] = t
@@ -214,7 +228,7 @@ def _advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0
     for j in range(n_steps):
         k = k0 + j
         t = k * dt
-        status = handle_events(t, x, u, d, events, sched, p)
+        status = handle_events(t, x, u, d, events, sched, p, tb)
         if status != RUNNING:
             return status, j, log_row, ""
         if int(u[U_ENGINE]) == ENGINE_UPPER and specific_energy(x, p[P_MU]) >= sched[S_ENERGY_TARGET]:
@@ -253,6 +267,7 @@ def _advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0
             u[U_DPC] = d[D_CMD_P]
             u[U_DYC] = d[D_CMD_Y]
             u[U_RCS] = d[D_CMD_RCS]
+            rcs.step_jets(x, p, u[U_RCS])  # jets without a ramp open and shut at once
 
         logging = k % rates.n_log == 0 and log_row < log.shape[0]
         if logging:  # the state before the step, the diagnostics of its first stage
@@ -265,7 +280,7 @@ def _advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0
             row[1 + nx + N_AUX:n_cols] = d
             log_row += 1
 
-        # housekeeping: unit quaternion, physical bounds of bounded states
+        # housekeeping: unit quaternion, physical bounds of bounded states (hard stops)
         qn = 1.0 / np.sqrt(x[Q] ** 2 + x[Q + 1] ** 2 + x[Q + 2] ** 2 + x[Q + 3] ** 2)
         for i in range(Q, Q + 4):
             x[i] *= qn
@@ -274,6 +289,7 @@ def _advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0
                 x[i] = 0.0
         for i in (RCS_POS, RCS_NEG):
             x[i] = min(max(x[i], 0.0), 1.0)
+        actuator.contain(x, p, int(u[U_ENGINE]))  # the rate and gimbal stops
         slosh.contain(x, p)
 
         finite = True

@@ -56,6 +56,40 @@ def derivative_state(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: 
 
 
 @njit(cache=True, error_model="numpy", inline="always")
+def mass_state(x: np.ndarray, p: np.ndarray, tb: np.ndarray, config: int):
+    """Mass properties of ``config`` in state ``x``.
+
+    Returns
+    -------
+    tuple
+        ``(propellant kg, (mass kg, CG x, y, z m) of the whole vehicle, (mass, CG x, y, z,
+        Ixx, Iyy, Izz, Ixy, Ixz, Iyz) of the rigid part, tank 0, tank 1)``: CGs in
+        structure axes, inertia about the rigid part's CG in body axes (tensor elements);
+        the rigid part leaves the slosh masses out when slosh is on (else it is the
+        whole vehicle), and each tank is ``(level m, ω rad/s, ζ, slosh mass kg, station
+        m)`` (zeros with slosh off).
+    """
+    prop = propulsion.propellant_remaining(x, config)
+    mass, cgx, cgy, cgz, ixx, iyy, izz, ixy, ixz, iyz = mass_model.mass_properties(tb, config, prop)
+    whole = (mass, cgx, cgy, cgz)
+    tank0 = tank1 = (0.0, 0.0, 0.0, 0.0, 0.0)
+    if int(p[slosh.P_OFFSET]) >= 0:  # the rigid part leaves the slosh masses out
+        tank0 = slosh.slosh_tank(tb, p, 0, x[MLOX])
+        tank1 = slosh.slosh_tank(tb, p, 1, x[MLH2])
+        mass, cgx, cgy, cgz, ixx, iyy, izz, ixy, ixz, iyz = slosh.rigid_part(
+            mass, cgx, cgy, cgz, ixx, iyy, izz, ixy, ixz, iyz, tank0[3], tank0[4], tank1[3], tank1[4])
+    return prop, whole, (mass, cgx, cgy, cgz, ixx, iyy, izz, ixy, ixz, iyz), tank0, tank1
+
+
+@njit(cache=True, error_model="numpy")
+def reference_cg(x: np.ndarray, p: np.ndarray, tb: np.ndarray, config: int) -> tuple[float, float, float]:
+    """The state's reference point in configuration ``config``: the CG (structure axes,
+    m) of the rigid part (:func:`mass_state`)."""
+    rigid = mass_state(x, p, tb, config)[2]
+    return rigid[1], rigid[2], rigid[3]
+
+
+@njit(cache=True, error_model="numpy", inline="always")
 def compose(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarray,
             aux: np.ndarray, xd: np.ndarray, diagnostics: bool) -> None:
     """Time derivative of the continuous state, written into ``xd``.
@@ -107,16 +141,12 @@ def compose(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarra
     vair, alpha, beta, mach, qbar = aero.air_data(ub, vb, wb, rho, sos)
 
     # ------------------------------------------------------- mass properties
-    prop = propulsion.propellant_remaining(x, config)
-    mass, cgx, cgy, cgz, ixx, iyy, izz, ixy, ixz, iyz = mass_model.mass_properties(tb, config, prop)
-    mass_total, cgx_t, cgy_t, cgz_t = mass, cgx, cgy, cgz
+    prop, whole, rigid, tank0, tank1 = mass_state(x, p, tb, config)
+    mass_total, cgx_t, cgy_t, cgz_t = whole
+    mass, cgx, cgy, cgz, ixx, iyy, izz, ixy, ixz, iyz = rigid
+    lvl0, ws0, zs0, ms0, xs0 = tank0
+    lvl1, ws1, zs1, ms1, xs1 = tank1
     slosh_at = int(p[slosh.P_OFFSET])  # first slosh state, −1 when slosh is off
-    lvl0 = lvl1 = ws0 = ws1 = zs0 = zs1 = ms0 = ms1 = xs0 = xs1 = 0.0
-    if slosh_at >= 0:  # the rigid part leaves the slosh masses out
-        lvl0, ws0, zs0, ms0, xs0 = slosh.slosh_tank(tb, p, 0, x[MLOX])
-        lvl1, ws1, zs1, ms1, xs1 = slosh.slosh_tank(tb, p, 1, x[MLH2])
-        mass, cgx, cgy, cgz, ixx, iyy, izz, ixy, ixz, iyz = slosh.rigid_part(
-            mass, cgx, cgy, cgz, ixx, iyy, izz, ixy, ixz, iyz, ms0, xs0, ms1, xs1)
 
     # ------------------------------------------------- forces and moments
     fax, fay, faz, max_, may, maz = aero.aero_loads(tb, p, config, t, mach, alpha, beta, qbar, cgx, cgy, cgz)
@@ -129,6 +159,8 @@ def compose(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarra
     thrust, mdot_fs, mdot_us = propulsion.thrust_and_flow(x, tb, p, engine, t, u[U_T_IGN], pres)
     dp, dy, bias_p, bias_y = actuator.gimbal_angles(x, p, engine)
     rgx, rgy, rgz = propulsion.gimbal_arm(p, engine, cgx, cgy, cgz)
+    dgx, dgy, dgz = flex.displacement_at(x, config, p, tb, gimbal_pt)  # the structure moves the gimbal
+    rgx, rgy, rgz = rgx + dgx, rgy + dgy, rgz + dgz
     ftx, fty, ftz, mtx, mty, mtz = propulsion.thrust_loads(thrust, dp + bias_p - tgy, dy + bias_y - tgz,
                                                            rgx, rgy, rgz)
     fwx, fwy, fwz, twy, twz, mwx, mwy, mwz = twd.twd_loads(p, engine, ddp, ddy, rgx, rgy, rgz)
