@@ -25,6 +25,18 @@ from savant_cli.errors import ConfigError
 
 
 @dataclass
+class HealthConfig:
+    """``sim.health``: when a run that flew to its end is not a clean ``complete``
+    (``savant_cli/sim/health.py``)."""
+
+    max_saturation_s: float = 1.0  # s on a rate limit or gimbal stop (per stage) → "saturated"
+    min_amplitude_deg: float = 0.1  # limit cycle: smallest gimbal-angle or attitude-error amplitude
+    min_periods: float = 5.0  # limit cycle: the oscillation holds for at least this many periods
+    window_s: float = 20.0  # limit cycle: analysis window (and the quiet time after each event)
+    tonal_fraction: float = 0.5  # limit cycle: share of a window's variance in its spectral peak
+
+
+@dataclass
 class SimConfig:
     plant_rate_hz: float = 200.0
     sensor_rate_hz: float = 200.0
@@ -35,6 +47,7 @@ class SimConfig:
     chunk_s: float = 10.0
     progress: bool = True
     max_body_rate_deg_s: float = 60.0
+    health: HealthConfig = field(default_factory=HealthConfig)
 
 
 @dataclass
@@ -608,6 +621,12 @@ def _check_rates(sim: SimConfig) -> None:
                               f"must divide sim.plant_rate_hz = {sim.plant_rate_hz} into a whole number of steps")
     _positive("sim.chunk_s", sim.chunk_s)
     _positive("sim.max_body_rate_deg_s", sim.max_body_rate_deg_s)
+    h = sim.health
+    _non_negative("sim.health.max_saturation_s", h.max_saturation_s)
+    for name in ("min_amplitude_deg", "min_periods", "window_s"):
+        _positive(f"sim.health.{name}", getattr(h, name))
+    if not 0.0 < h.tonal_fraction <= 1.0:
+        raise ConfigError("sim.health.tonal_fraction", h.tonal_fraction, "must lie in (0, 1]")
 
 
 def _check_controller(c: ControllerConfig) -> None:

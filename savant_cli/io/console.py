@@ -24,6 +24,7 @@ UNIT_SUFFIXES: tuple[tuple[str, str, str], ...] = (
     ("_m", "m", "{:,.1f}"),
     ("_s", "s", "{:,.3f}"),
     ("_N", "N", "{:,.0f}"),
+    ("_hz", "Hz", "{:.3f}"),
 )
 
 #: Keys shown on the status line instead of in the table.

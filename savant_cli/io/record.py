@@ -17,7 +17,10 @@ import numpy as np
 SummaryValue = float | int | str | None
 
 #: ``RunRecord.status`` values.
-STATUSES = ("complete", "diverged", "interrupted", "failed")
+STATUSES = ("complete", "limit_cycle", "saturated", "diverged", "interrupted", "failed")
+#: The statuses of a run that flew to its end: ``complete`` is healthy, ``limit_cycle``
+#: and ``saturated`` are not (``savant_cli/sim/health.py``).
+FLOWN = ("complete", "limit_cycle", "saturated")
 
 
 @dataclass(frozen=True)
@@ -68,9 +71,11 @@ class RunRecord:
         ``savant_version``, ``git_commit``, ``python``, ``numba``, ``host``,
         ``created_utc`` ... (see :func:`savant_cli.io.provenance.collect_provenance`).
     complete : bool
-        False when the run diverged, was interrupted or failed.
+        False when the run diverged, was interrupted or failed (it did not fly to its end).
     status : str
-        ``"complete"``, ``"diverged"``, ``"interrupted"`` or ``"failed"``.
+        One of :data:`STATUSES`: ``"complete"`` (flew to its end, healthy),
+        ``"limit_cycle"`` or ``"saturated"`` (flew to its end, unhealthy), ``"diverged"``,
+        ``"interrupted"`` or ``"failed"``.
     message : str
         Why the run stopped (``"cutoff on target energy"``, ``"NaN in body_rate at t=..."``).
     """

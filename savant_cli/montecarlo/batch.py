@@ -35,6 +35,7 @@ from savant_cli.montecarlo.targets import apply_samples, build_dispersed
 from savant_cli.sim.build import SimModel
 from savant_cli.sim.engine import EVENT_NAMES
 from savant_cli.sim.run import simulate, signals
+from savant_cli.sim.health import assess
 from savant_cli.sim.summary import summarize
 
 #: summary keys that vary from machine to machine, kept out of the run tables
@@ -133,7 +134,8 @@ def fly_run(case: Case, run: int, keep: bool = False):
         steps = tuple(int(round(t / (rt.dt * rt.n_fcs))) * rt.n_fcs for t in case.linear_times)
         result = simulate(model, progress=False, snapshot_steps=steps)
         sig = signals(result, model)
-        summ = summarize(result, sig)
+        health = assess(result, sig, model, case.cfg.sim.health)
+        summ = {**summarize(result, sig), **health}
         keys = [k for k, v in summ.items() if isinstance(v, (int, float)) and not isinstance(v, bool)
                 and k not in WALL_KEYS]
         with warnings.catch_warnings():

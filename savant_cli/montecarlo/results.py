@@ -24,6 +24,7 @@ from rich.table import Table
 from savant_cli.errors import ConfigError
 from savant_cli.io.atomic import atomic_path, write_json_atomic, write_text_atomic
 from savant_cli.io.console import split_unit
+from savant_cli.io.record import FLOWN
 from savant_cli.montecarlo.batch import AXIS_CODES, BAND_CODES, KIND_CODES, read_outcome
 from savant_cli.sim.engine import EVENT_NAMES
 
@@ -96,8 +97,9 @@ class Tables:
 
     @property
     def ok(self) -> np.ndarray:
-        """Runs with usable results (complete or diverged: a diverged run still flew)."""
-        return np.array([s in ("complete", "diverged") for s in self.status])
+        """Runs with usable results: those that flew to their end (healthy or not) and the
+        diverged ones (a diverged run still flew)."""
+        return np.array([s in (*FLOWN, "diverged") for s in self.status])
 
 
 def _write_tables(h5: h5py.Group, inv: Inventory, runs: list[int], history_names: list[str],

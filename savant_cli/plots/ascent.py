@@ -215,7 +215,8 @@ def _draw(spec: FigureSpec, record: RunRecord, t: np.ndarray, idx: np.ndarray) -
         return None
     # fixed margins in inches instead of a layout engine (which would draw every figure
     # twice): the figure is 8 in wide, 1.75 in per panel
-    top_in = 0.5 if record.complete else 0.72
+    clean = record.complete and record.status == "complete"
+    top_in = 0.5 if clean else 0.72
     height = top_in + 0.55 + 1.75 * len(panels)
     fig = Figure(figsize=(_WIDTH_IN, height), dpi=DPI)
     FigureCanvasAgg(fig)
@@ -249,11 +250,12 @@ def _draw(spec: FigureSpec, record: RunRecord, t: np.ndarray, idx: np.ndarray) -
         _event_lines(ax, record.events, float(t[0]), float(t[-1]), label=(k == 0))
     axes[-1].set_xlabel("time from liftoff (s)")
     axes[-1].set_xlim(float(t[0]), float(t[-1]) if t[-1] > t[0] else float(t[0]) + 1.0)
-    if record.complete:
+    if clean:
         fig.suptitle(spec.title, fontsize=11, y=1.0 - 0.2 / height, va="top")
-    else:
+    else:  # a run that did not fly to its end, or flew to it unhealthy (limit cycle, saturated)
         msg = record.message if len(record.message) <= 90 else record.message[:87] + "..."
-        fig.suptitle(f"{spec.title}\nINCOMPLETE: {msg}", fontsize=11, color="red", y=1.0 - 0.15 / height, va="top")
+        verdict = "INCOMPLETE" if not record.complete else record.status.replace("_", " ").upper()
+        fig.suptitle(f"{spec.title}\n{verdict}: {msg}", fontsize=11, color="red", y=1.0 - 0.15 / height, va="top")
     return fig
 
 
@@ -278,7 +280,9 @@ def plot_ascent(record: RunRecord, out_dir: Path) -> list[Path]:
     Angles are drawn in degrees, rates in deg/s, altitude in km and dynamic pressure in
     kPa; events (separation, ignition, LES jettison, cutoff) are thin dotted vertical
     lines on every axes. Lines longer than :data:`MAX_POINTS` samples are strided. When
-    ``record.complete`` is False every title carries ``INCOMPLETE: <message>`` in red.
+    ``record.complete`` is False every title carries ``INCOMPLETE: <message>`` in red; a
+    run that flew to its end unhealthy carries its status (``LIMIT CYCLE: <message>``,
+    ``SATURATED: <message>``).
     """
     out_dir = Path(out_dir)
     time_sig = record.signals.get("time")

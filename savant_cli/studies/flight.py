@@ -20,8 +20,9 @@ from savant_cli.config import SavantConfig
 from savant_cli.io.atomic import write_json_atomic
 from savant_cli.io.hdf5 import write_run
 from savant_cli.io.provenance import collect_provenance
-from savant_cli.io.record import RunRecord, Signal
+from savant_cli.io.record import FLOWN, RunRecord, Signal
 from savant_cli.sim.build import rates
+from savant_cli.sim.health import assess
 from savant_cli.sim.engine import EVENT_NAMES
 from savant_cli.sim.run import SimResult, signals, simulate
 from savant_cli.sim.setup import Prepared, prepare
@@ -45,7 +46,8 @@ def fly(cfg: SavantConfig, progress: bool | None = None, snapshot_steps: tuple[i
     result = simulate(prep.model, progress=cfg.sim.progress if progress is None else progress,
                       chunk_s=cfg.sim.chunk_s, snapshot_steps=snapshot_steps)
     sig = signals(result, prep.model)
-    return Flight(prep=prep, result=result, signals=sig, summary=summarize(result, sig))
+    health = assess(result, sig, prep.model, cfg.sim.health)  # may turn "complete" into a verdict
+    return Flight(prep=prep, result=result, signals=sig, summary={**summarize(result, sig), **health})
 
 
 def control_steps(cfg: SavantConfig, times: list[float]) -> tuple[int, ...]:
@@ -67,7 +69,7 @@ def record(result: SimResult, sig: dict[str, Signal], summary: dict[str, Any], r
     return RunRecord(signals=sig, events=events_of(result), summary=summary,
                      config_yaml=OmegaConf.to_yaml(raw_cfg, resolve=True),
                      provenance=collect_provenance(wall_time_s=wall_time_s),
-                     complete=result.status == "complete", status=result.status, message=result.message)
+                     complete=result.status in FLOWN, status=result.status, message=result.message)
 
 
 def write(out_dir: Path, rec: RunRecord, cfg: SavantConfig, json_summary: dict[str, Any] | None = None,

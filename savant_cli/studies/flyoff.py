@@ -28,6 +28,7 @@ from rich.table import Table
 from savant_cli.config import FlyoffStudyConfig, SavantConfig, check_physics
 from savant_cli.errors import ConfigError
 from savant_cli.io.atomic import write_json_atomic, write_text_atomic
+from savant_cli.io.record import FLOWN
 from savant_cli.io.hdf5 import write_study_file
 from savant_cli.io.provenance import collect_provenance
 from savant_cli.montecarlo.results import PERCENTILES
@@ -65,9 +66,10 @@ def _per_run(h5: Path) -> dict[str, np.ndarray]:
     with h5py.File(h5) as f:
         g = f["montecarlo"]
         runs = g["runs/run"][()]
-        ok = np.array([s in (b"complete", "complete") for s in g["runs/status"][()]])
+        status = g["runs/status"].asstr()[()]
+        ok = np.isin(status, FLOWN)  # flew to its end (its health is counted separately)
         order = np.argsort(runs)
-        out = {"run": runs[order], "ok": ok[order]}
+        out = {"run": runs[order], "ok": ok[order], "healthy": (status == "complete")[order]}
         for metric, (key, _, _) in METRICS.items():
             if key.startswith("margin:"):
                 kind = key.split(":")[1]
@@ -159,7 +161,8 @@ def _write(out_dir: Path, rows: list[dict], tables: dict, study: FlyoffStudyConf
         "study": "flyoff", "controllers": list(tables), "n_runs": study.n_runs,
         "linear_times_s": list(study.linear_times), "metrics": rows,
         "wins": {c: sum(r["winner"] == c for r in rows) for c in tables},
-        "runs_complete": {c: int(t["ok"].sum()) for c, t in tables.items()}})
+        "runs_complete": {c: int(t["healthy"].sum()) for c, t in tables.items()},
+        "runs_flagged": {c: int((t["ok"] & ~t["healthy"]).sum()) for c, t in tables.items()}})
 
 
 def _table(rows: list[dict], names: list[str]) -> Table:
