@@ -485,6 +485,10 @@ class ControllerConfig:
     flex_filters: FilterSets = field(default_factory=FilterSets)
     gains: GainTables = field(default_factory=GainTables)
     roll: RollControl = field(default_factory=RollControl)
+    # transport delay from the sensor sample to the actuator command (s): a whole number
+    # of plant steps, shorter than the control period; the same in the time run and the
+    # linear model
+    delay_s: float = 0.005
 
 
 @dataclass
@@ -681,6 +685,19 @@ def check_vehicle_match(cfg: SavantConfig) -> None:
                               f"config selects it by default), or set {group}.allow_other_vehicle=true to fly it anyway")
 
 
+def check_delay(delay_s: float, sim: SimConfig) -> None:
+    """``controller.delay_s``: 0 or more, a whole number of plant steps, below one
+    flight-control period."""
+    _non_negative("controller.delay_s", delay_s)
+    steps = delay_s * sim.plant_rate_hz
+    if abs(steps - round(steps)) > 1e-6:
+        raise ConfigError("controller.delay_s", delay_s,
+                          f"must be a whole number of plant steps (1 / sim.plant_rate_hz = {1.0 / sim.plant_rate_hz:g} s)")
+    if delay_s >= 1.0 / sim.fcs_rate_hz - 1e-12:
+        raise ConfigError("controller.delay_s", delay_s,
+                          f"must be shorter than the flight-control period (1 / sim.fcs_rate_hz = {1.0 / sim.fcs_rate_hz:g} s)")
+
+
 def check_physics(cfg: SavantConfig) -> None:
     """Physical checks of a typed config (every group); raises ConfigError naming the key."""
     check_vehicle_match(cfg)
@@ -693,6 +710,7 @@ def check_physics(cfg: SavantConfig) -> None:
     if cfg.phase.start == "staging" and not cfg.phase.staging_state_file:
         raise ConfigError("phase.staging_state_file", "", "must name a staging-state file when phase.start = staging")
     check_actuator(cfg.actuator, cfg.sim.plant_rate_hz)
+    check_delay(cfg.controller.delay_s, cfg.sim)
     check_flex(cfg.flex)
     check_slosh(cfg.slosh)
     _positive("sensors.rate_gyro.natural_frequency_hz", cfg.sensors.rate_gyro.natural_frequency_hz)

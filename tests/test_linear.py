@@ -71,7 +71,7 @@ def test_linear_plant_matches_nonlinear_small_step(maxq):
     q_lin = resp.outputs.ravel()
     peak = np.abs(q_nl).max()
     assert peak > 1e-5
-    assert np.abs(q_lin - q_nl).max() < 0.05 * peak
+    assert np.abs(q_lin - q_nl).max() < 0.02 * peak  # measured 1.2 %
 
 
 def test_tail_wags_dog_zero_pair():
@@ -235,3 +235,52 @@ def test_every_crossing_of_a_flex_loop_is_listed():
     assert sum(r.kind == "phase" for r in rows) == n_gain_cross
     assert sum(r.kind == "gain" for r in rows) == n_phase_cross
     assert n_gain_cross >= 3 and any(r.band == "flex" for r in rows)
+
+
+def _closed_loop_gust_response(model, snap, gust: float, seconds: float) -> np.ndarray:
+    """Pitch gimbal angle at every flight-control cycle of the time run (engine.advance,
+    flight software in the loop) from ``snap`` with a constant body-z gust (m/s)."""
+    from savant_cli.sim import engine as E
+    from savant_cli.sim.run import log_columns
+
+    x, d, u, ev = snap.x.copy(), snap.d.copy(), snap.u.copy(), snap.events.copy()
+    u[L.U_GUST + 2] = gust
+    rt = model.rates
+    log = np.empty((int(seconds / rt.dt) // rt.n_log + 4, log_columns(x.size)))
+    out, k, row = [x[L.ACT_P]], snap.step, 0
+    for _ in range(int(round(seconds / (rt.dt * rt.n_fcs)))):
+        status, done, row, _ = E.advance(x, d, u, ev, k, rt.n_fcs, rt, model.p, model.packed_tables, model.fcs,
+                                         model.gyro, model.guidance, model.sched, log, row)
+        assert status == E.RUNNING and done == rt.n_fcs
+        k += done
+        out.append(x[L.ACT_P])
+    return np.asarray(out)
+
+
+@pytest.mark.parametrize("overrides", [["flex=on", "flex.n_modes=4"], ["flex=on", "flex.n_modes=4",
+                                                                   "controller.delay_s=0"]])
+def test_closed_loop_matches_the_time_run_with_flight_software(overrides):
+    """The linear closed loop (plant sampled as the flight software samples it: the rate
+    gyros' own 200 Hz filters, the loop delay) against the time run itself: the pitch
+    gimbal response to a 0.05 m/s body-z gust step at max-Q, flight software in the
+    loop, as the difference of two nonlinear runs (the trajectory's drift cancels).
+
+    Within 1 % of the peak over the first 0.5 s (measured 0.8 %; the issue-4 model, a
+    continuous gyro and no delay, was off by 2.6 % with the 5 ms delay and 1.2 % without,
+    7 % and 2.2 % over the first 0.25 s). Later the frozen-time model itself drifts from
+    the flight: the airspeed grows by about 4 %/s at max-Q, and the gust's α with it
+    (2 % at 1 s, 4 % at 2 s, for either model)."""
+    model, snap = _point(overrides, 55.0)
+    lin = linearize_plant(model, snap)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        pt = assemble(model, snap, lin, DT_FCS)
+    gust, seconds = 0.05, 0.5
+    nonlinear = (_closed_loop_gust_response(model, snap, gust, seconds)
+                 - _closed_loop_gust_response(model, snap, 0.0, seconds))
+    t = np.arange(nonlinear.size) * DT_FCS
+    sub = pt.closed[pt.closed.output_labels.index("pitch_gimbal"), pt.closed.input_labels.index("gust_z")]
+    linear = ct.forced_response(sub, t, np.full(t.size, gust)).outputs.ravel()
+    peak = np.abs(nonlinear).max()
+    assert peak > 1e-6
+    assert np.abs(linear - nonlinear).max() < 0.01 * peak

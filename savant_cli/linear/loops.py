@@ -7,9 +7,10 @@ Pitch and yaw (``models/fcs.py``), frozen at the snapshot's scheduled gains:
 
 (the integrators are updated before use, as in the flight code), F the two fourth-order
 flex-filter sections, the gyro blend and the stage's own gyro as in flight. The roll jets
-(on/off) are outside linear analysis. The continuous plant plus the gyros' second-order
-transfer functions is discretized with a zero-order hold at the control period, so the
-sample-and-hold of the commands is in the model.
+(on/off) are outside linear analysis. The plant is sampled exactly as the time run samples
+it (:func:`sensor_plant`): held commands over each plant step, the rate gyros' own
+discrete filters at the sensor rate, and the loop's transport delay
+(``controller.delay_s``), lifted to the control period.
 
 Loop conventions: ``L`` is the open loop broken at an actuator command with the
 negative-feedback convention (closed loop ``L/(1+L)``), so
@@ -22,7 +23,7 @@ from dataclasses import dataclass
 
 import control as ct
 import numpy as np
-from scipy.linalg import block_diag
+from scipy.linalg import block_diag, expm
 from scipy.signal import tf2ss
 
 from savant_cli.models.fcs import FCS_STACK, GYRO_FIRST, GYRO_UPPER
@@ -100,24 +101,70 @@ def controller_lti(model: SimModel, snap: Snapshot, dt: float) -> ct.StateSpace:
 
 
 def sensor_plant(lin: PlantLinearization, model: SimModel, dt: float) -> ct.StateSpace:
-    """The continuous plant followed by the rate gyros' transfer functions, discretized
-    with a zero-order hold at ``dt``."""
-    wn = model.info["gyro_wn_rad_s"]
-    zeta = model.info["gyro_zeta"]
-    p = lin.sys
-    n_out = p.noutputs
-    blocks = []
-    for i, name in enumerate(p.output_labels):
-        if name.startswith("gyro_"):
-            blocks.append(ct.ss(ct.tf([wn * wn], [1.0, 2.0 * zeta * wn, wn * wn])))
-        else:
-            blocks.append(ct.ss([], [], [], [[1.0]]))
-    s = ct.append(*blocks)
-    assert s.ninputs == n_out
-    cont = ct.series(p, s)
-    cont = ct.ss(cont.A, cont.B, cont.C, cont.D, inputs=p.input_labels, outputs=p.output_labels, name="plant")
-    disc = ct.c2d(cont, dt, "zoh")
-    return ct.ss(disc.A, disc.B, disc.C, disc.D, dt, inputs=p.input_labels, outputs=p.output_labels, name="plant")
+    """The linear plant as the flight software samples it, at the control period ``dt``.
+
+    Exactly the time run's schedule (``engine.advance``), lifted from the plant step h to
+    ``dt = N h``: the continuous plant with each plant step's input held (zero-order hold
+    over h, :func:`scipy.linalg.expm`); at every sensor sample each rate gyro's discrete
+    filter (the time run's own ``model.gyro`` matrices) reads the rate at the gyro and
+    outputs its previous state's value; the flight control reads the navigation attitude
+    and the gyro outputs at the start of its cycle, and its commands reach the actuators
+    ``m = controller.delay_s / h`` plant steps later (the first ``m`` steps of a cycle
+    still hold the previous commands, one extra state per command). Gust inputs are held
+    over the cycle, undelayed.
+
+    Returns a discrete system (dt) with the plant's inputs and outputs (``gyro_*`` now the
+    gyro filter outputs).
+    """
+    sys = lin.sys
+    a, b, c, d = (np.asarray(m, dtype=float) for m in (sys.A, sys.B, sys.C, sys.D))
+    n, nu = b.shape
+    rt = model.rates
+    h, n_sub = rt.dt, rt.n_fcs
+    m_delay = int(round(model.sched[E.S_DELAY_STEPS]))
+    if abs(n_sub * h - dt) > 1e-12 or not 0 <= m_delay < n_sub:
+        raise ValueError(f"control period {dt} s must be {n_sub} plant steps of {h} s and exceed the delay")
+    zoh = expm(np.block([[a * h, b * h], [np.zeros((nu, n + nu))]]))
+    phi, gam = zoh[:n, :n], zoh[:n, n:]
+    gyro = [i for i, name in enumerate(sys.output_labels) if name.startswith("gyro_")]
+    ng = len(gyro)
+    ag = block_diag(*[model.gyro.ad] * ng)
+    bg = block_diag(*[model.gyro.bd.reshape(2, 1)] * ng)
+    cg = block_diag(*[model.gyro.cd.reshape(1, 2)] * ng)
+    nx = n + 2 * ng
+    # one plant step of [x, gyro filter states]; a sensor step also samples the gyros
+    step_m = {False: block_diag(phi, np.eye(2 * ng)),
+              True: np.block([[phi, np.zeros((n, 2 * ng))], [bg @ c[gyro], ag]])}
+    step_b = {False: np.vstack([gam, np.zeros((2 * ng, nu))]), True: np.vstack([gam, bg @ d[gyro]])}
+    commands = [sys.input_labels.index(name) for name in ("dc_pitch", "dc_yaw")]
+    total = np.eye(nx)
+    b_now = np.zeros((nx, nu))
+    b_prev = np.zeros((nx, len(commands)))
+    for j in range(n_sub):
+        sensing = j % rt.n_sensor == 0
+        mj, bj = step_m[sensing], step_b[sensing]
+        total, b_now, b_prev = mj @ total, mj @ b_now, mj @ b_prev
+        if j < m_delay:  # the previous cycle's commands still act
+            b_prev += bj[:, commands]
+            bj = bj.copy()
+            bj[:, commands] = 0.0
+        b_now += bj
+    # outputs at the cycle's start: sensors of x, gyro filters' outputs
+    c_out = np.hstack([c, np.zeros((c.shape[0], 2 * ng))])
+    d_now = d.copy()
+    d_prev = np.zeros((c.shape[0], len(commands)))
+    c_out[gyro] = np.hstack([np.zeros((ng, n)), cg])
+    d_now[gyro] = 0.0
+    if m_delay:  # what the commands feed through to at the cycle's start is the held ones
+        d_prev[:, :] = d_now[:, commands]
+        d_now[:, commands] = 0.0
+        k = len(commands)
+        a_l = np.block([[total, b_prev], [np.zeros((k, nx + k))]])
+        b_l = np.vstack([b_now, np.eye(nu)[commands]])
+        c_l = np.hstack([c_out, d_prev])
+    else:
+        a_l, b_l, c_l = total, b_now, c_out
+    return ct.ss(a_l, b_l, c_l, d_now, dt, inputs=sys.input_labels, outputs=sys.output_labels, name="plant")
 
 
 def assemble(model: SimModel, snap: Snapshot, lin: PlantLinearization, dt: float) -> LinearPoint:

@@ -5,6 +5,8 @@ on step boundaries, runs the discrete parts at their own rates with zero-order h
 
 * rate gyros every ``n_sensor`` plant steps (200 Hz by default);
 * command smoother, flight control and roll-jet logic every ``n_fcs`` steps (50 Hz);
+  their commands reach the actuators and jets ``controller.delay_s`` later (the loop's
+  transport delay, a whole number of plant steps within the control period);
 * a new guidance command every ``n_guid`` steps (1 Hz);
 * events (separation, J-2X ignition, LES jettison, cutoff) at the first step boundary at
   or after their time or condition.
@@ -63,7 +65,8 @@ S_STOP_AT_SEP = 5  # 1: the phase ends at separation
 S_SMOOTH_ZETA = 6
 S_SMOOTH_WN = 7
 S_MAX_RATE = 8  # divergence threshold on |ω|, rad/s
-N_SCHED = 9
+S_DELAY_STEPS = 9  # plant steps from the flight-control cycle to its commands (controller.delay_s)
+N_SCHED = 10
 
 
 class Rates(NamedTuple):
@@ -264,6 +267,7 @@ def _advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0
                 d[D_FLEX_NAV:D_FLEX_NAV + 3] = flex3
             qt.qmul_into(x[Q:Q + 4], q_imu, q_nav)  # sensed attitude q_b2i ⊗ q_s2b
             fcs_step(d, q_nav, phase, sched_var, dt_fcs, ft)
+        if (k - int(sched[S_DELAY_STEPS])) % rates.n_fcs == 0:  # the commands, after the loop delay
             u[U_DPC] = d[D_CMD_P]
             u[U_DYC] = d[D_CMD_Y]
             u[U_RCS] = d[D_CMD_RCS]
