@@ -48,7 +48,11 @@ class MarginRow:
     frequency_hz : float
         Crossover frequency (Hz).
     band : str
-        ``"rigid/aero"``, ``"slosh"`` or ``"flex"``.
+        The requirement band: ``"rigid/aero"``, ``"slosh"`` or ``"flex"``.
+    mode : str
+        The open-loop mode that makes the crossing (``rigid``, ``aero``, ``integrator``,
+        ``slosh_lox``, ``slosh_lh2``, ``flex_<n>``; :mod:`savant_cli.linear.modes`), or
+        ``""`` when labelled by frequency band alone.
     """
 
     time_s: float
@@ -57,6 +61,7 @@ class MarginRow:
     value: float
     frequency_hz: float
     band: str
+    mode: str = ""
 
     def __post_init__(self) -> None:
         if self.kind not in ("gain", "phase"):
@@ -127,26 +132,35 @@ def _roots(fun, w: np.ndarray, values: np.ndarray) -> list[float]:
 
 
 def loop_margins(loop: ct.StateSpace, time_s: float, axis: str, bands: Bands,
-                 response: FastResponse | None = None) -> list[MarginRow]:
+                 response: FastResponse | None = None, labeler=None) -> list[MarginRow]:
     """All gain and phase crossings of one SISO loop (negative-feedback convention).
 
     Crossings are bracketed on :func:`frequency_grid` and refined by Brent's method on
     the exact response; gain margin ``1/|L|`` where ``L`` crosses the negative real
     axis, phase margin ``∠L mod 360° − 180°`` where ``|L| = 1`` (the definitions of
     :func:`control.stability_margins`, against which the tests check these).
-    ``response``: the loop's :class:`FastResponse` when already built."""
+    ``response``: the loop's :class:`FastResponse` when already built; ``labeler``: a
+    :class:`savant_cli.linear.modes.MarginLabeler` of the loop, which names each
+    crossing's mode and band (else ``bands`` gives the band by frequency)."""
     w, fr = _grid_and_response(loop, response)
     h = fr.siso(w)
     rows = []
+
+    def row(kind: str, value: float, f: float) -> MarginRow:
+        if labeler is None:
+            return MarginRow(time_s, axis, kind, value, f, bands.label(f))
+        mode, band = labeler.label(f, kind, value)
+        return MarginRow(time_s, axis, kind, value, f, band, mode)
+
     for wp in _roots(lambda x: float(fr.siso(x)[0].imag), w, h.imag):
         hp = fr.siso(wp)[0]
         if hp.real < 0.0:
             f = wp / (2 * np.pi)
-            rows.append(MarginRow(time_s, axis, "gain", float(-20 * np.log10(abs(hp))), f, bands.label(f)))
+            rows.append(row("gain", float(-20 * np.log10(abs(hp))), f))
     for wg in _roots(lambda x: float(abs(fr.siso(x)[0]) - 1.0), w, np.abs(h) - 1.0):
         pm = float(np.remainder(np.angle(fr.siso(wg)[0], deg=True), 360.0) - 180.0)
         f = wg / (2 * np.pi)
-        rows.append(MarginRow(time_s, axis, "phase", pm, f, bands.label(f)))
+        rows.append(row("phase", pm, f))
     return sorted(rows, key=lambda r: (r.kind, r.frequency_hz))
 
 

@@ -33,7 +33,7 @@ from savant_cli.linear.loops import LinearPoint
 from savant_cli.linear.margins import MarginRow
 
 _STR = h5py.string_dtype()
-MARGIN_COLUMNS = ("time_s", "axis", "kind", "value", "frequency_hz", "band")
+MARGIN_COLUMNS = ("time_s", "axis", "kind", "value", "frequency_hz", "band", "mode")
 
 
 def point_key(time_s: float) -> str:
@@ -99,7 +99,7 @@ def write_linear_group(f: h5py.File, points: list[LinearPoint], rows: list[Margi
     mg.attrs["requirements"] = json.dumps({band: list(req) for band, req in (requirements or {}).items()})
     for col in MARGIN_COLUMNS:
         vals = [getattr(r, col) for r in rows]
-        if col in ("axis", "kind", "band"):
+        if col in ("axis", "kind", "band", "mode"):
             mg.create_dataset(col, data=_names(vals), dtype=_STR)
         else:
             mg.create_dataset(col, data=np.asarray(vals, dtype=np.float64))
@@ -164,9 +164,13 @@ def read_margins(g: h5py.Group) -> tuple[list[MarginRow], dict[str, tuple[float,
     """The margin table of a ``linear`` (or flex-sweep case) group, its requirement set
     (band → gain dB, phase deg) and its ``exclusion_zones`` option."""
     mg = g["margins"]
-    cols = {c: (mg[c].asstr()[()] if c in ("axis", "kind", "band") else mg[c][()]) for c in MARGIN_COLUMNS}
-    rows = [MarginRow(float(t), str(a), str(k), float(v), float(fz), str(b))
-            for t, a, k, v, fz, b in zip(*(cols[c] for c in MARGIN_COLUMNS))]
+    names = [c for c in MARGIN_COLUMNS if c in mg]  # files before issue 12 have no mode
+    cols = {c: (mg[c].asstr()[()] if c in ("axis", "kind", "band", "mode") else mg[c][()]) for c in names}
+    n = len(cols["time_s"])
+    modes = cols.get("mode", [""] * n)
+    rows = [MarginRow(float(t), str(a), str(k), float(v), float(fz), str(b), str(m))
+            for t, a, k, v, fz, b, m in zip(cols["time_s"], cols["axis"], cols["kind"], cols["value"],
+                                            cols["frequency_hz"], cols["band"], modes)]
     req = {band: (float(v[0]), float(v[1])) for band, v in json.loads(mg.attrs.get("requirements", "{}")).items()}
     return rows, req, bool(mg.attrs.get("exclusion_zones", True))
 
@@ -230,6 +234,6 @@ def write_margins_csv(path: Path, rows: list[MarginRow]) -> None:
     from savant_cli.io.atomic import write_text_atomic
 
     lines = [",".join(MARGIN_COLUMNS)]  # value: gain margin in dB or phase margin in deg
-    for r in rows:
-        lines.append(f"{r.time_s:.3f},{r.axis},{r.kind},{r.value:.4f},{r.frequency_hz:.5f},{r.band}")
+    for r in rows:  # frequencies to 1e-8 relative: a crossing on a 1e-4-damped resonance
+        lines.append(f"{r.time_s:.3f},{r.axis},{r.kind},{r.value:.4f},{r.frequency_hz:.9g},{r.band},{r.mode}")
     write_text_atomic(path, "\n".join(lines) + "\n")

@@ -29,6 +29,7 @@ from savant_cli.io.console import print_run_summary
 from savant_cli.linear.charts import PointCharts, point_charts
 from savant_cli.linear.loops import AXES, LinearPoint, assemble
 from savant_cli.linear.margins import Bands, MarginRow, bandwidth_hz, disk_margins, loop_margins
+from savant_cli.linear.modes import MarginLabeler, aero_unstable, state_groups
 from savant_cli.linear.plant import linearize_plant
 from savant_cli.linear.response import FastResponse
 from savant_cli.linear.store import write_linear_group, write_margins_csv, write_mat
@@ -88,11 +89,14 @@ def analyse(model, snap, study: LinearStudyConfig, dt: float) -> tuple[LinearPoi
     lin = linearize_plant(model, snap, mode=study.jacobian, rel_step=study.jacobian_step)
     pt = assemble(model, snap, lin, dt)
     bands = bands_at(model, snap)
+    groups = state_groups(lin, pt.plant, pt.controller)
+    unstable = aero_unstable(lin)
     rows = []
     extra: dict[str, float] = {"time_s": snap.t}
     for c, axis in enumerate(AXES):
         fr = FastResponse(pt.loops[axis])
-        rows += loop_margins(pt.loops[axis], snap.t, axis, bands, fr)
+        labeler = MarginLabeler(pt.loops[axis], groups, unstable)
+        rows += loop_margins(pt.loops[axis], snap.t, axis, bands, fr, labeler)
         for k, v in disk_margins(pt.loops[axis], fr).items():
             extra[f"{axis}_{k}"] = v
         extra[f"{axis}_bandwidth_hz"] = bandwidth_hz(pt.closed[c, c])
@@ -107,11 +111,11 @@ def analyse(model, snap, study: LinearStudyConfig, dt: float) -> tuple[LinearPoi
 
 def _table(rows: list[MarginRow], study: LinearStudyConfig) -> Table:
     tb = Table(title="stability margins (loop at a time; gain dB, phase deg)")
-    for col in ("t (s)", "axis", "kind", "margin", "freq (Hz)", "band", "meets req."):
+    for col in ("t (s)", "axis", "kind", "margin", "freq (Hz)", "mode", "band", "meets req."):
         tb.add_column(col, justify="right" if col in ("t (s)", "margin", "freq (Hz)") else "left")
     for r in rows:
         ok = abs(r.value) >= study.requirements.required(r.band, r.kind)
-        tb.add_row(f"{r.time_s:.1f}", r.axis, r.kind, f"{r.value:.2f}", f"{r.frequency_hz:.3f}", r.band,
+        tb.add_row(f"{r.time_s:.1f}", r.axis, r.kind, f"{r.value:.2f}", f"{r.frequency_hz:.3f}", r.mode, r.band,
                    "yes" if ok else "[red]NO[/red]")
     return tb
 
@@ -154,7 +158,7 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
               for pt in points} if charted else {}
     requirements = study.requirements.by_band()
     summary["margins"] = [{"time_s": r.time_s, "axis": r.axis, "kind": r.kind, "value": r.value,
-                           "frequency_hz": r.frequency_hz, "band": r.band} for r in rows]
+                           "frequency_hz": r.frequency_hz, "band": r.band, "mode": r.mode} for r in rows]
     summary["linear_points"] = scalars
     summary["linear_note"] = "roll (on/off RCS) is left out of the linear analysis"
     summary["study_wall_time_s"] = time.perf_counter() - t_start
