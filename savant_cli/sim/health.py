@@ -86,36 +86,43 @@ def _stage_masks(t: np.ndarray, result: SimResult) -> list[np.ndarray]:
     return [first, ~first]
 
 
-def _window_peak(t: np.ndarray, y: np.ndarray, fs: float) -> tuple[float, float, float]:
-    """(peak frequency Hz, tonality, narrow-band amplitude) of one detrended window."""
-    y = y - np.polyval(np.polyfit(t - t[0], y, 3), t - t[0])
-    f, pxx = periodogram(y, fs=fs, window="hann", detrend=False, scaling="density")
-    if pxx.size < 4 or not np.isfinite(pxx).all() or pxx[1:].sum() <= 0.0:
-        return 0.0, 0.0, 0.0
-    k = 1 + int(np.argmax(pxx[1:]))
-    band = (f >= (1 - _BAND) * f[k]) & (f <= (1 + _BAND) * f[k])
+def _window_peaks(y: np.ndarray, fs: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Peak frequency (Hz), tonality and narrow-band amplitude of each row of ``y`` (one
+    window per row, uniformly sampled at ``fs``), all windows at once: each row less its
+    least-squares cubic, then its Hann-windowed periodogram."""
+    n = y.shape[1]
+    tau = np.arange(n) / fs
+    basis = np.vander(tau - tau.mean(), 4)
+    y = y - (y @ np.linalg.pinv(basis).T) @ basis.T
+    f, pxx = periodogram(y, fs=fs, window="hann", detrend=False, scaling="density", axis=-1)
+    df = f[1] - f[0]
+    k = 1 + np.argmax(pxx[:, 1:], axis=1)
+    fk = f[k]
+    band = (f[None, :] >= (1 - _BAND) * fk[:, None]) & (f[None, :] <= (1 + _BAND) * fk[:, None])
     # a density integrates to the mean square (the Hann window's noise bandwidth is in
     # the scaling), so the band's share is its variance: a sine of amplitude A gives A²/2
-    power = float(pxx[band].sum() * (f[1] - f[0]))
-    return float(f[k]), power / float(pxx[1:].sum() * (f[1] - f[0])), float(np.sqrt(2.0 * power))
+    power = (pxx * band).sum(axis=1) * df
+    total = pxx[:, 1:].sum(axis=1) * df
+    with np.errstate(invalid="ignore", divide="ignore"):
+        tonal = np.where(total > 0.0, power / total, 0.0)
+    return fk, tonal, np.sqrt(2.0 * power)
 
 
 def detect_limit_cycle(t: np.ndarray, y_deg: np.ndarray, window_s: float, min_amplitude_deg: float,
                        tonal_fraction: float, min_periods: float) -> tuple[float, float, float, float] | None:
     """The longest sustained oscillation of one signal segment (deg): ``(frequency Hz,
     amplitude deg, start s, end s)``, or None (method in the module notes)."""
-    if t.size < 8:
+    if t.size < 8 or not np.isfinite(y_deg).all():
         return None
     fs = 1.0 / float(np.median(np.diff(t)))
     n = int(round(window_s * fs))
     if n < 16 or t.size < n:
         return None
-    hits = []
-    for i0 in range(0, t.size - n + 1, n // 2):
-        sl = slice(i0, i0 + n)
-        f, tonal, amp = _window_peak(t[sl], y_deg[sl], fs)
-        ok = tonal >= tonal_fraction and amp >= min_amplitude_deg and f * window_s >= 3.0
-        hits.append((ok, f, amp, float(t[sl][0]), float(t[sl][-1])))
+    starts = np.arange(0, t.size - n + 1, n // 2)
+    f, tonal, amp = _window_peaks(y_deg[starts[:, None] + np.arange(n)[None, :]], fs)
+    ok = (tonal >= tonal_fraction) & (amp >= min_amplitude_deg) & (f * window_s >= 3.0)
+    hits = [(bool(ok[w]), float(f[w]), float(amp[w]), float(t[s0]), float(t[s0 + n - 1]))
+            for w, s0 in enumerate(starts)]
     best = None
     i = 0
     while i < len(hits):
@@ -132,9 +139,9 @@ def detect_limit_cycle(t: np.ndarray, y_deg: np.ndarray, window_s: float, min_am
             start, end = run[0][3], run[-1][4]
             holds = run[-1][2] >= 0.5 * run[0][2]
             if holds and (end - start) * f_med >= min_periods:
-                amp = float(np.median([h[2] for h in run]))
+                amplitude = float(np.median([h[2] for h in run]))
                 if best is None or (end - start) > best[3] - best[2]:
-                    best = (f_med, amp, start, end)
+                    best = (f_med, amplitude, start, end)
         i = j + 1
     return best
 
