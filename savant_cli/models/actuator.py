@@ -143,6 +143,19 @@ def held(value: float, limit: float, push: float) -> bool:
 
 
 @njit(cache=True, error_model="numpy", inline="always")
+def at_gimbal_stop(d: float, rate: float, acc: float, limit: float, out: np.ndarray, k: int) -> float:
+    """The nozzle's ``δ̇``, ``δ̈`` into ``out[k]``, ``out[k + 1]``, each zero while the
+    gimbal stop at ±``limit`` holds the nozzle against it; returns that δ̈ (rad/s²)."""
+    if held(d, limit, rate):
+        rate = 0.0
+    if held(d, limit, acc):
+        acc = 0.0
+    out[k] = rate
+    out[k + 1] = acc
+    return acc
+
+
+@njit(cache=True, error_model="numpy", inline="always")
 def third_order(x: np.ndarray, k: int, cmd: float, p: np.ndarray, base: int, limit: float,
                 out: np.ndarray) -> float:
     """Third-order actuator: states ``x[k:k+3] = [δ, δ̇, δ̈]``, derivatives into
@@ -156,13 +169,7 @@ def third_order(x: np.ndarray, k: int, cmd: float, p: np.ndarray, base: int, lim
     out[k + 2] = wn * wn * (v - rate) - 2.0 * p[base + T3_ZETA] * wn * acc
     if held(rate, rate_limit, acc):
         acc = 0.0
-    if held(d, limit, rate):
-        rate = 0.0
-    if held(d, limit, acc):
-        acc = 0.0
-    out[k] = rate
-    out[k + 1] = acc
-    return acc
+    return at_gimbal_stop(d, rate, acc, limit, out, k)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -183,17 +190,10 @@ def simplex(x: np.ndarray, k: int, kv: int, cmd: float, p: np.ndarray, base: int
     if held(r, rl, r_acc):
         r_acc = 0.0
     torque = p[base + SX_K] * (th - d)
-    acc = (torque - p[base + SX_C] * rate) / p[base + SX_J]
-    if held(d, limit, rate):
-        rate = 0.0
-    if held(d, limit, acc):
-        acc = 0.0
-    out[k] = rate
-    out[k + 1] = acc
     out[k + 2] = r - p[base + SX_LEAK] * torque
     out[kv] = r_dot
     out[kv + 1] = r_acc
-    return acc
+    return at_gimbal_stop(d, rate, (torque - p[base + SX_C] * rate) / p[base + SX_J], limit, out, k)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
