@@ -33,6 +33,13 @@ def test_margins_csv_summary_console_and_charts(linear_run):
     assert {float(r["time_s"]) for r in rows} == {55.0, 180.0}
     s = json.loads((run_dir / "summary.json").read_text())
     assert len(s["margins"]) == len(rows) and "roll" in s["linear_note"]
+    # every row carries its requirement verdict: |margin| against the band's requirement
+    req = {"rigid/aero": (6.0, 30.0), "slosh": (6.0, 30.0), "flex": (6.0, 30.0)}  # conf/study/linear.yaml
+    for r in rows:
+        need = req[r["band"]][0 if r["kind"] == "gain" else 1]
+        assert r["meets_requirement"] == ("yes" if abs(float(r["value"])) >= need else "no"), r
+    n_ok = sum(r["meets_requirement"] == "yes" for r in rows)
+    assert s["margins_meeting_requirements"] == f"{n_ok} of {len(rows)}"
     # at max-Q the vehicle is aerodynamically unstable: a gain-reduction margin exists
     assert any(r["kind"] == "gain" and float(r["value"]) < 0 and float(r["time_s"]) == 55.0 for r in rows)
     assert "stability margins" in proc.stdout and "left out of the linear analysis" in proc.stdout

@@ -230,10 +230,16 @@ def write_mat(path: Path, points: list[LinearPoint]) -> None:
             savemat(fh, data, do_compression=True)
 
 
-def write_margins_csv(path: Path, rows: list[MarginRow]) -> None:
+def write_margins_csv(path: Path, rows: list[MarginRow], verdicts: list[bool] | None = None) -> None:
+    """``margins.csv``: one row per crossing (:data:`MARGIN_COLUMNS`), plus the column
+    ``meets_requirement`` (yes/no) when ``verdicts`` gives one per row."""
     from savant_cli.io.atomic import write_text_atomic
 
-    lines = [",".join(MARGIN_COLUMNS)]  # value: gain margin in dB or phase margin in deg
-    for r in rows:  # frequencies to 1e-8 relative: a crossing on a 1e-4-damped resonance
-        lines.append(f"{r.time_s:.3f},{r.axis},{r.kind},{r.value:.4f},{r.frequency_hz:.9g},{r.band},{r.mode}")
+    header = list(MARGIN_COLUMNS) + (["meets_requirement"] if verdicts is not None else [])
+    lines = [",".join(header)]  # value: gain margin in dB or phase margin in deg
+    for i, r in enumerate(rows):  # frequencies to 1e-8 relative: a crossing on a 1e-4-damped resonance
+        line = f"{r.time_s:.3f},{r.axis},{r.kind},{r.value:.4f},{r.frequency_hz:.9g},{r.band},{r.mode}"
+        if verdicts is not None:
+            line += ",yes" if verdicts[i] else ",no"
+        lines.append(line)
     write_text_atomic(path, "\n".join(lines) + "\n")

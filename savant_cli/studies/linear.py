@@ -109,12 +109,19 @@ def analyse(model, snap, study: LinearStudyConfig, dt: float) -> tuple[LinearPoi
     return pt, rows, extra
 
 
+def meets(row: MarginRow, study: LinearStudyConfig) -> bool:
+    """Whether a margin meets the study's requirement for its band: |margin| at least the
+    required gain (dB) or phase (deg) margin (a negative gain margin is a gain-reduction
+    margin; a phase margin of either sign is its distance to the critical point)."""
+    return abs(row.value) >= study.requirements.required(row.band, row.kind)
+
+
 def _table(rows: list[MarginRow], study: LinearStudyConfig) -> Table:
     tb = Table(title="stability margins (loop at a time; gain dB, phase deg)")
     for col in ("t (s)", "axis", "kind", "margin", "freq (Hz)", "mode", "band", "meets req."):
         tb.add_column(col, justify="right" if col in ("t (s)", "margin", "freq (Hz)") else "left")
     for r in rows:
-        ok = abs(r.value) >= study.requirements.required(r.band, r.kind)
+        ok = meets(r, study)
         tb.add_row(f"{r.time_s:.1f}", r.axis, r.kind, f"{r.value:.2f}", f"{r.frequency_hz:.3f}", r.mode, r.band,
                    "yes" if ok else "[red]NO[/red]")
     return tb
@@ -158,7 +165,10 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
               for pt in points} if charted else {}
     requirements = study.requirements.by_band()
     summary["margins"] = [{"time_s": r.time_s, "axis": r.axis, "kind": r.kind, "value": r.value,
-                           "frequency_hz": r.frequency_hz, "band": r.band, "mode": r.mode} for r in rows]
+                           "frequency_hz": r.frequency_hz, "band": r.band, "mode": r.mode,
+                           "meets_requirement": meets(r, study)} for r in rows]
+    failing = [r for r in rows if not meets(r, study)]
+    summary["margins_meeting_requirements"] = f"{len(rows) - len(failing)} of {len(rows)}"
     summary["linear_points"] = scalars
     summary["linear_note"] = "roll (on/off RCS) is left out of the linear analysis"
     summary["study_wall_time_s"] = time.perf_counter() - t_start
@@ -167,7 +177,7 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
     flight_mod.write(out_dir, record, cfg, json_summary=summary, extra=lambda f: write_linear_group(f, points, rows, charts, requirements, study.exclusion_zones))
     if cfg.output.hdf5:
         write_mat(out_dir / "linear.mat", points)
-    write_margins_csv(out_dir / "margins.csv", rows)
+    write_margins_csv(out_dir / "margins.csv", rows, [meets(r, study) for r in rows])
     if cfg.output.plots:
         draw_linear(list(charts.values()), rows, requirements, study.exclusion_zones, out_dir / "plots")
     print_run_summary({k: v for k, v in hdf_summary.items() if k != "linear_note"}, record.status, record.message,
