@@ -33,6 +33,7 @@ from rich.table import Table
 from savant_cli.config import FlexSweepStudyConfig, LinearStudyConfig, SavantConfig
 from savant_cli.errors import ConfigError
 from savant_cli.io.atomic import write_text_atomic
+from savant_cli.io.record import FLOWN
 from savant_cli.linear.charts import LoopResponse, loop_response
 from savant_cli.linear.store import read_loop_response, write_loop_response
 from savant_cli.sim.build import SimModel
@@ -116,7 +117,7 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
         draw(charts, study.exclusion_zones, out_dir / "plots")
     console.print(_table(worst))
     console.print(f"{len(cases)} cases in {time.perf_counter() - t_start:.1f} s; outputs: {out_dir}")
-    return 0 if result.status == "complete" else 1
+    return 0 if result.status in FLOWN else 1  # flown to its end (its health is in its status)
 
 
 def write_group(f: h5py.File, rows: list[dict], charts: dict[tuple[float, str, str], list[LoopResponse]],

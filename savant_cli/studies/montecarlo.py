@@ -26,6 +26,7 @@ from savant_cli.config import MonteCarloStudyConfig, SavantConfig, validate
 from savant_cli.errors import ConfigError
 from savant_cli.io.guidance_file import read_guidance
 from savant_cli.io.provenance import collect_provenance
+from savant_cli.io.record import FLOWN
 from savant_cli.montecarlo.batch import (BatchStop, Case, Journal, RunOutcome, default_workers, execute, fly_run,
                                          history_columns, read_outcome, shard_runs)
 from savant_cli.montecarlo.results import inventory, ranges_text, write_outputs
@@ -181,7 +182,7 @@ def rerun(run_dir: Path, run_number: int, console: Console | None = None) -> int
         if not same:
             return 1
     console.print(f"run {run_number} ({outcome.status}) written to {out}")
-    return 0 if outcome.status == "complete" else 1
+    return 0 if outcome.status in FLOWN else 1  # flown to its end (its health is in its status)
 
 
 def collect(folder: Path, console: Console | None = None) -> int:
