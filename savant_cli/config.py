@@ -100,6 +100,12 @@ class LinearRequirements:
         gain, phase = self.by_band()[band]
         return gain if kind == "gain" else phase
 
+    def meets(self, band: str, kind: str, value: float) -> bool:
+        """Whether a margin meets its band's requirement: |margin| at least the required
+        gain (dB) or phase (deg) margin (a negative gain margin is a gain-reduction
+        margin; a phase margin of either sign is its distance to the critical point)."""
+        return abs(value) >= self.required(band, kind)
+
 
 @dataclass
 class LinearStudyConfig:

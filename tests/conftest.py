@@ -55,7 +55,7 @@ def assert_report_redraws(run_dir) -> list[str]:
     first = run_dir.parent / f"{run_dir.name}_plots_as_drawn"
     shutil.move(run_dir / "plots", first)
     try:
-        paths = report(run_dir, console=Console(file=open("/dev/null", "w")))
+        paths = report(run_dir, console=Console(quiet=True))
         drawn = sorted(str(p.relative_to(first)) for p in first.rglob("*.png"))
         again = sorted(str(p.relative_to(run_dir / "plots")) for p in (run_dir / "plots").rglob("*.png"))
         assert again == drawn, (set(drawn) ^ set(again))

@@ -10,9 +10,11 @@ spline (which evaluates point by point and took 0.1 s per loop); the polynomial 
 not used (it is numerically meaningless for loops of 50–100 states). The tests check
 both against ``control``'s routines.
 
-Bands: ``flex`` from 0.7 × the lowest retained bending frequency, ``slosh`` within a
-factor 2 of the slosh frequencies, ``rigid/aero`` otherwise. A gain margin below 0 dB is
-the gain-reduction (aerodynamic) margin of an unstable vehicle.
+Labels: the studies name each crossing by the mode that makes it
+(:mod:`savant_cli.linear.modes`); without a labeler, :class:`Bands` gives the band by
+frequency (``flex`` from 0.7 × the lowest retained bending frequency, ``slosh`` within a
+factor 2 of the slosh frequencies, ``rigid/aero`` otherwise). A gain margin below 0 dB is
+a gain-reduction margin.
 """
 
 from __future__ import annotations
@@ -131,7 +133,7 @@ def _roots(fun, w: np.ndarray, values: np.ndarray) -> list[float]:
     return roots
 
 
-def loop_margins(loop: ct.StateSpace, time_s: float, axis: str, bands: Bands,
+def loop_margins(loop: ct.StateSpace, time_s: float, axis: str, bands: Bands | None = None,
                  response: FastResponse | None = None, labeler=None) -> list[MarginRow]:
     """All gain and phase crossings of one SISO loop (negative-feedback convention).
 
@@ -141,7 +143,9 @@ def loop_margins(loop: ct.StateSpace, time_s: float, axis: str, bands: Bands,
     :func:`control.stability_margins`, against which the tests check these).
     ``response``: the loop's :class:`FastResponse` when already built; ``labeler``: a
     :class:`savant_cli.linear.modes.MarginLabeler` of the loop, which names each
-    crossing's mode and band (else ``bands`` gives the band by frequency)."""
+    crossing's mode and band (else ``bands``, default ``Bands()``, gives the band by
+    frequency)."""
+    bands = bands or Bands()
     w, fr = _grid_and_response(loop, response)
     h = fr.siso(w)
     rows = []

@@ -201,10 +201,10 @@ def load_point(path: Path | str, time_s: float, system: str = "open_pitch") -> c
             have = sorted(float(g[k].attrs["time_s"]) for k in g if k != "margins")
             raise KeyError(f"no linear point at t = {time_s} s; stored: {have}")
         sg = g[key][system]
-        dec = lambda ds: [s.decode() if isinstance(s, bytes) else str(s) for s in ds[()]]  # noqa: E731
         dt = float(sg.attrs["dt"])
         return ct.ss(sg["A"][()], sg["B"][()], sg["C"][()], sg["D"][()], dt if dt > 0 else 0,
-                     states=dec(sg["states"]) or None, inputs=dec(sg["inputs"]), outputs=dec(sg["outputs"]),
+                     states=list(_strs(sg["states"][()])) or None, inputs=list(_strs(sg["inputs"][()])),
+                     outputs=list(_strs(sg["outputs"][()])),
                      name=f"{system}_{key}")
 
 

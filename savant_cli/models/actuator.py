@@ -213,21 +213,30 @@ def _stop(x: np.ndarray, i: int, limit: float) -> bool:
     return False
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def limits(p: np.ndarray, engine: int) -> tuple[float, float]:
+    """The stage's rate limit (rad/s: the third-order nozzle rate's, the simplex spool
+    flow's) and gimbal limit (rad); the upper stage's from separation on."""
+    first = engine == ENGINE_FIRST
+    if int(p[P_KIND]) == SIMPLEX:
+        rate = p[(P_FS_SPX if first else P_US_SPX) + SX_RATE]
+    else:
+        rate = p[(P_FS_THIRD if first else P_US_THIRD) + T3_RATE]
+    return rate, p[gimbal_stage(engine) + G_LIMIT]
+
+
 @njit(cache=True, error_model="numpy")
 def contain(x: np.ndarray, p: np.ndarray, engine: int) -> None:
     """After a plant step: the active stage's gimbal stop on δ, and the rate stop (the
     third-order δ̇, the simplex spool r), each with its outward rate of change cleared."""
-    first = engine == ENGINE_FIRST
-    lim = p[gimbal_stage(engine) + G_LIMIT]
+    rl, lim = limits(p, engine)
     if int(p[P_KIND]) == SIMPLEX:
-        rl = p[(P_FS_SPX if first else P_US_SPX) + SX_RATE]
         vo = int(p[P_VALVE_OFFSET])
         for kv in (vo, vo + 2):
             _stop(x, kv, rl)
         for k in (ACT_P, ACT_Y):
             _stop(x, k, lim)
     else:
-        rl = p[(P_FS_THIRD if first else P_US_THIRD) + T3_RATE]
         for k in (ACT_P, ACT_Y):
             _stop(x, k + 1, rl)
             if _stop(x, k, lim) and x[k + 2] * x[k] > 0.0:

@@ -47,12 +47,6 @@ def locate(axis: np.ndarray, n: int, x: float) -> tuple[int, float]:
 
 
 @njit(cache=True, error_model="numpy")
-def rows(table: np.ndarray, i: int, w: float) -> np.ndarray:
-    """Blend rows ``i`` and ``i+1`` of a 2-D table with weight ``w``."""
-    return (1.0 - w) * table[i] + w * table[i + 1]
-
-
-@njit(cache=True, error_model="numpy")
 def trilinear(grid: np.ndarray, i: int, wi: float, j: int, wj: float, k: int, wk: float) -> float:
     """Trilinear blend of ``grid[i:i+2, j:j+2, k:k+2]`` with cell weights."""
     c00 = grid[i, j, k] * (1.0 - wi) + grid[i + 1, j, k] * wi

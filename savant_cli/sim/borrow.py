@@ -3,9 +3,10 @@
 numba passes an array as a struct whose ``meminfo`` owns the buffer, and increments and
 decrements its reference count (an atomic instruction each) whenever an array crosses a
 call boundary and at the branch points of the kernels inlined into the plant's
-derivative; the reference-count pruning pass removes only some of them. At four
-derivatives per plant step those atomics cost a fifth to a third of the derivative
-(measured: 410 → 330 ns rigid, 540 → 435 ns at full fidelity, medians).
+derivative; the reference-count pruning pass removes only some of them (19 increments
+and 28 decrements remained in the rigid derivative's IR). With four derivatives per
+plant step those atomics were a large share of the run time (docs/architecture.md,
+*Borrowed arrays in the loop*, for the measured effect).
 
 :func:`borrowed` returns a view of the same buffer with a null ``meminfo``: every
 increment and decrement on it becomes a null check, and the arithmetic is unchanged

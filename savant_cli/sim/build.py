@@ -182,8 +182,6 @@ def build_model(cfg: SavantConfig, vehicle: Vehicle, guidance: GuidanceTable) ->
     sched[E.S_SMOOTH_WN] = cfg.guidance.smoother.natural_frequency_rad_s
     sched[E.S_MAX_RATE] = np.radians(cfg.sim.max_body_rate_deg_s)
     sched[E.S_DELAY_STEPS] = round(cfg.controller.delay_s / rt.dt)
-    info = {"separation_time_s": sched[E.S_T_SEP],
-            "gyro_wn_rad_s": 2.0 * np.pi * cfg.sensors.rate_gyro.natural_frequency_hz,
-            "gyro_zeta": cfg.sensors.rate_gyro.damping}
+    info = {"separation_time_s": sched[E.S_T_SEP]}
     return SimModel(p=p, tables=tb, fcs=ft, gyro=gyro, guidance=guidance, rates=rt, sched=sched,
                     x0=x0, d0=d0, u0=u0, info=info, layout=layout)

@@ -70,14 +70,7 @@ class LimitCycle:
 
 def _limits(model: SimModel, stage: int) -> tuple[float, float]:
     """(rate limit rad/s, gimbal limit rad) of a stage (0 first, 1 upper)."""
-    p = model.p
-    engine = ENGINE_FIRST if stage == 0 else L.ENGINE_UPPER
-    first = stage == 0
-    if int(p[actuator.P_KIND]) == actuator.SIMPLEX:
-        rate = p[(actuator.P_FS_SPX if first else actuator.P_US_SPX) + actuator.SX_RATE]
-    else:
-        rate = p[(actuator.P_FS_THIRD if first else actuator.P_US_THIRD) + actuator.T3_RATE]
-    return rate, p[actuator.gimbal_stage(engine) + actuator.G_LIMIT]
+    return actuator.limits(model.p, ENGINE_FIRST if stage == 0 else L.ENGINE_UPPER)
 
 
 def _stage_masks(t: np.ndarray, result: SimResult) -> list[np.ndarray]:

@@ -96,7 +96,7 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
             for r in margin_rows:
                 rows.append({"time_s": t, "parameter": prm, "level": lvl, "axis": r.axis, "kind": r.kind,
                              "band": r.band, "value": r.value, "frequency_hz": r.frequency_hz,
-                             "meets_requirement": bool(abs(r.value) >= study.requirements.required(r.band, r.kind)),
+                             "meets_requirement": study.requirements.meets(r.band, r.kind, r.value),
                              "closed_loop_stable": bool(extra["closed_loop_stable"])})
             bar.advance(task)
     buf = io.StringIO()

@@ -28,14 +28,11 @@ from savant_cli.errors import ConfigError
 from savant_cli.io.console import print_run_summary
 from savant_cli.linear.charts import PointCharts, point_charts
 from savant_cli.linear.loops import AXES, LinearPoint, assemble
-from savant_cli.linear.margins import Bands, MarginRow, bandwidth_hz, disk_margins, loop_margins
+from savant_cli.linear.margins import MarginRow, bandwidth_hz, disk_margins, loop_margins
 from savant_cli.linear.modes import MarginLabeler, aero_unstable, state_groups
 from savant_cli.linear.plant import linearize_plant
 from savant_cli.linear.response import FastResponse
 from savant_cli.linear.store import write_linear_group, write_margins_csv, write_mat
-from savant_cli.models import slosh as slosh_model
-from savant_cli.sim import layout as L
-from savant_cli.sim.plant import derivative
 from savant_cli.studies import flight as flight_mod
 
 MAX_CHART_POINTS = 20
@@ -68,27 +65,10 @@ def check_times(times: list[float], t_final: float, events: dict[str, float], st
     return keep
 
 
-def bands_at(model, snap) -> Bands:
-    """Frequency bands of the retained flex modes and the slosh tanks at a point."""
-    lay = model.layout
-    flex_from = slosh = None
-    if lay.n_modes:
-        s = 0 if np.isnan(snap.events[0]) else 2
-        flex_from = 0.7 * float(model.tables.flex_freq[s, :lay.n_modes].min()) / (2 * np.pi)
-    if lay.slosh:
-        aux = np.zeros(L.N_AUX)
-        derivative(snap.t, snap.x, snap.u, model.p, model.packed_tables, aux, np.zeros(snap.x.size))
-        f = aux[slosh_model.A_FREQUENCY:slosh_model.A_FREQUENCY + 2] / (2 * np.pi)
-        if np.all(f > 0):
-            slosh = (float(f.min()), float(f.max()))
-    return Bands(flex_from, slosh)
-
-
 def analyse(model, snap, study: LinearStudyConfig, dt: float) -> tuple[LinearPoint, list[MarginRow], dict]:
     """Linear systems, margins and scalar results of one point."""
     lin = linearize_plant(model, snap, mode=study.jacobian, rel_step=study.jacobian_step)
     pt = assemble(model, snap, lin, dt)
-    bands = bands_at(model, snap)
     groups = state_groups(lin, pt.plant, pt.controller)
     unstable = aero_unstable(lin)
     rows = []
@@ -96,7 +76,7 @@ def analyse(model, snap, study: LinearStudyConfig, dt: float) -> tuple[LinearPoi
     for c, axis in enumerate(AXES):
         fr = FastResponse(pt.loops[axis])
         labeler = MarginLabeler(pt.loops[axis], groups, unstable)
-        rows += loop_margins(pt.loops[axis], snap.t, axis, bands, fr, labeler)
+        rows += loop_margins(pt.loops[axis], snap.t, axis, response=fr, labeler=labeler)
         for k, v in disk_margins(pt.loops[axis], fr).items():
             extra[f"{axis}_{k}"] = v
         extra[f"{axis}_bandwidth_hz"] = bandwidth_hz(pt.closed[c, c])
@@ -109,19 +89,12 @@ def analyse(model, snap, study: LinearStudyConfig, dt: float) -> tuple[LinearPoi
     return pt, rows, extra
 
 
-def meets(row: MarginRow, study: LinearStudyConfig) -> bool:
-    """Whether a margin meets the study's requirement for its band: |margin| at least the
-    required gain (dB) or phase (deg) margin (a negative gain margin is a gain-reduction
-    margin; a phase margin of either sign is its distance to the critical point)."""
-    return abs(row.value) >= study.requirements.required(row.band, row.kind)
-
-
 def _table(rows: list[MarginRow], study: LinearStudyConfig) -> Table:
     tb = Table(title="stability margins (loop at a time; gain dB, phase deg)")
     for col in ("t (s)", "axis", "kind", "margin", "freq (Hz)", "mode", "band", "meets req."):
         tb.add_column(col, justify="right" if col in ("t (s)", "margin", "freq (Hz)") else "left")
     for r in rows:
-        ok = meets(r, study)
+        ok = study.requirements.meets(r.band, r.kind, r.value)
         tb.add_row(f"{r.time_s:.1f}", r.axis, r.kind, f"{r.value:.2f}", f"{r.frequency_hz:.3f}", r.mode, r.band,
                    "yes" if ok else "[red]NO[/red]")
     return tb
@@ -164,20 +137,21 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
     charts = {pt.time_s: point_charts(pt.time_s, pt.loops, pt.closed, [r for r in rows if r.time_s == pt.time_s])
               for pt in points} if charted else {}
     requirements = study.requirements.by_band()
+    verdicts = [study.requirements.meets(r.band, r.kind, r.value) for r in rows]
     summary["margins"] = [{"time_s": r.time_s, "axis": r.axis, "kind": r.kind, "value": r.value,
-                           "frequency_hz": r.frequency_hz, "band": r.band, "mode": r.mode,
-                           "meets_requirement": meets(r, study)} for r in rows]
-    failing = [r for r in rows if not meets(r, study)]
-    summary["margins_meeting_requirements"] = f"{len(rows) - len(failing)} of {len(rows)}"
+                           "frequency_hz": r.frequency_hz, "band": r.band, "mode": r.mode, "meets_requirement": ok}
+                          for r, ok in zip(rows, verdicts)]
+    summary["margins_meeting_requirements"] = f"{sum(verdicts)} of {len(rows)}"
     summary["linear_points"] = scalars
     summary["linear_note"] = "roll (on/off RCS) is left out of the linear analysis"
     summary["study_wall_time_s"] = time.perf_counter() - t_start
     hdf_summary = {k: v for k, v in summary.items() if not isinstance(v, list)}
     record = flight_mod.record(result, sig, hdf_summary, raw_cfg, summary["study_wall_time_s"])
-    flight_mod.write(out_dir, record, cfg, json_summary=summary, extra=lambda f: write_linear_group(f, points, rows, charts, requirements, study.exclusion_zones))
+    flight_mod.write(out_dir, record, cfg, json_summary=summary,
+                     extra=lambda f: write_linear_group(f, points, rows, charts, requirements, study.exclusion_zones))
     if cfg.output.hdf5:
         write_mat(out_dir / "linear.mat", points)
-    write_margins_csv(out_dir / "margins.csv", rows, [meets(r, study) for r in rows])
+    write_margins_csv(out_dir / "margins.csv", rows, verdicts)
     if cfg.output.plots:
         draw_linear(list(charts.values()), rows, requirements, study.exclusion_zones, out_dir / "plots")
     print_run_summary({k: v for k, v in hdf_summary.items() if k != "linear_note"}, record.status, record.message,
