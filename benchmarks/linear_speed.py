@@ -52,16 +52,16 @@ def main() -> None:
     results = [analyse(model, res.snapshots[k], cfg.study, dt) for k in steps]
     t_models = time.perf_counter() - t0
     t0 = time.perf_counter()
-    charts = [point_charts(pt.time_s, pt.loops, pt.closed, rows) for pt, rows, _ in results]
+    charts = [point_charts(pt.time_s, pt.loops, pt.closed, rows) for pt, rows in ((a.point, a.rows) for a in results)]
     t_data = time.perf_counter() - t0
     with tempfile.TemporaryDirectory() as tmp:
         t0 = time.perf_counter()
-        for c, (_, rows, _) in zip(charts, results):
-            plot_linear_point(c, rows, Path(tmp))
+        for c, a in zip(charts, results):
+            plot_linear_point(c, a.rows, Path(tmp))
         t_draw = time.perf_counter() - t0
     t_plots = t_data + t_draw
     n = len(steps)
-    print(f"plant states: {results[0][0].plant_continuous.nstates}, loop states: {results[0][0].loops['pitch'].nstates}")
+    print(f"plant states: {results[0].point.plant_continuous.nstates}, loop states: {results[0].point.loops['pitch'].nstates}")
     print(f"time run with {n} snapshots: {t_run:.2f} s")
     print(f"models and margins: {t_models:.2f} s for {n} points = {t_models / n:.3f} s per point (target 0.2)")
     print(f"charts: {t_plots:.2f} s (data {t_data:.2f} s, drawing {t_draw:.2f} s); points with charts: {t_models + t_plots:.1f} s (target 30 s for 20)")

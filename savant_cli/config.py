@@ -11,6 +11,7 @@ what is allowed; the command line turns it into exit status 2.
 from __future__ import annotations
 
 import dataclasses
+import re
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -79,32 +80,105 @@ class StudyConfig:
 
 
 @dataclass
-class MarginRequirement:
+class RigidRequirement:
+    """Rigid-body margins: the gain-increase margin of the phase crossover above the
+    control bandwidth (dB), the gain-reduction margin below it where the vehicle has no
+    aerodynamic instability (the integrator's conditional stability, dB), and the phase
+    margin at the bandwidth (deg)."""
+
+    gain_dB: float = 6.0
+    gain_reduction_dB: float = 6.0
+    phase_deg: float = 30.0
+
+
+@dataclass
+class AeroRequirement:
+    """Gain-reduction margin of the aerodynamically unstable vehicle (dB)."""
+
+    gain_dB: float = 6.0
+
+
+@dataclass
+class SloshRequirement:
+    """Margins of the crossings a propellant-slosh mode makes (dB, deg)."""
+
+    gain_dB: float = 6.0
+    phase_deg: float = 30.0
+
+
+#: How a bending mode is required to be stabilized (``linear/requirements.py``).
+STABILIZATIONS = ("gain", "phase", "either")
+
+
+@dataclass
+class FlexModeRequirement:
+    """One bending mode's requirement: ``gain``-stabilized (its loop peak at least
+    ``gain_dB`` below 0 dB), ``phase``-stabilized (every crossing it makes: phase margin
+    at least ``phase_deg``, gain margin at least ``gain_dB``) or ``either``."""
+
+    stabilization: str = "either"
     gain_dB: float = 6.0
     phase_deg: float = 30.0
 
 
 @dataclass
-class LinearRequirements:
-    rigid_aero: MarginRequirement = field(default_factory=MarginRequirement)
-    slosh: MarginRequirement = field(default_factory=MarginRequirement)
-    flex: MarginRequirement = field(default_factory=MarginRequirement)
+class FlexStageRequirement:
+    """A stage's bending-mode requirements: ``default`` for every mode, ``modes`` (keys
+    ``flex_<n>``, the 1-based retained mode) for the modes that differ."""
+
+    default: FlexModeRequirement = field(default_factory=FlexModeRequirement)
+    modes: dict[str, FlexModeRequirement] = field(default_factory=dict)
+
+
+@dataclass
+class FlexRequirement:
+    first_stage: FlexStageRequirement = field(default_factory=FlexStageRequirement)
+    upper_stage: FlexStageRequirement = field(default_factory=FlexStageRequirement)
+
+
+@dataclass
+class RequirementSet:
+    """The stability-margin requirement set (group ``requirements``, selected by the
+    vehicle config): what every linear margin, point and study is judged against
+    (``savant_cli/linear/requirements.py``)."""
+
+    name: str = "none"
+    source: str = ""
+    rigid: RigidRequirement = field(default_factory=RigidRequirement)
+    aero: AeroRequirement = field(default_factory=AeroRequirement)
+    slosh: SloshRequirement = field(default_factory=SloshRequirement)
+    flex: FlexRequirement = field(default_factory=FlexRequirement)
+
+    def flex_mode(self, stage: str, mode: str) -> FlexModeRequirement:
+        """The requirement of bending mode ``mode`` (``flex_<n>``) in ``stage``
+        (``first_stage`` or ``upper_stage``)."""
+        st = getattr(self.flex, stage)
+        return st.modes.get(mode, st.default)
 
     def by_band(self) -> dict[str, tuple[float, float]]:
-        """Band (``rigid/aero``, ``slosh``, ``flex``) → (gain margin dB, phase margin deg)."""
-        return {band: (r.gain_dB, r.phase_deg) for band, r in
-                (("rigid/aero", self.rigid_aero), ("slosh", self.slosh), ("flex", self.flex))}
+        """Band → (gain margin dB, phase margin deg) the charts mark: the rigid body's,
+        the slosh modes' and the first stage's default bending-mode requirement."""
+        fd = self.flex.first_stage.default
+        return {"rigid/aero": (self.rigid.gain_dB, self.rigid.phase_deg),
+                "slosh": (self.slosh.gain_dB, self.slosh.phase_deg), "flex": (fd.gain_dB, fd.phase_deg)}
 
-    def required(self, band: str, kind: str) -> float:
-        """The required margin of a band for a ``gain`` (dB) or ``phase`` (deg) crossing."""
-        gain, phase = self.by_band()[band]
-        return gain if kind == "gain" else phase
 
-    def meets(self, band: str, kind: str, value: float) -> bool:
-        """Whether a margin meets its band's requirement: |margin| at least the required
-        gain (dB) or phase (deg) margin (a negative gain margin is a gain-reduction
-        margin; a phase margin of either sign is its distance to the critical point)."""
-        return abs(value) >= self.required(band, kind)
+def check_requirements(r: RequirementSet) -> None:
+    """Margins are non-negative finite numbers; stabilizations one of
+    :data:`STABILIZATIONS`; per-mode keys ``flex_<n>``."""
+    for key, value in (("rigid.gain_dB", r.rigid.gain_dB), ("rigid.gain_reduction_dB", r.rigid.gain_reduction_dB),
+                       ("rigid.phase_deg", r.rigid.phase_deg), ("aero.gain_dB", r.aero.gain_dB),
+                       ("slosh.gain_dB", r.slosh.gain_dB), ("slosh.phase_deg", r.slosh.phase_deg)):
+        _non_negative(f"requirements.{key}", value)
+    for stage in ("first_stage", "upper_stage"):
+        st = getattr(r.flex, stage)
+        for name, m in [("default", st.default)] + [(f"modes.{k}", v) for k, v in st.modes.items()]:
+            key = f"requirements.flex.{stage}.{name}"
+            if name != "default" and not re.fullmatch(r"modes\.flex_[1-9][0-9]*", name):
+                raise ConfigError(key, name.split(".", 1)[1], "a bending mode is named flex_<n> (1-based retained mode)")
+            _one_of(f"{key}.stabilization", m.stabilization, STABILIZATIONS)
+            _non_negative(f"{key}.gain_dB", m.gain_dB)
+            _non_negative(f"{key}.phase_deg", m.phase_deg)
 
 
 @dataclass
@@ -119,7 +193,6 @@ class LinearStudyConfig:
     jacobian_step: float = 1e-6  # the fixed step, as an attitude perturbation in rad
     charts: str = "auto"  # all | none | auto (per-point charts up to 20 points)
     exclusion_zones: bool = True  # Nichols exclusion zones
-    requirements: LinearRequirements = field(default_factory=LinearRequirements)
 
 
 @dataclass
@@ -186,7 +259,6 @@ class MonteCarloStudyConfig:
     shard: int = 0  # … and fly this one (Hydra multirun: study.shard='range(0,N)')
     histories: HistoriesSpec = field(default_factory=HistoriesSpec)
     linear_times: list[float] = field(default_factory=list)  # s: margins of every run at these times
-    requirements: LinearRequirements = field(default_factory=LinearRequirements)
 
 
 @dataclass
@@ -226,7 +298,6 @@ class FlexSweepStudyConfig:
     chart_axes: list[str] = field(default_factory=lambda: ["pitch"])  # loops overlaid in the Nichols charts
     event_clearance_s: float = 0.1
     exclusion_zones: bool = True
-    requirements: LinearRequirements = field(default_factory=LinearRequirements)
 
 
 STUDY_SCHEMAS: dict[str, type] = {"nominal": StudyConfig, "linear": LinearStudyConfig,
@@ -545,6 +616,7 @@ class SavantConfig:
     guidance: GuidanceConfig = field(default_factory=GuidanceConfig)
     sensors: SensorsConfig = field(default_factory=SensorsConfig)
     dispersions: DispersionSetConfig = field(default_factory=DispersionSetConfig)
+    requirements: RequirementSet = field(default_factory=RequirementSet)
     study: Any = field(default_factory=lambda: {"name": "nominal"})  # typed per study in validate()
     sim: SimConfig = field(default_factory=SimConfig)
     environment: EnvironmentConfig = field(default_factory=EnvironmentConfig)
@@ -719,6 +791,7 @@ def check_physics(cfg: SavantConfig) -> None:
     check_delay(cfg.controller.delay_s, cfg.sim)
     check_flex(cfg.flex)
     check_slosh(cfg.slosh)
+    check_requirements(cfg.requirements)
     _positive("sensors.rate_gyro.natural_frequency_hz", cfg.sensors.rate_gyro.natural_frequency_hz)
     _positive("sensors.rate_gyro.damping", cfg.sensors.rate_gyro.damping)
     for name in ("imu", "rate_gyro_upper_stage", "rate_gyro_first_stage"):

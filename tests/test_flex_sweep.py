@@ -64,8 +64,8 @@ def test_vanishing_mode_shapes_give_the_rigid_margins(flex_point):
     lin = LinearStudyConfig(times=[T])
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        _, rows_flex, _ = analyse(variant(model, "shape", 1e-6, []), snap, lin, 0.02)
-        _, rows_rigid, _ = analyse(rigid_model, rigid_snap, lin, 0.02)
+        rows_flex = analyse(variant(model, "shape", 1e-6, []), snap, lin, 0.02).rows
+        rows_rigid = analyse(rigid_model, rigid_snap, lin, 0.02).rows
     key = lambda r: (r.axis, r.kind, r.frequency_hz)  # noqa: E731
     rows_flex, rows_rigid = sorted(rows_flex, key=key), sorted(rows_rigid, key=key)
     # the same crossings, no flex resonance left: every margin as the rigid vehicle's
@@ -98,6 +98,17 @@ def test_flex_sweep_end_to_end(tmp_path):
     assert len(cases) == 2 * 2 * 3
     summary = json.loads((out / "summary.json").read_text())
     assert len(summary["cases"]) == 12
+    # each case judged against the requirement set: failing cases name their worst offender
+    for c in summary["cases"]:
+        case_rows = [r for r in rows if (float(r["time_s"]), r["parameter"], float(r["level"]))
+                     == (c["time_s"], c["parameter"], c["level"])]
+        assert c["meets_requirements"] == (c["violations"] == 0)
+        if any(r["meets_requirement"] == "False" for r in case_rows) or not c["closed_loop_stable"]:
+            assert not c["meets_requirements"] and c["worst"].startswith(f"{c['time_s']:.1f} s")
+    n_pass = sum(c["meets_requirements"] for c in summary["cases"])
+    assert summary["requirements_verdict"].startswith(f"requirements ares_i: {'PASS' if n_pass == 12 else 'FAIL'}, "
+                                                      f"{n_pass} of 12 cases pass")
+    assert summary["requirements_verdict"] in proc.stdout
     for t in ("0055.0", "0180.0"):
         for prm in ("frequency", "shape"):
             assert (out / "plots" / "flex_sweep" / f"nichols_pitch_{prm}_t{t}.png").is_file()

@@ -65,6 +65,14 @@ def test_flyoff_end_to_end(tmp_path):
     assert {r["metric"] for r in rows} == set(METRICS)
     summary = json.loads((out / "summary.json").read_text())
     assert summary["controllers"] == ["msfc_pid", "larc_pd"] and sum(summary["wins"].values()) <= len(METRICS)
+    for ctrl in ("msfc_pid", "larc_pd"):  # each batch judged against the requirement set at 55 s
+        with h5py.File(out / ctrl / "savant.h5") as f:
+            g = f["montecarlo/requirements"]
+            passed, run_of = g["checks/passed"][()], g["checks/run"][()]
+            n_pass = sum(passed[run_of == r].all() for r in np.unique(run_of))
+            assert summary["runs_meeting_requirements"][ctrl] == f"{n_pass} of {len(np.unique(run_of))}"
+            assert summary["requirements_verdict"][ctrl] == g.attrs["verdict"]
+            assert f"{ctrl}: {g.attrs['verdict']}" in proc.stdout
     with h5py.File(out / "msfc_pid" / "savant.h5") as a, h5py.File(out / "larc_pd" / "savant.h5") as b:
         for k in a["montecarlo/dispersions"]:  # the same dispersed vehicles
             assert np.array_equal(a[f"montecarlo/dispersions/{k}"][()], b[f"montecarlo/dispersions/{k}"][()],

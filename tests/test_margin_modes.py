@@ -62,7 +62,8 @@ def full_fidelity_margins():
         model, snap = _point(["flex=on", "flex.n_modes=4", "slosh=on", "twd=on"], t)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            _, rows, extra = analyse(model, snap, LinearStudyConfig(times=[t]), DT)
+            a = analyse(model, snap, LinearStudyConfig(times=[t]), DT)
+        rows, extra = a.rows, a.scalars
         aux = np.zeros(L.N_AUX)
         derivative(snap.t, snap.x, snap.u, model.p, model.packed_tables, aux, np.zeros(snap.x.size))
         slosh_hz = aux[slosh_model.A_FREQUENCY:slosh_model.A_FREQUENCY + 2] / (2 * np.pi)

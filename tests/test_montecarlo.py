@@ -262,7 +262,10 @@ def test_killed_batch_resumes_without_losing_or_repeating_runs(tmp_path):
 
 def test_margins_of_every_run_and_their_spread(tmp_path):
     """study.linear_times: each run carries its loop margins (the aerodynamic gain margin
-    at max-Q among them), and the spread keeps each run's critical crossing."""
+    at max-Q among them) with their requirement checks, and the spread keeps each run's
+    critical crossing per mode and counts the runs whose crossing misses its requirement."""
+    from savant_cli.linear.requirements import CHECK_ARRAY_COLUMNS, mode_code
+    from savant_cli.montecarlo.batch import MARGIN_ARRAY_COLUMNS
     from savant_cli.montecarlo.results import margin_spread
 
     cfg = validate(compose_config(SHORT + ["study.n_runs=3", "study.histories.signals=[]", "study.linear_times=[55]"]))
@@ -270,12 +273,21 @@ def test_margins_of_every_run_and_their_spread(tmp_path):
     out = _fly(case, tmp_path / "runs", range(3), 1)
     for o in out.values():
         m = o.margins
-        assert m.shape[1] == 6 and np.all(m[:, 0] == 55.0)
+        assert m.shape[1] == len(MARGIN_ARRAY_COLUMNS) == 8 and np.all(m[:, 0] == 55.0)
         aero = m[(m[:, 1] == 0) & (m[:, 2] == 0) & (m[:, 4] < 0)]  # pitch gain margins below 0 dB
-        assert aero.size and -20.0 < aero[0, 4] < -3.0
-    table = np.array([[0, 55.0, 0, 0, 0, -9.0, 0.09], [0, 55.0, 0, 0, 0, 13.0, 1.3],
-                      [1, 55.0, 0, 0, 0, -7.5, 0.09], [1, 55.0, 0, 0, 0, 12.0, 1.3],
-                      [2, 55.0, 0, 0, 0, -11.0, 0.09], [2, 55.0, 0, 0, 0, 6.0, 1.3]])
-    (row,) = margin_spread(table)
-    assert row["runs"] == 3 and row["worst"] == 6.0 and row["worst_run"] == 2
-    assert row["min"] == -9.0 and row["max"] == 6.0  # the critical crossings: -9, -7.5, 6
+        assert aero.size and -20.0 < aero[0, 4] < -3.0 and aero[0, 6] == mode_code("aero")
+        # the verdict of each row is |margin| >= 6 (the ares_i set: 6 dB, 30 deg everywhere)
+        assert np.array_equal(m[:, 7] == 1.0, np.abs(m[:, 4]) >= np.where(m[:, 2] == 0, 6.0, 30.0))
+        c = o.checks
+        assert c.shape[1] == len(CHECK_ARRAY_COLUMNS) and np.all(c[:, 0] == 55.0)
+        assert (c[:, 2] == mode_code("closed_loop")).sum() == 1  # one stability check per point
+    rigid, aero = mode_code("rigid"), mode_code("aero")
+    table = np.array([[0, 55.0, 0, 0, 0, -9.0, 0.09, aero, 1], [0, 55.0, 0, 0, 0, 13.0, 1.3, rigid, 1],
+                      [1, 55.0, 0, 0, 0, -7.5, 0.09, aero, 1], [1, 55.0, 0, 0, 0, 12.0, 1.3, rigid, 1],
+                      [2, 55.0, 0, 0, 0, -11.0, 0.09, aero, 1], [2, 55.0, 0, 0, 0, 5.0, 1.3, rigid, 0]])
+    rows = {r["mode"]: r for r in margin_spread(table)}
+    assert set(rows) == {"rigid", "aero"}
+    assert rows["rigid"]["runs"] == 3 and rows["rigid"]["worst"] == 5.0 and rows["rigid"]["worst_run"] == 2
+    assert rows["rigid"]["runs_below_requirement"] == 1 and rows["aero"]["runs_below_requirement"] == 0
+    assert rows["aero"]["worst"] == -7.5 and rows["aero"]["worst_run"] == 1  # the critical crossings: -9, -7.5, -11
+    assert rows["aero"]["min"] == -11.0 and rows["aero"]["max"] == -7.5

@@ -124,3 +124,8 @@ def print_run_summary(record_summary: Mapping[str, Any], status: str, message: s
     if message:
         line.append(f" — {message}", style="green" if ok else "red")
     console.print(line)
+
+
+def print_verdict(line: str, passed: bool, console: Console) -> None:
+    """A one-line requirement verdict, green when it passes, red otherwise, unwrapped."""
+    console.print(f"[{'green' if passed else 'red'}]{line}[/]", highlight=False, soft_wrap=True)

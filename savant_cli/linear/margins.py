@@ -55,6 +55,9 @@ class MarginRow:
         The open-loop mode that makes the crossing (``rigid``, ``aero``, ``integrator``,
         ``slosh_lox``, ``slosh_lh2``, ``flex_<n>``; :mod:`savant_cli.linear.modes`), or
         ``""`` when labelled by frequency band alone.
+    meets_requirement : bool or None
+        Its verdict against the requirement set (:mod:`savant_cli.linear.requirements`),
+        ``None`` when not judged.
     """
 
     time_s: float
@@ -64,6 +67,7 @@ class MarginRow:
     frequency_hz: float
     band: str
     mode: str = ""
+    meets_requirement: bool | None = None
 
     def __post_init__(self) -> None:
         if self.kind not in ("gain", "phase"):

@@ -29,6 +29,8 @@ The band of the requirement (``rigid/aero``, ``slosh``, ``flex``) follows from t
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import control as ct
 import numpy as np
 
@@ -41,6 +43,8 @@ RESONANCE_SHARE = 0.25
 #: An unstable real rigid pole faster than this (1/s) is the aerodynamic one; slower
 #: ones are the frozen-time trajectory's drift (orbital and gravity-turn dynamics).
 AERO_POLE_MIN = 0.05
+#: Points of the grid on which a bending mode's peak loop gain is found.
+PEAK_POINTS = 401
 #: Groups in every loop path: they label no crossing.
 PATH_GROUPS = ("actuator", "filter", "sensor", "delay")
 #: The low-frequency groups: their poles form one cluster near z = 1.
@@ -85,6 +89,31 @@ def state_groups(lin: PlantLinearization, plant: ct.StateSpace, controller: ct.S
     return np.array(groups + list(CONTROLLER_AXIS) * 2)
 
 
+@dataclass(frozen=True)
+class ModePeak:
+    """The peak loop gain at one bending mode of one loop at one point.
+
+    Attributes
+    ----------
+    time_s : float
+        Flight time of the point (s).
+    axis : str
+        Loop: ``"pitch"`` or ``"yaw"``.
+    mode : str
+        ``flex_<n>``.
+    peak_dB : float
+        Largest |L| near the mode's resonance (dB); its attenuation is ``-peak_dB``.
+    frequency_hz : float
+        Where the peak is (Hz).
+    """
+
+    time_s: float
+    axis: str
+    mode: str
+    peak_dB: float
+    frequency_hz: float
+
+
 class MarginLabeler:
     """Labels the crossings of one discrete SISO loop (see the module notes).
 
@@ -120,8 +149,8 @@ class MarginLabeler:
         self.half_width_hz = np.abs(s.real) / (2 * np.pi)
         self.zeta = -s.real / np.maximum(np.abs(s), 1e-300)
 
-    def label(self, f_hz: float, kind: str, value: float) -> tuple[str, str]:
-        """``(mode, band)`` of a ``kind`` (gain/phase) crossing of margin ``value`` at f."""
+    def _by_group(self, f_hz: float) -> tuple[np.ndarray, float]:
+        """|contribution| of every group's poles to L at f, and |L| there."""
         z = np.exp(2j * np.pi * f_hz * self.dt)
         contrib = self.residues / (z - self.poles)
         total = abs(contrib.sum() + self.d)
@@ -131,11 +160,20 @@ class MarginLabeler:
         low = [g for g, name in enumerate(self.names) if name in LOW_GROUPS]
         by_group = np.array([abs(contrib[np.isin(owner, low) if g in low else owner == g].sum())
                              for g in range(len(self.names))])
+        return by_group, total
+
+    def _resonant(self, g: int) -> np.ndarray:
+        """Indices of the lightly damped (0 < ζ < 0.1) oscillatory poles of group g."""
+        return np.flatnonzero((self.owner == g) & (self.zeta < 0.1) & (self.zeta > 0) & (self.freq_hz > 0))
+
+    def label(self, f_hz: float, kind: str, value: float) -> tuple[str, str]:
+        """``(mode, band)`` of a ``kind`` (gain/phase) crossing of margin ``value`` at f."""
+        by_group, total = self._by_group(f_hz)
         best, best_dist = None, np.inf
         for g, name in enumerate(self.names):
             if not name.startswith(("slosh", "flex")):
                 continue
-            for j in np.flatnonzero((owner == g) & (self.zeta < 0.1) & (self.zeta > 0) & (self.freq_hz > 0)):
+            for j in self._resonant(g):
                 dist = abs(f_hz - self.freq_hz[j]) / max(self.half_width_hz[j], 1e-9)
                 if dist <= RESONANCE_WIDTHS and by_group[g] >= RESONANCE_SHARE * total and dist < best_dist:
                     best, best_dist = name, dist
@@ -150,6 +188,33 @@ class MarginLabeler:
             # conditional stability of a PID on a double integrator
             mode = "aero" if self.aero_unstable else "integrator"
         return str(mode), band_of(str(mode))
+
+
+    def flex_peaks(self, response, time_s: float, axis: str) -> list[ModePeak]:
+        """The loop's peak gain at each bending mode it carries: for every ``flex_<n>``
+        group with a lightly damped pole whose contribution is at least
+        :data:`RESONANCE_SHARE` of |L| at its frequency, the largest |L| within
+        :data:`RESONANCE_WIDTHS` half-power half-widths of it (the mode's attenuation is
+        its negative). ``response``: the loop's
+        :class:`savant_cli.linear.response.FastResponse`."""
+        out = []
+        for g, name in enumerate(self.names):
+            if not name.startswith("flex"):
+                continue
+            carried = {}
+            for j in self._resonant(g):
+                by_group, total = self._by_group(self.freq_hz[j])
+                if by_group[g] >= RESONANCE_SHARE * total:
+                    carried[j] = by_group[g]
+            if not carried:
+                continue
+            j = max(carried, key=carried.get)
+            f = self.freq_hz[j] + np.linspace(-RESONANCE_WIDTHS, RESONANCE_WIDTHS, PEAK_POINTS) * self.half_width_hz[j]
+            f = f[(f > 0.0) & (f < 0.5 / self.dt)]
+            mag = np.abs(response.siso(2 * np.pi * f))
+            k = int(np.argmax(mag))
+            out.append(ModePeak(time_s, axis, name, float(20 * np.log10(mag[k])), float(f[k])))
+        return out
 
 
 def aero_unstable(lin: PlantLinearization) -> bool:

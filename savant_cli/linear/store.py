@@ -6,9 +6,11 @@ continuous), ``states``, ``inputs``, ``outputs`` (names), ``time_s``; ``<point>`
 ``t<time in ms>`` (e.g. ``t055000``); systems: ``plant_continuous``, ``plant`` (discrete,
 with the gyro dynamics), ``controller``, ``open_pitch`` and ``open_yaw`` (loop at a time,
 the other axis closed), ``open_pitch_only`` and ``open_yaw_only`` (other axis open),
-``open_mimo`` (2x2), ``closed_loop``. ``linear/margins`` is the margin table, with the
-requirement set as attribute ``requirements`` (JSON: band → [gain dB, phase deg]) and the
-chart option ``exclusion_zones``.
+``open_mimo`` (2x2), ``closed_loop``. ``linear/margins`` is the margin table (with each
+row's ``meets_requirement``), with the band requirements the charts mark as attribute
+``requirements`` (JSON: band → [gain dB, phase deg]) and the chart option
+``exclusion_zones``; ``linear/requirements`` holds the requirement set and every check of
+every point (:func:`write_checks`).
 
 Chart data (:mod:`savant_cli.linear.charts`) of a point, when the study drew or was asked
 to keep its charts, sits in ``linear/<point>/charts``: ``loop_<axis>/{f_hz, response,
@@ -27,17 +29,27 @@ from pathlib import Path
 import control as ct
 import h5py
 import numpy as np
+from omegaconf import OmegaConf
 
+from savant_cli.config import RequirementSet
 from savant_cli.linear.charts import CommandResponses, LoopResponse, PointCharts, PoleZeroMap, RootLocus
 from savant_cli.linear.loops import LinearPoint
 from savant_cli.linear.margins import MarginRow
+from savant_cli.linear.requirements import PointVerdict, verdict_line
 
 _STR = h5py.string_dtype()
 MARGIN_COLUMNS = ("time_s", "axis", "kind", "value", "frequency_hz", "band", "mode")
+CHECK_COLUMNS = ("time_s", "axis", "mode", "criterion", "value", "required", "unit", "frequency_hz", "passed")
 
 
 def point_key(time_s: float) -> str:
     return f"t{int(round(time_s * 1000)):06d}"
+
+
+def point_keys(g: h5py.Group) -> list[str]:
+    """The operating points' group names in a ``linear`` group (``margins`` and
+    ``requirements`` aside)."""
+    return [k for k in g if "time_s" in g[k].attrs and k not in ("margins", "requirements")]
 
 
 def systems(pt: LinearPoint) -> dict[str, ct.StateSpace]:
@@ -57,10 +69,10 @@ def _names(labels) -> np.ndarray:
 
 
 def write_linear_group(f: h5py.File, points: list[LinearPoint], rows: list[MarginRow],
-                       charts: dict[float, PointCharts] | None = None,
-                       requirements: dict[str, tuple[float, float]] | None = None,
-                       exclusion_zones: bool = True) -> None:
-    """Write every point's systems, chart data and the margin table into ``f["linear"]``.
+                       charts: dict[float, PointCharts] | None = None, requirements: RequirementSet | None = None,
+                       exclusion_zones: bool = True, verdicts: list[PointVerdict] | None = None) -> None:
+    """Write every point's systems, chart data, the margin table and the requirement
+    checks into ``f["linear"]``.
 
     Parameters
     ----------
@@ -72,10 +84,13 @@ def write_linear_group(f: h5py.File, points: list[LinearPoint], rows: list[Margi
         The margin table of all points.
     charts : dict of float to PointCharts, optional
         Chart data by point time (s); points without an entry get no ``charts`` group.
-    requirements : dict of str to (float, float), optional
-        Band → (gain margin dB, phase margin deg) the charts mark.
+    requirements : RequirementSet, optional
+        The requirement set (its band values are what the charts mark).
     exclusion_zones : bool
         Whether the Nichols charts draw the exclusion zones.
+    verdicts : list of PointVerdict, optional
+        The points' requirement verdicts: group ``linear/requirements``
+        (:func:`write_checks`).
     """
     g = f.create_group("linear", track_order=True)
     g.attrs["note"] = "roll (on/off jets) is not part of the linear analysis"
@@ -94,15 +109,62 @@ def write_linear_group(f: h5py.File, points: list[LinearPoint], rows: list[Margi
             for attr, labels in (("states", sys.state_labels), ("inputs", sys.input_labels),
                                  ("outputs", sys.output_labels)):
                 sg.create_dataset(attr, data=_names(labels), dtype=_STR)
-    mg = g.create_group("margins")
+    write_margin_table(g.create_group("margins"), rows, requirements, exclusion_zones)
+    if verdicts is not None:
+        write_checks(g.create_group("requirements", track_order=True), verdicts, requirements)
+
+
+def write_margin_table(mg: h5py.Group, rows: list[MarginRow], requirements: RequirementSet | None,
+                       exclusion_zones: bool) -> None:
+    """The margin rows (:data:`MARGIN_COLUMNS`, and ``meets_requirement`` when the rows
+    were judged) into ``mg``, with the attributes ``requirements`` (JSON: band → [gain dB,
+    phase deg], what the charts mark) and ``exclusion_zones``."""
     mg.attrs["exclusion_zones"] = bool(exclusion_zones)
-    mg.attrs["requirements"] = json.dumps({band: list(req) for band, req in (requirements or {}).items()})
+    bands = requirements.by_band() if requirements is not None else {}
+    mg.attrs["requirements"] = json.dumps({band: list(req) for band, req in bands.items()})
     for col in MARGIN_COLUMNS:
         vals = [getattr(r, col) for r in rows]
         if col in ("axis", "kind", "band", "mode"):
             mg.create_dataset(col, data=_names(vals), dtype=_STR)
         else:
             mg.create_dataset(col, data=np.asarray(vals, dtype=np.float64))
+    if rows and all(r.meets_requirement is not None for r in rows):
+        mg.create_dataset("meets_requirement", data=np.array([r.meets_requirement for r in rows], bool))
+
+
+def write_checks(g: h5py.Group, verdicts: list[PointVerdict], requirements: RequirementSet | None) -> None:
+    """The requirement verdicts into ``g``: attributes ``set`` (the requirement set as
+    JSON), ``verdict`` (the one-line verdict) and ``passed``; ``points/{time_s, stage,
+    passed}`` and ``checks/<column>`` (:data:`CHECK_COLUMNS`, every check of every point)."""
+    if requirements is not None:
+        g.attrs["set"] = json.dumps(OmegaConf.to_container(OmegaConf.structured(requirements)))
+        g.attrs["verdict"] = verdict_line([("", [v]) for v in verdicts], requirements.name)
+    g.attrs["passed"] = all(v.passed for v in verdicts)
+    pg = g.create_group("points", track_order=True)
+    pg.create_dataset("time_s", data=np.array([v.time_s for v in verdicts], float))
+    pg.create_dataset("stage", data=_names([v.stage for v in verdicts]), dtype=_STR)
+    pg.create_dataset("passed", data=np.array([v.passed for v in verdicts], bool))
+    checks = [c for v in verdicts for c in v.checks]
+    cg = g.create_group("checks", track_order=True)
+    for col in CHECK_COLUMNS:
+        vals = [getattr(c, col) for c in checks]
+        if col in ("axis", "mode", "criterion", "unit"):
+            cg.create_dataset(col, data=_names(vals), dtype=_STR)
+        else:
+            cg.create_dataset(col, data=np.asarray(vals, dtype=bool if col == "passed" else np.float64))
+
+
+def write_checks_csv(path: Path, verdicts: list[PointVerdict]) -> None:
+    """``requirements.csv``: every requirement check of every point
+    (:data:`CHECK_COLUMNS`, with the point's stage; ``passed`` yes/no)."""
+    from savant_cli.io.atomic import write_text_atomic
+
+    lines = [",".join(("stage",) + CHECK_COLUMNS)]
+    for v in verdicts:
+        for c in v.checks:
+            lines.append(f"{v.stage},{c.time_s:.3f},{c.axis},{c.mode},{c.criterion},{c.value:.6g},{c.required:g},"
+                         f"{c.unit},{c.frequency_hz:.9g},{'yes' if c.passed else 'no'}")
+    write_text_atomic(path, "\n".join(lines) + "\n")
 
 
 def write_loop_response(g: h5py.Group, lp: LoopResponse) -> None:
@@ -168,9 +230,10 @@ def read_margins(g: h5py.Group) -> tuple[list[MarginRow], dict[str, tuple[float,
     cols = {c: (mg[c].asstr()[()] if c in ("axis", "kind", "band", "mode") else mg[c][()]) for c in names}
     n = len(cols["time_s"])
     modes = cols.get("mode", [""] * n)
-    rows = [MarginRow(float(t), str(a), str(k), float(v), float(fz), str(b), str(m))
-            for t, a, k, v, fz, b, m in zip(cols["time_s"], cols["axis"], cols["kind"], cols["value"],
-                                            cols["frequency_hz"], cols["band"], modes)]
+    meets = [bool(ok) for ok in mg["meets_requirement"][()]] if "meets_requirement" in mg else [None] * n
+    rows = [MarginRow(float(t), str(a), str(k), float(v), float(fz), str(b), str(m), ok)
+            for t, a, k, v, fz, b, m, ok in zip(cols["time_s"], cols["axis"], cols["kind"], cols["value"],
+                                                cols["frequency_hz"], cols["band"], modes, meets)]
     req = {band: (float(v[0]), float(v[1])) for band, v in json.loads(mg.attrs.get("requirements", "{}")).items()}
     return rows, req, bool(mg.attrs.get("exclusion_zones", True))
 
@@ -180,7 +243,7 @@ def read_linear_group(path: Path | str) -> tuple[list[PointCharts], list[MarginR
     has it (in time order), the margin table, the requirements and ``exclusion_zones``."""
     with h5py.File(path, "r") as f:
         g = f["linear"]
-        charts = [read_charts(g[k]["charts"]) for k in g if k != "margins" and "charts" in g[k]]
+        charts = [read_charts(g[k]["charts"]) for k in point_keys(g) if "charts" in g[k]]
         rows, req, zones = read_margins(g)
     return sorted(charts, key=lambda c: c.time_s), rows, req, zones
 
@@ -198,7 +261,7 @@ def load_point(path: Path | str, time_s: float, system: str = "open_pitch") -> c
         g = f["linear"]
         key = point_key(time_s)
         if key not in g:
-            have = sorted(float(g[k].attrs["time_s"]) for k in g if k != "margins")
+            have = sorted(float(g[k].attrs["time_s"]) for k in point_keys(g))
             raise KeyError(f"no linear point at t = {time_s} s; stored: {have}")
         sg = g[key][system]
         dt = float(sg.attrs["dt"])
@@ -230,16 +293,17 @@ def write_mat(path: Path, points: list[LinearPoint]) -> None:
             savemat(fh, data, do_compression=True)
 
 
-def write_margins_csv(path: Path, rows: list[MarginRow], verdicts: list[bool] | None = None) -> None:
+def write_margins_csv(path: Path, rows: list[MarginRow]) -> None:
     """``margins.csv``: one row per crossing (:data:`MARGIN_COLUMNS`), plus the column
-    ``meets_requirement`` (yes/no) when ``verdicts`` gives one per row."""
+    ``meets_requirement`` (yes/no) when the rows were judged."""
     from savant_cli.io.atomic import write_text_atomic
 
-    header = list(MARGIN_COLUMNS) + (["meets_requirement"] if verdicts is not None else [])
+    judged = bool(rows) and all(r.meets_requirement is not None for r in rows)
+    header = list(MARGIN_COLUMNS) + (["meets_requirement"] if judged else [])
     lines = [",".join(header)]  # value: gain margin in dB or phase margin in deg
-    for i, r in enumerate(rows):  # frequencies to 1e-8 relative: a crossing on a 1e-4-damped resonance
+    for r in rows:  # frequencies to 1e-8 relative: a crossing on a 1e-4-damped resonance
         line = f"{r.time_s:.3f},{r.axis},{r.kind},{r.value:.4f},{r.frequency_hz:.9g},{r.band},{r.mode}"
-        if verdicts is not None:
-            line += ",yes" if verdicts[i] else ",no"
+        if judged:
+            line += ",yes" if r.meets_requirement else ",no"
         lines.append(line)
     write_text_atomic(path, "\n".join(lines) + "\n")

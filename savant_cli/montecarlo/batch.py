@@ -30,6 +30,7 @@ import numpy as np
 
 from savant_cli.config import LinearStudyConfig, SavantConfig
 from savant_cli.errors import ConfigError
+from savant_cli.linear.requirements import AXIS_NAMES, CHECK_ARRAY_COLUMNS, checks_array, mode_code
 from savant_cli.montecarlo.spec import DispersionSet
 from savant_cli.montecarlo.targets import apply_samples, build_dispersed
 from savant_cli.sim.build import SimModel
@@ -40,9 +41,11 @@ from savant_cli.sim.summary import summarize
 
 #: summary keys that vary from machine to machine, kept out of the run tables
 WALL_KEYS = ("sim_wall_time_s", "realtime_factor", "study_wall_time_s")
-AXIS_CODES = ("pitch", "yaw")
+AXIS_CODES = AXIS_NAMES
 KIND_CODES = ("gain", "phase")
 BAND_CODES = ("rigid/aero", "slosh", "flex")
+#: Columns of a run's margin rows (codes for the strings; modes as ``mode_code``).
+MARGIN_ARRAY_COLUMNS = ("time_s", "axis", "kind", "band", "value", "frequency_hz", "mode", "meets_requirement")
 
 
 @dataclass
@@ -73,7 +76,8 @@ class RunOutcome:
     summary: np.ndarray = field(default_factory=lambda: np.zeros(0))
     events: np.ndarray = field(default_factory=lambda: np.full(len(EVENT_NAMES), np.nan))
     histories: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), np.float32))
-    margins: np.ndarray = field(default_factory=lambda: np.zeros((0, 6)))  # time, axis, kind, band, value, f_hz
+    margins: np.ndarray = field(default_factory=lambda: np.zeros((0, len(MARGIN_ARRAY_COLUMNS))))
+    checks: np.ndarray = field(default_factory=lambda: np.zeros((0, len(CHECK_ARRAY_COLUMNS))))  # requirement checks
 
 
 def history_columns(sig: dict, names: list[str]) -> list[tuple[str, str, int | None]]:
@@ -101,19 +105,22 @@ def _decimate(sig: dict, names: list[str], grid: np.ndarray) -> np.ndarray:
     return out
 
 
-def _margins(case: Case, model: SimModel, result) -> np.ndarray:
+def _margins(case: Case, model: SimModel, result) -> tuple[np.ndarray, np.ndarray]:
+    """The run's margin rows (:data:`MARGIN_ARRAY_COLUMNS`) and requirement checks
+    (``linear/requirements.py::CHECK_ARRAY_COLUMNS``) at its linear times."""
     from savant_cli.studies.linear import analyse
 
-    rows = []
+    rows, verdicts = [], []
     dt_fcs = model.rates.dt * model.rates.n_fcs
     lin_cfg = LinearStudyConfig(times=list(case.linear_times))
     for k, snap in sorted(result.snapshots.items()):
         if any(abs(snap.t - te) < lin_cfg.event_clearance_s for te in result.events if te == te):
             continue  # on this run's event: no frozen-time point there
-        _, margin_rows, _ = analyse(model, snap, lin_cfg, dt_fcs)
+        a = analyse(model, snap, lin_cfg, dt_fcs, case.cfg.requirements)
+        verdicts.append(a.verdict)
         rows += [(r.time_s, AXIS_CODES.index(r.axis), KIND_CODES.index(r.kind), BAND_CODES.index(r.band), r.value,
-                  r.frequency_hz) for r in margin_rows]
-    return np.array(rows, dtype=float).reshape(-1, 6)
+                  r.frequency_hz, mode_code(r.mode), float(r.meets_requirement)) for r in a.rows]
+    return np.array(rows, dtype=float).reshape(-1, len(MARGIN_ARRAY_COLUMNS)), checks_array(verdicts)
 
 
 def fly_run(case: Case, run: int, keep: bool = False):
@@ -140,10 +147,12 @@ def fly_run(case: Case, run: int, keep: bool = False):
                 and k not in WALL_KEYS]
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            margins = _margins(case, model, result) if case.linear_times else np.zeros((0, 6))
+            margins, checks = _margins(case, model, result) if case.linear_times else (None, None)
         outcome = RunOutcome(run, result.status, result.message, float(result.t_final), 0.0, values, keys,
                              np.array([float(summ[k]) for k in keys]), np.asarray(result.events, float),
-                             _decimate(sig, case.history_signals, case.history_time), margins)
+                             _decimate(sig, case.history_signals, case.history_time))
+        if margins is not None:
+            outcome.margins, outcome.checks = margins, checks
         if keep:
             extra = (model, result, sig, summ)
     except ConfigError as exc:
@@ -199,7 +208,7 @@ class Journal:
         tmp = self.folder / f".run_{o.run:06d}.{os.getpid()}.tmp.npz"
         np.savez(tmp, run=o.run, status=o.status, message=o.message, t_final=o.t_final, wall_s=o.wall_s,
                  values=o.values, summary_keys=np.array(o.summary_keys, dtype=str), summary=o.summary,
-                 events=o.events, histories=o.histories, margins=o.margins)
+                 events=o.events, histories=o.histories, margins=o.margins, checks=o.checks)
         os.replace(tmp, self.folder / f"run_{o.run:06d}.npz")
 
 
@@ -208,7 +217,7 @@ def read_outcome(path: Path) -> RunOutcome:
     with np.load(path, allow_pickle=False) as z:
         return RunOutcome(int(z["run"]), str(z["status"]), str(z["message"]), float(z["t_final"]), float(z["wall_s"]),
                           z["values"], [str(k) for k in z["summary_keys"]], z["summary"], z["events"],
-                          z["histories"], z["margins"])
+                          z["histories"], z["margins"], z["checks"])
 
 
 # ------------------------------------------------------------------------- execution

@@ -18,17 +18,23 @@ from typing import Any
 
 import h5py
 import numpy as np
+from omegaconf import OmegaConf
 from rich.console import Console
 from rich.table import Table
 
 from savant_cli.errors import ConfigError
 from savant_cli.io.atomic import atomic_path, write_json_atomic, write_text_atomic
-from savant_cli.io.console import split_unit
+from savant_cli.io.console import print_verdict, split_unit
 from savant_cli.io.record import FLOWN
-from savant_cli.montecarlo.batch import AXIS_CODES, BAND_CODES, KIND_CODES, read_outcome
+from savant_cli.config import RequirementSet
+from savant_cli.linear.requirements import (CHECK_ARRAY_COLUMNS, CRITERIA, STAGES, mode_code, mode_name, verdict_line,
+                                            verdicts_of_array)
+from savant_cli.montecarlo.batch import AXIS_CODES, BAND_CODES, KIND_CODES, MARGIN_ARRAY_COLUMNS, read_outcome
 from savant_cli.sim.engine import EVENT_NAMES
 
 PERCENTILES = (0.135, 50.0, 99.865)  # the ±3σ-equivalent tails of a normal distribution
+N_MARGIN = 1 + len(MARGIN_ARRAY_COLUMNS)  # run, then the margin row
+N_CHECK = 1 + len(CHECK_ARRAY_COLUMNS)  # run, then the check
 
 
 @dataclass
@@ -92,8 +98,9 @@ class Tables:
     summary_keys: list[str]
     summary: np.ndarray  # (n, n_keys)
     events: np.ndarray  # (n, n_events)
-    margins: np.ndarray  # (m, 7): run, time, axis, kind, band, value, f_hz
+    margins: np.ndarray  # (m, 9): run, then batch.MARGIN_ARRAY_COLUMNS
     history_names: list[str]
+    checks: np.ndarray = field(default_factory=lambda: np.zeros((0, 1 + len(CHECK_ARRAY_COLUMNS))))  # run, checks
 
     @property
     def ok(self) -> np.ndarray:
@@ -111,7 +118,7 @@ def _write_tables(h5: h5py.Group, inv: Inventory, runs: list[int], history_names
     values = np.full((n, nd), np.nan)
     events = np.full((n, len(EVENT_NAMES)), np.nan)
     summary_cols: dict[str, np.ndarray] = {}
-    margins = []
+    margins, checks = [], []
     hist = None
     if history_names:
         hg = h5.create_group("histories", track_order=True)
@@ -133,12 +140,15 @@ def _write_tables(h5: h5py.Group, inv: Inventory, runs: list[int], history_names
             summary_cols[k][i] = v
         if o.margins.size:
             margins.append(np.column_stack([np.full(len(o.margins), run), o.margins]))
+        if o.checks.size:
+            checks.append(np.column_stack([np.full(len(o.checks), run), o.checks]))
         if hist is not None and o.histories.size:
             for j, name in enumerate(history_names):
                 hist[name][i] = o.histories[j]
     return Tables(np.asarray(runs), status, message, t_final, wall, values, keys,
                   np.column_stack([summary_cols[k] for k in keys]) if keys else np.zeros((n, 0)), events,
-                  np.vstack(margins) if margins else np.zeros((0, 7)), history_names)
+                  np.vstack(margins) if margins else np.zeros((0, N_MARGIN)), history_names,
+                  np.vstack(checks) if checks else np.zeros((0, N_CHECK)))
 
 
 def _strings(items: list[str]) -> np.ndarray:
@@ -165,28 +175,46 @@ def percentile_rows(names: list[str], data: np.ndarray, runs: np.ndarray) -> lis
 
 
 def margin_spread(margins: np.ndarray) -> list[dict[str, Any]]:
-    """Per (time, axis, kind, band): the critical crossing of each run (smallest |margin|),
-    then its spread over the runs."""
+    """Per (time, axis, kind, mode): the critical crossing of each run (smallest |margin|),
+    then its spread over the runs, and how many runs' critical crossing misses its
+    requirement."""
     rows = []
     if not margins.size:
         return rows
-    keys = np.unique(margins[:, 1:5], axis=0)
-    for t, ax, kd, bd in keys:
-        sel = margins[(margins[:, 1] == t) & (margins[:, 2] == ax) & (margins[:, 3] == kd) & (margins[:, 4] == bd)]
-        crit: dict[int, float] = {}
-        for run, value in zip(sel[:, 0].astype(int), sel[:, 5]):
-            if run not in crit or abs(value) < abs(crit[run]):
-                crit[run] = float(value)
+    keys = np.unique(margins[:, [1, 2, 3, 7]], axis=0)
+    for t, ax, kd, md in keys:
+        sel = margins[(margins[:, 1] == t) & (margins[:, 2] == ax) & (margins[:, 3] == kd) & (margins[:, 7] == md)]
+        crit: dict[int, tuple[float, bool]] = {}
+        for run, value, ok in zip(sel[:, 0].astype(int), sel[:, 5], sel[:, 8]):
+            if run not in crit or abs(value) < abs(crit[run][0]):
+                crit[run] = (float(value), bool(ok))
         runs = np.array(list(crit))
-        vals = np.array(list(crit.values()))
+        vals = np.array([v for v, _ in crit.values()])
         p = np.percentile(vals, PERCENTILES)
         rows.append({"time_s": float(t), "axis": AXIS_CODES[int(ax)], "kind": KIND_CODES[int(kd)],
-                     "band": BAND_CODES[int(bd)], "runs": int(vals.size),
+                     "mode": mode_name(int(md)), "band": BAND_CODES[int(sel[0, 4])], "runs": int(vals.size),
                      "worst": float(vals[np.argmin(np.abs(vals))]), "worst_run": int(runs[np.argmin(np.abs(vals))]),
                      "min": float(vals.min()), "min_run": int(runs[np.argmin(vals)]),
                      "max": float(vals.max()), "max_run": int(runs[np.argmax(vals)]),
-                     "p0.135": float(p[0]), "p50": float(p[1]), "p99.865": float(p[2])})
+                     "p0.135": float(p[0]), "p50": float(p[1]), "p99.865": float(p[2]),
+                     "runs_below_requirement": int(sum(not ok for _, ok in crit.values()))})
     return rows
+
+
+def requirement_verdicts(checks: np.ndarray, requirement_set: str) -> dict[str, Any]:
+    """The batch's requirement verdict from every run's checks: how many runs were judged
+    (those with a linear point) and pass, the one-line verdict, and each failing run's
+    worst offender."""
+    per_run = {int(r): verdicts_of_array(checks[checks[:, 0] == r, 1:]) for r in np.unique(checks[:, 0])}
+    failed = []
+    for run, vs in per_run.items():
+        bad = [v for v in vs if not v.passed]
+        if bad:
+            worst = min((v.worst for v in bad), key=lambda c: c.ratio)
+            failed.append({"run": run, "points_failed": len(bad), "worst": worst.text()})
+    line = verdict_line([(f"run {r}", vs) for r, vs in per_run.items()], requirement_set, "runs")
+    return {"set": requirement_set, "runs_judged": len(per_run), "runs_passing": len(per_run) - len(failed),
+            "passed": bool(per_run) and not failed, "line": line, "failed_runs": failed}
 
 
 def _csv(path: Path, rows: list[dict[str, Any]]) -> None:
@@ -201,18 +229,22 @@ def _csv(path: Path, rows: list[dict[str, Any]]) -> None:
 
 def write_outputs(out_dir: Path, inv: Inventory, expected: list[int], dispersions: list[dict[str, Any]],
                   config_yaml: str, provenance: dict[str, str], history_names: list[str],
-                  history_time: np.ndarray, requirements: dict[str, tuple[float, float]] | None,
+                  history_time: np.ndarray, requirements: RequirementSet | None,
                   plots: bool, console: Console | None = None) -> dict[str, Any]:
-    """Write every batch output into ``out_dir``; returns the ``summary.json`` content."""
+    """Write every batch output into ``out_dir``; returns the ``summary.json`` content.
+    ``requirements``: the set the runs' margins were judged against (its band values
+    mark the margin-spread plot)."""
     runs = sorted(r for r in expected if r in inv.files)
     missing = inv.missing(expected)
     out_dir.mkdir(parents=True, exist_ok=True)
+    bands = requirements.by_band() if requirements is not None else {}
+    set_name = requirements.name if requirements is not None else "none"
     with atomic_path(out_dir / "savant.h5") as tmp, h5py.File(tmp, "w") as f:
         g = f.create_group("montecarlo")
         g.attrs.update({"n_runs_expected": len(expected), "n_runs_present": len(runs), "seed": inv.manifest.get("seed", -1),
                         "config_yaml": config_yaml, "percentiles": PERCENTILES,
                         "missing_runs": ranges_text(missing),
-                        "requirements": json.dumps({b: list(r) for b, r in (requirements or {}).items()})})
+                        "requirements": json.dumps({b: list(r) for b, r in bands.items()})})
         for k, v in provenance.items():
             g.attrs[f"provenance_{k}"] = str(v)
         tb = _write_tables(g, inv, runs, history_names, history_time)
@@ -233,13 +265,18 @@ def write_outputs(out_dir: Path, inv: Inventory, expected: list[int], dispersion
         for j, k in enumerate(tb.summary_keys):
             sg.create_dataset(k, data=tb.summary[:, j])
         mg = g.create_group("margins")
-        for j, col in enumerate(("run", "time_s", "axis", "kind", "band", "value", "frequency_hz")):
+        for j, col in enumerate(("run",) + MARGIN_ARRAY_COLUMNS):
             data = tb.margins[:, j]
             if col in ("axis", "kind", "band"):
                 codes = {"axis": AXIS_CODES, "kind": KIND_CODES, "band": BAND_CODES}[col]
                 mg.create_dataset(col, data=_strings([codes[int(c)] for c in data]))
+            elif col == "mode":
+                mg.create_dataset(col, data=_strings([mode_name(int(c)) for c in data]))
             else:
-                mg.create_dataset(col, data=data.astype(int) if col == "run" else data)
+                mg.create_dataset(col, data=data.astype(int) if col == "run" else data.astype(bool)
+                                  if col == "meets_requirement" else data)
+        verdict = requirement_verdicts(tb.checks, set_name)
+        _write_checks(g.create_group("requirements", track_order=True), tb.checks, verdict, requirements)
     ok = tb.ok
     stats = percentile_rows(tb.summary_keys, tb.summary[ok], tb.runs[ok])
     disp_stats = percentile_rows([d["name"] for d in dispersions], tb.values[tb.runs > 0], tb.runs[tb.runs > 0])
@@ -255,12 +292,41 @@ def write_outputs(out_dir: Path, inv: Inventory, expected: list[int], dispersion
     summary = {"study": "montecarlo", "n_runs_expected": len(expected), "n_runs_present": len(runs),
                "missing_runs": ranges_text(missing), "status_counts": counts, "failures": failures,
                "statistics": stats, "dispersion_statistics": disp_stats, "margin_spread": spread}
+    if tb.checks.size:
+        summary.update({"requirements_met": verdict["passed"], "requirements_verdict": verdict["line"],
+                        "requirements": verdict})
     write_json_atomic(out_dir / "summary.json", summary)
     if plots:
-        _plots(out_dir, tb, dispersions, requirements)
+        _plots(out_dir, tb, dispersions, bands or None)
     if console is not None:
-        print_tables(console, stats, spread, counts, missing)
+        print_tables(console, stats, spread, counts, missing, verdict if tb.checks.size else None)
     return summary
+
+
+def _write_checks(g: h5py.Group, checks: np.ndarray, verdict: dict[str, Any],
+                  requirements: RequirementSet | None) -> None:
+    """Group ``montecarlo/requirements``: attributes ``set`` (JSON), ``verdict`` (the one
+    line), ``passed``; ``checks/<column>`` (every check of every run: ``run`` and
+    ``linear/requirements.py::CHECK_ARRAY_COLUMNS``, names for the codes) and
+    ``failed_runs/{run, points_failed, worst}``."""
+    if requirements is not None:
+        g.attrs["set"] = json.dumps(OmegaConf.to_container(OmegaConf.structured(requirements)))
+    g.attrs["verdict"] = verdict["line"]
+    g.attrs["passed"] = bool(verdict["passed"])
+    cg = g.create_group("checks", track_order=True)
+    names = {"axis": lambda c: AXIS_CODES[int(c)] if c >= 0 else "", "mode": lambda c: mode_name(int(c)),
+             "criterion": lambda c: CRITERIA[int(c)], "stage": lambda c: STAGES[int(c)]}
+    for j, col in enumerate(("run",) + CHECK_ARRAY_COLUMNS):
+        data = checks[:, j]
+        if col in names:
+            cg.create_dataset(col, data=_strings([names[col](c) for c in data]))
+        else:
+            cg.create_dataset(col, data=data.astype(int) if col == "run" else data.astype(bool)
+                              if col == "passed" else data)
+    fg = g.create_group("failed_runs", track_order=True)
+    fg.create_dataset("run", data=np.array([f["run"] for f in verdict["failed_runs"]], dtype=int))
+    fg.create_dataset("points_failed", data=np.array([f["points_failed"] for f in verdict["failed_runs"]], dtype=int))
+    fg.create_dataset("worst", data=_strings([f["worst"] for f in verdict["failed_runs"]]))
 
 
 def read_tables(g: h5py.Group) -> Tables:
@@ -269,11 +335,13 @@ def read_tables(g: h5py.Group) -> Tables:
     summary_keys = list(g["summary"])
     runs = g["runs/run"][()]
     m = g["margins"]
-    margins = np.zeros((0, 7))
+    margins = np.zeros((0, N_MARGIN))
     if m["run"].size:
-        codes = [np.array([names.index(s) for s in m[col].asstr()[()]], dtype=float)
-                 for col, names in (("axis", AXIS_CODES), ("kind", KIND_CODES), ("band", BAND_CODES))]
-        margins = np.column_stack([m["run"][()], m["time_s"][()], *codes, m["value"][()], m["frequency_hz"][()]])
+        codes = {col: np.array([names.index(s) for s in m[col].asstr()[()]], dtype=float)
+                 for col, names in (("axis", AXIS_CODES), ("kind", KIND_CODES), ("band", BAND_CODES))}
+        codes["mode"] = np.array([mode_code(s) for s in m["mode"].asstr()[()]], dtype=float)
+        margins = np.column_stack([m["run"][()]] + [codes[c] if c in codes else m[c][()].astype(float)
+                                                    for c in MARGIN_ARRAY_COLUMNS])
     return Tables(runs, list(g["runs/status"].asstr()[()]), list(g["runs/message"].asstr()[()]),
                   g["runs/t_final_s"][()], g["runs/wall_time_s"][()],
                   np.column_stack([ds[()] for ds in g["dispersions"].values()]) if len(g["dispersions"])
@@ -327,8 +395,8 @@ def _plots(out_dir: Path, tb: Tables, dispersions: list[dict[str, Any]],
 
 
 def print_tables(console: Console, stats: list[dict], spread: list[dict], counts: dict[str, int],
-                 missing: list[int]) -> None:
-    """The min/max table (and the margin spread) on the console."""
+                 missing: list[int], verdict: dict[str, Any] | None = None) -> None:
+    """The min/max table (and the margin spread and requirement verdict) on the console."""
     tb = Table(title="Monte Carlo: extremes over the runs (run number in brackets)")
     for col in ("variable", "max", "min", "p0.135", "p50", "p99.865"):
         tb.add_column(col, justify="left" if col == "variable" else "right")
@@ -337,13 +405,16 @@ def print_tables(console: Console, stats: list[dict], spread: list[dict], counts
                    f"{r['p0.135']:.6g}", f"{r['p50']:.6g}", f"{r['p99.865']:.6g}")
     console.print(tb)
     if spread:
-        ms = Table(title="margin spread (critical crossing per run; gain dB, phase deg)")
-        for col in ("t (s)", "axis", "kind", "band", "runs", "worst [run]", "p0.135", "p50", "p99.865"):
+        ms = Table(title="margin spread (critical crossing per run and mode; gain dB, phase deg)")
+        for col in ("t (s)", "axis", "kind", "mode", "runs", "worst [run]", "p0.135", "p50", "p99.865", "below req."):
             ms.add_column(col)
         for r in spread:
-            ms.add_row(f"{r['time_s']:.1f}", r["axis"], r["kind"], r["band"], str(r["runs"]),
+            below = r["runs_below_requirement"]
+            ms.add_row(f"{r['time_s']:.1f}", r["axis"], r["kind"], r["mode"], str(r["runs"]),
                        f"{r['worst']:.2f} [{r['worst_run']}]", f"{r['p0.135']:.2f}", f"{r['p50']:.2f}",
-                       f"{r['p99.865']:.2f}")
+                       f"{r['p99.865']:.2f}", f"[red]{below}[/red]" if below else "0")
         console.print(ms)
     console.print("runs: " + ", ".join(f"{k} {v}" for k, v in counts.items())
                   + (f"; missing {ranges_text(missing)}" if missing else ""))
+    if verdict is not None:
+        print_verdict(verdict["line"], verdict["passed"], console)

@@ -689,8 +689,10 @@ def _envelope_figure(rows: Sequence[MarginRow], requirements: Mapping[str, tuple
                 v = np.array([r.value for r in pts])
                 req = requirements.get(band)
                 bad = np.zeros(v.size, dtype=bool)
-                if req is not None:
-                    bad = np.abs(v) < req[0] if kind == "gain" else v < req[1]
+                if all(r.meets_requirement is not None for r in pts):  # judged by the requirement set
+                    bad = np.array([not r.meets_requirement for r in pts])
+                elif req is not None:  # by the band's requirement alone
+                    bad = np.abs(v) < (req[0] if kind == "gain" else req[1])
                 violating |= bool(bad.any())
                 ax.scatter([r.time_s for r in pts], v, s=22, marker=marker, color=color,
                            edgecolors=np.where(bad, "k", color), linewidths=np.where(bad, 1.4, 0.5), zorder=3)

@@ -7,8 +7,10 @@ One time run of the configured vehicle (flex on) sets the operating points. At e
 scale factor of ``study.levels``, the retained modes (or ``study.modes``) are scaled in
 the model's flex tables, the plant is linearized about the same state and the loops are
 assembled and analysed as in ``study=linear``. Outputs: ``flex_sweep.csv`` (every margin
-of every case, flagged against the requirements), ``summary.json``, a console table of
-the worst margin per band and case with losses of stability, ``savant.h5`` (the time
+of every case with its requirement verdict), ``summary.json`` (each case's verdict and worst
+offender, and the one-line ``requirements_verdict``), a console table of the worst margin
+per band and case with losses of stability and the worst requirement offender, the verdict
+line, ``savant.h5`` (the time
 run, and group ``flex_sweep``: the margin table and the Nichols data of every chart) and
 one Nichols chart per time, parameter and chart axis with the levels overlaid
 (``plots/flex_sweep/``), which ``savant report`` redraws from ``savant.h5``.
@@ -33,15 +35,17 @@ from rich.table import Table
 from savant_cli.config import FlexSweepStudyConfig, LinearStudyConfig, SavantConfig
 from savant_cli.errors import ConfigError
 from savant_cli.io.atomic import write_text_atomic
+from savant_cli.io.console import print_verdict
 from savant_cli.io.record import FLOWN
 from savant_cli.linear.charts import LoopResponse, loop_response
+from savant_cli.linear.requirements import verdict_line
 from savant_cli.linear.store import read_loop_response, write_loop_response
 from savant_cli.sim.build import SimModel
 from savant_cli.studies import flight as flight_mod
 from savant_cli.studies.linear import analyse, check_times
 
-COLUMNS = ("time_s", "parameter", "level", "axis", "kind", "band", "value", "frequency_hz", "meets_requirement",
-           "closed_loop_stable")
+COLUMNS = ("time_s", "parameter", "level", "axis", "kind", "band", "mode", "value", "frequency_hz",
+           "meets_requirement", "closed_loop_stable")
 
 
 def variant(model: SimModel, parameter: str, level: float, modes: list[int]) -> SimModel:
@@ -81,7 +85,7 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
     times = check_times(sorted({k * rt.dt for k in steps}), result.t_final, events, study, skip=False)
     lin = LinearStudyConfig(times=times)
     cases = [(t, prm, lvl) for t in times for prm in study.parameters for lvl in study.levels]
-    rows, charts, stable = [], {}, {}
+    rows, charts, stable, verdicts = [], {}, {}, {}
     bar = Progress(TextColumn("[bold]flex sweep"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
                    transient=True, disable=not cfg.sim.progress)
     with warnings.catch_warnings(), bar:
@@ -89,24 +93,28 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
         task = bar.add_task("cases", total=len(cases))
         for t, prm, lvl in cases:
             snap = result.snapshots[int(round(t / rt.dt))]
-            pt, margin_rows, extra = analyse(variant(model, prm, lvl, list(study.modes)), snap, lin, dt)
-            stable[(t, prm, lvl)] = extra["closed_loop_stable"]
+            a = analyse(variant(model, prm, lvl, list(study.modes)), snap, lin, dt, cfg.requirements)
+            stable[(t, prm, lvl)] = a.scalars["closed_loop_stable"]
+            verdicts[(t, prm, lvl)] = a.verdict
             for axis in study.chart_axes:
-                charts.setdefault((t, prm, axis), []).append(loop_response(f"{prm} × {lvl:g}", pt.loops[axis]))
-            for r in margin_rows:
+                charts.setdefault((t, prm, axis), []).append(loop_response(f"{prm} × {lvl:g}", a.point.loops[axis]))
+            for r in a.rows:
                 rows.append({"time_s": t, "parameter": prm, "level": lvl, "axis": r.axis, "kind": r.kind,
-                             "band": r.band, "value": r.value, "frequency_hz": r.frequency_hz,
-                             "meets_requirement": study.requirements.meets(r.band, r.kind, r.value),
-                             "closed_loop_stable": bool(extra["closed_loop_stable"])})
+                             "band": r.band, "mode": r.mode, "value": r.value, "frequency_hz": r.frequency_hz,
+                             "meets_requirement": r.meets_requirement, "closed_loop_stable": bool(a.scalars["closed_loop_stable"])})
             bar.advance(task)
     buf = io.StringIO()
     w = csv.DictWriter(buf, fieldnames=list(COLUMNS), lineterminator="\n")
     w.writeheader()
     w.writerows(rows)
-    worst = _worst(rows, stable, study)
+    worst = _worst(rows, stable, verdicts)
+    line = verdict_line([(f"{t:g} s, {prm} × {lvl:g}", [v]) for (t, prm, lvl), v in verdicts.items()],
+                        cfg.requirements.name, "cases")
     wall = time.perf_counter() - t_start
     summary = {"study": "flex_sweep", "times_s": times, "parameters": list(study.parameters),
                "levels": list(study.levels), "modes": list(study.modes) or list(range(1, cfg.flex.n_modes + 1)),
+               "requirement_set": cfg.requirements.name, "requirements_met": all(v.passed for v in verdicts.values()),
+               "requirements_verdict": line,
                "cases": worst, "unstable_cases": [c for c in worst if not c["closed_loop_stable"]],
                "study_wall_time_s": wall}
     rec = flight_mod.record(result, flight.signals, flight.summary, raw_cfg, wall)
@@ -116,6 +124,7 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
     if cfg.output.plots:
         draw(charts, study.exclusion_zones, out_dir / "plots")
     console.print(_table(worst))
+    print_verdict(line, summary["requirements_met"], console)
     console.print(f"{len(cases)} cases in {time.perf_counter() - t_start:.1f} s; outputs: {out_dir}")
     return 0 if result.status in FLOWN else 1  # flown to its end (its health is in its status)
 
@@ -131,7 +140,7 @@ def write_group(f: h5py.File, rows: list[dict], charts: dict[tuple[float, str, s
     for col in COLUMNS:
         vals = [r[col] for r in rows]
         cg.create_dataset(col, data=np.array(vals, dtype=h5py.string_dtype()) if col in ("parameter", "axis", "kind",
-                                                                                          "band") else np.asarray(vals))
+                                                                                          "band", "mode") else np.asarray(vals))
     ng = g.create_group("nichols", track_order=True)
     for n, ((t, prm, axis), loops) in enumerate(charts.items()):
         chart = ng.create_group(f"{n:03d}", track_order=True)
@@ -162,30 +171,34 @@ def draw(charts: dict[tuple[float, str, str], list[LoopResponse]], exclusion_zon
             for (t, prm, axis), loops in charts.items()]
 
 
-def _worst(rows: list[dict], stable: dict, study: FlexSweepStudyConfig) -> list[dict]:
-    """Per case: stability, the smallest |margin| per band and kind, and the violations."""
+def _worst(rows: list[dict], stable: dict, verdicts: dict) -> list[dict]:
+    """Per case: stability, the smallest |margin| per band and kind, the requirement
+    verdict, the violations and the worst offender."""
     out = []
     for (t, prm, lvl), ok in stable.items():
-        case = {"time_s": t, "parameter": prm, "level": lvl, "closed_loop_stable": bool(ok), "violations": 0}
+        v = verdicts[(t, prm, lvl)]
+        case = {"time_s": t, "parameter": prm, "level": lvl, "closed_loop_stable": bool(ok),
+                "meets_requirements": v.passed, "violations": len(v.failed),
+                "worst": v.worst.text() if v.worst is not None else ""}
         for r in rows:
             if (r["time_s"], r["parameter"], r["level"]) != (t, prm, lvl):
                 continue
             key = f"{r['band']}_{r['kind']}"
             if key not in case or abs(r["value"]) < abs(case[key]):
                 case[key] = r["value"]
-            case["violations"] += not r["meets_requirement"]
         out.append(case)
     return out
 
 
 def _table(cases: list[dict]) -> Table:
-    tb = Table(title="flex sweep: smallest |margin| per band (gain dB, phase deg); red = below requirement")
+    tb = Table(title="flex sweep: smallest |margin| per band (gain dB, phase deg); the worst requirement offender")
     cols = ("rigid/aero_gain", "rigid/aero_phase", "flex_gain", "flex_phase")
-    for c in ("t (s)", "parameter", "level", "stable", *cols, "violations"):
-        tb.add_column(c, justify="right")
+    for c in ("t (s)", "parameter", "level", "stable", *cols, "violations", "worst offender"):
+        tb.add_column(c, justify="left" if c == "worst offender" else "right")
     for c in cases:
         tb.add_row(f"{c['time_s']:.1f}", c["parameter"], f"{c['level']:g}",
                    "yes" if c["closed_loop_stable"] else "[red]NO[/red]",
                    *[f"{c[k]:.2f}" if k in c else "–" for k in cols],
-                   f"[red]{c['violations']}[/red]" if c["violations"] else "0")
+                   f"[red]{c['violations']}[/red]" if c["violations"] else "0",
+                   c["worst"] if c["meets_requirements"] else f"[red]{c['worst']}[/red]")
     return tb

@@ -28,6 +28,7 @@ from rich.table import Table
 from savant_cli.config import FlyoffStudyConfig, SavantConfig, check_physics
 from savant_cli.errors import ConfigError
 from savant_cli.io.atomic import write_json_atomic, write_text_atomic
+from savant_cli.io.console import print_verdict
 from savant_cli.io.record import FLOWN
 from savant_cli.io.hdf5 import write_study_file
 from savant_cli.io.provenance import collect_provenance
@@ -48,6 +49,7 @@ METRICS: dict[str, tuple[str, str, str]] = {
     "RCS on-time": ("rcs_on_time_s", "low", "s"),
     "smallest rigid gain margin": ("margin:gain", "high", "dB"),
     "smallest rigid phase margin": ("margin:phase", "high", "deg"),
+    "smallest margin-to-requirement ratio": ("requirements:ratio", "high", "1"),
 }
 
 
@@ -69,9 +71,12 @@ def _per_run(h5: Path) -> dict[str, np.ndarray]:
         status = g["runs/status"].asstr()[()]
         ok = np.isin(status, FLOWN)  # flew to its end (its health is counted separately)
         order = np.argsort(runs)
-        out = {"run": runs[order], "ok": ok[order], "healthy": (status == "complete")[order]}
+        out = {"run": runs[order], "ok": ok[order], "healthy": (status == "complete")[order],
+               "meets_requirements": _meets(g, runs)[order]}
         for metric, (key, _, _) in METRICS.items():
-            if key.startswith("margin:"):
+            if key == "requirements:ratio":
+                out[metric] = _requirement_ratio(g, runs)[order]
+            elif key.startswith("margin:"):
                 kind = key.split(":")[1]
                 col = np.full(runs.size, np.nan)
                 m = g["margins"]
@@ -85,6 +90,34 @@ def _per_run(h5: Path) -> dict[str, np.ndarray]:
             else:
                 out[metric] = g[f"summary/{key}"][()][order] if key in g["summary"] else np.full(runs.size, np.nan)
         return out
+
+
+def _requirement_ratio(g: h5py.Group, runs: np.ndarray) -> np.ndarray:
+    """Per run: the smallest ratio of a margin (or a bending mode's attenuation) to its
+    requirement over the run's checks (< 1: a requirement missed); NaN for a run without
+    linear points. Closed-loop stability is counted by ``meets_requirements``."""
+    out = np.full(runs.size, np.nan)
+    c = g["requirements/checks"]
+    run, crit = c["run"][()], c["criterion"].asstr()[()]
+    value, required = c["value"][()], c["required"][()]
+    ratio = np.where(crit == "attenuation", value, np.abs(value)) / np.where(required > 0, required, np.nan)
+    for j, r in enumerate(runs):
+        sel = (run == r) & (crit != "stability") & np.isfinite(ratio)
+        if sel.any():
+            out[j] = ratio[sel].min()
+    return out
+
+
+def _meets(g: h5py.Group, runs: np.ndarray) -> np.ndarray:
+    """Per run: 1 if every requirement check passes, 0 if one fails, NaN if not judged."""
+    out = np.full(runs.size, np.nan)
+    c = g["requirements/checks"]
+    run, passed = c["run"][()], c["passed"][()]
+    for j, r in enumerate(runs):
+        sel = run == r
+        if sel.any():
+            out[j] = float(passed[sel].all())
+    return out
 
 
 def compare(tables: dict[str, dict[str, np.ndarray]]) -> list[dict]:
@@ -139,19 +172,28 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
         console.print(f"[bold red]a batch stopped[/]; run the same command with hydra.run.dir={out_dir} to resume")
         return 1
     tables = {name: _per_run(out_dir / name / "savant.h5") for name in cfgs}
+    verdicts, passed = {}, {}
+    for name in cfgs:
+        with h5py.File(out_dir / name / "savant.h5") as f:
+            g = f["montecarlo"]
+            if g["requirements/checks/run"].size:  # judged: the batch had linear times
+                verdicts[name] = str(g["requirements"].attrs["verdict"])
+                passed[name] = bool(g["requirements"].attrs["passed"])
     rows = compare(tables)
-    _write(out_dir, rows, tables, study)
+    _write(out_dir, rows, tables, study, verdicts)
     time_s, histories = _nominal_histories(out_dir, list(cfgs))
     write_study_file(out_dir / "savant.h5", "flyoff", OmegaConf.to_yaml(raw_cfg, resolve=True), collect_provenance(),
                      lambda f: write_group(f, rows, tables, time_s, histories))
     console.print(_table(rows, list(cfgs)))
+    for name, line in verdicts.items():
+        print_verdict(f"{name}: {line}", passed[name], console)
     if cfg.output.plots:
         draw(rows, tables, time_s, histories, out_dir / "plots")
     console.print(f"outputs: {out_dir}")
     return 0
 
 
-def _write(out_dir: Path, rows: list[dict], tables: dict, study: FlyoffStudyConfig) -> None:
+def _write(out_dir: Path, rows: list[dict], tables: dict, study: FlyoffStudyConfig, verdicts: dict[str, str]) -> None:
     buf = io.StringIO()
     w = csv.DictWriter(buf, fieldnames=list(rows[0]), lineterminator="\n")
     w.writeheader()
@@ -162,7 +204,16 @@ def _write(out_dir: Path, rows: list[dict], tables: dict, study: FlyoffStudyConf
         "linear_times_s": list(study.linear_times), "metrics": rows,
         "wins": {c: sum(r["winner"] == c for r in rows) for c in tables},
         "runs_complete": {c: int(t["healthy"].sum()) for c, t in tables.items()},
-        "runs_flagged": {c: int((t["ok"] & ~t["healthy"]).sum()) for c, t in tables.items()}})
+        "runs_flagged": {c: int((t["ok"] & ~t["healthy"]).sum()) for c, t in tables.items()},
+        "runs_meeting_requirements": {c: _meeting(t) for c, t in tables.items()},
+        "requirements_verdict": verdicts})
+
+
+def _meeting(t: dict[str, np.ndarray]) -> str:
+    """``"n of m"`` runs meeting the requirement set, of those judged."""
+    m = t["meets_requirements"]
+    judged = np.isfinite(m)
+    return f"{int(m[judged].sum())} of {int(judged.sum())}"
 
 
 def _table(rows: list[dict], names: list[str]) -> Table:

@@ -3,9 +3,13 @@
 A time run (the nominal flight, written like ``study=nominal``) sets the operating
 points; at each, the plant is linearized (``linear/plant.py``), assembled with the
 discrete flight control (``linear/loops.py``) and analysed (``linear/margins.py``).
-Outputs: ``savant.h5`` (time history + ``linear`` group: systems, margins, and the chart
-data of every charted point), ``linear.mat``, ``margins.csv``, ``summary.json`` (with
-``margins``), charts in ``plots/linear/`` and a console table. ``study.charts`` decides
+Every margin and point is judged against the requirement set (``requirements`` group,
+``linear/requirements.py``). Outputs: ``savant.h5`` (time history + ``linear`` group:
+systems, margins, requirement checks, and the chart data of every charted point),
+``linear.mat``, ``margins.csv`` (every crossing with its verdict), ``requirements.csv``
+(every check of every point), ``summary.json`` (``margins``, ``requirements`` and the
+one-line ``requirements_verdict``), charts in ``plots/linear/``, a console table and the
+verdict line. ``study.charts`` decides
 which points get chart data (``auto``: all when there are at most
 :data:`MAX_CHART_POINTS`); it is computed and stored with ``output.plots=false`` too, so
 ``savant report`` can draw the charts later.
@@ -15,6 +19,7 @@ from __future__ import annotations
 
 import time
 import warnings
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -23,16 +28,17 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from savant_cli.config import LinearStudyConfig, SavantConfig
+from savant_cli.config import LinearStudyConfig, RequirementSet, SavantConfig
 from savant_cli.errors import ConfigError
-from savant_cli.io.console import print_run_summary
+from savant_cli.io.console import print_run_summary, print_verdict
 from savant_cli.linear.charts import PointCharts, point_charts
 from savant_cli.linear.loops import AXES, LinearPoint, assemble
 from savant_cli.linear.margins import MarginRow, bandwidth_hz, disk_margins, loop_margins
-from savant_cli.linear.modes import MarginLabeler, aero_unstable, state_groups
+from savant_cli.linear.modes import MarginLabeler, ModePeak, aero_unstable, state_groups
 from savant_cli.linear.plant import linearize_plant
+from savant_cli.linear.requirements import STAGE_OF_PHASE, PointVerdict, evaluate_point, summary as requirement_summary
 from savant_cli.linear.response import FastResponse
-from savant_cli.linear.store import write_linear_group, write_margins_csv, write_mat
+from savant_cli.linear.store import write_checks_csv, write_linear_group, write_margins_csv, write_mat
 from savant_cli.studies import flight as flight_mod
 
 MAX_CHART_POINTS = 20
@@ -65,18 +71,32 @@ def check_times(times: list[float], t_final: float, events: dict[str, float], st
     return keep
 
 
-def analyse(model, snap, study: LinearStudyConfig, dt: float) -> tuple[LinearPoint, list[MarginRow], dict]:
-    """Linear systems, margins and scalar results of one point."""
+@dataclass
+class PointAnalysis:
+    """Everything ``study=linear`` computes at one operating point."""
+
+    point: LinearPoint
+    rows: list[MarginRow]  # every crossing of both loops, labelled by mode
+    peaks: list[ModePeak]  # the loops' peak gain at each bending mode they carry
+    scalars: dict  # disk margins, bandwidths, closed-loop stability
+    verdict: PointVerdict | None  # against the requirement set, when one is given
+
+
+def analyse(model, snap, study: LinearStudyConfig, dt: float,
+            requirements: RequirementSet | None = None) -> PointAnalysis:
+    """Linear systems, margins, bending-mode peaks, scalar results and (with
+    ``requirements``) the requirement verdict of one point."""
     lin = linearize_plant(model, snap, mode=study.jacobian, rel_step=study.jacobian_step)
     pt = assemble(model, snap, lin, dt)
     groups = state_groups(lin, pt.plant, pt.controller)
     unstable = aero_unstable(lin)
-    rows = []
+    rows, peaks = [], []
     extra: dict[str, float] = {"time_s": snap.t}
     for c, axis in enumerate(AXES):
         fr = FastResponse(pt.loops[axis])
         labeler = MarginLabeler(pt.loops[axis], groups, unstable)
         rows += loop_margins(pt.loops[axis], snap.t, axis, response=fr, labeler=labeler)
+        peaks += labeler.flex_peaks(fr, snap.t, axis)
         for k, v in disk_margins(pt.loops[axis], fr).items():
             extra[f"{axis}_{k}"] = v
         extra[f"{axis}_bandwidth_hz"] = bandwidth_hz(pt.closed[c, c])
@@ -86,17 +106,21 @@ def analyse(model, snap, study: LinearStudyConfig, dt: float) -> tuple[LinearPoi
     fast = poles[np.abs(poles) > 0.05]  # frozen-time trajectory drift (|s| < 0.05 rad/s) aside
     extra["closed_loop_stable"] = bool(np.all(fast.real < 0.0))
     extra["closed_loop_max_real_1_per_s"] = float(fast.real.max()) if fast.size else float("nan")
-    return pt, rows, extra
+    verdict = None
+    if requirements is not None:
+        verdict = evaluate_point(snap.t, STAGE_OF_PHASE[pt.phase], rows, peaks, extra["closed_loop_stable"],
+                                 extra["closed_loop_max_real_1_per_s"], requirements)
+        rows = [replace(r, meets_requirement=ok) for r, ok in zip(rows, verdict.row_verdicts)]
+    return PointAnalysis(pt, rows, peaks, extra, verdict)
 
 
-def _table(rows: list[MarginRow], study: LinearStudyConfig) -> Table:
+def _table(rows: list[MarginRow]) -> Table:
     tb = Table(title="stability margins (loop at a time; gain dB, phase deg)")
     for col in ("t (s)", "axis", "kind", "margin", "freq (Hz)", "mode", "band", "meets req."):
         tb.add_column(col, justify="right" if col in ("t (s)", "margin", "freq (Hz)") else "left")
     for r in rows:
-        ok = study.requirements.meets(r.band, r.kind, r.value)
         tb.add_row(f"{r.time_s:.1f}", r.axis, r.kind, f"{r.value:.2f}", f"{r.frequency_hz:.3f}", r.mode, r.band,
-                   "yes" if ok else "[red]NO[/red]")
+                   "yes" if r.meets_requirement else "[red]NO[/red]")
     return tb
 
 
@@ -118,7 +142,8 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
     times = check_times([k * rt.dt for k in steps], result.t_final, events, study, skip=study.every > 0)
     snaps = [result.snapshots[int(round(t / rt.dt))] for t in times]
 
-    points, rows, scalars = [], [], []
+    req = cfg.requirements
+    points, rows, scalars, verdicts = [], [], [], []
     dt = rt.dt * rt.n_fcs
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # python-control notes on unconnected signals, by design
@@ -127,37 +152,42 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
         with bar:
             task = bar.add_task("points", total=len(snaps))
             for snap in snaps:
-                pt, r, extra = analyse(model, snap, study, dt)
-                points.append(pt)
-                rows += r
-                scalars.append(extra)
+                a = analyse(model, snap, study, dt, req)
+                points.append(a.point)
+                rows += a.rows
+                scalars.append(a.scalars)
+                verdicts.append(a.verdict)
                 bar.advance(task)
 
     charted = study.charts == "all" or (study.charts == "auto" and len(points) <= MAX_CHART_POINTS)
     charts = {pt.time_s: point_charts(pt.time_s, pt.loops, pt.closed, [r for r in rows if r.time_s == pt.time_s])
               for pt in points} if charted else {}
-    requirements = study.requirements.by_band()
-    verdicts = [study.requirements.meets(r.band, r.kind, r.value) for r in rows]
     summary["margins"] = [{"time_s": r.time_s, "axis": r.axis, "kind": r.kind, "value": r.value,
-                           "frequency_hz": r.frequency_hz, "band": r.band, "mode": r.mode, "meets_requirement": ok}
-                          for r, ok in zip(rows, verdicts)]
-    summary["margins_meeting_requirements"] = f"{sum(verdicts)} of {len(rows)}"
+                           "frequency_hz": r.frequency_hz, "band": r.band, "mode": r.mode,
+                           "meets_requirement": r.meets_requirement} for r in rows]
+    summary["margins_meeting_requirements"] = f"{sum(r.meets_requirement for r in rows)} of {len(rows)}"
+    verdict = requirement_summary(verdicts, req)
+    summary["requirements_met"] = verdict["passed"]
+    summary["requirements_verdict"] = verdict["line"]
+    summary["requirements"] = verdict
     summary["linear_points"] = scalars
     summary["linear_note"] = "roll (on/off RCS) is left out of the linear analysis"
     summary["study_wall_time_s"] = time.perf_counter() - t_start
-    hdf_summary = {k: v for k, v in summary.items() if not isinstance(v, list)}
+    hdf_summary = {k: v for k, v in summary.items() if not isinstance(v, (list, dict))}
     record = flight_mod.record(result, sig, hdf_summary, raw_cfg, summary["study_wall_time_s"])
     flight_mod.write(out_dir, record, cfg, json_summary=summary,
-                     extra=lambda f: write_linear_group(f, points, rows, charts, requirements, study.exclusion_zones))
+                     extra=lambda f: write_linear_group(f, points, rows, charts, req, study.exclusion_zones, verdicts))
     if cfg.output.hdf5:
         write_mat(out_dir / "linear.mat", points)
-    write_margins_csv(out_dir / "margins.csv", rows, verdicts)
+    write_margins_csv(out_dir / "margins.csv", rows)
+    write_checks_csv(out_dir / "requirements.csv", verdicts)
     if cfg.output.plots:
-        draw_linear(list(charts.values()), rows, requirements, study.exclusion_zones, out_dir / "plots")
-    print_run_summary({k: v for k, v in hdf_summary.items() if k != "linear_note"}, record.status, record.message,
-                      console)
-    console.print(_table(rows, study))
+        draw_linear(list(charts.values()), rows, req.by_band(), study.exclusion_zones, out_dir / "plots")
+    print_run_summary({k: v for k, v in hdf_summary.items() if k not in ("linear_note", "requirements_verdict")},
+                      record.status, record.message, console)
+    console.print(_table(rows))
     console.print("roll (on/off jets) is left out of the linear analysis")
+    print_verdict(verdict["line"], verdict["passed"], console)
     console.print(f"outputs: {out_dir}")
     return 0 if record.complete else 1
 

@@ -91,7 +91,8 @@ def _fly(cfg: SavantConfig, n: int, study: ModeRetentionStudyConfig) -> CountRes
             snap = res.snapshots.get(k)
             if snap is None:
                 continue
-            pt, rows, extra = analyse(model, snap, lin, dt)
+            a = analyse(model, snap, lin, dt)
+            pt, rows, extra = a.point, a.rows, a.scalars
             t = round(float(snap.t), 6)
             out.stable[t] = bool(extra["closed_loop_stable"])
             closed = pt.closed

@@ -1,0 +1,176 @@
+"""Requirement sets in config and their verdicts (issue 12 item 7): the rules of
+``linear/requirements.py`` on hand-made margins, a bending mode's peak against
+python-control's own frequency response, and the ``requirements`` config group."""
+
+from __future__ import annotations
+
+import warnings
+
+import control as ct
+import numpy as np
+import pytest
+
+from savant_cli.config import FlexModeRequirement, RequirementSet, validate
+from savant_cli.errors import ConfigError
+from savant_cli.linear.margins import MarginRow
+from savant_cli.linear.modes import MarginLabeler, ModePeak
+from savant_cli.linear.requirements import (CHECK_ARRAY_COLUMNS, checks_array, evaluate_point, mode_code, mode_name,
+                                            verdict_line, verdicts_of_array)
+
+from conftest import compose_config
+from test_margin_modes import _synthetic_loop
+
+T = 55.0
+
+
+def _row(kind: str, value: float, f: float, mode: str, axis: str = "pitch") -> MarginRow:
+    band = "slosh" if mode.startswith("slosh") else "flex" if mode.startswith("flex") else "rigid/aero"
+    return MarginRow(T, axis, kind, value, f, band, mode)
+
+
+def _verdict(rows, peaks=(), stage="first_stage", stable=True, req=None):
+    return evaluate_point(T, stage, list(rows), list(peaks), stable, -0.1 if stable else 0.2, req or RequirementSet())
+
+
+def test_rigid_aero_integrator_and_slosh_margins_against_their_own_requirements():
+    req = RequirementSet()
+    req.rigid.gain_dB, req.rigid.gain_reduction_dB, req.rigid.phase_deg = 6.0, 4.0, 30.0
+    req.aero.gain_dB, req.slosh.gain_dB, req.slosh.phase_deg = 5.0, 3.0, 20.0
+    rows = [_row("gain", 5.9, 1.1, "rigid"), _row("gain", -5.5, 0.09, "aero"), _row("gain", -4.5, 0.05, "integrator"),
+            _row("phase", 31.0, 0.3, "rigid"), _row("phase", -25.0, 0.5, "slosh_lox"),
+            _row("gain", -2.5, 0.5, "slosh_lh2")]
+    v = _verdict(rows, req=req)
+    # 5.9 < 6 fails; |-5.5| >= 5; |-4.5| >= 4; 31 >= 30; |-25| >= 20; |-2.5| < 3 fails
+    assert v.row_verdicts == (False, True, True, True, True, False)
+    assert [c.criterion for c in v.checks[:3]] == ["gain margin", "gain-reduction margin", "gain-reduction margin"]
+    assert [c.required for c in v.checks[:6]] == [6.0, 5.0, 4.0, 30.0, 20.0, 3.0]
+    assert not v.passed and len(v.failed) == 2
+    # the worst offender is the furthest below its requirement: 2.5/3 = 0.83 < 5.9/6 = 0.98
+    assert v.worst.mode == "slosh_lh2" and v.worst.ratio == pytest.approx(2.5 / 3.0)
+    assert v.checks[-1].criterion == "stability" and v.checks[-1].passed
+
+
+def test_a_lost_closed_loop_fails_the_point_and_is_its_worst_offender():
+    v = _verdict([_row("gain", 12.0, 1.1, "rigid"), _row("phase", 45.0, 0.3, "rigid")], stable=False)
+    assert v.row_verdicts == (True, True) and not v.passed
+    assert v.worst.criterion == "stability" and "UNSTABLE" in v.worst.text()
+
+
+def _peak(peak_dB: float, mode: str = "flex_1", axis: str = "pitch") -> ModePeak:
+    return ModePeak(T, axis, mode, peak_dB, 1.0)
+
+
+@pytest.mark.parametrize("stabilization, peak_dB, rows, passed, judged_by", [
+    # gain: the attenuation (-peak) against gain_dB, whatever the crossings
+    ("gain", -7.0, [], True, "attenuation"),
+    ("gain", -5.0, [], False, "attenuation"),
+    ("gain", 3.0, [("phase", 50.0)], False, "attenuation"),
+    # phase: every crossing of the mode; none: it stays below 0 dB
+    ("phase", 3.0, [("phase", 35.0), ("phase", -40.0)], True, "phase margin"),
+    ("phase", 3.0, [("phase", 35.0), ("phase", 25.0)], False, "phase margin"),
+    ("phase", -3.0, [("gain", 4.0)], False, "gain margin"),
+    ("phase", -3.0, [], True, "attenuation"),
+    # either: gain-stabilized when the attenuation suffices, else judged on the crossings
+    ("either", -7.0, [("gain", 7.5)], True, "attenuation"),
+    ("either", 3.0, [("phase", 40.0), ("phase", 120.0)], True, "phase margin"),
+    ("either", 3.0, [("phase", 20.0), ("phase", 120.0)], False, "phase margin"),
+    ("either", -3.0, [("gain", 4.0)], False, "attenuation"),
+])
+def test_bending_mode_stabilization(stabilization, peak_dB, rows, passed, judged_by):
+    req = RequirementSet()
+    req.flex.first_stage.default = FlexModeRequirement(stabilization, 6.0, 30.0)
+    v = _verdict([_row(kind, value, 1.0 + 0.01 * i, "flex_1") for i, (kind, value) in enumerate(rows)],
+                 [_peak(peak_dB)], req=req)
+    flex = [c for c in v.checks if c.mode == "flex_1"]
+    assert v.passed is passed
+    assert {c.criterion for c in flex} == {judged_by}
+    if judged_by == "attenuation" and rows == [] and stabilization == "phase":
+        assert flex[0].required == 0.0 and flex[0].value == pytest.approx(3.0)  # below 0 dB
+    elif judged_by == "attenuation":
+        assert flex[0].value == pytest.approx(-peak_dB) and flex[0].required == 6.0
+    # a row's verdict: its own check when the mode is judged on its crossings, else the mode's
+    mode_ok = all(c.passed for c in flex)
+    for r, ok in zip(rows, v.row_verdicts):
+        own = abs(r[1]) >= (6.0 if r[0] == "gain" else 30.0)
+        assert ok == (own if judged_by != "attenuation" else mode_ok)
+
+
+def test_per_stage_and_per_mode_requirements():
+    """The Ares I choice (shared/data/ares_i_public_data.md): the first stage
+    phase-stabilizes its first bending mode and gain-stabilizes the others; the upper
+    stage gain-stabilizes all."""
+    req = RequirementSet()
+    req.flex.first_stage.default = FlexModeRequirement("gain", 6.0, 30.0)
+    req.flex.first_stage.modes = {"flex_1": FlexModeRequirement("phase", 6.0, 30.0)}
+    req.flex.upper_stage.default = FlexModeRequirement("gain", 10.0, 30.0)
+    rows = [_row("phase", 40.0, 1.0, "flex_1")]
+    peaks = [_peak(2.0, "flex_1"), _peak(-8.0, "flex_3")]
+    first = _verdict(rows, peaks, stage="first_stage", req=req)
+    assert first.passed  # flex_1 phase-stabilized with 40 deg, flex_3 attenuated by 8 >= 6 dB
+    upper = _verdict(rows, peaks, stage="upper_stage", req=req)
+    assert not upper.passed  # all gain-stabilized by 10 dB: flex_1 (+2 dB) and flex_3 (8 dB) fail
+    assert {c.mode for c in upper.failed} == {"flex_1", "flex_3"}
+    assert upper.worst.mode == "flex_1" and upper.worst.ratio == pytest.approx(-0.2)
+
+
+def test_verdict_line_names_the_worst_offender_of_its_group():
+    good = _verdict([_row("gain", 12.0, 1.1, "rigid")])
+    bad = evaluate_point(180.0, "upper_stage", [MarginRow(180.0, "yaw", "phase", 22.0, 0.3, "rigid/aero", "rigid")],
+                         [], True, -0.1, RequirementSet(name="crew"))
+    assert verdict_line([("", [good]), ("", [bad])], "crew") == (
+        "requirements crew: FAIL, 1 of 2 points pass; worst: 180.0 s yaw rigid phase margin 22.0 deg < 30 deg at 0.3 Hz")
+    assert verdict_line([("run 3", [good, bad]), ("run 4", [good])], "crew", "runs").startswith(
+        "requirements crew: FAIL, 1 of 2 runs pass; worst: run 3: 180.0 s yaw rigid phase margin")
+    assert verdict_line([("", [good])], "crew") == "requirements crew: PASS, 1 of 1 points pass"
+
+
+def test_checks_survive_their_numeric_encoding():
+    v = _verdict([_row("gain", 5.9, 1.1, "rigid"), _row("phase", 33.0, 1.0, "flex_3", "yaw")], [_peak(2.0, "flex_3", "yaw")],
+                 stage="upper_stage")
+    arr = checks_array([v])
+    assert arr.shape == (len(v.checks), len(CHECK_ARRAY_COLUMNS))
+    (back,) = verdicts_of_array(arr)
+    assert back.stage == "upper_stage" and repr(back.checks) == repr(v.checks)  # NaN frequency of the stability check
+    for name in ("rigid", "aero", "integrator", "slosh_lox", "slosh_lh2", "closed_loop", "flex_1", "flex_12"):
+        assert mode_name(mode_code(name)) == name
+
+
+def test_bending_peak_matches_python_controls_frequency_response():
+    """The synthetic loop's 2 Hz mode (|L| = 3 at resonance by construction): the peak
+    found by the labeler against the maximum of control.frequency_response on a dense
+    grid across the resonance."""
+    loop, groups = _synthetic_loop()
+    for scale in (1.0, 0.1):  # a phase-stabilizable (+9.5 dB) and a gain-stabilized (-10.5 dB) mode
+        sys = loop * scale
+        from savant_cli.linear.response import FastResponse
+
+        (peak,) = MarginLabeler(sys, groups, aero_unstable=False).flex_peaks(FastResponse(sys), 0.0, "pitch")
+        w = 2 * np.pi * np.linspace(1.9, 2.1, 20001)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            mag = np.abs(ct.frequency_response(sys, w).complex).ravel()
+        assert peak.mode == "flex_1"
+        assert peak.peak_dB == pytest.approx(20 * np.log10(mag.max()), abs=0.01)
+        assert peak.frequency_hz == pytest.approx(w[np.argmax(mag)] / (2 * np.pi), rel=1e-3)
+    assert 20 * np.log10(3.0 * 0.1) - 0.5 < peak.peak_dB < 20 * np.log10(3.0 * 0.1) + 0.5
+
+
+def test_the_vehicle_selects_its_requirement_set():
+    assert validate(compose_config([])).requirements.name == "ares_i"
+    cfg = validate(compose_config(["vehicle=small_launcher"]))
+    assert cfg.requirements.name == "small_launcher"
+    assert cfg.requirements.flex.upper_stage.default.stabilization == "either"
+    over = validate(compose_config(["+requirements.flex.first_stage.modes.flex_1.stabilization=phase"]))
+    assert over.requirements.flex_mode("first_stage", "flex_1").stabilization == "phase"
+    assert over.requirements.flex_mode("first_stage", "flex_3").stabilization == "either"
+
+
+@pytest.mark.parametrize("override, key", [
+    ("requirements.rigid.phase_deg=-30", "requirements.rigid.phase_deg"),
+    ("requirements.flex.upper_stage.default.stabilization=notch", "requirements.flex.upper_stage.default.stabilization"),
+    ("+requirements.flex.first_stage.modes.mode1.gain_dB=6", "requirements.flex.first_stage.modes.mode1"),
+])
+def test_bad_requirements_are_refused_naming_the_key(override, key):
+    with pytest.raises(ConfigError) as err:
+        validate(compose_config([override]))
+    assert err.value.key == key
