@@ -84,8 +84,8 @@ def report(run_dir: Path | str, console: Console | None = None) -> list[Path]:
         from savant_cli.linear.store import read_linear_group
         from savant_cli.studies.linear import draw_linear
 
-        charts, rows, requirements, zones = read_linear_group(h5)
-        paths += draw_linear(charts, rows, requirements, zones, folder)
+        charts, rows, requirements, zones, failed = read_linear_group(h5)
+        paths += draw_linear(charts, rows, requirements, zones, folder, failed)
     if "flex_sweep" in groups:
         from savant_cli.studies import flex_sweep
 

@@ -373,6 +373,29 @@ def test_margin_envelope(system, tmp_path):
     assert plot_margin_envelope(rows[:3], tmp_path / "plain.png").read_bytes()[:8] == PNG_MAGIC
 
 
+def test_margin_envelope_marks_the_verdicts_it_is_given():
+    """Judged rows get a black edge by their own verdict, not by the band values; failing
+    points get a red line across both panels."""
+    from dataclasses import replace
+
+    rows = [MarginRow(10.0, "pitch", "gain", 12.0, 1.0, "rigid/aero", "rigid", False),
+            MarginRow(10.0, "pitch", "gain", 3.0, 1.0, "flex", "flex_1", True),
+            MarginRow(40.0, "pitch", "phase", 45.0, 0.3, "rigid/aero", "rigid", True)]
+    req = {"rigid/aero": (6.0, 30.0), "flex": (6.0, 30.0)}
+    fig = linear._envelope_figure(rows, req, failed_times=[10.0])
+    ax_g, ax_p = fig.axes
+    edges = {}
+    for coll in ax_g.collections:
+        (x, y), = coll.get_offsets()
+        edges[float(y)] = tuple(coll.get_edgecolors()[0][:3])
+    assert edges[12.0] == (0.0, 0.0, 0.0) and edges[3.0] != (0.0, 0.0, 0.0)
+    for ax in (ax_g, ax_p):
+        assert any(np.allclose(line.get_xdata(), [10.0, 10.0]) for line in ax.lines)
+    unjudged = linear._envelope_figure([replace(r, meets_requirement=None) for r in rows], req)
+    edges = {float(c.get_offsets()[0][1]): tuple(c.get_edgecolors()[0][:3]) for c in unjudged.axes[0].collections}
+    assert edges[3.0] == (0.0, 0.0, 0.0) and edges[12.0] != (0.0, 0.0, 0.0)  # by the band's 6 dB
+
+
 def test_no_pyplot(tmp_path):
     """The module never imports or uses pyplot.
 

@@ -56,6 +56,14 @@ def test_a_lost_closed_loop_fails_the_point_and_is_its_worst_offender():
     assert v.worst.criterion == "stability" and "UNSTABLE" in v.worst.text()
 
 
+def test_the_fastest_lost_closed_loop_is_the_worst_offender():
+    slow = evaluate_point(10.0, "first_stage", [], [], False, 1e-4, RequirementSet())
+    fast = evaluate_point(130.0, "first_stage", [], [], False, 0.05, RequirementSet())
+    margin = _verdict([_row("phase", 5.0, 0.3, "rigid")])
+    line = verdict_line([("", [slow]), ("", [margin]), ("", [fast])], "ares_i")
+    assert line.endswith("worst: 130.0 s closed loop UNSTABLE (largest real part 0.05 1/s)")
+
+
 def _peak(peak_dB: float, mode: str = "flex_1", axis: str = "pitch") -> ModePeak:
     return ModePeak(T, axis, mode, peak_dB, 1.0)
 

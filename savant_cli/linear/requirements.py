@@ -28,7 +28,8 @@ its bending-mode peaks and its closed-loop poles:
 A margin of either sign is judged by its magnitude (a negative gain margin is a
 gain-reduction margin, a negative phase margin the distance to the critical point on the
 other side). A point passes when every check passes; its worst offender is the failing
-check with the smallest ratio of value to requirement (a lost closed loop first).
+check with the smallest ratio of value to requirement (a lost closed loop first, the
+fastest-diverging one first among them).
 """
 
 from __future__ import annotations
@@ -101,6 +102,12 @@ class Check:
             return float("inf") if self.passed else float("-inf")
         return magnitude / self.required
 
+    @property
+    def severity(self) -> tuple[float, float]:
+        """Sort key, worst first: the :attr:`ratio`, then (for lost closed loops, all at
+        −∞) the larger real part."""
+        return (self.ratio, -self.value if self.criterion == "stability" else 0.0)
+
     def text(self) -> str:
         """E.g. ``"55.0 s pitch flex_1 phase margin 15.9 deg < 30 deg at 1.02 Hz"``."""
         if self.criterion == "stability":
@@ -134,7 +141,7 @@ class PointVerdict:
     def worst(self) -> Check | None:
         """The failing check furthest below its requirement; if all pass, the tightest."""
         pool = self.failed or [c for c in self.checks if c.criterion != "stability"]
-        return min(pool, key=lambda c: c.ratio) if pool else None
+        return min(pool, key=lambda c: c.severity) if pool else None
 
 
 def _requirement(row: MarginRow, req: RequirementSet, stage: str) -> tuple[str, float, str]:
@@ -253,7 +260,7 @@ def verdict_line(groups: Sequence[tuple[str, Sequence[PointVerdict]]], set_name:
     head = f"requirements {set_name}: {'FAIL' if failing else 'PASS'}, {len(groups) - n_fail} of {len(groups)} {noun} pass"
     if not failing:
         return head
-    label, worst = min(((label, v.worst) for label, v in failing), key=lambda lw: lw[1].ratio)
+    label, worst = min(((label, v.worst) for label, v in failing), key=lambda lw: lw[1].severity)
     return f"{head}; worst: {label + ': ' if label else ''}{worst.text()}"
 
 

@@ -238,14 +238,20 @@ def read_margins(g: h5py.Group) -> tuple[list[MarginRow], dict[str, tuple[float,
     return rows, req, bool(mg.attrs.get("exclusion_zones", True))
 
 
-def read_linear_group(path: Path | str) -> tuple[list[PointCharts], list[MarginRow], dict[str, tuple[float, float]], bool]:
+def read_linear_group(path: Path | str) -> tuple[list[PointCharts], list[MarginRow], dict[str, tuple[float, float]],
+                                                 bool, list[float]]:
     """What ``savant report`` draws of a linear study: the chart data of every point that
-    has it (in time order), the margin table, the requirements and ``exclusion_zones``."""
+    has it (in time order), the margin table, the requirements, ``exclusion_zones`` and
+    the times of the points that fail their requirement set."""
     with h5py.File(path, "r") as f:
         g = f["linear"]
         charts = [read_charts(g[k]["charts"]) for k in point_keys(g) if "charts" in g[k]]
         rows, req, zones = read_margins(g)
-    return sorted(charts, key=lambda c: c.time_s), rows, req, zones
+        failed = []
+        if "requirements" in g:
+            pts = g["requirements/points"]
+            failed = [float(t) for t, ok in zip(pts["time_s"][()], pts["passed"][()]) if not ok]
+    return sorted(charts, key=lambda c: c.time_s), rows, req, zones, failed
 
 
 def load_point(path: Path | str, time_s: float, system: str = "open_pitch") -> ct.StateSpace:

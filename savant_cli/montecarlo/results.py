@@ -210,7 +210,7 @@ def requirement_verdicts(checks: np.ndarray, requirement_set: str) -> dict[str, 
     for run, vs in per_run.items():
         bad = [v for v in vs if not v.passed]
         if bad:
-            worst = min((v.worst for v in bad), key=lambda c: c.ratio)
+            worst = min((v.worst for v in bad), key=lambda c: c.severity)
             failed.append({"run": run, "points_failed": len(bad), "worst": worst.text()})
     line = verdict_line([(f"run {r}", vs) for r, vs in per_run.items()], requirement_set, "runs")
     return {"set": requirement_set, "runs_judged": len(per_run), "runs_passing": len(per_run) - len(failed),

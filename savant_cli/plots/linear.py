@@ -666,8 +666,10 @@ def _response_figure(time_s: float, data: CommandResponses) -> Figure:
     return fig
 
 
-def _envelope_figure(rows: Sequence[MarginRow], requirements: Mapping[str, tuple[float, float]] | None) -> Figure:
-    """Gain and phase margins vs flight time, by band (colour) and axis (marker)."""
+def _envelope_figure(rows: Sequence[MarginRow], requirements: Mapping[str, tuple[float, float]] | None,
+                     failed_times: Sequence[float] = ()) -> Figure:
+    """Gain and phase margins vs flight time, by band (colour) and axis (marker); the
+    points failing their requirement set marked by a red line across both panels."""
     fig = _figure(9.0, 7.0, left=0.85, right=2.2, bottom=0.6, top=0.5, hspace=0.08)
     ax_g, ax_p = fig.subplots(2, 1, sharex=True)
     requirements = dict(requirements or {})
@@ -712,6 +714,11 @@ def _envelope_figure(rows: Sequence[MarginRow], requirements: Mapping[str, tuple
     if violating:
         handles.append(Line2D([], [], ls="none", marker="o", mfc="white", mec="k", mew=1.4,
                               label="inside requirement\n(black edge)"))
+    for t in failed_times:
+        for ax in (ax_g, ax_p):
+            ax.axvline(t, color="tab:red", lw=2.5, alpha=0.25, zorder=1)
+    if len(failed_times):
+        handles.append(Line2D([], [], color="tab:red", lw=2.5, alpha=0.25, label="point fails its\nrequirement set"))
     ax_g.axhline(0.0, color="0.3", lw=0.6)
     ax_p.axhline(0.0, color="0.3", lw=0.6)
     ax_g.set_ylabel("gain margin (dB)\nnegative: gain reduction", fontsize=9)
@@ -792,7 +799,8 @@ def plot_linear_point(charts: PointCharts, margins: Sequence[MarginRow], out_dir
 
 
 def plot_margin_envelope(rows: list[MarginRow], out_path: Path,
-                         requirements: dict[str, tuple[float, float]] | None = None) -> Path:
+                         requirements: dict[str, tuple[float, float]] | None = None,
+                         failed_times: Sequence[float] = ()) -> Path:
     """Draw the stability margins of a study against flight time.
 
     Parameters
@@ -804,8 +812,13 @@ def plot_margin_envelope(rows: list[MarginRow], out_path: Path,
     requirements : dict of str to (float, float), optional
         Band → (gain margin in dB, phase margin in deg), e.g.
         ``{"rigid/aero": (6, 30), "slosh": (6, 30), "flex": (6, 30)}``. Drawn as lines at
-        ±gain (a gain-reduction margin must be below −gain) and at +phase; points of a band
-        inside its requirement get a black edge.
+        ±gain (a gain-reduction margin must be below −gain) and at +phase. A margin
+        that misses its requirement gets a black edge: by its own verdict
+        (``MarginRow.meets_requirement``) when the rows were judged, else by its band's
+        values here.
+    failed_times : sequence of float
+        Flight times (s) of the points that fail their requirement set (a margin, a
+        bending mode's attenuation or closed-loop stability), marked by a red line.
 
     Returns
     -------
@@ -817,7 +830,7 @@ def plot_margin_envelope(rows: list[MarginRow], out_path: Path,
     Top panel: gain margins (dB); bottom panel: phase margins (deg); colour = band
     (rigid/aero, slosh, flex), marker = axis (pitch ○, yaw △).
     """
-    return _save(_envelope_figure(rows, requirements), Path(out_path))
+    return _save(_envelope_figure(rows, requirements, failed_times), Path(out_path))
 
 
 def plot_nichols_overlay(time_s: float, loops: Sequence[LoopResponse], out_path: Path, title: str = "Nichols chart",

@@ -182,7 +182,8 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
     write_margins_csv(out_dir / "margins.csv", rows)
     write_checks_csv(out_dir / "requirements.csv", verdicts)
     if cfg.output.plots:
-        draw_linear(list(charts.values()), rows, req.by_band(), study.exclusion_zones, out_dir / "plots")
+        draw_linear(list(charts.values()), rows, req.by_band(), study.exclusion_zones, out_dir / "plots",
+                    [v.time_s for v in verdicts if not v.passed])
     print_run_summary({k: v for k, v in hdf_summary.items() if k not in ("linear_note", "requirements_verdict")},
                       record.status, record.message, console)
     console.print(_table(rows))
@@ -193,14 +194,16 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
 
 
 def draw_linear(charts: list[PointCharts], rows: list[MarginRow], requirements: dict[str, tuple[float, float]],
-                exclusion_zones: bool, folder: Path) -> list[Path]:
+                exclusion_zones: bool, folder: Path, failed_times: list[float] | tuple = ()) -> list[Path]:
     """The linear charts into ``folder/linear`` (the ascent plots are drawn with the run's
-    files): six per charted point and the margin envelope. Returns the PNGs written."""
+    files): six per charted point and the margin envelope (``failed_times``: the points
+    failing their requirement set). Returns the PNGs written."""
     from savant_cli.plots.linear import plot_linear_point, plot_margin_envelope
 
     paths = []
     for c in charts:
         paths += plot_linear_point(c, [r for r in rows if r.time_s == c.time_s], folder / "linear",
                                    exclusion_zones=exclusion_zones)
-    paths.append(plot_margin_envelope(rows, folder / "linear" / "margin_envelope.png", requirements=requirements))
+    paths.append(plot_margin_envelope(rows, folder / "linear" / "margin_envelope.png", requirements=requirements,
+                                      failed_times=failed_times))
     return paths
