@@ -99,3 +99,6 @@ def test_default_vehicle_margins_are_labelled_by_their_modes(full_fidelity_margi
                 f = flex_hz[int(r.mode.split("_")[1]) - 1]
                 assert abs(r.frequency_hz - f) < 0.1 * f, (t, r)
         assert {r.band for r in rows} <= {"rigid/aero", "slosh", "flex"}
+    # the baffled tanks still make crossings in vacuum (the LOX mode at 180 s): the slosh
+    # check above is not empty
+    assert any(r.mode.startswith("slosh") for r in rows180)

@@ -48,10 +48,27 @@ def ref_height_m(h):
     return h - (2.0 * R_M / XI) * np.tanh(XI * h / (2.0 * R_M))
 
 
-def ref_damping(h, nu, a=G0):
+def ref_smooth_wall_damping(h, nu, a=G0):
     q = np.maximum(np.asarray(h, dtype=float) / R_M, 0.1)
     return (4.98 * nu**0.5 * R_M**-0.75 * a**-0.25
             * (1.0 + 0.318 / np.sinh(1.84 * q) * (1.0 + (1.0 - q) / np.cosh(1.84 * q))) / (2.0 * np.pi))
+
+
+# [E] ring baffles of slosh_README.md: width 0.1 R every 1.1 m from 0.55 m up to the last
+# ring below the full level, damping judged at a wave of 0.01 R (Miles 1958, SP-106 ch. 4)
+RING_WIDTH, RING_SPACING, RING_LOWEST, RING_AMPLITUDE = 0.1, 1.1, 0.55, 0.01
+
+
+def ref_damping(h, nu, h_full):
+    """Smooth wall plus Miles' ring damping, one term per submerged ring."""
+    alpha = 1.0 - (1.0 - RING_WIDTH) ** 2  # blocked area fraction
+    total = ref_smooth_wall_damping(h, nu)
+    for level, zeta in np.nditer([np.asarray(h, float), total], op_flags=[["readonly"], ["readwrite"]]):
+        for ring in np.arange(RING_LOWEST, h_full, RING_SPACING):
+            if ring <= level:
+                d = max(level - ring, 0.1 * R_M)
+                zeta += 2.83 * np.exp(-4.6 * d / R_M) * alpha**1.5 * RING_AMPLITUDE**0.5
+    return total
 
 
 def read_table(path: Path) -> tuple[list[str], list[str], np.ndarray]:
@@ -100,7 +117,7 @@ def test_functions_match_independent_formulas():
     np.testing.assert_allclose(gen.slosh_frequency_hz(R_M, h), ref_frequency_hz(h), rtol=1e-12)
     np.testing.assert_allclose(gen.slosh_mass_kg(R_M, h, 1141.0), ref_mass_kg(h, 1141.0), rtol=1e-12)
     np.testing.assert_allclose(gen.slosh_mass_height_m(R_M, h), ref_height_m(h), rtol=1e-9, atol=1e-15)
-    np.testing.assert_allclose(gen.slosh_damping(R_M, h, 1.7e-7), ref_damping(h, 1.7e-7), rtol=1e-12)
+    np.testing.assert_allclose(gen.slosh_damping(R_M, h, 1.7e-7), ref_smooth_wall_damping(h, 1.7e-7), rtol=1e-12)
 
 
 def test_empty_tank_limits_are_finite():
@@ -198,7 +215,7 @@ def test_shipped_rows_reproduce_formulas(shipped):
     _, rho, nu = TANKS[name]
     level, freq, zeta, mass, height = rows.T
     np.testing.assert_allclose(freq, ref_frequency_hz(level), rtol=1e-8, atol=1e-12)
-    np.testing.assert_allclose(zeta, ref_damping(level, nu), rtol=1e-8)
+    np.testing.assert_allclose(zeta, ref_damping(level, nu, level[-1]), rtol=1e-8)
     np.testing.assert_allclose(mass, ref_mass_kg(level, rho), rtol=1e-8, atol=1e-9)
     np.testing.assert_allclose(height, ref_height_m(level), rtol=1e-8, atol=1e-12)
 
@@ -212,6 +229,11 @@ def test_shipped_physical_bounds(shipped):
     assert np.all(mass >= 0.0) and np.all(mass <= m_f * (1 + 1e-9))
     assert np.all(height >= 0.0) and np.all(height <= level)
     assert np.all(zeta > 0.0)
+    # baffled: wherever a ring is submerged, at least 0.3 % and of the 0.001-0.01 order of
+    # the data file (not the smooth wall's 1e-4)
+    wet = level >= RING_LOWEST
+    assert np.all(zeta[wet] >= 0.003) and np.all(zeta[wet] <= 0.02)
+    assert np.all(zeta[~wet] < 1e-3)
     assert np.all(freq >= 0.0) and np.all(np.diff(freq) > 0.0)
     assert freq[0] == 0.0 and mass[0] == 0.0 and height[0] == 0.0
 

@@ -84,8 +84,49 @@ A_REF_MPS2 = float(G0)             # reference acceleration of the tables, m/s^2
 DAMPING_MIN_DEPTH_RATIO = 0.1      # [E] h/R below which the damping's depth factor is frozen
 N_LEVELS = 41                      # table rows, level 0 .. full inclusive
 
+RING_MIN_DEPTH_RATIO = 0.1         # [E] d/R below which a ring's depth is held (ring near the surface)
+
 # ====================================================================== public figures
 TANK_RADIUS_M = US_DIAMETER_M / 2.0    # [P] 5.5 m upper-stage diameter -> R = 2.75 m, both tanks
+
+
+@dataclass(frozen=True)
+class RingBaffles:
+    """Ring (annular) slosh baffles of one tank, evenly spaced up the barrel.
+
+    Attributes
+    ----------
+    width_ratio : float
+        Ring width over the tank radius, ``w/R``; the ring blocks the area fraction
+        ``alpha = 1 - (1 - w/R)^2`` of the cross-section.
+    spacing_m : float
+        Distance between rings, m.
+    lowest_m, highest_m : float
+        Heights of the lowest and the highest ring above the flat bottom, m.
+    design_amplitude_ratio : float
+        Slosh wave amplitude at the wall over the radius, ``eta/R``, at which the
+        amplitude-dependent ring damping is evaluated (small: the linear regime of the
+        stability analysis, and the low, conservative end of the damping).
+    """
+
+    width_ratio: float
+    spacing_m: float
+    lowest_m: float
+    highest_m: float
+    design_amplitude_ratio: float
+
+    def heights_m(self) -> np.ndarray:
+        """Ring heights above the bottom, m."""
+        n = int(np.floor((self.highest_m - self.lowest_m) / self.spacing_m + 1e-9)) + 1
+        return self.lowest_m + self.spacing_m * np.arange(n)
+
+
+# [E] both tanks: rings of 0.1 R width every 0.4 R (1.1 m) up the barrel, judged at a
+# 2.75 cm wave (eta/R = 0.01); the resulting 0.4-1.5 % sits in the 0.001-0.01 order of
+# baffled flight tanks of shared/data/ares_i_public_data.md
+BAFFLE_WIDTH_RATIO = 0.1
+BAFFLE_SPACING_M = 0.4 * TANK_RADIUS_M
+BAFFLE_DESIGN_AMPLITUDE_RATIO = 0.01
 
 
 @dataclass(frozen=True)
@@ -104,6 +145,8 @@ class Tank:
         Liquid density, kg/m^3.
     kinematic_viscosity_m2_s : float
         Liquid kinematic viscosity, m^2/s.
+    baffles : RingBaffles or None
+        The tank's ring baffles (``None``: smooth wall).
     radius_m : float
         Tank radius, m.
     """
@@ -113,6 +156,7 @@ class Tank:
     load_kg: float
     density_kg_m3: float
     kinematic_viscosity_m2_s: float
+    baffles: RingBaffles | None = None
     radius_m: float = TANK_RADIUS_M
 
     @property
@@ -121,12 +165,23 @@ class Tank:
         return liquid_level_m(self.load_kg, self.density_kg_m3, self.radius_m)
 
 
+def _barrel_baffles(full_height_m: float) -> RingBaffles:
+    """[E] Rings every :data:`BAFFLE_SPACING_M` from half a spacing above the bottom to
+    the last one below the full level."""
+    low = 0.5 * BAFFLE_SPACING_M
+    n = int(np.floor((full_height_m - low) / BAFFLE_SPACING_M))
+    return RingBaffles(BAFFLE_WIDTH_RATIO, BAFFLE_SPACING_M, low, low + n * BAFFLE_SPACING_M,
+                       BAFFLE_DESIGN_AMPLITUDE_RATIO)
+
+
 LOX = Tank("lox", "upper-stage LOX tank", load_kg=M_LOX,        # [P] 112,900 kg
            density_kg_m3=1141.0,                                 # [E] saturated LOX at ~90 K
-           kinematic_viscosity_m2_s=1.7e-7)                      # [E] ~1.9e-4 Pa s / 1141 kg/m^3
+           kinematic_viscosity_m2_s=1.7e-7,                      # [E] ~1.9e-4 Pa s / 1141 kg/m^3
+           baffles=_barrel_baffles(M_LOX / (1141.0 * np.pi * TANK_RADIUS_M**2)))
 LH2 = Tank("lh2", "upper-stage LH2 tank", load_kg=M_LH2,        # [P] 22,200 kg
            density_kg_m3=70.85,                                  # [E] saturated LH2 at ~20 K
-           kinematic_viscosity_m2_s=1.9e-7)                      # [E] ~1.35e-5 Pa s / 70.85 kg/m^3
+           kinematic_viscosity_m2_s=1.9e-7,                      # [E] ~1.35e-5 Pa s / 70.85 kg/m^3
+           baffles=_barrel_baffles(M_LH2 / (70.85 * np.pi * TANK_RADIUS_M**2)))
 TANKS = (LOX, LH2)
 
 HEADER = ["level_m", "frequency_hz", "damping", "slosh_mass_kg", "slosh_height_m"]
@@ -347,8 +402,48 @@ def slosh_damping(radius_m, fill_height_m, kinematic_viscosity_m2_s, accel_mps2=
     return _as_out(4.98 * np.sqrt(nu) * r**-0.75 * a**-0.25 * depth / (2.0 * np.pi))
 
 
+def ring_baffle_damping(radius_m, fill_height_m, baffles: RingBaffles,
+                        min_depth_ratio=RING_MIN_DEPTH_RATIO):
+    """First-mode damping ratio added by submerged ring baffles.
+
+    Miles (1958), "Ring damping of free surface oscillations in a circular tank", J. Appl.
+    Mech. 25, as quoted in SP-106 ch. 4 and Dodge ch. 3, for one ring at depth ``d``
+    below the free surface::
+
+        zeta_ring = 2.83 exp(-4.60 d/R) alpha^(3/2) (eta/R)^(1/2)
+
+    (``alpha`` the blocked area fraction, ``eta`` the wave amplitude at the wall), summed
+    over the rings below the surface, each at ``d' = max(d, min_depth_ratio R)`` (the
+    formula is for a ring well below the surface; one at the surface damps less, not
+    more). Independent of the acceleration. A level below the lowest ring gets 0.
+
+    Parameters
+    ----------
+    radius_m : float
+        Tank radius ``R``, m.
+    fill_height_m : float or array_like
+        Liquid fill height ``h``, m (>= 0).
+    baffles : RingBaffles
+        Ring width, heights and the design wave amplitude.
+    min_depth_ratio : float, optional
+        ``d/R`` below which a ring's depth is held, 0.1 by default.
+
+    Returns
+    -------
+    float or numpy.ndarray
+        Damping ratio added by the rings (fraction of critical), >= 0.
+    """
+    r, h = _check(radius_m, fill_height_m)
+    alpha = 1.0 - (1.0 - baffles.width_ratio) ** 2
+    z = baffles.heights_m()
+    depth = h[..., None] - z  # (levels, rings): > 0 for the submerged rings
+    d = np.maximum(depth, min_depth_ratio * r)
+    per_ring = 2.83 * np.exp(-4.60 * d / r) * alpha**1.5 * np.sqrt(baffles.design_amplitude_ratio)
+    return _as_out(np.where(depth >= 0.0, per_ring, 0.0).sum(axis=-1))
+
+
 def slosh_table(radius_m, density_kg_m3, kinematic_viscosity_m2_s, load_kg, n_levels=N_LEVELS,
-                accel_mps2=A_REF_MPS2) -> np.ndarray:
+                accel_mps2=A_REF_MPS2, baffles: RingBaffles | None = None) -> np.ndarray:
     """Slosh table of one tank from empty to full.
 
     Parameters
@@ -365,6 +460,8 @@ def slosh_table(radius_m, density_kg_m3, kinematic_viscosity_m2_s, load_kg, n_le
         Number of evenly spaced levels from 0 to full inclusive (>= 2), 41 by default.
     accel_mps2 : float, optional
         Acceleration the frequency and damping are given at, m/s^2; 1 g by default.
+    baffles : RingBaffles, optional
+        Ring baffles, whose damping adds to the smooth wall's (none by default).
 
     Returns
     -------
@@ -378,10 +475,13 @@ def slosh_table(radius_m, density_kg_m3, kinematic_viscosity_m2_s, load_kg, n_le
     h_full = liquid_level_m(load_kg, density_kg_m3, radius_m)
     level = np.linspace(0.0, h_full, int(n_levels))
     level[-1] = h_full
+    zeta = slosh_damping(radius_m, level, kinematic_viscosity_m2_s, accel_mps2)
+    if baffles is not None:
+        zeta = zeta + ring_baffle_damping(radius_m, level, baffles)
     return np.column_stack([
         level,
         slosh_frequency_hz(radius_m, level, accel_mps2),
-        slosh_damping(radius_m, level, kinematic_viscosity_m2_s, accel_mps2),
+        zeta,
         slosh_mass_kg(radius_m, level, density_kg_m3),
         slosh_mass_height_m(radius_m, level),
     ])
@@ -389,7 +489,8 @@ def slosh_table(radius_m, density_kg_m3, kinematic_viscosity_m2_s, load_kg, n_le
 
 def tank_table(tank: Tank) -> np.ndarray:
     """:func:`slosh_table` of a :class:`Tank` at the reference acceleration."""
-    return slosh_table(tank.radius_m, tank.density_kg_m3, tank.kinematic_viscosity_m2_s, tank.load_kg)
+    return slosh_table(tank.radius_m, tank.density_kg_m3, tank.kinematic_viscosity_m2_s, tank.load_kg,
+                       baffles=tank.baffles)
 
 
 # ========================================================================== writing
@@ -400,21 +501,27 @@ def tank_comments(tank: Tank) -> list[str]:
         "generated by `python -m savant_cli.datagen.ares_i_slosh`; sources, assumptions and marks in slosh_README.md",
         (f"tank: {tank.label}, first antisymmetric slosh mode, spring-mass analogy (NASA SP-106; Dodge 2000); "
          f"flat-bottom upright circular cylinder equivalent of the domed tank, radius R = {r:g} m [P], "
-         f"smooth wall, no baffles"),
+         + (f"ring baffles [E]: width {b.width_ratio:g} R every {b.spacing_m:g} m from {b.lowest_m:g} to "
+            f"{b.highest_m:.4g} m above the bottom, damping judged at a wave of {b.design_amplitude_ratio:g} R"
+            if (b := tank.baffles) is not None else "smooth wall, no baffles")),
         (f"liquid: load {tank.load_kg:g} kg [P], density rho = {tank.density_kg_m3:g} kg/m3 [E], "
          f"kinematic viscosity nu = {tank.kinematic_viscosity_m2_s:g} m2/s [E]; "
          f"full fill height load/(rho pi R^2) = {tank.full_height_m:.6g} m [D]"),
         (f"level_m: liquid fill height above the flat tank bottom, m, {N_LEVELS} levels evenly spaced "
          "from 0 to full inclusive; level 0 holds the limiting values (frequency 0, mass 0, height 0)"),
         (f"frequency_hz and damping are given at the reference acceleration a_ref = {A_REF_MPS2:g} m/s2 (1 g); "
-         "frequency scales as sqrt(a/a_ref), the damping formula as (a/a_ref)^-0.25"),
+         "frequency scales as sqrt(a/a_ref), the smooth-wall damping formula as (a/a_ref)^-0.25 "
+         "(the simulation uses the tabulated damping as it is)"),
         ("slosh_mass_kg: first-mode spring mass m1, kg; slosh_height_m: height of the spring mass above "
          "the tank bottom, m"),
         ("formulas (xi = 1.8412, h = level_m, m_F = rho pi R^2 h): omega1^2 = (xi a/R) tanh(xi h/R), "
          "frequency_hz = omega1/(2 pi); m1 = m_F 2R tanh(xi h/R)/(xi (xi^2 - 1) h); "
          "slosh_height_m = h - (2R/xi) tanh(xi h/(2R))"),
-        ("damping (Mikishev, SP-106): zeta = 4.98 nu^0.5 R^-0.75 a^-0.25 [1 + 0.318/sinh(1.84 q) "
-         f"(1 + (1 - q)/cosh(1.84 q))]/(2 pi), q = max(h/R, {DAMPING_MIN_DEPTH_RATIO:g})"),
+        ("damping: smooth wall (Mikishev, SP-106) zeta = 4.98 nu^0.5 R^-0.75 a^-0.25 [1 + 0.318/sinh(1.84 q) "
+         f"(1 + (1 - q)/cosh(1.84 q))]/(2 pi), q = max(h/R, {DAMPING_MIN_DEPTH_RATIO:g})"
+         + ("; plus ring baffles (Miles 1958, SP-106) sum over submerged rings of 2.83 exp(-4.6 d/R) "
+            f"alpha^1.5 (eta/R)^0.5, d = max(depth below the surface, {RING_MIN_DEPTH_RATIO:g} R), "
+            "alpha = 1 - (1 - w/R)^2, independent of a" if tank.baffles is not None else "")),
     ]
 
 
@@ -473,7 +580,7 @@ def main(argv: list[str] | None = None) -> None:
 
 __all__ = ["XI_1", "A_REF_MPS2", "DAMPING_MIN_DEPTH_RATIO", "N_LEVELS", "HEADER", "Tank", "LOX", "LH2", "TANKS",
            "liquid_level_m", "slosh_frequency_rad_s", "slosh_frequency_hz", "slosh_mass_ratio", "slosh_mass_kg",
-           "slosh_mass_height_m", "slosh_damping", "slosh_table", "tank_table", "write_all", "main"]
+           "slosh_mass_height_m", "slosh_damping", "RingBaffles", "ring_baffle_damping", "slosh_table", "tank_table", "write_all", "main"]
 
 if __name__ == "__main__":
     main()
