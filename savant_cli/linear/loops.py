@@ -26,7 +26,7 @@ import numpy as np
 from scipy.linalg import block_diag, expm
 from scipy.signal import tf2ss
 
-from savant_cli.models.fcs import FCS_STACK, GYRO_FIRST, GYRO_UPPER
+from savant_cli.models.fcs import FCS_STACK, GYRO_FIRST, GYRO_UPPER, FcsTables
 from savant_cli.sim import engine as E
 from savant_cli.sim import layout as L
 from savant_cli.sim.build import SimModel
@@ -62,17 +62,25 @@ def _filter(coef: np.ndarray, dt: float) -> ct.StateSpace:
     return ct.ss(*tf2ss(coef[0, 0], coef[0, 1]), dt) * ct.ss(*tf2ss(coef[1, 0], coef[1, 1]), dt)
 
 
-def controller_lti(model: SimModel, snap: Snapshot, dt: float) -> ct.StateSpace:
-    """The pitch/yaw flight control at a snapshot as a discrete LTI.
+def controller_lti(ft: FcsTables, gains: np.ndarray, phase: int, dt: float) -> ct.StateSpace:
+    """The pitch/yaw flight control as a discrete LTI.
+
+    Parameters
+    ----------
+    ft : FcsTables
+        The flight control's filters and blend (``models/fcs.py::fcs_tables``).
+    gains : numpy.ndarray
+        The 8 scheduled gains Kp, Ki, Kd, Kir of pitch then yaw (``fcs.D_GAINS``).
+    phase : int
+        Flight-control phase (``FCS_STACK``: the stack filter set and first-stage gyro).
+    dt : float
+        Control period (s).
 
     Inputs: the 12 sensor signals (:data:`SENSOR_NAMES`) and the attitude commands
     ``cmd_pitch``, ``cmd_yaw`` (rad); outputs the gimbal commands ``dc_pitch``, ``dc_yaw``.
     """
-    ft = model.fcs
-    phase = fcs_phase(snap.events)
     fset = 0 if phase == FCS_STACK else 1
     own = GYRO_FIRST if phase == FCS_STACK else GYRO_UPPER
-    gains = snap.d[L.D_GAINS:L.D_GAINS + 8]
     integ = ct.ss(1.0, 1.0, dt, dt, dt)  # T z / (z − 1) = T + T / (z − 1)
     n_in = len(SENSOR_NAMES) + len(COMMANDS)
     blocks = []
@@ -167,11 +175,16 @@ def sensor_plant(lin: PlantLinearization, model: SimModel, dt: float) -> ct.Stat
     return ct.ss(a_l, b_l, c_l, d_now, dt, inputs=sys.input_labels, outputs=sys.output_labels, name="plant")
 
 
-def assemble(model: SimModel, snap: Snapshot, lin: PlantLinearization, dt: float) -> LinearPoint:
-    """Discrete plant, controller, broken loops and closed loop of one point (state-space
-    algebra: series and feedback, no signal-name interconnection, for speed)."""
-    plant = sensor_plant(lin, model, dt)
-    fcs = controller_lti(model, snap, dt)
+def snapshot_controller(model: SimModel, snap: Snapshot, dt: float) -> ct.StateSpace:
+    """:func:`controller_lti` of the model's flight control at a snapshot's gains."""
+    return controller_lti(model.fcs, snap.d[L.D_GAINS:L.D_GAINS + 8], fcs_phase(snap.events), dt)
+
+
+def broken_loops(plant: ct.StateSpace, fcs: ct.StateSpace, dt: float
+                 ) -> tuple[ct.StateSpace, dict[str, ct.StateSpace], dict[str, ct.StateSpace]]:
+    """``G2`` (the two gimbal commands → the controller's commands, negative-feedback
+    sign inside), the loops broken at one command with the other closed, and with the
+    other open."""
     n_s = len(SENSOR_NAMES)
     # G: plant inputs → controller outputs (commands zero); G2: from the two gimbal commands
     g = ct.series(plant[:n_s, :], fcs[:, :n_s])
@@ -183,6 +196,16 @@ def assemble(model: SimModel, snap: Snapshot, lin: PlantLinearization, dt: float
         one_open = ct.feedback(g2, ct.ss([], [], [], close_other, dt), sign=1)
         loops[axis] = _named(-one_open[c, c], f"L_{axis}", f"dc_{axis}", f"k_{axis}")
         loops_open[axis] = _named(-g2[c, c], f"Lo_{axis}", f"dc_{axis}", f"k_{axis}")
+    return g2, loops, loops_open
+
+
+def assemble(model: SimModel, snap: Snapshot, lin: PlantLinearization, dt: float) -> LinearPoint:
+    """Discrete plant, controller, broken loops and closed loop of one point (state-space
+    algebra: series and feedback, no signal-name interconnection, for speed)."""
+    plant = sensor_plant(lin, model, dt)
+    fcs = snapshot_controller(model, snap, dt)
+    g2, loops, loops_open = broken_loops(plant, fcs, dt)
+    n_s = len(SENSOR_NAMES)
     mimo = -g2
     mimo = ct.ss(mimo.A, mimo.B, mimo.C, mimo.D, dt, inputs=["dc_pitch", "dc_yaw"], outputs=["k_pitch", "k_yaw"],
                  name="L_mimo")
@@ -217,5 +240,5 @@ def _named(sys: ct.StateSpace, name: str, inp: str, out: str) -> ct.StateSpace:
     return ct.ss(sys.A, sys.B, sys.C, sys.D, sys.dt, inputs=[inp], outputs=[out], name=name)
 
 
-__all__ = ["AXES", "COMMANDS", "LinearPoint", "assemble", "controller_lti",
-           "sensor_plant"]
+__all__ = ["AXES", "COMMANDS", "LinearPoint", "assemble", "broken_loops", "controller_lti", "sensor_plant",
+           "snapshot_controller"]

@@ -213,7 +213,7 @@ class MarginLabeler:
             f = f[(f > 0.0) & (f < 0.5 / self.dt)]
             mag = np.abs(response.siso(2 * np.pi * f))
             k = int(np.argmax(mag))
-            out.append(ModePeak(time_s, axis, name, float(20 * np.log10(mag[k])), float(f[k])))
+            out.append(ModePeak(time_s, axis, str(name), float(20 * np.log10(mag[k])), float(f[k])))
         return out
 
 

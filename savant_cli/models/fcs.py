@@ -205,9 +205,7 @@ def fcs_step(d: np.ndarray, q_nav: np.ndarray, phase: int, schedule_var: float,
     d[D_RATE_ERR + 2] = b2 - rc2
     own = GYRO_FIRST if phase == FCS_STACK else GYRO_UPPER
 
-    i, w = locate(ft.gain_axis[phase], ft.gain_len[phase], schedule_var)
-    for k in range(8):  # Kp, Ki, Kd, Kir of pitch then yaw
-        d[D_GAINS + k] = (1.0 - w) * ft.gain_data[phase, i, k] + w * ft.gain_data[phase, i + 1, k]
+    scheduled_gains(ft.gain_axis, ft.gain_len, ft.gain_data, phase, schedule_var, d, D_GAINS)
 
     for c in range(2):  # 0 pitch (body y), 1 yaw (body z)
         ax = c + 1
@@ -225,6 +223,17 @@ def fcs_step(d: np.ndarray, q_nav: np.ndarray, phase: int, schedule_var: float,
 
     roll_rate_f = filter_pair(d, D_ROLL_FILT, ft.roll_filters[fset], d[D_RATE_ERR])
     d[D_CMD_RCS] = roll_phase_plane(d[D_ERR], roll_rate_f, ft.roll[0], ft.roll[1], ft.roll[2])
+
+
+@njit(cache=True, error_model="numpy")
+def scheduled_gains(gain_axis: np.ndarray, gain_len: np.ndarray, gain_data: np.ndarray, phase: int,
+                    schedule_var: float, out: np.ndarray, k0: int) -> None:
+    """Kp, Ki, Kd, Kir of pitch then yaw at ``schedule_var`` (altitude m or speed m/s;
+    :class:`FcsTables` ``gain_*``), linear between breakpoints, held beyond them, into
+    ``out[k0:k0 + 8]``."""
+    i, w = locate(gain_axis[phase], gain_len[phase], schedule_var)
+    for k in range(8):
+        out[k0 + k] = (1.0 - w) * gain_data[phase, i, k] + w * gain_data[phase, i + 1, k]
 
 
 @njit(cache=True, error_model="numpy")

@@ -186,6 +186,28 @@ def handle_events(t: float, x: np.ndarray, u: np.ndarray, d: np.ndarray,
 
 
 @njit(cache=True, error_model="numpy")
+def schedule_variable(t: float, x: np.ndarray, phase: int, p: np.ndarray) -> float:
+    """What the flight control's gains are scheduled on (``models/fcs.py``): the
+    geodetic height (m) in the stack phase, the Earth-relative speed (m/s) after it.
+
+    Parameters
+    ----------
+    t : float
+        Time from liftoff (s; sets the Earth's rotation angle).
+    x : numpy.ndarray
+        The plant state (ECI position and velocity at ``R``, ``V``).
+    phase : int
+        Flight-control phase (``FCS_STACK``, coast or upper).
+    p : numpy.ndarray
+        Plant parameters (Earth rotation rate and ellipsoid).
+    """
+    if phase == FCS_STACK:
+        return earth.height_of_eci(t, x[R], x[R + 1], x[R + 2], p[P_OMEGA_E], p[P_RE], p[P_E2])
+    ex, ey, ez = earth.earth_relative_velocity_xyz(x[R], x[R + 1], x[V], x[V + 1], x[V + 2], p[P_OMEGA_E])
+    return np.sqrt(ex ** 2 + ey ** 2 + ez ** 2)
+
+
+@njit(cache=True, error_model="numpy")
 def specific_energy(x: np.ndarray, mu: float) -> float:
     r = np.sqrt(x[R] ** 2 + x[R + 1] ** 2 + x[R + 2] ** 2)
     v2 = x[V] ** 2 + x[V + 1] ** 2 + x[V + 2] ** 2
@@ -256,12 +278,7 @@ def _advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0
         if k % rates.n_fcs == 0:
             dt_fcs = rates.n_fcs * dt
             smoother_step(d, t, dt_fcs, sched[S_SMOOTH_ZETA], sched[S_SMOOTH_WN])
-            if phase == FCS_STACK:  # schedules: geodetic height, then Earth-relative speed
-                sched_var = earth.height_of_eci(t, x[R], x[R + 1], x[R + 2], p[P_OMEGA_E], p[P_RE], p[P_E2])
-            else:
-                ex, ey, ez = earth.earth_relative_velocity_xyz(x[R], x[R + 1], x[V], x[V + 1], x[V + 2],
-                                                               p[P_OMEGA_E])
-                sched_var = np.sqrt(ex ** 2 + ey ** 2 + ez ** 2)
+            sched_var = schedule_variable(t, x, phase, p)
             if has_flex:
                 flex.flex_point(x, config, p, tb, flex.PT_IMU, False, flex3)  # flex rotation at the nav unit
                 d[D_FLEX_NAV:D_FLEX_NAV + 3] = flex3

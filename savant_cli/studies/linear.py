@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import time
 import warnings
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -33,11 +33,11 @@ from savant_cli.errors import ConfigError
 from savant_cli.io.console import print_run_summary, print_verdict
 from savant_cli.linear.charts import PointCharts, point_charts
 from savant_cli.linear.loops import AXES, LinearPoint, assemble
-from savant_cli.linear.margins import MarginRow, bandwidth_hz, disk_margins, loop_margins
-from savant_cli.linear.modes import MarginLabeler, ModePeak, aero_unstable, state_groups
+from savant_cli.linear.evaluate import closed_loop_stability, judge_loops, verdict as judge_verdict
+from savant_cli.linear.margins import MarginRow, bandwidth_hz, disk_margins
+from savant_cli.linear.modes import ModePeak, aero_unstable, state_groups
 from savant_cli.linear.plant import linearize_plant
-from savant_cli.linear.requirements import STAGE_OF_PHASE, PointVerdict, evaluate_point, summary as requirement_summary
-from savant_cli.linear.response import FastResponse
+from savant_cli.linear.requirements import PointVerdict, summary as requirement_summary
 from savant_cli.linear.store import write_checks_csv, write_linear_group, write_margins_csv, write_mat
 from savant_cli.studies import flight as flight_mod
 
@@ -89,28 +89,20 @@ def analyse(model, snap, study: LinearStudyConfig, dt: float,
     lin = linearize_plant(model, snap, mode=study.jacobian, rel_step=study.jacobian_step)
     pt = assemble(model, snap, lin, dt)
     groups = state_groups(lin, pt.plant, pt.controller)
-    unstable = aero_unstable(lin)
-    rows, peaks = [], []
+    rows, peaks, responses = judge_loops(pt.loops, groups, aero_unstable(lin), snap.t)
     extra: dict[str, float] = {"time_s": snap.t}
     for c, axis in enumerate(AXES):
-        fr = FastResponse(pt.loops[axis])
-        labeler = MarginLabeler(pt.loops[axis], groups, unstable)
-        rows += loop_margins(pt.loops[axis], snap.t, axis, response=fr, labeler=labeler)
-        peaks += labeler.flex_peaks(fr, snap.t, axis)
-        for k, v in disk_margins(pt.loops[axis], fr).items():
+        for k, v in disk_margins(pt.loops[axis], responses[axis]).items():
             extra[f"{axis}_{k}"] = v
         extra[f"{axis}_bandwidth_hz"] = bandwidth_hz(pt.closed[c, c])
     for k, v in disk_margins(pt.mimo).items():
         extra[f"mimo_{k}"] = v
-    poles = np.log(pt.closed.poles().astype(complex)) / dt
-    fast = poles[np.abs(poles) > 0.05]  # frozen-time trajectory drift (|s| < 0.05 rad/s) aside
-    extra["closed_loop_stable"] = bool(np.all(fast.real < 0.0))
-    extra["closed_loop_max_real_1_per_s"] = float(fast.real.max()) if fast.size else float("nan")
+    stable, max_real = closed_loop_stability(pt.closed.poles(), dt)
+    extra["closed_loop_stable"] = stable
+    extra["closed_loop_max_real_1_per_s"] = max_real
     verdict = None
     if requirements is not None:
-        verdict = evaluate_point(snap.t, STAGE_OF_PHASE[pt.phase], rows, peaks, extra["closed_loop_stable"],
-                                 extra["closed_loop_max_real_1_per_s"], requirements)
-        rows = [replace(r, meets_requirement=ok) for r, ok in zip(rows, verdict.row_verdicts)]
+        rows, verdict = judge_verdict(snap.t, pt.phase, rows, peaks, stable, max_real, requirements)
     return PointAnalysis(pt, rows, peaks, extra, verdict)
 
 
