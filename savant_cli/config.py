@@ -13,7 +13,7 @@ from __future__ import annotations
 import dataclasses
 import re
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Optional
 
 import numpy as np
 from hydra.core.config_store import ConfigStore
@@ -300,9 +300,73 @@ class FlexSweepStudyConfig:
     exclusion_zones: bool = True
 
 
+@dataclass
+class DesignParameter:
+    """One free parameter of ``study=fcs_design``: its starting value (``None``: the design
+    rules' own) and bounds."""
+
+    initial: Any = None
+    low: float = 0.0
+    high: float = 0.0
+
+
+@dataclass
+class ScheduleParameters:
+    """The tuned parameters of one gain schedule (``null``: not tuned;
+    ``savant_cli/design/parameters.py``)."""
+
+    omega: Optional[DesignParameter] = None  # rad/s, pole-placement natural frequency
+    zeta: Optional[DesignParameter] = None  # pole-placement damping
+    kir_share: Optional[DesignParameter] = None  # attitude stiffness in the integrated-rate path
+    lowpass_hz: Optional[DesignParameter] = None  # Butterworth corner of the rate paths, Hz
+    notch1_hz: Optional[DesignParameter] = None
+    notch1_q: Optional[DesignParameter] = None
+    notch2_hz: Optional[DesignParameter] = None
+    notch2_q: Optional[DesignParameter] = None
+    blend_first: Optional[DesignParameter] = None  # stack only: first-stage gyro weight in the rate blend
+
+
+@dataclass
+class DesignParameters:
+    stack: ScheduleParameters = field(default_factory=ScheduleParameters)
+    upper: ScheduleParameters = field(default_factory=ScheduleParameters)
+
+
+@dataclass
+class DesignOptimizer:
+    """The search of ``study=fcs_design`` (``scipy.optimize.minimize``)."""
+
+    method: str = "nelder-mead"  # nelder-mead (max-min ratio) | cobyla (margins as constraints)
+    max_evaluations: int = 300  # per schedule
+    tolerance: float = 1e-3  # on the normalized parameters and the ratio
+    initial_step: float = 0.1  # first simplex / trust radius, fraction of each parameter's range
+    stop_ratio: float = 0.0  # > 0: stop a schedule's search once every point's ratio reaches it
+
+
+@dataclass
+class FcsDesignStudyConfig:
+    """``study=fcs_design``: tune the flight control's free parameters against the
+    requirement set at frozen points over the flight and the uncertainty corners, and
+    write the controller config (docs/design_studies.md)."""
+
+    name: str = "fcs_design"
+    design: str = "msfc_pid"  # design rules it starts from (savant_cli/datagen/fcs_gains.py CONTROLLERS)
+    controller_name: str = ""  # name of the controller written ("": the design's)
+    install: bool = False  # also write conf/controller/<name>.yaml of the shipped config tree
+    schedules: list[str] = field(default_factory=lambda: ["stack", "upper"])  # tuned in turn
+    every_s: dict[str, float] = field(default_factory=lambda: {"stack": 10.0, "upper": 20.0})  # design points
+    verify_every_s: float = 5.0  # the before/after envelope
+    event_window_s: float = 2.0  # points this close to an event are skipped
+    axes: list[str] = field(default_factory=lambda: ["pitch"])  # loops judged in the search (both verified)
+    corners: dict[str, dict[str, Any]] = field(default_factory=dict)  # name → {config key: value}
+    parameters: DesignParameters = field(default_factory=DesignParameters)
+    optimizer: DesignOptimizer = field(default_factory=DesignOptimizer)
+
+
 STUDY_SCHEMAS: dict[str, type] = {"nominal": StudyConfig, "linear": LinearStudyConfig,
                                   "montecarlo": MonteCarloStudyConfig, "flex_sweep": FlexSweepStudyConfig,
-                                  "flyoff": FlyoffStudyConfig, "mode_retention": ModeRetentionStudyConfig}
+                                  "flyoff": FlyoffStudyConfig, "mode_retention": ModeRetentionStudyConfig,
+                                  "fcs_design": FcsDesignStudyConfig}
 
 
 @dataclass
@@ -940,7 +1004,51 @@ def _study(node: Any) -> Any:
         _check_flex_sweep(study)
     if isinstance(study, ModeRetentionStudyConfig):
         _check_mode_retention(study)
+    if isinstance(study, FcsDesignStudyConfig):
+        _check_fcs_design(study)
     return study
+
+
+#: The gain schedules ``study=fcs_design`` tunes.
+DESIGN_SCHEDULES = ("stack", "upper")
+
+
+def _check_fcs_design(s: FcsDesignStudyConfig) -> None:
+    for i, name in enumerate(s.schedules):
+        _one_of(f"study.schedules[{i}]", name, DESIGN_SCHEDULES)
+    for name, step in s.every_s.items():
+        _one_of("study.every_s", name, DESIGN_SCHEDULES)
+        _positive(f"study.every_s.{name}", step)
+    for name in s.schedules:
+        if name not in s.every_s:
+            raise ConfigError("study.every_s", dict(s.every_s), f"must give the design-point spacing of {name}")
+    _positive("study.verify_every_s", s.verify_every_s)
+    _non_negative("study.event_window_s", s.event_window_s)
+    for i, axis in enumerate(s.axes):
+        _one_of(f"study.axes[{i}]", axis, ("pitch", "yaw"))
+    if not s.axes:
+        raise ConfigError("study.axes", [], "must name at least one loop (pitch, yaw)")
+    for sched in DESIGN_SCHEDULES:
+        params = getattr(s.parameters, sched)
+        if sched != "stack" and params.blend_first is not None:
+            raise ConfigError(f"study.parameters.{sched}.blend_first", "set", "only the stack blends its gyros")
+        for f in dataclasses.fields(params):
+            prm = getattr(params, f.name)
+            if prm is None:
+                continue
+            key = f"study.parameters.{sched}.{f.name}"
+            if not (np.isfinite(prm.low) and np.isfinite(prm.high) and prm.low < prm.high):
+                raise ConfigError(f"{key}.high", prm.high, f"must be finite and above low = {prm.low}")
+            if prm.initial is not None and not prm.low <= prm.initial <= prm.high:
+                raise ConfigError(f"{key}.initial", prm.initial, f"must lie within [{prm.low}, {prm.high}]")
+    o = s.optimizer
+    _one_of("study.optimizer.method", o.method, ("nelder-mead", "cobyla"))
+    if o.max_evaluations < 1:
+        raise ConfigError("study.optimizer.max_evaluations", o.max_evaluations, "must be a positive count")
+    _positive("study.optimizer.tolerance", o.tolerance)
+    if not 0.0 < o.initial_step <= 1.0:
+        raise ConfigError("study.optimizer.initial_step", o.initial_step, "must lie in (0, 1]")
+    _non_negative("study.optimizer.stop_ratio", o.stop_ratio)
 
 
 def _flight_times(times: list[float]) -> None:

@@ -102,7 +102,11 @@ def report(run_dir: Path | str, console: Console | None = None) -> list[Path]:
         from savant_cli.studies import mode_retention
 
         paths += mode_retention.draw(mode_retention.read_group(h5), folder)
-    studies = sorted(groups & {"linear", "flex_sweep", "montecarlo", "flyoff", "mode_retention"})
+    if "fcs_design" in groups:
+        from savant_cli.studies import fcs_design
+
+        paths += fcs_design.draw(*fcs_design.read_group(h5), folder)
+    studies = sorted(groups & {"linear", "flex_sweep", "montecarlo", "flyoff", "mode_retention", "fcs_design"})
     if studies:
         console.print(f"redrawn from {RUN_FILE}: {', '.join(studies)}")
     return paths

@@ -33,12 +33,15 @@ DESIGN = {
 }
 
 
-def design_set(lowpass_hz: float, notch_hz: tuple[float, float], notch_q: float,
+def design_set(lowpass_hz: float, notch_hz: tuple[float, float], notch_q: float | tuple[float, float],
                fs_hz: float = FCS_RATE_HZ) -> list[dict[str, list[float]]]:
-    """Two 4th-order sections ``[{b, a}, {b, a}]`` (a₀ = 1) for one filter set."""
+    """Two 4th-order sections ``[{b, a}, {b, a}]`` (a₀ = 1) for one filter set: a
+    Butterworth low-pass at ``lowpass_hz``, and two notches at ``notch_hz`` with quality
+    factors ``notch_q`` (one for both, or one each)."""
+    q1, q2 = (notch_q, notch_q) if np.isscalar(notch_q) else notch_q
     b1, a1 = signal.butter(4, lowpass_hz, fs=fs_hz)
-    bn1, an1 = signal.iirnotch(notch_hz[0], notch_q, fs=fs_hz)
-    bn2, an2 = signal.iirnotch(notch_hz[1], notch_q, fs=fs_hz)
+    bn1, an1 = signal.iirnotch(notch_hz[0], q1, fs=fs_hz)
+    bn2, an2 = signal.iirnotch(notch_hz[1], q2, fs=fs_hz)
     b2, a2 = np.convolve(bn1, bn2), np.convolve(an1, an2)
     return [{"b": b1.tolist(), "a": a1.tolist()}, {"b": b2.tolist(), "a": a2.tolist()}]
 

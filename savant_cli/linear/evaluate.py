@@ -101,6 +101,20 @@ def freeze(model: SimModel, snap: Snapshot, dt: float, jacobian: str = "auto", r
                        sensor_plant(lin, model, dt), aero_unstable(lin))
 
 
+def point_controller(point: FrozenPoint, ft: FcsTables, dt: float, gains: np.ndarray | None = None) -> ct.StateSpace:
+    """The flight control ``ft`` as an LTI at a frozen point: its gains scheduled at the
+    point's state as in flight, or ``gains`` (Kp, Ki, Kd, Kir of pitch then yaw)."""
+    if gains is None:
+        gains = np.zeros(8)
+        scheduled_gains(ft.gain_axis, ft.gain_len, ft.gain_data, point.phase, point.schedule_var, gains, 0)
+    return controller_lti(ft, gains, point.phase, dt)
+
+
+def candidate_loops(point: FrozenPoint, ft: FcsTables, dt: float) -> dict[str, ct.StateSpace]:
+    """The loops (broken at one command, the other closed) of ``ft`` at a frozen point."""
+    return broken_loops(point.plant, point_controller(point, ft, dt), dt)[1]
+
+
 def judge_controller(point: FrozenPoint, ft: FcsTables, dt: float, requirements: RequirementSet,
                      gains: np.ndarray | None = None, axes: tuple[str, ...] = AXES
                      ) -> tuple[list[MarginRow], list[ModePeak], PointVerdict]:
@@ -108,10 +122,7 @@ def judge_controller(point: FrozenPoint, ft: FcsTables, dt: float, requirements:
     a frozen point (the loops of ``axes``; the closed loop with both); its gains scheduled
     at the point's state as in flight, or ``gains`` (Kp, Ki, Kd, Kir of pitch then yaw)
     when given."""
-    if gains is None:
-        gains = np.zeros(8)
-        scheduled_gains(ft.gain_axis, ft.gain_len, ft.gain_data, point.phase, point.schedule_var, gains, 0)
-    fcs = controller_lti(ft, gains, point.phase, dt)
+    fcs = point_controller(point, ft, dt, gains)
     g2, loops, _ = broken_loops(point.plant, fcs, dt)
     groups = state_groups(point.lin, point.plant, fcs)
     rows, peaks, _ = judge_loops(loops, groups, point.aero_unstable, point.time_s, tuple(axes))

@@ -144,10 +144,11 @@ class MarginLabeler:
         path = np.array([part[groups == g].sum(axis=0) for g in PATH_GROUPS if g in groups]).sum(axis=0)
         # the group each pole belongs to most (−1: a path group's)
         self.owner = np.where(share.max(axis=0) >= path, np.argmax(share, axis=0), -1)
-        s = np.log(lam.astype(complex)) / self.dt
+        with np.errstate(divide="ignore", invalid="ignore"):  # a pole at z = 0 (a pure delay): s = −∞
+            s = np.log(lam.astype(complex)) / self.dt
+            self.zeta = -s.real / np.maximum(np.abs(s), 1e-300)
         self.freq_hz = np.abs(s.imag) / (2 * np.pi)
         self.half_width_hz = np.abs(s.real) / (2 * np.pi)
-        self.zeta = -s.real / np.maximum(np.abs(s), 1e-300)
 
     def _by_group(self, f_hz: float) -> tuple[np.ndarray, float]:
         """|contribution| of every group's poles to L at f, and |L| there."""

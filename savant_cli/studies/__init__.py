@@ -10,7 +10,9 @@ from types import ModuleType
 
 from savant_cli.errors import ConfigError
 
-STUDIES = ("nominal", "linear", "montecarlo", "flex_sweep", "flyoff", "mode_retention")
+from savant_cli.config import STUDY_SCHEMAS
+
+STUDIES = tuple(STUDY_SCHEMAS)
 
 
 def get_study(name: str) -> ModuleType:

@@ -1,0 +1,151 @@
+"""The search of the flight-control design: every candidate judged on frozen operating
+points of the nominal flight and the uncertainty corners, the smallest margin-to-requirement
+ratio maximized with ``scipy.optimize.minimize``.
+
+The score of a point is its worst check's ratio (:attr:`Check.ratio`: |margin| / required,
+attenuation / required; ≥ 1 meets the requirement); a lost closed loop scores
+``−1 − 10 σ_max`` (σ_max its largest real part, 1/s), below any kept loop and graded so the
+search can climb out of it. A candidate's score is the smallest over its points.
+
+Two methods (``study.optimizer.method``):
+
+- ``nelder-mead``: maximize the smallest ratio (a max-min), bounded simplex search on the
+  normalized parameters;
+- ``cobyla``: the margins as constraints: maximize ``t`` subject to every point's ratio
+  ``≥ t`` (the epigraph form), a linear-approximation trust region.
+
+Both are derivative-free: margins are piecewise smooth (crossings appear and vanish as the
+loop changes). The plant of each point is linearized once (:func:`savant_cli.linear.
+evaluate.freeze`); a candidate costs its controller, the loop assembly and the margins.
+"""
+
+from __future__ import annotations
+
+import time
+import warnings
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import NonlinearConstraint, minimize
+
+from savant_cli.config import DesignOptimizer, RequirementSet
+from savant_cli.design.parameters import FreeParameter
+from savant_cli.linear.evaluate import FrozenPoint, judge_controller
+from savant_cli.linear.requirements import PointVerdict
+from savant_cli.models.fcs import FcsTables
+
+
+@dataclass
+class DesignPoint:
+    """A frozen operating point of one uncertainty corner (``""``: the nominal plant)."""
+
+    corner: str
+    point: FrozenPoint
+
+
+def point_score(v: PointVerdict) -> float:
+    """The worst check's ratio to its requirement (module notes)."""
+    stability = v.checks[-1]
+    if not stability.passed:
+        return -1.0 - 10.0 * stability.value
+    ratios = [c.ratio for c in v.checks if c.criterion != "stability"]
+    return float(min(ratios)) if ratios else float("inf")
+
+
+def judge_all(points: list[DesignPoint], ft: FcsTables, dt: float, requirements: RequirementSet,
+              axes: tuple[str, ...] = ("pitch", "yaw")) -> list[PointVerdict]:
+    """The verdict of ``ft`` at every point (loops of ``axes`` only)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # python-control notes on unconnected signals
+        return [judge_controller(p.point, ft, dt, requirements, axes=axes)[2] for p in points]
+
+
+@dataclass
+class SearchResult:
+    """A schedule's search: the best parameters, their scores, and every evaluation."""
+
+    values: dict[tuple[str, str], float]
+    score: float
+    initial_score: float
+    evaluations: int
+    wall_s: float
+    history: list[float] = field(default_factory=list)  # score of each evaluation, in order
+    message: str = ""
+
+
+def search(params: list[FreeParameter], tables_of: Callable[[dict[tuple[str, str], float]], FcsTables],
+           points: list[DesignPoint], dt: float, requirements: RequirementSet, opt: DesignOptimizer,
+           axes: tuple[str, ...], progress: Callable[[int, float], None] | None = None) -> SearchResult:
+    """Maximize the smallest point score of the candidates ``tables_of(values)``.
+
+    Parameters
+    ----------
+    params : list of FreeParameter
+        The tuned parameters (one schedule's).
+    tables_of : callable
+        Parameter values → the candidate's flight-control tables.
+    points : list of DesignPoint
+        Where candidates are judged.
+    dt : float
+        Control period (s).
+    requirements : RequirementSet
+        The requirement set.
+    opt : DesignOptimizer
+        Method, evaluation budget, tolerance, initial step, early stop.
+    axes : tuple of str
+        Loops judged.
+    progress : callable, optional
+        Called with (evaluations so far, best score so far) after each evaluation.
+    """
+    t0 = time.perf_counter()
+    cache: dict[bytes, np.ndarray] = {}
+    history: list[float] = []
+    best = [-np.inf, None]
+
+    def values_of(u: np.ndarray) -> dict[tuple[str, str], float]:
+        u = np.clip(u, 0.0, 1.0)
+        return {(p.schedule, p.name): p.physical(float(x)) for p, x in zip(params, u)}
+
+    def scores(u: np.ndarray) -> np.ndarray:
+        key = np.clip(u, 0.0, 1.0).tobytes()
+        if key not in cache:
+            verdicts = judge_all(points, tables_of(values_of(u)), dt, requirements, axes)
+            cache[key] = np.array([point_score(v) for v in verdicts])
+            s = float(cache[key].min())
+            history.append(s)
+            if s > best[0]:
+                best[0], best[1] = s, np.clip(u, 0.0, 1.0).copy()
+            if progress is not None:
+                progress(len(history), best[0])
+            if opt.stop_ratio > 0 and best[0] >= opt.stop_ratio:
+                raise _Enough
+        return cache[key]
+
+    u0 = np.array([p.normalized(p.initial) for p in params])
+    initial = float(scores(u0).min())
+    bounds = [(0.0, 1.0)] * len(params)
+    message = ""
+    try:
+        if opt.method == "nelder-mead":
+            simplex = [u0] + [np.clip(u0 + opt.initial_step * np.eye(len(params))[i]
+                                      * (1.0 if u0[i] + opt.initial_step <= 1.0 else -1.0), 0.0, 1.0)
+                              for i in range(len(params))]
+            res = minimize(lambda u: -float(scores(u).min()), u0, method="Nelder-Mead", bounds=bounds,
+                           options={"maxfev": opt.max_evaluations, "xatol": opt.tolerance, "fatol": opt.tolerance,
+                                    "initial_simplex": np.array(simplex)})
+        else:  # epigraph: z = (u, t), maximize t with every point's score >= t
+            z0 = np.append(u0, initial)
+            cons = NonlinearConstraint(lambda z: scores(z[:-1]) - z[-1], 0.0, np.inf)
+            res = minimize(lambda z: -z[-1], z0, method="COBYLA", constraints=[cons],
+                           bounds=bounds + [(None, None)],
+                           options={"maxiter": opt.max_evaluations, "rhobeg": opt.initial_step, "tol": opt.tolerance})
+        message = str(res.message)
+    except _Enough:
+        message = f"every point reached the stop ratio {opt.stop_ratio}"
+    return SearchResult(values_of(best[1]), float(best[0]), initial, len(history), time.perf_counter() - t0,
+                        history, message)
+
+
+class _Enough(Exception):
+    """Raised inside the objective to end a search at ``stop_ratio``."""
