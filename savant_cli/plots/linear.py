@@ -667,7 +667,8 @@ def _response_figure(time_s: float, data: CommandResponses) -> Figure:
 
 
 def _envelope_figure(rows: Sequence[MarginRow], requirements: Mapping[str, tuple[float, float]] | None,
-                     failed_times: Sequence[float] = ()) -> Figure:
+                     failed_times: Sequence[float] = (),
+                     failed_label: str = "point fails its\nrequirement set") -> Figure:
     """Gain and phase margins vs flight time, by band (colour) and axis (marker); the
     points failing their requirement set marked by a red line across both panels."""
     fig = _figure(9.0, 7.0, left=0.85, right=2.2, bottom=0.6, top=0.5, hspace=0.08)
@@ -718,7 +719,7 @@ def _envelope_figure(rows: Sequence[MarginRow], requirements: Mapping[str, tuple
         for ax in (ax_g, ax_p):
             ax.axvline(t, color="tab:red", lw=2.5, alpha=0.25, zorder=1)
     if len(failed_times):
-        handles.append(Line2D([], [], color="tab:red", lw=2.5, alpha=0.25, label="point fails its\nrequirement set"))
+        handles.append(Line2D([], [], color="tab:red", lw=2.5, alpha=0.25, label=failed_label))
     ax_g.axhline(0.0, color="0.3", lw=0.6)
     ax_p.axhline(0.0, color="0.3", lw=0.6)
     ax_g.set_ylabel("gain margin (dB)\nnegative: gain reduction", fontsize=9)
@@ -800,7 +801,8 @@ def plot_linear_point(charts: PointCharts, margins: Sequence[MarginRow], out_dir
 
 def plot_margin_envelope(rows: list[MarginRow], out_path: Path,
                          requirements: dict[str, tuple[float, float]] | None = None,
-                         failed_times: Sequence[float] = ()) -> Path:
+                         failed_times: Sequence[float] = (),
+                         failed_label: str = "point fails its\nrequirement set") -> Path:
     """Draw the stability margins of a study against flight time.
 
     Parameters
@@ -819,6 +821,8 @@ def plot_margin_envelope(rows: list[MarginRow], out_path: Path,
     failed_times : sequence of float
         Flight times (s) of the points that fail their requirement set (a margin, a
         bending mode's attenuation or closed-loop stability), marked by a red line.
+    failed_label : str
+        The legend entry of those lines.
 
     Returns
     -------
@@ -830,7 +834,7 @@ def plot_margin_envelope(rows: list[MarginRow], out_path: Path,
     Top panel: gain margins (dB); bottom panel: phase margins (deg); colour = band
     (rigid/aero, slosh, flex), marker = axis (pitch ○, yaw △).
     """
-    return _save(_envelope_figure(rows, requirements, failed_times), Path(out_path))
+    return _save(_envelope_figure(rows, requirements, failed_times, failed_label), Path(out_path))
 
 
 def plot_nichols_overlay(time_s: float, loops: Sequence[LoopResponse], out_path: Path, title: str = "Nichols chart",

@@ -328,12 +328,14 @@ def read_group(path: Path) -> tuple[list[MarginRow], list[MarginRow], dict[float
 
 def draw(before: list[MarginRow], after: list[MarginRow], charts: dict[float, list[LoopResponse]], bands: dict,
          failed: tuple[list[float], list[float]], folder: Path) -> list[Path]:
-    """The margin envelopes before and after (the failing points marked), and one Nichols
-    chart per worst point with the corners overlaid."""
+    """The margin envelopes before and after (the nominal plant's margins; the points where
+    it or a corner fails marked), and one Nichols chart per worst point with the corners
+    overlaid."""
     from savant_cli.plots.linear import plot_margin_envelope, plot_nichols_overlay
 
     out = folder / "fcs_design"
-    paths = [plot_margin_envelope(rows, out / f"margin_envelope_{key}.png", requirements=bands, failed_times=times)
+    paths = [plot_margin_envelope(rows, out / f"margin_envelope_{key}.png", requirements=bands, failed_times=times,
+                                  failed_label="fails at the nominal\nplant or a corner")
              for key, rows, times in (("before", before, failed[0]), ("after", after, failed[1]))]
     for t, loops in charts.items():
         paths.append(plot_nichols_overlay(t, loops, out / f"nichols_pitch_t{t:06.1f}.png",
