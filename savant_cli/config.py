@@ -315,8 +315,10 @@ class ScheduleParameters:
     """The tuned parameters of one gain schedule (``null``: not tuned;
     ``savant_cli/design/parameters.py``)."""
 
-    omega: Optional[DesignParameter] = None  # rad/s, pole-placement natural frequency
+    omega: Optional[DesignParameter] = None  # rad/s, pole-placement natural frequency (first breakpoint)
+    omega_end: Optional[DesignParameter] = None  # rad/s, at the last breakpoint (linear in between)
     zeta: Optional[DesignParameter] = None  # pole-placement damping
+    integral_ratio: Optional[DesignParameter] = None  # integral gain / (omega x attitude stiffness)
     kir_share: Optional[DesignParameter] = None  # attitude stiffness in the integrated-rate path
     lowpass_hz: Optional[DesignParameter] = None  # Butterworth corner of the rate paths, Hz
     notch1_hz: Optional[DesignParameter] = None
@@ -341,6 +343,7 @@ class DesignOptimizer:
     tolerance: float = 1e-3  # on the normalized parameters and the ratio
     initial_step: float = 0.1  # first simplex / trust radius, fraction of each parameter's range
     stop_ratio: float = 0.0  # > 0: stop a schedule's search once every point's ratio reaches it
+    restarts: int = 2  # fresh starts from the best point after a search converges (budget permitting)
 
 
 @dataclass
@@ -1049,6 +1052,8 @@ def _check_fcs_design(s: FcsDesignStudyConfig) -> None:
     if not 0.0 < o.initial_step <= 1.0:
         raise ConfigError("study.optimizer.initial_step", o.initial_step, "must lie in (0, 1]")
     _non_negative("study.optimizer.stop_ratio", o.stop_ratio)
+    if o.restarts < 0:
+        raise ConfigError("study.optimizer.restarts", o.restarts, "must be 0 or a positive count")
 
 
 def _flight_times(times: list[float]) -> None:

@@ -28,6 +28,8 @@ def test_rule_values_are_the_design_rules():
     assert dp.rule_value(spec, "upper", "notch1_hz", blend) == 9.5
     assert dp.rule_value(spec, "stack", "notch2_q", blend) == 1.5
     assert dp.rule_value(spec, "stack", "kir_share", blend) == 0.2
+    assert dp.rule_value(spec, "upper", "omega_end", blend) == 1.0 and dp.rule_value(spec, "stack", "integral_ratio",
+                                                                                     blend) == 0.15
     assert dp.rule_value(spec, "stack", "blend_first", blend) == 0.599
     moved = dp.apply(spec, {("stack", "notch2_q"): 0.8, ("upper", "omega"): 1.1, ("stack", "blend_first"): 0.65})
     assert moved["filters"]["stack"]["notch_q"] == (1.5, 0.8) and moved["upper"]["omega"] == 1.1
@@ -47,14 +49,13 @@ def test_untuned_parameters_give_the_shipped_controller():
     blend = flex_filters.vehicle_stack_blend(cfg.vehicle, prep.vehicle_dir)
     spec = fcs_gains.DESIGN
     ranges = DesignParameters()
-    for sched, names in (("stack", ("omega", "zeta", "kir_share", "lowpass_hz", "notch1_hz", "notch1_q", "notch2_hz",
-                                    "notch2_q", "blend_first")),
-                         ("upper", ("omega", "zeta", "kir_share", "lowpass_hz", "notch1_hz", "notch1_q", "notch2_hz",
-                                    "notch2_q"))):
+    common = ("omega", "omega_end", "zeta", "integral_ratio", "kir_share", "lowpass_hz", "notch1_hz", "notch1_q",
+              "notch2_hz", "notch2_q")
+    for sched, names in (("stack", common + ("blend_first",)), ("upper", common)):
         for n in names:
             setattr(getattr(ranges, sched), n, DesignParameter(None, 0.0, 100.0))
     params = dp.free_parameters(ranges, ["stack", "upper"], spec, blend)
-    assert len(params) == 17
+    assert len(params) == 21
     text = dp.controller_text(dp.apply(spec, {(p.schedule, p.name): p.initial for p in params}),
                               fcs_gains.design_points(cfg, prep.vehicle, spec), blend, "ares_i")
     mine, shipped = dp.controller_tables(text), fcs_tables(cfg.controller)
@@ -123,3 +124,20 @@ def test_fcs_design_end_to_end(tmp_path):
     fly = run(["run", f"--config-dir={out}", "controller=tuned_test", "phase=first_stage", "sim.progress=false",
                f"hydra.run.dir={tmp_path}/fly"], cwd=tmp_path)
     assert fly.returncode == 0, fly.stdout + fly.stderr
+
+
+def test_pole_placement_gains_follow_the_frequency_ramp():
+    """Kp + Kir = (ω² + max(μα, 0))/μc, Kd = 2ζω/μc, Ki = ratio·ω·(Kp + Kir), with ω going
+    linearly from omega to omega_end over the breakpoints (hand-computed here)."""
+    pts = {"stack": [(0.0, 0.1, 2.0), (1.0, -0.2, 3.0), (2.0, 0.0, 1.0)], "upper": [(0.0, 0.0, 4.0), (1.0, 0.0, 4.0)]}
+    spec = dict(fcs_gains.DESIGN, stack={"omega": 1.0, "omega_end": 2.0, "zeta": 0.5, "kir_share": 0.25,
+                                         "integral_ratio": 0.1},
+                upper={"omega": 0.8, "zeta": 0.7}, stack_altitudes_m=[0, 1, 2], upper_speeds_mps=[0, 1])
+    tb = fcs_gains.gain_tables(pts, spec)["stack"]
+    for w, (_, mu_a, mu_c), kp, kir, kd, ki in zip((1.0, 1.5, 2.0), pts["stack"], tb["kp"], tb["kir"], tb["kd"],
+                                                   tb["ki"]):
+        k = (w * w + max(mu_a, 0.0)) / mu_c
+        assert kp == pytest.approx(0.75 * k) and kir == pytest.approx(0.25 * k)
+        assert kd == pytest.approx(2 * 0.5 * w / mu_c) and ki == pytest.approx(0.1 * w * k)
+    up = fcs_gains.gain_tables(pts, spec)["upper"]  # no omega_end: constant, the spec's shares
+    assert up["kd"] == [pytest.approx(2 * 0.7 * 0.8 / 4.0)] * 2 and up["kir"][0] == pytest.approx(0.2 * 0.64 / 4.0)

@@ -124,17 +124,20 @@ def design_points(cfg, vehicle, spec: dict = DESIGN) -> dict[str, list[tuple[flo
 
 def gain_tables(points: dict[str, list[tuple[float, float, float]]], spec: dict = DESIGN) -> dict:
     """The pole-placement gain tables of ``spec`` at the design points of
-    :func:`design_points`: per schedule the natural frequency ``omega`` and damping
-    ``zeta``, and ``integral_ratio`` and ``kir_share`` (the schedule's own when given,
-    else the spec's)."""
+    :func:`design_points`: per schedule the natural frequency ``omega`` (rad/s; with
+    ``omega_end``, linear in the breakpoint index from ``omega`` at the first breakpoint
+    to ``omega_end`` at the last) and damping ``zeta``, and ``integral_ratio`` and
+    ``kir_share`` (the schedule's own when given, else the spec's)."""
     tables = {}
     for name, axis_key in (("stack", "stack_altitudes_m"), ("upper", "upper_speeds_mps")):
         d = spec[name]
-        w, z = d["omega"], d["zeta"]
+        z = d["zeta"]
         share = d.get("kir_share", spec["kir_share"])
         ratio = d.get("integral_ratio", spec["integral_ratio"])
+        n = len(points[name])
+        omegas = np.linspace(d["omega"], d.get("omega_end", d["omega"]), n) if n > 1 else [d["omega"]]
         kp, kd, ki, kir = [], [], [], []
-        for _, mu_a, mu_c in points[name]:
+        for w, (_, mu_a, mu_c) in zip(omegas, points[name]):
             k_att = (w * w + max(mu_a, 0.0)) / mu_c
             kp.append(k_att * (1.0 - share))
             kir.append(k_att * share)

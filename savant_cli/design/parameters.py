@@ -3,8 +3,10 @@ they make.
 
 The flight control is the one of ``savant_cli/datagen/fcs_gains.py``: per schedule
 (``stack`` vs altitude, ``upper`` vs Earth-relative speed) a PID gain table placed at the
-rigid-body natural frequency ``omega`` (rad/s) and damping ``zeta``, with the attitude
-stiffness shared with the filtered integrated-rate path (``kir_share``); the rate and
+rigid-body natural frequency ``omega`` (rad/s; ``omega_end`` at the last breakpoint, linear
+in between) and damping ``zeta``, with the integral gain ``integral_ratio`` × ω × the
+attitude stiffness, and the stiffness shared with the filtered integrated-rate path
+(``kir_share``); the rate and
 integrated-rate paths filtered by a 4th-order Butterworth low-pass (``lowpass_hz``) and two
 notches (``notch1_hz``/``notch1_q``, ``notch2_hz``/``notch2_q``, ``scipy.signal.iirnotch``);
 on the stack the rate blend's first-stage gyro weight ``blend_first`` (the upper-stage gyro
@@ -60,8 +62,10 @@ def rule_value(spec: dict, schedule: str, name: str, stack_blend: list[float]) -
     d = spec[schedule]
     if name == "omega" or name == "zeta":
         return float(d[name])
-    if name == "kir_share":
-        return float(d.get("kir_share", spec["kir_share"]))
+    if name == "omega_end":
+        return float(d.get("omega_end", d["omega"]))
+    if name in ("kir_share", "integral_ratio"):
+        return float(d.get(name, spec[name]))
     if name == "blend_first":
         return float((spec.get("stack_blend") or stack_blend)[2])
     f = _filters(copy.deepcopy(spec), schedule)
@@ -95,7 +99,7 @@ def apply(spec: dict, values: dict[tuple[str, str], float]) -> dict:
     out = copy.deepcopy(spec)
     for (sched, name), v in values.items():
         v = float(v)
-        if name in ("omega", "zeta", "kir_share"):
+        if name in ("omega", "omega_end", "zeta", "kir_share", "integral_ratio"):
             out[sched] = {**out[sched], name: v}
         elif name == "blend_first":  # 4 decimals, as the YAML writes it: the weights sum to 1
             v = round(v, 4)

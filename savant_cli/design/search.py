@@ -14,6 +14,9 @@ Two methods (``study.optimizer.method``):
 - ``cobyla``: the margins as constraints: maximize ``t`` subject to every point's ratio
   ``≥ t`` (the epigraph form), a linear-approximation trust region.
 
+A converged search restarts from the best point found with a fresh simplex (trust radius)
+up to ``restarts`` times while the evaluation budget lasts and a restart improves.
+
 Both are derivative-free: margins are piecewise smooth (crossings appear and vanish as the
 loop changes). The plant of each point is linearized once (:func:`savant_cli.linear.
 evaluate.freeze`); a candidate costs its controller, the loop assembly and the margins.
@@ -125,24 +128,31 @@ def search(params: list[FreeParameter], tables_of: Callable[[dict[tuple[str, str
     u0 = np.array([p.normalized(p.initial) for p in params])
     initial = float(scores(u0).min())
     bounds = [(0.0, 1.0)] * len(params)
-    message = ""
+    messages = []
     try:
-        if opt.method == "nelder-mead":
-            simplex = [u0] + [np.clip(u0 + opt.initial_step * np.eye(len(params))[i]
-                                      * (1.0 if u0[i] + opt.initial_step <= 1.0 else -1.0), 0.0, 1.0)
-                              for i in range(len(params))]
-            res = minimize(lambda u: -float(scores(u).min()), u0, method="Nelder-Mead", bounds=bounds,
-                           options={"maxfev": opt.max_evaluations, "xatol": opt.tolerance, "fatol": opt.tolerance,
-                                    "initial_simplex": np.array(simplex)})
-        else:  # epigraph: z = (u, t), maximize t with every point's score >= t
-            z0 = np.append(u0, initial)
-            cons = NonlinearConstraint(lambda z: scores(z[:-1]) - z[-1], 0.0, np.inf)
-            res = minimize(lambda z: -z[-1], z0, method="COBYLA", constraints=[cons],
-                           bounds=bounds + [(None, None)],
-                           options={"maxiter": opt.max_evaluations, "rhobeg": opt.initial_step, "tol": opt.tolerance})
-        message = str(res.message)
+        for attempt in range(1 + opt.restarts):  # each restart from the best point so far
+            left = opt.max_evaluations - len(history)
+            if left <= len(params) + 1:
+                break
+            start, before = best[1].copy(), best[0]
+            if opt.method == "nelder-mead":
+                simplex = [start] + [np.clip(start + opt.initial_step * np.eye(len(params))[i]
+                                             * (1.0 if start[i] + opt.initial_step <= 1.0 else -1.0), 0.0, 1.0)
+                                     for i in range(len(params))]
+                res = minimize(lambda u: -float(scores(u).min()), start, method="Nelder-Mead", bounds=bounds,
+                               options={"maxfev": left, "xatol": opt.tolerance, "fatol": opt.tolerance,
+                                        "initial_simplex": np.array(simplex)})
+            else:  # epigraph: z = (u, t), maximize t with every point's score >= t
+                cons = NonlinearConstraint(lambda z: scores(z[:-1]) - z[-1], 0.0, np.inf)
+                res = minimize(lambda z: -z[-1], np.append(start, before), method="COBYLA", constraints=[cons],
+                               bounds=bounds + [(None, None)],
+                               options={"maxiter": left, "rhobeg": opt.initial_step, "tol": opt.tolerance})
+            messages.append(str(res.message))
+            if attempt and best[0] - before <= opt.tolerance:
+                break  # a restart that found nothing better
     except _Enough:
-        message = f"every point reached the stop ratio {opt.stop_ratio}"
+        messages.append(f"every point reached the stop ratio {opt.stop_ratio}")
+    message = "; ".join(messages)
     return SearchResult(values_of(best[1]), float(best[0]), initial, len(history), time.perf_counter() - t0,
                         history, message)
 

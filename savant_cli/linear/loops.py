@@ -180,22 +180,51 @@ def snapshot_controller(model: SimModel, snap: Snapshot, dt: float) -> ct.StateS
     return controller_lti(model.fcs, snap.d[L.D_GAINS:L.D_GAINS + 8], fcs_phase(snap.events), dt)
 
 
+def _series(p: tuple, k: tuple) -> tuple:
+    """``p`` then ``k`` ((A, B, C, D) each): python-control's ``k * p``, the same
+    operations in the same order (so the same bits), without its signal bookkeeping."""
+    pa, pb, pc, pd = p
+    ka, kb, kc, kd = k
+    a = np.concatenate((np.concatenate((pa, np.zeros((pa.shape[0], ka.shape[1]))), axis=1),
+                        np.concatenate((kb @ pc, ka), axis=1)), axis=0)
+    return a, np.concatenate((pb, kb @ pd), axis=0), np.concatenate((kd @ pc, kc), axis=1), kd @ pd
+
+
+def _feedback_static(g: tuple, h: np.ndarray, sign: float) -> tuple:
+    """``g`` with the static gain ``h`` in its feedback path: python-control's
+    ``StateSpace.feedback`` for a system without states, the same operations."""
+    a1, b1, c1, d1 = g
+    f = np.eye(d1.shape[1]) - sign * h @ d1
+    e_d2 = np.linalg.solve(f, h)
+    t1 = np.eye(d1.shape[0]) + sign * d1 @ e_d2
+    t2 = np.eye(d1.shape[1]) + sign * e_d2 @ d1
+    return a1 + sign * b1 @ e_d2 @ c1, b1 @ t2, t1 @ c1, d1 @ t2
+
+
 def broken_loops(plant: ct.StateSpace, fcs: ct.StateSpace, dt: float
                  ) -> tuple[ct.StateSpace, dict[str, ct.StateSpace], dict[str, ct.StateSpace]]:
     """``G2`` (the two gimbal commands → the controller's commands, negative-feedback
     sign inside), the loops broken at one command with the other closed, and with the
-    other open."""
+    other open. The algebra is python-control's series and feedback, done on the
+    matrices (:func:`_series`, :func:`_feedback_static`): a design search builds these
+    loops for every candidate."""
     n_s = len(SENSOR_NAMES)
+    pm = tuple(np.asarray(m, dtype=float) for m in (plant.A, plant.B, plant.C, plant.D))
+    km = tuple(np.asarray(m, dtype=float) for m in (fcs.A, fcs.B, fcs.C, fcs.D))
     # G: plant inputs → controller outputs (commands zero); G2: from the two gimbal commands
-    g = ct.series(plant[:n_s, :], fcs[:, :n_s])
-    g2 = g[:, :2]
+    a, b, c, d = _series((pm[0], pm[1], pm[2][:n_s, :], pm[3][:n_s, :]), (km[0], km[1][:, :n_s], km[2],
+                                                                         km[3][:, :n_s]))
+    g2m = (a, b[:, :2], c, d[:, :2])
+    g2 = ct.ss(*g2m, dt)
     loops, loops_open = {}, {}
-    for c, axis in enumerate(AXES):
+    for k, axis in enumerate(AXES):
         close_other = np.zeros((2, 2))
-        close_other[1 - c, 1 - c] = 1.0  # the other axis's command fed back (dc = r + k)
-        one_open = ct.feedback(g2, ct.ss([], [], [], close_other, dt), sign=1)
-        loops[axis] = _named(-one_open[c, c], f"L_{axis}", f"dc_{axis}", f"k_{axis}")
-        loops_open[axis] = _named(-g2[c, c], f"Lo_{axis}", f"dc_{axis}", f"k_{axis}")
+        close_other[1 - k, 1 - k] = 1.0  # the other axis's command fed back (dc = r + k)
+        oa, ob, oc, od = _feedback_static(g2m, close_other, 1.0)
+        loops[axis] = ct.ss(oa, ob[:, [k]], -oc[[k], :], -od[[k], :][:, [k]], dt, name=f"L_{axis}",
+                            inputs=[f"dc_{axis}"], outputs=[f"k_{axis}"])
+        loops_open[axis] = ct.ss(a, g2m[1][:, [k]], -c[[k], :], -g2m[3][[k], :][:, [k]], dt, name=f"Lo_{axis}",
+                                 inputs=[f"dc_{axis}"], outputs=[f"k_{axis}"])
     return g2, loops, loops_open
 
 
@@ -234,10 +263,6 @@ def assemble(model: SimModel, snap: Snapshot, lin: PlantLinearization, dt: float
     phase = {0: "stack", 1: "coast", 2: "upper"}[fcs_phase(snap.events)]
     return LinearPoint(time_s=snap.t, phase=phase, plant_continuous=lin.sys, plant=plant, controller=fcs,
                        loops=loops, loops_open=loops_open, mimo=mimo, closed=closed)
-
-
-def _named(sys: ct.StateSpace, name: str, inp: str, out: str) -> ct.StateSpace:
-    return ct.ss(sys.A, sys.B, sys.C, sys.D, sys.dt, inputs=[inp], outputs=[out], name=name)
 
 
 __all__ = ["AXES", "COMMANDS", "LinearPoint", "assemble", "broken_loops", "controller_lti", "sensor_plant",
