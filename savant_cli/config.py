@@ -338,7 +338,7 @@ class DesignParameters:
 class DesignOptimizer:
     """The search of ``study=fcs_design`` (``scipy.optimize.minimize``)."""
 
-    method: str = "nelder-mead"  # nelder-mead (max-min ratio) | cobyla (margins as constraints)
+    method: str = "nelder-mead"  # nelder-mead (goal attainment, then max-min) | cobyla (margins as constraints)
     max_evaluations: int = 300  # per schedule
     tolerance: float = 1e-3  # on the normalized parameters and the ratio
     initial_step: float = 0.1  # first simplex / trust radius, fraction of each parameter's range
@@ -357,7 +357,7 @@ class FcsDesignStudyConfig:
     controller_name: str = ""  # name of the controller written ("": the design's)
     install: bool = False  # also write conf/controller/<name>.yaml of the shipped config tree
     schedules: list[str] = field(default_factory=lambda: ["stack", "upper"])  # tuned in turn
-    every_s: dict[str, float] = field(default_factory=lambda: {"stack": 10.0, "upper": 20.0})  # design points
+    every_s: dict[str, float] = field(default_factory=lambda: {"stack": 10.0, "upper": 30.0})  # design points
     verify_every_s: float = 5.0  # the before/after envelope
     event_window_s: float = 2.0  # points this close to an event are skipped
     axes: list[str] = field(default_factory=lambda: ["pitch"])  # loops judged in the search (both verified)

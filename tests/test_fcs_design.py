@@ -64,7 +64,8 @@ def test_untuned_parameters_give_the_shipped_controller():
 
 
 def _verdict(ratio: float) -> PointVerdict:
-    c = Check(0.0, "pitch", "rigid", "gain margin", 6.0 * ratio, 6.0, "dB", 1.0, ratio >= 1.0)
+    # an attenuation check: its ratio keeps its sign (a margin's is its magnitude's)
+    c = Check(0.0, "pitch", "flex_1", "attenuation", 6.0 * ratio, 6.0, "dB", 1.0, ratio >= 1.0)
     return PointVerdict(0.0, "first_stage", (c, Check(0.0, "", "closed_loop", "stability", -0.1, 0.0, "1/s",
                                                       float("nan"), True)), ())
 
@@ -86,6 +87,24 @@ def test_search_climbs_to_the_known_max_min(monkeypatch, method):
     assert res.values[("stack", "y")] == pytest.approx(0.0, abs=0.02)
     assert res.score == pytest.approx(1.96, abs=1e-3) and res.initial_score < res.score
     assert res.evaluations == len(res.history) <= 400 + 2
+
+
+def test_an_unfixable_point_does_not_stop_the_search_fixing_the_others(monkeypatch):
+    """Point 2 is stuck at 0.5 whatever x; point 3 passes only for x > 0.446. A bare
+    max-min is flat (0.5 everywhere) and would stay at x = 0.1; the goal-attainment
+    objective (minus the total shortfall below 1) moves x until point 3 passes."""
+    params = [dp.FreeParameter("stack", "x", 0.1, 0.0, 1.0)]
+
+    def fake_judge(points, values, dt, req, axes):
+        x = values[("stack", "x")]
+        return [_verdict(2.0 - (x - 0.3) ** 2), _verdict(0.5), _verdict(1.5 - 4.0 * (x - 0.8) ** 2)]
+
+    monkeypatch.setattr(ds, "judge_all", fake_judge)
+    res = ds.search(params, lambda v: v, [None] * 3, 0.02, None,
+                    DesignOptimizer(max_evaluations=200, tolerance=1e-6, initial_step=0.1), ("pitch",))
+    x = res.values[("stack", "x")]
+    assert 1.5 - 4.0 * (x - 0.8) ** 2 >= 1.0 and res.score == pytest.approx(-0.5)
+    assert ds.objective(np.array([1.2, 1.5])) == 1.2 and ds.objective(np.array([0.5, 2.0, -0.4])) == pytest.approx(-1.9)
 
 
 def test_a_lost_closed_loop_scores_below_any_kept_one():
@@ -116,7 +135,7 @@ def test_fcs_design_end_to_end(tmp_path):
     s = json.loads((out / "summary.json").read_text())
     assert s["controller"] == "tuned_test" and set(s["searches"]) == {"stack", "upper"}
     for r in s["searches"].values():
-        assert 1 <= r["evaluations"] <= 6 + 2 and r["ratio_after"] >= r["ratio_before"]
+        assert 1 <= r["evaluations"] <= 6 + 2 and r["objective_after"] >= r["objective_before"]
     assert s["verdict_before"].startswith("requirements ares_i:") and s["verdict_after"] in proc.stdout
     yaml = out / "controller" / "tuned_test.yaml"
     assert yaml.is_file() and "tuned by study=fcs_design" in yaml.read_text()

@@ -5,12 +5,15 @@ ratio maximized with ``scipy.optimize.minimize``.
 The score of a point is its worst check's ratio (:attr:`Check.ratio`: |margin| / required,
 attenuation / required; ≥ 1 meets the requirement); a lost closed loop scores
 ``−1 − 10 σ_max`` (σ_max its largest real part, 1/s), below any kept loop and graded so the
-search can climb out of it. A candidate's score is the smallest over its points.
+search can climb out of it. A candidate's objective (:func:`objective`) is its smallest
+point score when every point meets the requirement, and otherwise minus the sum of the
+points' shortfalls ``Σ max(0, 1 − score)`` (goal attainment): a point no candidate can
+fix does not stop the search from fixing the others, as a bare max-min would.
 
 Two methods (``study.optimizer.method``):
 
-- ``nelder-mead``: maximize the smallest ratio (a max-min), bounded simplex search on the
-  normalized parameters;
+- ``nelder-mead``: maximize :func:`objective`, bounded simplex search on the normalized
+  parameters;
 - ``cobyla``: the margins as constraints: maximize ``t`` subject to every point's ratio
   ``≥ t`` (the epigraph form), a linear-approximation trust region.
 
@@ -56,6 +59,12 @@ def point_score(v: PointVerdict) -> float:
     return float(min(ratios)) if ratios else float("inf")
 
 
+def objective(scores: np.ndarray) -> float:
+    """The smallest score if all are ≥ 1, else minus the total shortfall below 1."""
+    shortfall = np.maximum(0.0, 1.0 - scores).sum()
+    return float(scores.min()) if shortfall == 0.0 else -float(shortfall)
+
+
 def judge_all(points: list[DesignPoint], ft: FcsTables, dt: float, requirements: RequirementSet,
               axes: tuple[str, ...] = ("pitch", "yaw")) -> list[PointVerdict]:
     """The verdict of ``ft`` at every point (loops of ``axes`` only)."""
@@ -69,7 +78,7 @@ class SearchResult:
     """A schedule's search: the best parameters, their scores, and every evaluation."""
 
     values: dict[tuple[str, str], float]
-    score: float
+    score: float  # objective of the best candidate (the smallest ratio when all points pass)
     initial_score: float
     evaluations: int
     wall_s: float
@@ -80,7 +89,7 @@ class SearchResult:
 def search(params: list[FreeParameter], tables_of: Callable[[dict[tuple[str, str], float]], FcsTables],
            points: list[DesignPoint], dt: float, requirements: RequirementSet, opt: DesignOptimizer,
            axes: tuple[str, ...], progress: Callable[[int, float], None] | None = None) -> SearchResult:
-    """Maximize the smallest point score of the candidates ``tables_of(values)``.
+    """Maximize :func:`objective` over the candidates ``tables_of(values)``.
 
     Parameters
     ----------
@@ -115,7 +124,7 @@ def search(params: list[FreeParameter], tables_of: Callable[[dict[tuple[str, str
         if key not in cache:
             verdicts = judge_all(points, tables_of(values_of(u)), dt, requirements, axes)
             cache[key] = np.array([point_score(v) for v in verdicts])
-            s = float(cache[key].min())
+            s = objective(cache[key])
             history.append(s)
             if s > best[0]:
                 best[0], best[1] = s, np.clip(u, 0.0, 1.0).copy()
@@ -126,7 +135,7 @@ def search(params: list[FreeParameter], tables_of: Callable[[dict[tuple[str, str
         return cache[key]
 
     u0 = np.array([p.normalized(p.initial) for p in params])
-    initial = float(scores(u0).min())
+    initial = objective(scores(u0))
     bounds = [(0.0, 1.0)] * len(params)
     messages = []
     try:
@@ -139,12 +148,13 @@ def search(params: list[FreeParameter], tables_of: Callable[[dict[tuple[str, str
                 simplex = [start] + [np.clip(start + opt.initial_step * np.eye(len(params))[i]
                                              * (1.0 if start[i] + opt.initial_step <= 1.0 else -1.0), 0.0, 1.0)
                                      for i in range(len(params))]
-                res = minimize(lambda u: -float(scores(u).min()), start, method="Nelder-Mead", bounds=bounds,
+                res = minimize(lambda u: -objective(scores(u)), start, method="Nelder-Mead", bounds=bounds,
                                options={"maxfev": left, "xatol": opt.tolerance, "fatol": opt.tolerance,
                                         "initial_simplex": np.array(simplex)})
             else:  # epigraph: z = (u, t), maximize t with every point's score >= t
                 cons = NonlinearConstraint(lambda z: scores(z[:-1]) - z[-1], 0.0, np.inf)
-                res = minimize(lambda z: -z[-1], np.append(start, before), method="COBYLA", constraints=[cons],
+                res = minimize(lambda z: -z[-1], np.append(start, float(scores(start).min())), method="COBYLA",
+                               constraints=[cons],
                                bounds=bounds + [(None, None)],
                                options={"maxiter": left, "rhobeg": opt.initial_step, "tol": opt.tolerance})
             messages.append(str(res.message))

@@ -168,7 +168,7 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
     models = corner_models(cfg, raw_cfg, cfg0.controller, dict(study.corners), model)
     frozen: dict[tuple[str, float], DesignPoint] = {}
     bar = Progress(TextColumn("[bold]{task.description}"), BarColumn(), TextColumn("{task.completed}/{task.total}"),
-                   TextColumn("best ratio {task.fields[best]}"), TimeElapsedColumn(), disable=not cfg.sim.progress)
+                   TextColumn("best objective {task.fields[best]}"), TimeElapsedColumn(), disable=not cfg.sim.progress)
     with bar:
         task = bar.add_task("linearize", total=len(snaps) * len(models), best="–")
         for t, snap in snaps.items():
@@ -219,8 +219,9 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
                "requirement_set": cfg.requirements.name, "corners": {k: dict(v) for k, v in study.corners.items()},
                "parameters": [{"schedule": p.schedule, "name": p.name, "low": p.low, "high": p.high,
                                "before": p.initial, "after": values[(p.schedule, p.name)]} for p in params],
-               "searches": {s: {"evaluations": r.evaluations, "wall_time_s": r.wall_s, "ratio_before": r.initial_score,
-                                "ratio_after": r.score, "message": r.message} for s, r in searches.items()},
+               "searches": {s: {"evaluations": r.evaluations, "wall_time_s": r.wall_s,
+                                "objective_before": r.initial_score, "objective_after": r.score, "message": r.message}
+                            for s, r in searches.items()},
                "verdict_before": before.line(cfg.requirements.name), "verdict_after": after.line(cfg.requirements.name),
                "requirements_met": after.passed, "points": table,
                "controller_files": [str(p) for p in written], "study_wall_time_s": wall}
@@ -274,13 +275,14 @@ def _write_controller(path: Path, text: str) -> Path:
 
 
 def _console_table(params: list[dp.FreeParameter], values: dict, searches: dict) -> Table:
-    tb = Table(title="flight-control design: free parameters (before → after)")
+    tb = Table(title="flight-control design: free parameters (before → after); objective: the smallest ratio "
+                     "if every design point passes, else minus the total shortfall")
     for col in ("schedule", "parameter", "range", "before", "after"):
         tb.add_column(col, justify="right" if col in ("before", "after") else "left")
     for p in params:
         tb.add_row(p.schedule, p.name, f"{p.low:g}–{p.high:g}", f"{p.initial:.4g}", f"{values[(p.schedule, p.name)]:.4g}")
     for s, r in searches.items():
-        tb.add_row(s, "smallest ratio", "", f"{r.initial_score:.3f}", f"{r.score:.3f}")
+        tb.add_row(s, "objective", "", f"{r.initial_score:.3f}", f"{r.score:.3f}")
         tb.add_row(s, "evaluations", "", "", f"{r.evaluations} in {r.wall_s:.0f} s")
     return tb
 
