@@ -201,18 +201,20 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
         text1 = dp.controller_text(spec1, design_points, stack_blend, vehicle_name)
         verify = [t for t in times["verify"] if t in snaps]
         before = _judge(frozen, models, verify, dp.controller_tables(text0), dt, cfg)
-        after = _judge(frozen, models, verify, dp.controller_tables(text1), dt, cfg)
+        ft1 = dp.controller_tables(text1)
+        after = _judge(frozen, models, verify, ft1, dt, cfg)
 
     worst = sorted(((point_score(v), v.time_s) for v in after.verdicts[""]))[:N_WORST]
     charts = {}
-    ft1 = dp.controller_tables(text1)
     for _, t in worst:
         charts[t] = [loop_response(name or "nominal", candidate_loops(frozen[(name, t)].point, ft1, dt)["pitch"])
                      for name in models]
     name = spec["name"]
-    written = [_write_controller(out_dir / "controller" / f"{name}.yaml", text1)]
+    written = [out_dir / "controller" / f"{name}.yaml"]
     if study.install:
-        written.append(_write_controller(shipped_config_dir() / "controller" / f"{name}.yaml", text1))
+        written.append(shipped_config_dir() / "controller" / f"{name}.yaml")
+    for path in written:
+        write_text_atomic(path, text1)
     table = _point_table(before, after)
     wall = time.perf_counter() - t_start
     summary = {"study": "fcs_design", "design": study.design, "controller": name, "vehicle": vehicle_name,
@@ -267,11 +269,6 @@ def _point_table(before: Judged, after: Judged) -> list[dict]:
                         "ratio_after": point_score(a), "passed_after": a.passed,
                         "worst_after": a.worst.text() if a.worst else ""})
     return out
-
-
-def _write_controller(path: Path, text: str) -> Path:
-    write_text_atomic(path, text)
-    return path
 
 
 def _console_table(params: list[dp.FreeParameter], values: dict, searches: dict) -> Table:
