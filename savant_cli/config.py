@@ -248,6 +248,17 @@ class HistoriesSpec:
 
 
 @dataclass
+class ReliabilitySpec:
+    """The success probability a batch demonstrates (``montecarlo/reliability.py``)."""
+
+    confidence: float = 0.9  # one-sided confidence level of the demonstrated probability
+    target_probability: float = 0.9973  # the success probability the batch is to demonstrate
+    # a run succeeds with one of these statuses (flown to its end under control; a
+    # diverged or failed run is a loss)
+    success_statuses: list[str] = field(default_factory=lambda: ["complete", "limit_cycle", "saturated"])
+
+
+@dataclass
 class MonteCarloStudyConfig:
     """``study=montecarlo``: dispersed full-fidelity ascents."""
 
@@ -259,6 +270,7 @@ class MonteCarloStudyConfig:
     shard: int = 0  # … and fly this one (Hydra multirun: study.shard='range(0,N)')
     histories: HistoriesSpec = field(default_factory=HistoriesSpec)
     linear_times: list[float] = field(default_factory=list)  # s: margins of every run at these times
+    reliability: ReliabilitySpec = field(default_factory=ReliabilitySpec)
 
 
 @dataclass
@@ -326,6 +338,14 @@ class ScheduleParameters:
     notch2_hz: Optional[DesignParameter] = None
     notch2_q: Optional[DesignParameter] = None
     blend_first: Optional[DesignParameter] = None  # stack only: first-stage gyro weight in the rate blend
+    tailoff_kp_cap: Optional[DesignParameter] = None  # stack only: tail-off attitude-stiffness cap (x last regular)
+    tailoff_kd_cap: Optional[DesignParameter] = None  # stack only: tail-off rate-gain cap (x last regular)
+
+
+#: Design parameters only the stack schedule has, and why.
+STACK_ONLY_PARAMETERS = {"blend_first": "only the stack blends its gyros",
+                         "tailoff_kp_cap": "only the first stage has a thrust tail-off",
+                         "tailoff_kd_cap": "only the first stage has a thrust tail-off"}
 
 
 @dataclass
@@ -621,6 +641,16 @@ class RollControl:
 
 
 @dataclass
+class ControllerDesign:
+    """How a controller file was made: the design rules (``datagen/fcs_gains.py``) and the
+    values ``study=fcs_design`` tuned (schedule → parameter → value; empty: the rules'
+    own values). Provenance only: the flight uses the tables."""
+
+    rules: str = ""
+    parameters: dict[str, dict[str, float]] = field(default_factory=dict)
+
+
+@dataclass
 class ControllerConfig:
     name: str = "msfc_pid"
     vehicle: str = ""  # the vehicle the design is for ("": any); another is refused ...
@@ -633,6 +663,7 @@ class ControllerConfig:
     # of plant steps, shorter than the control period; the same in the time run and the
     # linear model
     delay_s: float = 0.005
+    design: ControllerDesign = field(default_factory=ControllerDesign)
 
 
 @dataclass
@@ -1033,8 +1064,9 @@ def _check_fcs_design(s: FcsDesignStudyConfig) -> None:
         raise ConfigError("study.axes", [], "must name at least one loop (pitch, yaw)")
     for sched in DESIGN_SCHEDULES:
         params = getattr(s.parameters, sched)
-        if sched != "stack" and params.blend_first is not None:
-            raise ConfigError(f"study.parameters.{sched}.blend_first", "set", "only the stack blends its gyros")
+        for name, why in STACK_ONLY_PARAMETERS.items():
+            if sched != "stack" and getattr(params, name) is not None:
+                raise ConfigError(f"study.parameters.{sched}.{name}", "set", why)
         for f in dataclasses.fields(params):
             prm = getattr(params, f.name)
             if prm is None:
@@ -1113,6 +1145,16 @@ def _check_montecarlo(s: MonteCarloStudyConfig) -> None:
     for i, t in enumerate(s.linear_times):
         if not (t > 0.0 and np.isfinite(t)):
             raise ConfigError(f"study.linear_times[{i}]", t, "must be a positive flight time in s")
+    from savant_cli.io.record import STATUSES
+
+    r = s.reliability
+    for key, value in (("confidence", r.confidence), ("target_probability", r.target_probability)):
+        if not 0.0 < value < 1.0:
+            raise ConfigError(f"study.reliability.{key}", value, "must be a probability strictly between 0 and 1")
+    if not r.success_statuses:
+        raise ConfigError("study.reliability.success_statuses", [], f"must name at least one of {', '.join(STATUSES)}")
+    for i, status in enumerate(r.success_statuses):
+        _one_of(f"study.reliability.success_statuses[{i}]", status, tuple(st for st in STATUSES if st != "interrupted"))
 
 
 def _check_linear(s: LinearStudyConfig) -> None:

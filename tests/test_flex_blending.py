@@ -20,10 +20,16 @@ def test_stack_blend_rule():
         stack_blend(2.0e-4, 1.0e-4)  # same sign: no positive-weight null
 
 
-def test_shipped_blend_nulls_first_bending_in_both_planes():
+def test_design_rule_blend_nulls_first_bending_in_both_planes():
+    """The design rule's blend (``flex_filters.vehicle_stack_blend``, where study=fcs_design
+    starts; the shipped msfc_pid's is tuned from it) nulls the first bending mode's slope
+    at the gyros in both planes."""
+    from savant_cli.datagen.flex_filters import vehicle_stack_blend
+
     cfg = validate(compose_config(["flex=on", "flex.n_modes=2"]))
-    model = prepare(cfg).model
-    w = np.asarray(cfg.controller.blending.stack)
+    prep = prepare(cfg)
+    model = prep.model
+    w = np.asarray(vehicle_stack_blend(cfg.vehicle, prep.vehicle_dir))
     shapes = model.tables.flex_shape[0]  # first-stage liftoff set, (modes, points, 6)
     for mode, comp in ((0, 4), (1, 5)):  # 1st bending x–z plane: body y rotation; x–y plane: body z
         slopes = np.array([shapes[mode, pt, comp] for pt in L.GYRO_POINTS])

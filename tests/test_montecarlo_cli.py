@@ -24,6 +24,7 @@ def batches(tmp_path_factory):
     root = tmp_path_factory.mktemp("mc")
     single = run(["run", *BASE, "study.workers=2", f"hydra.run.dir={root}/single"], cwd=root)
     assert single.returncode == 0, single.stdout + single.stderr
+    (root / "single_stdout.txt").write_text(single.stdout)
     multi = run(["run", "-m", *BASE, "study.shards=3", "study.shard=range(0,3)", "study.workers=1",
                  "hydra/launcher=joblib", "hydra.launcher.n_jobs=2", "output.plots=false",
                  f"hydra.sweep.dir={root}/multi"], cwd=root)
@@ -46,6 +47,10 @@ def test_single_batch_writes_every_output(batches):
         assert (out / name).is_file(), name
     summary = json.loads((out / "summary.json").read_text())
     assert summary["n_runs_present"] == 6 and summary["status_counts"] == {"complete": 6}
+    rel = summary["reliability"]  # 6 successes of 6 at 90 %: (1 - 0.9)^(1/6), closed form
+    assert (rel["runs"], rel["successes"], rel["failures"]) == (6, 6, 0)
+    assert rel["demonstrated_probability"] == pytest.approx(0.1 ** (1 / 6), rel=1e-9) and not rel["target_met"]
+    assert "success 6 of 6 runs" in (batches / "single_stdout.txt").read_text()
     drawn = assert_report_redraws(out)
     assert {"histograms_01.png", "envelope_dynamic_pressure.png", "dispersions/histograms_01.png"} <= set(drawn)
     rows = {r["variable"]: r for r in csv.DictReader(open(out / "minmax.csv"))}

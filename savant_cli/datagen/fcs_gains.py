@@ -12,6 +12,18 @@ Kd = 2ζω/μc; the integral gain is Ki = ω_i·Kp with ω_i = ``integral_ratio`
 attitude feedback Kp is shared between the navigation attitude error (1 − ``kir_share``)
 and the integrated-rate path (``kir_share``), whose sum is the designed stiffness.
 
+**First-stage tail-off.** From ``stack_design_end_before_separation_s`` before separation
+the solid motor's thrust, hence μc, collapses (to ~3 % of its peak 0.5 s before
+separation); a pole placement there would raise the gains without bound, into the bending
+modes, the actuator and the tail-wags-dog zero. The stack schedule gets
+``stack_tailoff_breakpoints`` more breakpoints at the reference's altitudes evenly spaced
+in time from the design end to ``stack_tailoff_end_before_separation_s`` before
+separation, where each gain is the pole placement's, capped at ``tailoff_kp_cap`` (the
+attitude stiffness) and ``tailoff_kd_cap`` (the rate gain) times its value at the last
+regular breakpoint, and the integral gain is 0: with the control power collapsing, the
+integrator's phase lag at the falling crossover costs more margin than its trim is worth
+(the trim it holds, a lateral CG offset over the gimbal arm, is ~0.1°).
+
 Two designs (:data:`CONTROLLERS`):
 
 * ``msfc_pid`` (MSFC-like): PID, ω = 1.3 / 1.0 rad/s, ζ = 0.7, integral and
@@ -36,7 +48,9 @@ from savant_cli.datagen.guidance_commands import _compose, solve
 from savant_cli.models import aero, atmosphere as atm, earth, mass as mass_model
 from savant_cli.models.configurations import CONFIG_STACK, CONFIG_UPPER
 
-DESIGN = {
+#: The first estimate of the MSFC-like design (the rigid-body pole placement and the
+#: filters of :data:`.flex_filters.DESIGN`): where ``study=fcs_design`` began.
+FIRST_ESTIMATE = {
     "name": "msfc_pid",
     "title": "MSFC-like gain-scheduled PID",
     "filters": None,  # flex_filters.DESIGN
@@ -50,13 +64,30 @@ DESIGN = {
     # and a pole-placement gain would grow without bound) and after the J-2X start
     "stack_design_end_before_separation_s": 12.0,
     "upper_design_start_after_ignition_s": 5.0,
+    # tail-off (module notes): breakpoints from the design end to this close to separation
+    "stack_tailoff_breakpoints": 4,
+    "stack_tailoff_end_before_separation_s": 0.5,
+    "tailoff_kp_cap": 1.0,   # attitude stiffness, x its value at the last regular breakpoint
+    "tailoff_kd_cap": 2.0,   # rate gain, likewise
 }
-LARC_PD = {**DESIGN, "name": "larc_pd", "title": "LaRC-like gain-scheduled PD (no integral paths)",
+#: msfc_pid's design rules: the first estimate with the stack's values from a
+#: ``study=fcs_design`` run on it (docs/design_studies.md), so the study starts there.
+DESIGN = {**FIRST_ESTIMATE,
+          "stack": {"omega": 0.8782, "omega_end": 0.8518, "zeta": 0.8419, "integral_ratio": 0.155,
+                    "kir_share": 0.2569, "tailoff_kp_cap": 1.465, "tailoff_kd_cap": 1.476},
+          "stack_blend": [0.3465, 0.0, 0.6535],
+          "filters": {"stack": {"lowpass_hz": 7.55, "notch_hz": (2.012, 5.674), "notch_q": (0.4, 2.601)},
+                      "upper": flex_filters.DESIGN["upper"]}}
+LARC_PD = {**FIRST_ESTIMATE, "name": "larc_pd", "title": "LaRC-like gain-scheduled PD (no integral paths)",
            "stack": {"omega": 1.5, "zeta": 0.6}, "upper": {"omega": 1.2, "zeta": 0.6},
            "integral_ratio": 0.0, "kir_share": 0.0,
+           "fixed_parameters": ("integral_ratio", "kir_share"),  # a PD law: study=fcs_design keeps them 0
            "filters": {"stack": {"lowpass_hz": 6.0, "notch_hz": (2.5, 4.5), "notch_q": 1.0},
                        "upper": {"lowpass_hz": 6.0, "notch_hz": (9.5, 21.7), "notch_q": 1.0}}}
-CONTROLLERS = {"msfc_pid": DESIGN, "larc_pd": LARC_PD}
+#: The design rules by name (``--controller``, ``study.design``); the small launcher's
+#: start from the first estimates (its own blend, its own search).
+CONTROLLERS = {"msfc_pid": DESIGN, "larc_pd": LARC_PD,
+               "small_pid": {**FIRST_ESTIMATE, "name": "small_pid"}, "small_pd": {**LARC_PD, "name": "small_pd"}}
 
 
 def pitch_coefficients(ref, t: float, y: np.ndarray, config: int) -> tuple[float, float]:
@@ -95,7 +126,9 @@ def pitch_coefficients(ref, t: float, y: np.ndarray, config: int) -> tuple[float
 
 def design_points(cfg, vehicle, spec: dict = DESIGN) -> dict[str, list[tuple[float, float, float]]]:
     """Per schedule (``stack`` vs altitude, ``upper`` vs relative speed): the reference
-    ascent's (t s, μα 1/s², μc 1/s²) at each breakpoint of ``spec``."""
+    ascent's (t s, μα 1/s², μc 1/s²) at each breakpoint of ``spec``; and key
+    ``stack_tailoff``: (altitude m, t s, μα, μc) at the tail-off breakpoints (module
+    notes)."""
     ref, sols, turn, azimuth, steer, sol = solve(cfg, vehicle, verbose=False)
     # dense reference history
     ts, ys = [], []
@@ -119,6 +152,16 @@ def design_points(cfg, vehicle, spec: dict = DESIGN) -> dict[str, list[tuple[flo
         for val in axis_vals:
             i = int(np.argmin(np.abs(np.where(sel, var, np.inf) - val)))
             points[name].append((float(t[i]), *pitch_coefficients(ref, t[i], y[i], config)))
+    n_tail = int(spec.get("stack_tailoff_breakpoints", 0))
+    t_tail = np.linspace(ref.t_sep - spec["stack_design_end_before_separation_s"],
+                         ref.t_sep - spec.get("stack_tailoff_end_before_separation_s", 0.5), n_tail + 1)[1:]
+    points["stack_tailoff"] = []
+    for tt in t_tail:
+        i = int(np.argmin(np.abs(np.where(t < ref.t_sep, t, np.inf) - tt)))
+        a = round(float(alt[i]), -2)  # a breakpoint to 100 m
+        if a <= (points["stack_tailoff"][-1][0] if points["stack_tailoff"] else spec["stack_altitudes_m"][-1]):
+            raise ValueError(f"tail-off breakpoint at {tt:.1f} s ({a:.0f} m) is not above the previous one")
+        points["stack_tailoff"].append((a, float(t[i]), *pitch_coefficients(ref, t[i], y[i], CONFIG_STACK)))
     return points
 
 
@@ -127,7 +170,10 @@ def gain_tables(points: dict[str, list[tuple[float, float, float]]], spec: dict 
     :func:`design_points`: per schedule the natural frequency ``omega`` (rad/s; with
     ``omega_end``, linear in the breakpoint index from ``omega`` at the first breakpoint
     to ``omega_end`` at the last) and damping ``zeta``, and ``integral_ratio`` and
-    ``kir_share`` (the schedule's own when given, else the spec's)."""
+    ``kir_share`` (the schedule's own when given, else the spec's). The stack's tail-off
+    breakpoints (``points["stack_tailoff"]``, if any) follow: the pole placement at the
+    last ω, each gain capped at ``tailoff_kp_cap`` / ``tailoff_kd_cap`` (the stack's own,
+    else the spec's) times its last regular value, Ki = 0 (module notes)."""
     tables = {}
     for name, axis_key in (("stack", "stack_altitudes_m"), ("upper", "upper_speeds_mps")):
         d = spec[name]
@@ -136,15 +182,25 @@ def gain_tables(points: dict[str, list[tuple[float, float, float]]], spec: dict 
         ratio = d.get("integral_ratio", spec["integral_ratio"])
         n = len(points[name])
         omegas = np.linspace(d["omega"], d.get("omega_end", d["omega"]), n) if n > 1 else [d["omega"]]
-        kp, kd, ki, kir = [], [], [], []
+        breakpoints = list(map(float, spec[axis_key]))
+        k_att, kd, ki = [], [], []
         for w, (_, mu_a, mu_c) in zip(omegas, points[name]):
-            k_att = (w * w + max(mu_a, 0.0)) / mu_c
-            kp.append(k_att * (1.0 - share))
-            kir.append(k_att * share)
+            k_att.append((w * w + max(mu_a, 0.0)) / mu_c)
             kd.append(2.0 * z * w / mu_c)
-            ki.append(ratio * w * k_att)
-        tables[name] = {"breakpoints": list(map(float, spec[axis_key])), "kp": kp, "ki": ki, "kd": kd, "kir": kir,
-                        "design_points": points[name]}
+            ki.append(ratio * w * k_att[-1])
+        design = list(points[name])
+        if name == "stack" and points.get("stack_tailoff"):
+            cap_p = d.get("tailoff_kp_cap", spec["tailoff_kp_cap"]) * k_att[n - 1]
+            cap_d = d.get("tailoff_kd_cap", spec["tailoff_kd_cap"]) * kd[n - 1]
+            w = omegas[-1]
+            for alt, t, mu_a, mu_c in points["stack_tailoff"]:
+                breakpoints.append(float(alt))
+                k_att.append(min((w * w + max(mu_a, 0.0)) / mu_c, cap_p))
+                kd.append(min(2.0 * z * w / mu_c, cap_d))
+                ki.append(0.0)
+                design.append((t, mu_a, mu_c))
+        tables[name] = {"breakpoints": breakpoints, "kp": [k * (1.0 - share) for k in k_att], "ki": ki, "kd": kd,
+                        "kir": [k * share for k in k_att], "design_points": design}
     return tables
 
 
@@ -157,15 +213,20 @@ def _fmt(vals) -> str:
     return "[" + ", ".join(f"{v:.4g}" for v in vals) + "]"
 
 
-def controller_yaml(tables: dict, stack_blend: list[float], spec: dict = DESIGN, vehicle: str = "ares_i") -> str:
+def controller_yaml(tables: dict, stack_blend: list[float], spec: dict = DESIGN, vehicle: str = "ares_i",
+                    design: dict | None = None) -> str:
     """The whole controller YAML text of the design ``spec`` for the vehicle named
     ``vehicle`` (the spec's own ``stack_blend``, when it has one, replaces
-    ``stack_blend``)."""
+    ``stack_blend``); ``design`` (``{"rules": name, "parameters": {(schedule, name):
+    value}}``, from ``study=fcs_design``) becomes the ``design`` block, values written to
+    round-trip exactly."""
     stack_blend = list(spec.get("stack_blend") or stack_blend)
+    made_by = (f"`savant run study=fcs_design study.design={design['rules']}` (the values in `design`"
+               if design else f"`python -m savant_cli.datagen.fcs_gains --controller {spec['name']}` (gains and filters")
     lines = [
         f"# {spec['title']} pitch/yaw control with flex filters and rate blending,",
         "# and phase-plane roll control (source paper III.F). Generated by",
-        f"# `python -m savant_cli.datagen.fcs_gains --controller {spec['name']}` (gains and filters,",
+        f"# {made_by},",
         "# design rules in savant_cli.datagen.fcs_gains and .flex_filters). Units: Kp and Kir",
         "# rad/rad, Ki 1/s, Kd s.",
         f"name: {spec['name']}",
@@ -208,9 +269,14 @@ def controller_yaml(tables: dict, stack_blend: list[float], spec: dict = DESIGN,
         "  attitude_deadband_deg: 1.0",
         "  rate_deadband_deg_s: 1.0",
         "  lead_time_s: 2.0",
-        "",
     ]
-    return "\n".join(lines)
+    if design:
+        lines += ["design:              # how this file was made (provenance; the flight uses the tables above)",
+                  f"  rules: {design['rules']}", "  parameters:"]
+        for sched in dict.fromkeys(s for s, _ in design["parameters"]):
+            lines.append(f"    {sched}:")
+            lines += [f"      {n}: {float(v)!r}" for (s, n), v in design["parameters"].items() if s == sched]
+    return "\n".join(lines + [""])
 
 
 def main(argv: list[str] | None = None) -> None:

@@ -1,7 +1,9 @@
-"""Design the default flex-filter coefficients of ``conf/controller/msfc_pid.yaml``.
+"""The flex filters' first estimate, and the filter sections of every controller.
 
 Each flight-control path carries two fourth-order discrete sections in series (source
-paper §III.F). The defaults are designed with scipy at the 50 Hz control rate:
+paper §III.F), designed with scipy at the 50 Hz control rate (:func:`design_set`). The
+shipped controllers' filter values are tuned by ``study=fcs_design`` (their ``design``
+blocks; docs/design_studies.md); :data:`DESIGN` is the first estimate it started from:
 
 * section 1: 4th-order Butterworth low-pass, gain-stabilizing everything above its
   corner (8 Hz on both stages);

@@ -25,9 +25,8 @@ the class. Run ``python -m savant_cli.datagen.small_launcher``, then the guidanc
 controller generators (see ``docs/vehicles.md``)::
 
     python -m savant_cli.datagen.guidance_commands vehicle=small_launcher guidance=small_launcher_leo
-    python -m savant_cli.datagen.fcs_gains vehicle=small_launcher guidance=small_launcher_leo --name small_pid
-    python -m savant_cli.datagen.fcs_gains vehicle=small_launcher guidance=small_launcher_leo --controller larc_pd \\
-        --name small_pd
+    python -m savant_cli.datagen.fcs_gains vehicle=small_launcher guidance=small_launcher_leo --controller small_pid
+    python -m savant_cli.datagen.fcs_gains vehicle=small_launcher guidance=small_launcher_leo --controller small_pd
 """
 
 from __future__ import annotations

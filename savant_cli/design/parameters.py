@@ -10,7 +10,7 @@ attitude stiffness, and the stiffness shared with the filtered integrated-rate p
 integrated-rate paths filtered by a 4th-order Butterworth low-pass (``lowpass_hz``) and two
 notches (``notch1_hz``/``notch1_q``, ``notch2_hz``/``notch2_q``, ``scipy.signal.iirnotch``);
 on the stack the rate blend's first-stage gyro weight ``blend_first`` (the upper-stage gyro
-takes the rest). A candidate is a set of these values; its controller is the design rules'
+takes the rest) and the tail-off gain caps ``tailoff_kp_cap``, ``tailoff_kd_cap``. A candidate is a set of these values; its controller is the design rules'
 YAML text written with them (:func:`controller_text`) and read back
 (:func:`controller_tables`), so what is judged is exactly what is written, rounding
 included.
@@ -26,6 +26,10 @@ from omegaconf import OmegaConf
 from savant_cli.config import ControllerConfig, DesignParameters
 from savant_cli.datagen import fcs_gains
 from savant_cli.models.fcs import FcsTables, fcs_tables
+
+
+#: Parameters a schedule may set for itself over the spec's common value.
+SPEC_VALUES = ("kir_share", "integral_ratio", "tailoff_kp_cap", "tailoff_kd_cap")
 
 
 @dataclass(frozen=True)
@@ -64,7 +68,7 @@ def rule_value(spec: dict, schedule: str, name: str, stack_blend: list[float]) -
         return float(d[name])
     if name == "omega_end":
         return float(d.get("omega_end", d["omega"]))
-    if name in ("kir_share", "integral_ratio"):
+    if name in SPEC_VALUES:
         return float(d.get(name, spec[name]))
     if name == "blend_first":
         return float((spec.get("stack_blend") or stack_blend)[2])
@@ -80,13 +84,15 @@ def rule_value(spec: dict, schedule: str, name: str, stack_blend: list[float]) -
 def free_parameters(config: DesignParameters, schedules: list[str], spec: dict,
                     stack_blend: list[float]) -> list[FreeParameter]:
     """The tuned parameters of ``schedules`` (``study.parameters``), their start the
-    configured one or the design rules' value."""
+    configured one or the design rules' value; those the rules hold fixed
+    (``spec["fixed_parameters"]``, e.g. a PD law's integral paths) are not tuned."""
     out = []
+    fixed = set(spec.get("fixed_parameters", ()))
     for sched in schedules:
         params = getattr(config, sched)
         for f in fields(params):
             p = getattr(params, f.name)
-            if p is None:
+            if p is None or f.name in fixed:
                 continue
             start = rule_value(spec, sched, f.name, stack_blend) if p.initial is None else float(p.initial)
             out.append(FreeParameter(sched, f.name, min(max(start, p.low), p.high), float(p.low), float(p.high)))
@@ -99,7 +105,7 @@ def apply(spec: dict, values: dict[tuple[str, str], float]) -> dict:
     out = copy.deepcopy(spec)
     for (sched, name), v in values.items():
         v = float(v)
-        if name in ("omega", "omega_end", "zeta", "kir_share", "integral_ratio"):
+        if name in ("omega", "omega_end", "zeta") + SPEC_VALUES:
             out[sched] = {**out[sched], name: v}
         elif name == "blend_first":  # 4 decimals, as the YAML writes it: the weights sum to 1
             v = round(v, 4)
@@ -118,10 +124,12 @@ def apply(spec: dict, values: dict[tuple[str, str], float]) -> dict:
     return out
 
 
-def controller_text(spec: dict, points: dict, stack_blend: list[float], vehicle: str) -> str:
+def controller_text(spec: dict, points: dict, stack_blend: list[float], vehicle: str,
+                    design: dict | None = None) -> str:
     """The controller YAML of ``spec`` at the design points of
-    :func:`savant_cli.datagen.fcs_gains.design_points`."""
-    return fcs_gains.controller_yaml(fcs_gains.gain_tables(points, spec), stack_blend, spec, vehicle)
+    :func:`savant_cli.datagen.fcs_gains.design_points`; ``design`` (``{"rules": name,
+    "parameters": {(schedule, name): value}}``) is written as the file's ``design`` block."""
+    return fcs_gains.controller_yaml(fcs_gains.gain_tables(points, spec), stack_blend, spec, vehicle, design)
 
 
 def controller_config(text: str) -> ControllerConfig:

@@ -44,18 +44,25 @@ from savant_cli.models.fcs import FcsTables
 
 @dataclass
 class DesignPoint:
-    """A frozen operating point of one uncertainty corner (``""``: the nominal plant)."""
+    """A frozen operating point of one uncertainty corner (``""``: the nominal plant) and
+    the requirement set it is judged against there (a corner's may be a fraction of the
+    nominal's, :func:`savant_cli.linear.requirements.scaled_requirements`)."""
 
     corner: str
     point: FrozenPoint
+    requirements: RequirementSet
 
 
 def point_score(v: PointVerdict) -> float:
-    """The worst check's ratio to its requirement (module notes)."""
+    """The worst check's ratio to its requirement (module notes); a failing check of a
+    zero requirement (e.g. a bending peak above 0 dB with no crossing of its own) scores
+    v/(1 + |v|) of its value v (dB or deg, negative), in (−1, 0], not the ratio's −∞: graded
+    for the search, above any lost closed loop."""
     stability = v.checks[-1]
     if not stability.passed:
         return -1.0 - 10.0 * stability.value
-    ratios = [c.ratio for c in v.checks if c.criterion != "stability"]
+    ratios = [c.ratio if np.isfinite(c.ratio) or c.ratio > 0 else min(c.value, 0.0) / (1.0 + abs(c.value))
+              for c in v.checks if c.criterion != "stability"]
     return float(min(ratios)) if ratios else float("inf")
 
 
@@ -65,12 +72,13 @@ def objective(scores: np.ndarray) -> float:
     return float(scores.min()) if shortfall == 0.0 else -float(shortfall)
 
 
-def judge_all(points: list[DesignPoint], ft: FcsTables, dt: float, requirements: RequirementSet,
+def judge_all(points: list[DesignPoint], ft: FcsTables, dt: float,
               axes: tuple[str, ...] = ("pitch", "yaw")) -> list[PointVerdict]:
-    """The verdict of ``ft`` at every point (loops of ``axes`` only)."""
+    """The verdict of ``ft`` at every point against its own requirement set (loops of
+    ``axes`` only)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # python-control notes on unconnected signals
-        return [judge_controller(p.point, ft, dt, requirements, axes=axes)[2] for p in points]
+        return [judge_controller(p.point, ft, dt, p.requirements, axes=axes)[2] for p in points]
 
 
 @dataclass
@@ -87,7 +95,7 @@ class SearchResult:
 
 
 def search(params: list[FreeParameter], tables_of: Callable[[dict[tuple[str, str], float]], FcsTables],
-           points: list[DesignPoint], dt: float, requirements: RequirementSet, opt: DesignOptimizer,
+           points: list[DesignPoint], dt: float, opt: DesignOptimizer,
            axes: tuple[str, ...], progress: Callable[[int, float], None] | None = None) -> SearchResult:
     """Maximize :func:`objective` over the candidates ``tables_of(values)``.
 
@@ -98,11 +106,9 @@ def search(params: list[FreeParameter], tables_of: Callable[[dict[tuple[str, str
     tables_of : callable
         Parameter values → the candidate's flight-control tables.
     points : list of DesignPoint
-        Where candidates are judged.
+        Where candidates are judged, each against its requirement set.
     dt : float
         Control period (s).
-    requirements : RequirementSet
-        The requirement set.
     opt : DesignOptimizer
         Method, evaluation budget, tolerance, initial step, early stop.
     axes : tuple of str
@@ -122,7 +128,7 @@ def search(params: list[FreeParameter], tables_of: Callable[[dict[tuple[str, str
     def scores(u: np.ndarray) -> np.ndarray:
         key = np.clip(u, 0.0, 1.0).tobytes()
         if key not in cache:
-            verdicts = judge_all(points, tables_of(values_of(u)), dt, requirements, axes)
+            verdicts = judge_all(points, tables_of(values_of(u)), dt, axes)
             cache[key] = np.array([point_score(v) for v in verdicts])
             s = objective(cache[key])
             history.append(s)

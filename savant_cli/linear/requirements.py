@@ -35,7 +35,7 @@ fastest-diverging one first among them).
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, fields, is_dataclass, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -142,6 +142,23 @@ class PointVerdict:
         """The failing check furthest below its requirement; if all pass, the tightest."""
         pool = self.failed or [c for c in self.checks if c.criterion != "stability"]
         return min(pool, key=lambda c: c.severity) if pool else None
+
+
+def scaled_requirements(req: RequirementSet, fraction: float) -> RequirementSet:
+    """``req`` with every margin and attenuation (dB, deg) times ``fraction`` and its name
+    marked (e.g. ``"ares_i × 0.5"``); 0 leaves closed-loop stability the only check that
+    can fail. Used for the uncertainty corners of the flight-control design."""
+
+    def scale(node):
+        if isinstance(node, dict):
+            return {k: scale(v) for k, v in node.items()}
+        if not is_dataclass(node):
+            return node
+        return replace(node, **{f.name: (getattr(node, f.name) * fraction if f.name.endswith(("_dB", "_deg"))
+                                         else scale(getattr(node, f.name))) for f in fields(node)
+                                if f.name not in ("name", "source")})
+
+    return replace(scale(req), name=f"{req.name} × {fraction:g}")
 
 
 def _requirement(row: MarginRow, req: RequirementSet, stage: str) -> tuple[str, float, str]:

@@ -26,10 +26,11 @@ from savant_cli.errors import ConfigError
 from savant_cli.io.atomic import atomic_path, write_json_atomic, write_text_atomic
 from savant_cli.io.console import print_verdict, split_unit
 from savant_cli.io.record import FLOWN
-from savant_cli.config import RequirementSet
+from savant_cli.config import ReliabilitySpec, RequirementSet
 from savant_cli.linear.requirements import (CHECK_ARRAY_COLUMNS, CRITERIA, STAGES, mode_code, mode_name, verdict_line,
                                             verdicts_of_array)
 from savant_cli.montecarlo.batch import AXIS_CODES, BAND_CODES, KIND_CODES, MARGIN_ARRAY_COLUMNS, read_outcome
+from savant_cli.montecarlo.reliability import reliability
 from savant_cli.sim.engine import EVENT_NAMES
 
 PERCENTILES = (0.135, 50.0, 99.865)  # the ±3σ-equivalent tails of a normal distribution
@@ -230,10 +231,14 @@ def _csv(path: Path, rows: list[dict[str, Any]]) -> None:
 def write_outputs(out_dir: Path, inv: Inventory, expected: list[int], dispersions: list[dict[str, Any]],
                   config_yaml: str, provenance: dict[str, str], history_names: list[str],
                   history_time: np.ndarray, requirements: RequirementSet | None,
-                  plots: bool, console: Console | None = None) -> dict[str, Any]:
+                  plots: bool, console: Console | None = None,
+                  reliability_spec: ReliabilitySpec | None = None) -> dict[str, Any]:
     """Write every batch output into ``out_dir``; returns the ``summary.json`` content.
     ``requirements``: the set the runs' margins were judged against (its band values
-    mark the margin-spread plot)."""
+    mark the margin-spread plot); ``reliability_spec``: the demonstrated success's
+    confidence, target and success statuses (``study.reliability``; its defaults when
+    None)."""
+    spec = reliability_spec or ReliabilitySpec()
     runs = sorted(r for r in expected if r in inv.files)
     missing = inv.missing(expected)
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -248,6 +253,8 @@ def write_outputs(out_dir: Path, inv: Inventory, expected: list[int], dispersion
         for k, v in provenance.items():
             g.attrs[f"provenance_{k}"] = str(v)
         tb = _write_tables(g, inv, runs, history_names, history_time)
+        rel = reliability(list(tb.status), tuple(spec.success_statuses), spec.confidence, spec.target_probability)
+        g.attrs["reliability"] = json.dumps(rel.as_dict())
         rg = g.create_group("runs")
         rg.create_dataset("run", data=tb.runs)
         rg.create_dataset("status", data=_strings(tb.status))
@@ -290,7 +297,8 @@ def write_outputs(out_dir: Path, inv: Inventory, expected: list[int], dispersion
                 for r, s, m, t in zip(tb.runs, tb.status, tb.message, tb.t_final) if s != "complete"]
     counts = {s: tb.status.count(s) for s in sorted(set(tb.status))}
     summary = {"study": "montecarlo", "n_runs_expected": len(expected), "n_runs_present": len(runs),
-               "missing_runs": ranges_text(missing), "status_counts": counts, "failures": failures,
+               "missing_runs": ranges_text(missing), "status_counts": counts, "reliability": rel.as_dict(),
+               "failures": failures,
                "statistics": stats, "dispersion_statistics": disp_stats, "margin_spread": spread}
     if tb.checks.size:
         summary.update({"requirements_met": verdict["passed"], "requirements_verdict": verdict["line"],
@@ -300,6 +308,7 @@ def write_outputs(out_dir: Path, inv: Inventory, expected: list[int], dispersion
         _plots(out_dir, tb, dispersions, bands or None)
     if console is not None:
         print_tables(console, stats, spread, counts, missing, verdict if tb.checks.size else None)
+        print_verdict(rel.line(), rel.target_met, console)
     return summary
 
 

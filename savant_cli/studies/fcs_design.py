@@ -8,7 +8,8 @@
    each at least ``study.event_window_s`` from an event.
 3. At each point the plant of the nominal vehicle and of every uncertainty corner
    (``study.corners``: config overrides, e.g. ``flex.frequency_scale: 0.8``) is linearized
-   once about the nominal state.
+   once about the nominal state. A corner is judged against the requirement set times its
+   ``requirement_fraction`` (default 1; 0: closed-loop stability alone).
 4. Schedule by schedule (``study.schedules``), the free parameters (``study.parameters``,
    ``savant_cli/design/parameters.py``) are searched (``savant_cli/design/search.py``) to
    maximize the smallest margin-to-requirement ratio over the schedule's design points and
@@ -52,7 +53,7 @@ from savant_cli.io.record import FLOWN
 from savant_cli.linear.charts import LoopResponse, loop_response
 from savant_cli.linear.evaluate import candidate_loops, freeze, judge_controller
 from savant_cli.linear.margins import MarginRow
-from savant_cli.linear.requirements import PointVerdict, verdict_line
+from savant_cli.linear.requirements import PointVerdict, scaled_requirements, verdict_line
 from savant_cli.linear.store import read_loop_response, read_margins, write_loop_response, write_margin_table
 from savant_cli.paths import shipped_config_dir
 from savant_cli.sim.setup import prepare
@@ -70,10 +71,16 @@ class Judged:
 
     verdicts: dict[str, list[PointVerdict]]  # corner ("" nominal) → one per point
     rows: list[MarginRow]  # the nominal plant's margins (both loops), for the envelope
+    requirement_names: dict[str, str]  # corner → the name of the set it is judged against
 
     def line(self, name: str) -> str:
-        groups = [(f"{c or 'nominal'}", [v]) for c, vs in self.verdicts.items() for v in vs]
+        groups = [(self.label(c), [v]) for c, vs in self.verdicts.items() for v in vs]
         return verdict_line(groups, name, "points")
+
+    def label(self, corner: str) -> str:
+        """``nominal``, or the corner's name with its set when that is not the nominal's."""
+        own = self.requirement_names[corner]
+        return corner or "nominal" if own == self.requirement_names[""] else f"{corner} ({own})"
 
     @property
     def passed(self) -> bool:
@@ -93,6 +100,9 @@ def _times(study: FcsDesignStudyConfig, t_end: float) -> dict[str, list[float]]:
     return out
 
 
+#: The corner key that is not a config override: the fraction of the requirement set the
+#: corner is judged against.
+REQUIREMENT_FRACTION = "requirement_fraction"
 #: Corner keys applied to the nominal model's flex tables (as ``study=flex_sweep`` does),
 #: not through the config: a linearization needs no RK4 step bound on the mode frequency.
 FLEX_TABLE_KEYS = {"flex.frequency_scale": "frequency", "flex.shape_scale": "shape"}
@@ -107,7 +117,7 @@ def corner_models(cfg: SavantConfig, raw_cfg: DictConfig, controller: object, co
 
     out = {"": nominal}
     for name, overrides in corners.items():
-        keys = {k: v for k, v in overrides.items() if k not in FLEX_TABLE_KEYS}
+        keys = {k: v for k, v in overrides.items() if k not in FLEX_TABLE_KEYS and k != REQUIREMENT_FRACTION}
         model = nominal
         if keys:
             raw = copy.deepcopy(raw_cfg)
@@ -128,6 +138,19 @@ def corner_models(cfg: SavantConfig, raw_cfg: DictConfig, controller: object, co
                     raise ConfigError(f"study.corners.{name}", key, "needs the flexible body (flex=on)")
                 model = variant(model, parameter, float(overrides[key]), [])
         out[name] = model
+    return out
+
+
+def corner_requirements(requirements, corners: dict[str, dict]) -> dict[str, object]:
+    """The requirement set of the nominal plant (key ``""``) and of every corner: the set
+    times the corner's ``requirement_fraction`` (in [0, 1]; 1 when absent)."""
+    out = {"": requirements}
+    for name, overrides in corners.items():
+        fraction = overrides.get(REQUIREMENT_FRACTION, 1.0)
+        if isinstance(fraction, bool) or not isinstance(fraction, (int, float)) or not 0.0 <= fraction <= 1.0:
+            raise ConfigError(f"study.corners.{name}.{REQUIREMENT_FRACTION}", fraction,
+                              "must be a number in [0, 1] (1: the full requirement set, 0: closed-loop stability)")
+        out[name] = requirements if fraction == 1.0 else scaled_requirements(requirements, float(fraction))
     return out
 
 
@@ -166,6 +189,7 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
 
     snaps = {t: result.snapshots[k] for t, k in ((k * rt.dt, k) for k in steps) if keep(t) and k in result.snapshots}
     models = corner_models(cfg, raw_cfg, cfg0.controller, dict(study.corners), model)
+    reqs = corner_requirements(cfg.requirements, {k: dict(v) for k, v in study.corners.items()})
     frozen: dict[tuple[str, float], DesignPoint] = {}
     bar = Progress(TextColumn("[bold]{task.description}"), BarColumn(), TextColumn("{task.completed}/{task.total}"),
                    TextColumn("best objective {task.fields[best]}"), TimeElapsedColumn(), disable=not cfg.sim.progress)
@@ -173,7 +197,7 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
         task = bar.add_task("linearize", total=len(snaps) * len(models), best="–")
         for t, snap in snaps.items():
             for name, m in models.items():
-                frozen[(name, t)] = DesignPoint(name, freeze(m, snap, dt))
+                frozen[(name, t)] = DesignPoint(name, freeze(m, snap, dt), reqs[name])
                 bar.advance(task)
 
         def schedule_points(sched: str, ts: list[float]) -> list[DesignPoint]:
@@ -193,16 +217,17 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
                 return dp.controller_tables(dp.controller_text(dp.apply(spec, {**_values, **v}),
                                                                design_points, stack_blend, vehicle_name))
 
-            res = search(mine, tables_of, pts, dt, cfg.requirements, study.optimizer, tuple(study.axes),
+            res = search(mine, tables_of, pts, dt, study.optimizer, tuple(study.axes),
                          progress=lambda n, best, _t=task: bar.update(_t, completed=n, best=f"{best:.3f}"))
             values.update(res.values)
             searches[sched] = res
         spec1 = dp.apply(spec, values)
-        text1 = dp.controller_text(spec1, design_points, stack_blend, vehicle_name)
+        text1 = dp.controller_text(spec1, design_points, stack_blend, vehicle_name,
+                                   {"rules": study.design, "parameters": values})
         verify = [t for t in times["verify"] if t in snaps]
-        before = _judge(frozen, models, verify, dp.controller_tables(text0), dt, cfg)
+        before = _judge(frozen, models, verify, dp.controller_tables(text0), dt)
         ft1 = dp.controller_tables(text1)
-        after = _judge(frozen, models, verify, ft1, dt, cfg)
+        after = _judge(frozen, models, verify, ft1, dt)
 
     worst = sorted(((point_score(v), v.time_s) for v in after.verdicts[""]))[:N_WORST]
     charts = {}
@@ -247,23 +272,27 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
     return 0 if result.status in FLOWN else 1
 
 
-def _judge(frozen: dict, models: dict, times: list[float], ft, dt: float, cfg: SavantConfig) -> Judged:
+def _judge(frozen: dict, models: dict, times: list[float], ft, dt: float) -> Judged:
     verdicts: dict[str, list[PointVerdict]] = {c: [] for c in models}
     rows: list[MarginRow] = []
+    names = {}
     for t in times:
         for c in models:
-            r, _, v = judge_controller(frozen[(c, t)].point, ft, dt, cfg.requirements)
+            p = frozen[(c, t)]
+            r, _, v = judge_controller(p.point, ft, dt, p.requirements)
             verdicts[c].append(v)
+            names[c] = p.requirements.name
             if not c:
                 rows += r
-    return Judged(verdicts, rows)
+    return Judged(verdicts, rows, names)
 
 
 def _point_table(before: Judged, after: Judged) -> list[dict]:
     out = []
     for c in before.verdicts:
         for b, a in zip(before.verdicts[c], after.verdicts[c]):
-            out.append({"time_s": b.time_s, "corner": c or "nominal", "stage": b.stage,
+            out.append({"time_s": b.time_s, "corner": c or "nominal", "requirements": before.requirement_names[c],
+                        "stage": b.stage,
                         "ratio_before": point_score(b), "passed_before": b.passed,
                         "worst_before": b.worst.text() if b.worst else "",
                         "ratio_after": point_score(a), "passed_after": a.passed,

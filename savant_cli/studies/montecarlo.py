@@ -118,7 +118,7 @@ def fly_batch(cfg: SavantConfig, config_yaml: str, out_dir: Path, console: Conso
         stop = execute(case, todo, journal, workers, on_done)
     summary = write_outputs(out_dir, inventory([journal.folder]), list(mine), dispersion_table(case.dispersions),
                             config_yaml, collect_provenance(), names, case.history_time, cfg.requirements,
-                            cfg.output.plots, console if print_tables else None)
+                            cfg.output.plots, console if print_tables else None, cfg.study.reliability)
     console.print(f"{title}: {len(todo)} runs flown on {workers} worker(s) in {time.perf_counter() - t0:.1f} s; "
                   f"outputs: {out_dir}")
     return summary, stop
@@ -201,7 +201,8 @@ def collect(folder: Path, console: Console | None = None) -> int:
     expected = list(range(cfg.study.n_runs))
     missing = inv.missing(expected)
     write_outputs(folder, inv, expected, dispersion_table(case.dispersions), OmegaConf.to_yaml(raw, resolve=True),
-                  collect_provenance(), names, case.history_time, cfg.requirements, cfg.output.plots, console)
+                  collect_provenance(), names, case.history_time, cfg.requirements, cfg.output.plots, console,
+                  cfg.study.reliability)
     console.print(f"collected {len(inv.files)} runs from {len(run_dirs)} shard folder(s) into {folder}")
     if missing:
         console.print(f"[bold red]missing runs[/]: {ranges_text(missing)}")
