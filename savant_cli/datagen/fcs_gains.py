@@ -24,13 +24,17 @@ regular breakpoint, and the integral gain is 0: with the control power collapsin
 integrator's phase lag at the falling crossover costs more margin than its trim is worth
 (the trim it holds, a lateral CG offset over the gimbal arm, is ~0.1°).
 
-Two designs (:data:`CONTROLLERS`):
+Design rules (:data:`CONTROLLERS`; each shipped file is ``study=fcs_design``'s tuning of
+its rules, recorded in the file's ``design`` block):
 
-* ``msfc_pid`` (MSFC-like): PID, ω = 1.3 / 1.0 rad/s, ζ = 0.7, integral and
-  integrated-rate paths, the rate-path flex filters of :mod:`.flex_filters`.
-* ``larc_pd`` (LaRC-like): PD only (Ki = Kir = 0), stiffer (ω = 1.5 / 1.2 rad/s,
-  ζ = 0.6), its own filters: a lower low-pass corner (6 Hz) and wider notches (quality
-  factor 1.0 on the stack). The same gyro blend, since it follows from the gyro locations.
+* :data:`FIRST_ESTIMATE` (MSFC-like): PID, ω = 1.3 / 1.0 rad/s, ζ = 0.7, integral and
+  integrated-rate paths, the rate-path flex filters of :mod:`.flex_filters` and the
+  mode-nulling gyro blend; ``small_pid`` starts from it.
+* ``msfc_pid`` (:data:`DESIGN`): the first estimate with the stack's values of an earlier
+  ``study=fcs_design`` run on it, so the study starts there.
+* ``larc_pd`` (LaRC-like; ``small_pd`` likewise): PD only (Ki = Kir = 0, held fixed in the
+  study), ω = 1.5 / 1.2 rad/s, ζ = 0.6, a lower low-pass corner (6 Hz) and wider notches
+  (quality factor 1.0).
 
 Run ``python -m savant_cli.datagen.fcs_gains [--controller larc_pd]`` to rewrite the YAML.
 """
@@ -152,9 +156,9 @@ def design_points(cfg, vehicle, spec: dict = DESIGN) -> dict[str, list[tuple[flo
         for val in axis_vals:
             i = int(np.argmin(np.abs(np.where(sel, var, np.inf) - val)))
             points[name].append((float(t[i]), *pitch_coefficients(ref, t[i], y[i], config)))
-    n_tail = int(spec.get("stack_tailoff_breakpoints", 0))
     t_tail = np.linspace(ref.t_sep - spec["stack_design_end_before_separation_s"],
-                         ref.t_sep - spec.get("stack_tailoff_end_before_separation_s", 0.5), n_tail + 1)[1:]
+                         ref.t_sep - spec["stack_tailoff_end_before_separation_s"],
+                         int(spec["stack_tailoff_breakpoints"]) + 1)[1:]
     points["stack_tailoff"] = []
     for tt in t_tail:
         i = int(np.argmin(np.abs(np.where(t < ref.t_sep, t, np.inf) - tt)))
@@ -163,6 +167,12 @@ def design_points(cfg, vehicle, spec: dict = DESIGN) -> dict[str, list[tuple[flo
             raise ValueError(f"tail-off breakpoint at {tt:.1f} s ({a:.0f} m) is not above the previous one")
         points["stack_tailoff"].append((a, float(t[i]), *pitch_coefficients(ref, t[i], y[i], CONFIG_STACK)))
     return points
+
+
+def _pole_placement(w: float, z: float, mu_a: float, mu_c: float) -> tuple[float, float]:
+    """Attitude stiffness (ω² + max(μα, 0))/μc and rate gain 2ζω/μc of the rigid pitch
+    plane at natural frequency ``w`` (rad/s) and damping ``z``."""
+    return (w * w + max(mu_a, 0.0)) / mu_c, 2.0 * z * w / mu_c
 
 
 def gain_tables(points: dict[str, list[tuple[float, float, float]]], spec: dict = DESIGN) -> dict:
@@ -185,18 +195,20 @@ def gain_tables(points: dict[str, list[tuple[float, float, float]]], spec: dict 
         breakpoints = list(map(float, spec[axis_key]))
         k_att, kd, ki = [], [], []
         for w, (_, mu_a, mu_c) in zip(omegas, points[name]):
-            k_att.append((w * w + max(mu_a, 0.0)) / mu_c)
-            kd.append(2.0 * z * w / mu_c)
-            ki.append(ratio * w * k_att[-1])
+            k, d_gain = _pole_placement(w, z, mu_a, mu_c)
+            k_att.append(k)
+            kd.append(d_gain)
+            ki.append(ratio * w * k)
         design = list(points[name])
         if name == "stack" and points.get("stack_tailoff"):
             cap_p = d.get("tailoff_kp_cap", spec["tailoff_kp_cap"]) * k_att[n - 1]
             cap_d = d.get("tailoff_kd_cap", spec["tailoff_kd_cap"]) * kd[n - 1]
             w = omegas[-1]
             for alt, t, mu_a, mu_c in points["stack_tailoff"]:
+                k, d_gain = _pole_placement(w, z, mu_a, mu_c)
                 breakpoints.append(float(alt))
-                k_att.append(min((w * w + max(mu_a, 0.0)) / mu_c, cap_p))
-                kd.append(min(2.0 * z * w / mu_c, cap_d))
+                k_att.append(min(k, cap_p))
+                kd.append(min(d_gain, cap_d))
                 ki.append(0.0)
                 design.append((t, mu_a, mu_c))
         tables[name] = {"breakpoints": breakpoints, "kp": [k * (1.0 - share) for k in k_att], "ki": ki, "kd": kd,

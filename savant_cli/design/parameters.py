@@ -10,8 +10,9 @@ attitude stiffness, and the stiffness shared with the filtered integrated-rate p
 integrated-rate paths filtered by a 4th-order Butterworth low-pass (``lowpass_hz``) and two
 notches (``notch1_hz``/``notch1_q``, ``notch2_hz``/``notch2_q``, ``scipy.signal.iirnotch``);
 on the stack the rate blend's first-stage gyro weight ``blend_first`` (the upper-stage gyro
-takes the rest) and the tail-off gain caps ``tailoff_kp_cap``, ``tailoff_kd_cap``. A candidate is a set of these values; its controller is the design rules'
-YAML text written with them (:func:`controller_text`) and read back
+takes the rest) and the tail-off gain caps ``tailoff_kp_cap``, ``tailoff_kd_cap``. A
+candidate is a set of these values; its controller is the design rules' YAML text written
+with them (:func:`controller_text`) and read back
 (:func:`controller_tables`), so what is judged is exactly what is written, rounding
 included.
 """

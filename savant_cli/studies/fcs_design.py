@@ -80,7 +80,7 @@ class Judged:
     def label(self, corner: str) -> str:
         """``nominal``, or the corner's name with its set when that is not the nominal's."""
         own = self.requirement_names[corner]
-        return corner or "nominal" if own == self.requirement_names[""] else f"{corner} ({own})"
+        return (corner or "nominal") if own == self.requirement_names[""] else f"{corner} ({own})"
 
     @property
     def passed(self) -> bool:
