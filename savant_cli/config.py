@@ -374,13 +374,14 @@ class FcsDesignStudyConfig:
 
     name: str = "fcs_design"
     design: str = "msfc_pid"  # design rules it starts from (savant_cli/datagen/fcs_gains.py CONTROLLERS)
-    controller_name: str = ""  # name of the controller written ("": the design's)
+    controller_name: str = ""  # name of the controller written ("": <design>_tuned, or <design> with install)
     install: bool = False  # also write conf/controller/<name>.yaml of the shipped config tree
     schedules: list[str] = field(default_factory=lambda: ["stack", "upper"])  # tuned in turn
     every_s: dict[str, float] = field(default_factory=lambda: {"stack": 10.0, "upper": 30.0})  # design points
     verify_every_s: float = 5.0  # the before/after envelope
     event_window_s: float = 2.0  # points this close to an event are skipped
     axes: list[str] = field(default_factory=lambda: ["pitch"])  # loops judged in the search (both verified)
+    workers: int = 0  # processes judging a candidate's points; 0: all cores
     corners: dict[str, dict[str, Any]] = field(default_factory=dict)  # name → {config key: value}
     parameters: DesignParameters = field(default_factory=DesignParameters)
     optimizer: DesignOptimizer = field(default_factory=DesignOptimizer)
@@ -1047,7 +1048,22 @@ def _study(node: Any) -> Any:
 DESIGN_SCHEDULES = ("stack", "upper")
 
 
+def design_controller_name(s: FcsDesignStudyConfig) -> str:
+    """The name ``study=fcs_design`` writes its controller under: ``study.controller_name``,
+    else the design's own with ``study.install`` and ``<design>_tuned`` without."""
+    return s.controller_name or (s.design if s.install else f"{s.design}_tuned")
+
+
 def _check_fcs_design(s: FcsDesignStudyConfig) -> None:
+    from savant_cli.paths import shipped_config_dir
+
+    name = design_controller_name(s)
+    if not s.install and (shipped_config_dir() / "controller" / f"{name}.yaml").is_file():
+        # Hydra searches the shipped config tree before --config-dir: the copy would be shadowed
+        raise ConfigError("study.controller_name", name,
+                          "names a shipped controller, which would shadow the run folder's copy "
+                          "(--config-dir is searched after the shipped configs): choose another name, "
+                          "or set study.install=true to replace the shipped file")
     for i, name in enumerate(s.schedules):
         _one_of(f"study.schedules[{i}]", name, DESIGN_SCHEDULES)
     for name, step in s.every_s.items():
@@ -1058,6 +1074,8 @@ def _check_fcs_design(s: FcsDesignStudyConfig) -> None:
             raise ConfigError("study.every_s", dict(s.every_s), f"must give the design-point spacing of {name}")
     _positive("study.verify_every_s", s.verify_every_s)
     _non_negative("study.event_window_s", s.event_window_s)
+    if s.workers < 0:
+        raise ConfigError("study.workers", s.workers, "must be 0 (all cores) or a positive process count")
     for i, axis in enumerate(s.axes):
         _one_of(f"study.axes[{i}]", axis, ("pitch", "yaw"))
     if not s.axes:

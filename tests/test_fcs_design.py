@@ -5,6 +5,7 @@ end to end into a controller config that loads and flies."""
 from __future__ import annotations
 
 import json
+import types
 
 import numpy as np
 import pytest
@@ -135,6 +136,8 @@ def test_a_lost_closed_loop_scores_below_any_kept_one():
     ("+study.parameters.upper.blend_first={low: 0.1, high: 0.9}", "study.parameters.upper.blend_first"),
     ("study.schedules=[coast]", "study.schedules[0]"),
     ("+study.parameters.upper.tailoff_kd_cap={low: 1, high: 2}", "study.parameters.upper.tailoff_kd_cap"),
+    ("study.controller_name=larc_pd", "study.controller_name"),  # shadowed by the shipped file
+    ("study.workers=-1", "study.workers"),
 ])
 def test_bad_design_settings_are_refused(override, key):
     with pytest.raises(ConfigError) as err:
@@ -221,3 +224,23 @@ def test_a_pd_design_keeps_its_integral_paths_off():
         assert "omega" in names and not names & {"integral_ratio", "kir_share"}
     names = {p.name for p in dp.free_parameters(cfg.study.parameters, ["stack"], fcs_gains.DESIGN, [0.4, 0.0, 0.6])}
     assert {"integral_ratio", "kir_share"} <= names
+
+
+def test_the_score_pool_returns_every_point_score_in_order(monkeypatch):
+    """Scores computed on 2 forked workers come back in the points' order, for a subset
+    of the pool's points as the search asks (each worker gets an interleaved share)."""
+    from savant_cli.design import pool as dpool
+
+    def fake_scores(points, ft, dt, axes):  # a point's score: its value x the 'tables'
+        return np.array([p.value * ft for p in points])
+
+    monkeypatch.setattr(dpool, "point_scores", fake_scores)
+    points = [types.SimpleNamespace(value=float(k)) for k in range(11)]
+    subset = points[1::2] + [points[0]]
+    with dpool.ScorePool(points, 2) as pool:
+        assert pool.workers == 2
+        np.testing.assert_array_equal(pool.scores(subset, 3.0, 0.02, ("pitch",)),
+                                      [3.0 * p.value for p in subset])
+        np.testing.assert_array_equal(pool.scores(points, -1.0, 0.02, ("pitch",)), -np.arange(11.0))
+    with dpool.ScorePool(points[:1], 4) as one:  # never more workers than points
+        assert one.workers == 1 and one.scores(points[:1], 2.0, 0.02, ("pitch",)).tolist() == [0.0]

@@ -21,7 +21,7 @@ from scipy import stats
 from conftest import compose_config
 from savant_cli.config import CorrelationGroup, DispersionSetConfig, DispersionSpec, validate
 from savant_cli.errors import ConfigError
-from savant_cli.montecarlo.batch import Journal, execute, read_outcome, shard_runs
+from savant_cli.montecarlo.batch import RUN_STAGES, Journal, execute, read_outcome, shard_runs
 from savant_cli.montecarlo.results import inventory, ranges_text
 from savant_cli.montecarlo.spec import parse
 from savant_cli.montecarlo.targets import apply_samples
@@ -193,6 +193,11 @@ def test_results_are_bit_identical_for_workers_and_shards(case, tmp_path):
     # dispersed runs differ from the nominal and from each other
     q = [one[r].summary[one[r].summary_keys.index("max_dynamic_pressure_Pa")] for r in range(6)]
     assert len(set(q)) == 6
+    # the journal keeps where each run's time went: its stages add up to its wall time
+    for o in one.values():
+        assert o.stage_wall_s.shape == (len(RUN_STAGES),) and np.all(o.stage_wall_s >= 0.0)
+        assert o.stage_wall_s.sum() == pytest.approx(o.wall_s, rel=1e-12)
+        assert o.stage_wall_s[RUN_STAGES.index("simulate")] > 0.0
 
 
 def test_failing_runs_are_recorded_and_the_batch_goes_on(tmp_path):

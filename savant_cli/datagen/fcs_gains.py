@@ -32,9 +32,11 @@ its rules, recorded in the file's ``design`` block):
   mode-nulling gyro blend; ``small_pid`` starts from it.
 * ``msfc_pid`` (:data:`DESIGN`): the first estimate with the stack's values of an earlier
   ``study=fcs_design`` run on it, so the study starts there.
-* ``larc_pd`` (LaRC-like; ``small_pd`` likewise): PD only (Ki = Kir = 0, held fixed in the
+* :data:`PD_FIRST_ESTIMATE` (LaRC-like): PD only (Ki = Kir = 0, held fixed in the
   study), ω = 1.5 / 1.2 rad/s, ζ = 0.6, a lower low-pass corner (6 Hz) and wider notches
-  (quality factor 1.0).
+  (quality factor 1.0); ``small_pd`` starts from it.
+* ``larc_pd`` (:data:`LARC_PD`): the PD first estimate with the stack's values of an
+  earlier ``study=fcs_design`` run on it.
 
 Run ``python -m savant_cli.datagen.fcs_gains [--controller larc_pd]`` to rewrite the YAML.
 """
@@ -82,16 +84,25 @@ DESIGN = {**FIRST_ESTIMATE,
           "stack_blend": [0.3465, 0.0, 0.6535],
           "filters": {"stack": {"lowpass_hz": 7.55, "notch_hz": (2.012, 5.674), "notch_q": (0.4, 2.601)},
                       "upper": flex_filters.DESIGN["upper"]}}
-LARC_PD = {**FIRST_ESTIMATE, "name": "larc_pd", "title": "LaRC-like gain-scheduled PD (no integral paths)",
-           "stack": {"omega": 1.5, "zeta": 0.6}, "upper": {"omega": 1.2, "zeta": 0.6},
-           "integral_ratio": 0.0, "kir_share": 0.0,
-           "fixed_parameters": ("integral_ratio", "kir_share"),  # a PD law: study=fcs_design keeps them 0
-           "filters": {"stack": {"lowpass_hz": 6.0, "notch_hz": (2.5, 4.5), "notch_q": 1.0},
-                       "upper": {"lowpass_hz": 6.0, "notch_hz": (9.5, 21.7), "notch_q": 1.0}}}
+#: The PD first estimate (the small launcher's ``small_pd`` starts from it).
+PD_FIRST_ESTIMATE = {**FIRST_ESTIMATE, "name": "larc_pd", "title": "LaRC-like gain-scheduled PD (no integral paths)",
+                     "stack": {"omega": 1.5, "zeta": 0.6}, "upper": {"omega": 1.2, "zeta": 0.6},
+                     "integral_ratio": 0.0, "kir_share": 0.0,
+                     "fixed_parameters": ("integral_ratio", "kir_share"),  # a PD law: study=fcs_design keeps them 0
+                     "filters": {"stack": {"lowpass_hz": 6.0, "notch_hz": (2.5, 4.5), "notch_q": 1.0},
+                                 "upper": {"lowpass_hz": 6.0, "notch_hz": (9.5, 21.7), "notch_q": 1.0}}}
+#: larc_pd's design rules: the PD first estimate with the stack's values from a
+#: ``study=fcs_design`` run on it (docs/design_studies.md), so the study starts there.
+LARC_PD = {**PD_FIRST_ESTIMATE,
+           "stack": {"omega": 0.825, "omega_end": 0.9475, "zeta": 0.6465, "tailoff_kp_cap": 1.484,
+                     "tailoff_kd_cap": 1.317},
+           "stack_blend": [0.292, 0.0, 0.708],
+           "filters": {"stack": {"lowpass_hz": 9.862, "notch_hz": (2.003, 5.457), "notch_q": (0.648, 2.764)},
+                       "upper": PD_FIRST_ESTIMATE["filters"]["upper"]}}
 #: The design rules by name (``--controller``, ``study.design``); the small launcher's
 #: start from the first estimates (its own blend, its own search).
 CONTROLLERS = {"msfc_pid": DESIGN, "larc_pd": LARC_PD,
-               "small_pid": {**FIRST_ESTIMATE, "name": "small_pid"}, "small_pd": {**LARC_PD, "name": "small_pd"}}
+               "small_pid": {**FIRST_ESTIMATE, "name": "small_pid"}, "small_pd": {**PD_FIRST_ESTIMATE, "name": "small_pd"}}
 
 
 def pitch_coefficients(ref, t: float, y: np.ndarray, config: int) -> tuple[float, float]:

@@ -31,6 +31,7 @@ import time
 import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.optimize import NonlinearConstraint, minimize
@@ -40,6 +41,9 @@ from savant_cli.design.parameters import FreeParameter
 from savant_cli.linear.evaluate import FrozenPoint, judge_controller
 from savant_cli.linear.requirements import PointVerdict
 from savant_cli.models.fcs import FcsTables
+
+if TYPE_CHECKING:
+    from savant_cli.design.pool import ScorePool
 
 
 @dataclass
@@ -81,6 +85,11 @@ def judge_all(points: list[DesignPoint], ft: FcsTables, dt: float,
         return [judge_controller(p.point, ft, dt, p.requirements, axes=axes)[2] for p in points]
 
 
+def point_scores(points: list[DesignPoint], ft: FcsTables, dt: float, axes: tuple[str, ...]) -> np.ndarray:
+    """:func:`point_score` of ``ft`` at every point."""
+    return np.array([point_score(v) for v in judge_all(points, ft, dt, axes)])
+
+
 @dataclass
 class SearchResult:
     """A schedule's search: the best parameters, their scores, and every evaluation."""
@@ -96,7 +105,8 @@ class SearchResult:
 
 def search(params: list[FreeParameter], tables_of: Callable[[dict[tuple[str, str], float]], FcsTables],
            points: list[DesignPoint], dt: float, opt: DesignOptimizer,
-           axes: tuple[str, ...], progress: Callable[[int, float], None] | None = None) -> SearchResult:
+           axes: tuple[str, ...], progress: Callable[[int, float], None] | None = None,
+           pool: "ScorePool | None" = None) -> SearchResult:
     """Maximize :func:`objective` over the candidates ``tables_of(values)``.
 
     Parameters
@@ -115,6 +125,9 @@ def search(params: list[FreeParameter], tables_of: Callable[[dict[tuple[str, str
         Loops judged.
     progress : callable, optional
         Called with (evaluations so far, best score so far) after each evaluation.
+    pool : ScorePool, optional
+        Judges each candidate's points on its worker processes (the same scores as in
+        this process, :mod:`savant_cli.design.pool`); None: in this process.
     """
     t0 = time.perf_counter()
     cache: dict[bytes, np.ndarray] = {}
@@ -128,8 +141,8 @@ def search(params: list[FreeParameter], tables_of: Callable[[dict[tuple[str, str
     def scores(u: np.ndarray) -> np.ndarray:
         key = np.clip(u, 0.0, 1.0).tobytes()
         if key not in cache:
-            verdicts = judge_all(points, tables_of(values_of(u)), dt, axes)
-            cache[key] = np.array([point_score(v) for v in verdicts])
+            ft = tables_of(values_of(u))
+            cache[key] = pool.scores(points, ft, dt, axes) if pool is not None else point_scores(points, ft, dt, axes)
             s = objective(cache[key])
             history.append(s)
             if s > best[0]:

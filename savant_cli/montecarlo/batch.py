@@ -13,10 +13,8 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import json
-import multiprocessing as mp
 import os
 import secrets
-import sys
 import time
 import traceback
 from collections.abc import Callable, Iterable
@@ -33,6 +31,7 @@ from savant_cli.errors import ConfigError
 from savant_cli.linear.requirements import AXIS_NAMES, CHECK_ARRAY_COLUMNS, checks_array, mode_code
 from savant_cli.montecarlo.spec import DispersionSet
 from savant_cli.montecarlo.targets import apply_samples, build_dispersed
+from savant_cli.processes import process_context
 from savant_cli.sim.build import SimModel
 from savant_cli.sim.engine import EVENT_NAMES
 from savant_cli.sim.run import simulate, signals
@@ -62,6 +61,13 @@ class Case:
     staging: Callable | None = None
 
 
+#: The stages of one run whose wall time (s) each outcome keeps (``stage_wall_s``): drawing
+#: and applying the dispersions and building the model; the simulation; signals, flight
+#: health and summary; the linearization and margins at ``study.linear_times``; and the
+#: histories' decimation.
+RUN_STAGES = ("build", "simulate", "assess", "margins", "histories")
+
+
 @dataclass
 class RunOutcome:
     """What one run leaves in the journal."""
@@ -78,6 +84,8 @@ class RunOutcome:
     histories: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), np.float32))
     margins: np.ndarray = field(default_factory=lambda: np.zeros((0, len(MARGIN_ARRAY_COLUMNS))))
     checks: np.ndarray = field(default_factory=lambda: np.zeros((0, len(CHECK_ARRAY_COLUMNS))))  # requirement checks
+    stage_wall_s: np.ndarray = field(default_factory=lambda: np.zeros(len(RUN_STAGES)))  # s, per RUN_STAGES
+
 
 
 def history_columns(sig: dict, names: list[str]) -> list[tuple[str, str, int | None]]:
@@ -130,6 +138,14 @@ def fly_run(case: Case, run: int, keep: bool = False):
     import warnings
 
     t0 = time.perf_counter()
+    stages = np.zeros(len(RUN_STAGES))
+    clock = [t0, 0]  # start of the current stage, its index
+
+    def lap(stage: int) -> None:  # the time since the last lap was stage `stage`'s
+        now = time.perf_counter()
+        stages[stage] += now - clock[0]
+        clock[0], clock[1] = now, min(stage + 1, len(RUN_STAGES) - 1)
+
     samples = case.dispersions.sample(run)
     values = case.dispersions.numbers(run, samples)
     extra = None
@@ -139,18 +155,23 @@ def fly_run(case: Case, run: int, keep: bool = False):
         model = build_dispersed(applied, case.guidance, case.staging)
         rt = model.rates
         steps = tuple(int(round(t / (rt.dt * rt.n_fcs))) * rt.n_fcs for t in case.linear_times)
+        lap(0)
         result = simulate(model, progress=False, snapshot_steps=steps)
+        lap(1)
         sig = signals(result, model)
         health = assess(result, sig, model, case.cfg.sim.health)
         summ = {**summarize(result, sig), **health}
         keys = [k for k, v in summ.items() if isinstance(v, (int, float)) and not isinstance(v, bool)
                 and k not in WALL_KEYS]
+        lap(2)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             margins, checks = _margins(case, model, result) if case.linear_times else (None, None)
+        lap(3)
         outcome = RunOutcome(run, result.status, result.message, float(result.t_final), 0.0, values, keys,
                              np.array([float(summ[k]) for k in keys]), np.asarray(result.events, float),
                              _decimate(sig, case.history_signals, case.history_time))
+        lap(4)
         if margins is not None:
             outcome.margins, outcome.checks = margins, checks
         if keep:
@@ -161,7 +182,9 @@ def fly_run(case: Case, run: int, keep: bool = False):
         last = traceback.extract_tb(exc.__traceback__)[-1]
         outcome = RunOutcome(run, "failed", f"{type(exc).__name__}: {exc} ({Path(last.filename).name}:{last.lineno})",
                              float("nan"), 0.0, values)
-    outcome.wall_s = time.perf_counter() - t0
+    lap(clock[1])  # the rest (or a failing run's stage up to its exception)
+    outcome.wall_s = clock[0] - t0  # the sum of the stages
+    outcome.stage_wall_s = stages
     return (outcome, extra) if keep else outcome
 
 
@@ -208,7 +231,8 @@ class Journal:
         tmp = self.folder / f".run_{o.run:06d}.{os.getpid()}.tmp.npz"
         np.savez(tmp, run=o.run, status=o.status, message=o.message, t_final=o.t_final, wall_s=o.wall_s,
                  values=o.values, summary_keys=np.array(o.summary_keys, dtype=str), summary=o.summary,
-                 events=o.events, histories=o.histories, margins=o.margins, checks=o.checks)
+                 events=o.events, histories=o.histories, margins=o.margins, checks=o.checks,
+                 stage_wall_s=o.stage_wall_s)
         os.replace(tmp, self.folder / f"run_{o.run:06d}.npz")
 
 
@@ -217,7 +241,8 @@ def read_outcome(path: Path) -> RunOutcome:
     with np.load(path, allow_pickle=False) as z:
         return RunOutcome(int(z["run"]), str(z["status"]), str(z["message"]), float(z["t_final"]), float(z["wall_s"]),
                           z["values"], [str(k) for k in z["summary_keys"]], z["summary"], z["events"],
-                          z["histories"], z["margins"], z["checks"])
+                          z["histories"], z["margins"], z["checks"],
+                          z["stage_wall_s"] if "stage_wall_s" in z else np.full(len(RUN_STAGES), np.nan))
 
 
 # ------------------------------------------------------------------------- execution
@@ -233,11 +258,6 @@ def _init_worker(case: Case) -> None:
 def _fly(run: int) -> RunOutcome:
     assert _CASE is not None
     return fly_run(_CASE, run)
-
-
-def _context() -> mp.context.BaseContext:
-    # fork shares the built case and the loaded compiled engine; elsewhere spawn
-    return mp.get_context("fork" if sys.platform.startswith("linux") else "spawn")
 
 
 @dataclass
@@ -265,7 +285,7 @@ def execute(case: Case, todo: Iterable[int], journal: Journal, workers: int,
     pending: dict[Future, int] = {}
     queue = iter(todo)
     stop = BatchStop()
-    pool = ProcessPoolExecutor(max_workers=workers, mp_context=_context(), initializer=_init_worker, initargs=(case,))
+    pool = ProcessPoolExecutor(max_workers=workers, mp_context=process_context(), initializer=_init_worker, initargs=(case,))
     try:
         for run in queue:
             pending[pool.submit(_fly, run)] = run
@@ -288,10 +308,6 @@ def execute(case: Case, todo: Iterable[int], journal: Journal, workers: int,
     finally:
         pool.shutdown(wait=stop.reason == "done", cancel_futures=True)
     return stop
-
-
-def default_workers() -> int:
-    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
 
 
 def shard_runs(n_runs: int, shards: int, shard: int) -> range:

@@ -13,13 +13,15 @@
 4. Schedule by schedule (``study.schedules``), the free parameters (``study.parameters``,
    ``savant_cli/design/parameters.py``) are searched (``savant_cli/design/search.py``) to
    maximize the smallest margin-to-requirement ratio over the schedule's design points and
-   corners (the loops of ``study.axes``).
+   corners (the loops of ``study.axes``); each candidate's points are judged on
+   ``study.workers`` processes (``savant_cli/design/pool.py``).
 5. The tuned controller is judged at every verification point and corner, both loops,
    and written.
 
 Outputs: ``controller/<name>.yaml`` (``savant run --config-dir <run dir>
-controller=<name>`` loads it; ``study.install=true`` also writes the shipped
-``conf/controller/<name>.yaml``), ``fcs_design.csv`` (every point and corner, ratio and
+controller=<name>`` loads it; the name is ``<design>_tuned`` unless
+``study.controller_name`` says otherwise; ``study.install=true`` writes it under the
+design's name to the shipped ``conf/controller/<name>.yaml`` as well), ``fcs_design.csv`` (every point and corner, ratio and
 worst offender before and after), ``summary.json``, ``savant.h5`` (the nominal flight and
 group ``fcs_design``), ``plots/fcs_design/`` (the margin envelopes before and after, the
 Nichols charts of the worst points with the corners overlaid), the console tables and the
@@ -42,9 +44,10 @@ from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from savant_cli.config import FcsDesignStudyConfig, SavantConfig, validate
+from savant_cli.config import FcsDesignStudyConfig, SavantConfig, design_controller_name, validate
 from savant_cli.datagen import fcs_gains, flex_filters
 from savant_cli.design import parameters as dp
+from savant_cli.design.pool import ScorePool
 from savant_cli.design.search import DesignPoint, point_score, search
 from savant_cli.errors import ConfigError
 from savant_cli.io.atomic import write_text_atomic
@@ -56,6 +59,7 @@ from savant_cli.linear.margins import MarginRow
 from savant_cli.linear.requirements import PointVerdict, scaled_requirements, verdict_line
 from savant_cli.linear.store import read_loop_response, read_margins, write_loop_response, write_margin_table
 from savant_cli.paths import shipped_config_dir
+from savant_cli.processes import default_workers
 from savant_cli.sim.setup import prepare
 from savant_cli.studies import flight as flight_mod
 
@@ -162,7 +166,7 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
     if study.design not in fcs_gains.CONTROLLERS:
         raise ConfigError("study.design", study.design, f"must be one of {', '.join(fcs_gains.CONTROLLERS)}")
     spec = copy.deepcopy(fcs_gains.CONTROLLERS[study.design])
-    spec["name"] = study.controller_name or spec["name"]
+    spec["name"] = design_controller_name(study)
     prep = prepare(cfg)
     vehicle_name = cfg.vehicle["name"]
     stack_blend = flex_filters.vehicle_stack_blend(cfg.vehicle, prep.vehicle_dir)
@@ -206,21 +210,23 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
 
         values = dict(start)
         searches = {}
-        for sched in study.schedules:
-            pts = schedule_points(sched, times[sched])
-            mine = [p for p in params if p.schedule == sched]
-            if not pts or not mine:
-                continue
-            task = bar.add_task(f"design {sched}", total=study.optimizer.max_evaluations, best="–")
+        with ScorePool(list(frozen.values()), study.workers or default_workers()) as pool:
+            for sched in study.schedules:
+                pts = schedule_points(sched, times[sched])
+                mine = [p for p in params if p.schedule == sched]
+                if not pts or not mine:
+                    continue
+                task = bar.add_task(f"design {sched}", total=study.optimizer.max_evaluations, best="–")
 
-            def tables_of(v: dict, _values=values) -> object:
-                return dp.controller_tables(dp.controller_text(dp.apply(spec, {**_values, **v}),
-                                                               design_points, stack_blend, vehicle_name))
+                def tables_of(v: dict, _values=values) -> object:
+                    return dp.controller_tables(dp.controller_text(dp.apply(spec, {**_values, **v}),
+                                                                   design_points, stack_blend, vehicle_name))
 
-            res = search(mine, tables_of, pts, dt, study.optimizer, tuple(study.axes),
-                         progress=lambda n, best, _t=task: bar.update(_t, completed=n, best=f"{best:.3f}"))
-            values.update(res.values)
-            searches[sched] = res
+                res = search(mine, tables_of, pts, dt, study.optimizer, tuple(study.axes),
+                             progress=lambda n, best, _t=task: bar.update(_t, completed=n, best=f"{best:.3f}"),
+                             pool=pool)
+                values.update(res.values)
+                searches[sched] = res
         spec1 = dp.apply(spec, values)
         text1 = dp.controller_text(spec1, design_points, stack_blend, vehicle_name,
                                    {"rules": study.design, "parameters": values})

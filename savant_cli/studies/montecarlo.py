@@ -27,11 +27,12 @@ from savant_cli.errors import ConfigError
 from savant_cli.io.guidance_file import read_guidance
 from savant_cli.io.provenance import collect_provenance
 from savant_cli.io.record import FLOWN
-from savant_cli.montecarlo.batch import (BatchStop, Case, Journal, RunOutcome, default_workers, execute, fly_run,
+from savant_cli.montecarlo.batch import (BatchStop, Case, Journal, RunOutcome, execute, fly_run,
                                          history_columns, read_outcome, shard_runs)
 from savant_cli.montecarlo.results import inventory, ranges_text, write_outputs
 from savant_cli.montecarlo.spec import DispersionSet, parse
 from savant_cli.montecarlo.targets import TABLE_TARGETS
+from savant_cli.processes import default_workers
 from savant_cli.paths import hydra_search_dirs, resolve_data_path
 from savant_cli.sim import engine as E
 from savant_cli.sim.run import signals, simulate
