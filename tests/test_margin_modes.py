@@ -77,8 +77,11 @@ def test_default_vehicle_margins_are_labelled_by_their_modes(full_fidelity_margi
     """At max-Q the phase crossing near the closed-loop bandwidth is the rigid-body one
     (it was labelled slosh by the frequency window), the −9.7 dB gain reduction is the
     aerodynamic pole's; in vacuum (180 s) the gain reduction is the integrator's. Every
-    crossing labelled by a bending mode lies within 10 % of that mode's frequency in the
-    modal data, and every one labelled by a slosh tank within a factor 1.5 of that tank's
+    phase crossing labelled by a bending mode (its resonance's phase swing) lies within
+    10 % of that mode's frequency in the modal data, a gain crossing within a factor 2
+    (off the resonance a mode labels the phase crossover where its skirt dominates |L|:
+    at 180 s the upper stage's 5.3 and 12.0 Hz crossovers either side of its 9.5 Hz mode,
+    shaped by the notch there), and every one labelled by a slosh tank within a factor 1.5 of that tank's
     spring-mass frequency (the slosh model's own, uncoupled: on the vehicle the coupled
     LOX pole sits 19 % above it at 180 s, 0.444 against 0.373 Hz, and the tank's loop
     excursion reaches beyond it) and below the first bending mode."""
@@ -97,7 +100,10 @@ def test_default_vehicle_margins_are_labelled_by_their_modes(full_fidelity_margi
                 assert f / 1.5 < r.frequency_hz < min(1.5 * f, flex_hz.min()), (t, r)
             elif r.mode.startswith("flex"):
                 f = flex_hz[int(r.mode.split("_")[1]) - 1]
-                assert abs(r.frequency_hz - f) < 0.1 * f, (t, r)
+                assert f / 2.0 < r.frequency_hz < 2.0 * f, (t, r)
+                # a crossing on the resonance itself (its phase swing) lies within 10 %
+                if r.kind == "phase":
+                    assert abs(r.frequency_hz - f) < 0.1 * f, (t, r)
         assert {r.band for r in rows} <= {"rigid/aero", "slosh", "flex"}
     # the baffled tanks still make crossings in vacuum (the LOX mode at 180 s): the slosh
     # check above is not empty

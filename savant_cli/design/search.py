@@ -106,7 +106,7 @@ class SearchResult:
 def search(params: list[FreeParameter], tables_of: Callable[[dict[tuple[str, str], float]], FcsTables],
            points: list[DesignPoint], dt: float, opt: DesignOptimizer,
            axes: tuple[str, ...], progress: Callable[[int, float], None] | None = None,
-           pool: "ScorePool | None" = None) -> SearchResult:
+           pool: ScorePool | None = None) -> SearchResult:
     """Maximize :func:`objective` over the candidates ``tables_of(values)``.
 
     Parameters

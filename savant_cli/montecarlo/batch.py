@@ -87,7 +87,6 @@ class RunOutcome:
     stage_wall_s: np.ndarray = field(default_factory=lambda: np.zeros(len(RUN_STAGES)))  # s, per RUN_STAGES
 
 
-
 def history_columns(sig: dict, names: list[str]) -> list[tuple[str, str, int | None]]:
     """``(output name, signal, column)`` of each requested history; a vector signal
     gives one history per column, ``<signal>_<column>``."""
