@@ -21,8 +21,8 @@
 Outputs: ``controller/<name>.yaml`` (``savant run --config-dir <run dir>
 controller=<name>`` loads it; the name is ``<design>_tuned`` unless
 ``study.controller_name`` says otherwise; ``study.install=true`` writes it under the
-design's name to the shipped ``conf/controller/<name>.yaml`` as well), ``fcs_design.csv`` (every point and corner, ratio and
-worst offender before and after), ``summary.json``, ``savant.h5`` (the nominal flight and
+design's name to the shipped ``conf/controller/<name>.yaml`` as well),
+``fcs_design.csv`` (every point and corner, ratio and worst offender before and after), ``summary.json``, ``savant.h5`` (the nominal flight and
 group ``fcs_design``), ``plots/fcs_design/`` (the margin envelopes before and after, the
 Nichols charts of the worst points with the corners overlaid), the console tables and the
 verdict lines before and after.
