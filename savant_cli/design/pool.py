@@ -46,10 +46,10 @@ class ScorePool:
         if self._pool is None:
             return point_scores(points, ft, dt, axes)
         idx = [self._index[id(p)] for p in points]
-        shares = [idx[k::self.workers] for k in range(self.workers)]
         out = np.empty(len(idx))
-        futures = [self._pool.submit(_scores, share, ft, dt, axes) for share in shares if share]
-        for k, fut in enumerate(futures):
+        futures = {k: self._pool.submit(_scores, idx[k::self.workers], ft, dt, axes)
+                   for k in range(min(self.workers, len(idx)))}
+        for k, fut in futures.items():
             out[k::self.workers] = fut.result()
         return out
 
