@@ -4,6 +4,7 @@ of a reference commit, flown case by case through the installed command line.
     python benchmarks/bitwise_regression.py --ref a15cafb            # reference from git
     python benchmarks/bitwise_regression.py --ref-dir /tmp/ref_out   # reuse recorded outputs
     python benchmarks/bitwise_regression.py --record DIR             # only record this checkout
+    python benchmarks/bitwise_regression.py --ref 325fc54 --with guidance=ares_i_iss   # the same overrides on both
 
 The cases are the acceptance set of issue 11: all 16 combinations of ``flex``, ``slosh``,
 ``twd`` and ``actuator`` (nominal flights), ``study=linear`` at the paper's four times with
@@ -46,7 +47,7 @@ COMMON = ["output.plots=false", "sim.progress=false"]
 CONFIG_HASH_KEYS = ("fingerprint",)
 #: Summary keys and root attributes that measure the machine, not the flight.
 WALL_CLOCK_KEYS = ("study_wall_time_s", "process_wall_time_s", "sim_wall_time_s", "realtime_factor", "wall_time_s", "wall_s",
-                   "simulation_wall_time_s", "elapsed_s", "runs_per_minute")
+                   "simulation_wall_time_s", "elapsed_s", "runs_per_minute", "stage_wall_s")
 #: Root attributes of a run file that describe the flight (the rest is provenance).
 RUN_ATTRS = ("complete", "status", "message")
 #: Deliberate additions since the reference (a15cafb): output that only the new file may
@@ -57,7 +58,13 @@ NAMED_ADDITIONS = {
         "issue 11 item 5: the linear study stores what its charts mark, for savant report",
     r"montecarlo@requirements": "issue 11 item 5: the batch stores its requirement set, for savant report",
     r"linear/t\d+/charts(/.*)?": "issue 11 item 5: the chart data of a charted point, for savant report",
+    r"summary@(insertion_.*)": "issue 14: the insertion errors against the target at cutoff",
+    r"montecarlo/summary/insertion_.*": "issue 14: the insertion errors of every run",
+    r"montecarlo@insertion": "issue 14: the batch's insertion accuracy and flight-performance reserve",
 }
+#: Deliberate additions to the JSON summaries, the CSV tables and the journal records
+#: (a key, a statistics row or a summary column only the new output holds), by name.
+NAMED_KEYS = {r"insertion(_.*)?": "issue 14: insertion errors and statistics"}
 
 
 def cases() -> dict[str, list[str]]:
@@ -75,15 +82,16 @@ def cases() -> dict[str, list[str]]:
     return out
 
 
-def record(source: Path, out_dir: Path, jobs: int = 2) -> None:
-    """Fly every case with the code of ``source`` into ``out_dir/<case>``."""
+def record(source: Path, out_dir: Path, jobs: int = 2, extra: tuple[str, ...] = ()) -> None:
+    """Fly every case with the code of ``source`` into ``out_dir/<case>`` (``extra``:
+    overrides added to every case)."""
     env = dict(os.environ, PYTHONPATH=str(source))
     env.pop("SAVANT_SOURCE_DIR", None)
 
     def one(item: tuple[str, list[str]]) -> str:
         name, overrides = item
         run_dir = out_dir / name
-        cmd = [sys.executable, "-m", "savant_cli.cli", "run", *overrides, *COMMON, f"hydra.run.dir={run_dir}"]
+        cmd = [sys.executable, "-m", "savant_cli.cli", "run", *overrides, *extra, *COMMON, f"hydra.run.dir={run_dir}"]
         proc = subprocess.run(cmd, cwd=source, env=env, capture_output=True, text=True)
         (out_dir / f"{name}.log").write_text(proc.stdout + proc.stderr)
         return f"{name}: exit {proc.returncode}"
@@ -132,6 +140,8 @@ def compare_h5(a: Path, b: Path) -> list[str]:
             for at in (at_a, at_b):  # provenance of a group (e.g. the Monte Carlo's): the machine, not the flight
                 for k in [k for k in at if k.startswith("provenance_")]:
                     del at[k]
+            if "__none__" in at_b:  # the summary's null keys: a named addition may be null
+                at_b["__none__"] = np.array([x for x in at_b["__none__"] if not _named(str(x))], dtype=object)
             for k in sorted(set(at_a) | set(at_b)):
                 if k not in at_a:
                     diffs.append(f"{name}@{k}: only in the new file")
@@ -173,10 +183,14 @@ def compare_json(a: Path, b: Path) -> list[str]:
     diffs = []
 
     def walk(x, y, path):
+        if _rows(x) and _rows(y):  # statistics tables: rows by variable
+            x, y = ({r["variable"]: r for r in x}, {r["variable"]: r for r in y})
         if isinstance(x, dict) and isinstance(y, dict):
             for k in sorted(set(x) | set(y)):
                 if k in WALL_CLOCK_KEYS or k in CONFIG_HASH_KEYS:
                     continue
+                if k not in x and _named(k):
+                    continue  # a deliberate addition (NAMED_KEYS)
                 if k not in x or k not in y:
                     diffs.append(f"{path}{k}: key only in one file")
                 else:
@@ -186,6 +200,25 @@ def compare_json(a: Path, b: Path) -> list[str]:
 
     walk(ja, jb, "")
     return diffs
+
+
+def _named(key: str) -> bool:
+    return any(re.fullmatch(pat, key) for pat in NAMED_KEYS)
+
+
+def _rows(x) -> bool:
+    """A list of statistics rows (dicts keyed by ``variable``)."""
+    return isinstance(x, list) and bool(x) and all(isinstance(r, dict) and "variable" in r for r in x)
+
+
+def compare_csv(a: Path, b: Path) -> list[str]:
+    """Byte equality, or, for a table whose new rows are all deliberate additions (first
+    field named in NAMED_KEYS), byte equality of the other rows."""
+    la, lb = a.read_text().splitlines(), b.read_text().splitlines()
+    if la == lb:
+        return []
+    kept = [ln for ln in lb if not _named(ln.split(",", 1)[0])]
+    return [] if kept == la else ["bytes differ"]
 
 
 def compare_dirs(ref: Path, new: Path) -> dict[str, list[str]]:
@@ -206,8 +239,8 @@ def compare_dirs(ref: Path, new: Path) -> dict[str, list[str]]:
                 diffs += [f"{rel}: {d}" for d in compare_h5(a / rel, b / rel)]
             elif rel.suffix == ".json":
                 diffs += [f"{rel}: {d}" for d in compare_json(a / rel, b / rel)]
-            elif rel.suffix == ".csv" and (a / rel).read_bytes() != (b / rel).read_bytes():
-                diffs.append(f"{rel}: bytes differ")
+            elif rel.suffix == ".csv":
+                diffs += [f"{rel}: {d}" for d in compare_csv(a / rel, b / rel)]
             elif rel.suffix == ".npz":
                 diffs += [f"{rel}: {d}" for d in compare_npz(a / rel, b / rel)]
         out[name] = diffs
@@ -217,9 +250,15 @@ def compare_dirs(ref: Path, new: Path) -> dict[str, list[str]]:
 def compare_npz(a: Path, b: Path) -> list[str]:
     """Differences between two Monte Carlo journal records (wall-clock keys excepted)."""
     with np.load(a, allow_pickle=False) as za, np.load(b, allow_pickle=False) as zb:
-        keys = (set(za.files) | set(zb.files)) - set(WALL_CLOCK_KEYS)
-        return [f"{k}: {'only in one file' if k not in za.files or k not in zb.files else _deviation(za[k], zb[k])}"
-                for k in sorted(keys) if k not in za.files or k not in zb.files or not _equal(za[k], zb[k])]
+        za, zb = dict(za), dict(zb)
+        if "summary_keys" in za and "summary_keys" in zb:  # the summary by key; named columns added
+            ka, kb = list(za["summary_keys"]), list(zb["summary_keys"])
+            if [k for k in kb if not _named(str(k))] == ka:
+                keep = [i for i, k in enumerate(kb) if not _named(str(k))]
+                zb["summary_keys"], zb["summary"] = zb["summary_keys"][keep], zb["summary"][keep]
+    keys = (set(za) | set(zb)) - set(WALL_CLOCK_KEYS)
+    return [f"{k}: {'only in one file' if k not in za or k not in zb else _deviation(za[k], zb[k])}"
+            for k in sorted(keys) if k not in za or k not in zb or not _equal(za[k], zb[k])]
 
 
 def divergence_fix_only(ref: Path, new: Path) -> str | None:
@@ -266,13 +305,13 @@ def divergence_fix_only(ref: Path, new: Path) -> str | None:
         return (f"histories identical to t = {ta[n - 1]:.2f} s; {ha.attrs['message']} → {hb.attrs['message']}")
 
 
-def reference_outputs(commit: str, work: Path) -> Path:
+def reference_outputs(commit: str, work: Path, extra: tuple[str, ...] = ()) -> Path:
     """Record the reference commit's outputs (a detached git worktree of it)."""
     tree = work / "ref_tree"
     subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", str(tree), commit], check=True,
                    capture_output=True)
     try:
-        record(tree, work / "ref_out")
+        record(tree, work / "ref_out", extra=extra)
     finally:
         subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force", str(tree)], capture_output=True)
     return work / "ref_out"
@@ -285,18 +324,22 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--record", type=Path, help="only record this checkout's outputs into this folder")
     ap.add_argument("--keep", type=Path, help="keep the recorded outputs in this folder")
     ap.add_argument("--new-dir", type=Path, help="outputs already recorded for this checkout (skip recording)")
+    ap.add_argument("--with", dest="extra", action="append", default=[], metavar="OVERRIDE",
+                    help="an override added to every case of both checkouts (repeatable), e.g. "
+                         "guidance=ares_i_iss when the default changed")
     args = ap.parse_args(argv)
+    extra = tuple(args.extra)
     if args.record:
-        record(ROOT, args.record)
+        record(ROOT, args.record, extra=extra)
         return 0
     if not (args.ref or args.ref_dir):
         ap.error("give --ref COMMIT or --ref-dir DIR")
     work = args.keep or Path(tempfile.mkdtemp(prefix="savant_bitwise_"))
     work.mkdir(parents=True, exist_ok=True)
-    ref = args.ref_dir or reference_outputs(args.ref, work)
+    ref = args.ref_dir or reference_outputs(args.ref, work, extra)
     new = args.new_dir or work / "new_out"
     if not args.new_dir:
-        record(ROOT, new)
+        record(ROOT, new, extra=extra)
     result = compare_dirs(ref, new)
     n_same = n_fix = n_added = 0
     for name, diffs in result.items():

@@ -5,15 +5,18 @@ compiled loop, after a warm-up run that loads (or compiles) the numba cache; the
 and the median of ``--repeat`` runs — for the rigid vehicle and at full fidelity; (2)
 when the ``jsbsim`` package is installed (``pip install jsbsim``; not a dependency),
 JSBSim's own J246 launch-vehicle script (``scripts/J2461.xml``, 120 Hz, C++) timed the
-same way in the same process, and the ratio of the two; (3) the whole second `savant
+same way in the same process, and the ratio of the two; (3) the cost of closed-loop
+guidance: the default flight (PEG, ``guidance=ares_i_peg``) against the stored profile
+alone (``guidance=ares_i_iss``), interleaved run by run; (4) the whole second `savant
 run` process, plots and files included, timed as a subprocess.
 
     python benchmarks/nominal_speed.py [--repeat 5]
 
 Targets: rigid real-time factor at least 2× JSBSim's J246 measured in the same run, full
 fidelity (4 flex modes, both slosh tanks, tail-wags-dog, third-order actuators) at least
-1,500× real time (issue 11); a whole second `savant run` in under 10 s on the 2-core
-reference machine (issue 2). The machine is noisy: compare medians and ratios of one run.
+1,500× real time (issue 11); PEG's real-time factor less than 5 % below the stored
+profile's (issue 14); a whole second `savant run` in under 10 s on the 2-core reference
+machine (issue 2). The machine is noisy: compare medians and ratios of one run.
 """
 
 from __future__ import annotations
@@ -56,6 +59,34 @@ def simulation_only(repeat: int, overrides: list[str] | None = None, label: str 
     print(f"simulation real-time factor, {label}: median {statistics.median(rtfs):,.0f}x, best {max(rtfs):,.0f}x "
           f"(of {repeat})")
     return statistics.median(rtfs)
+
+
+def guidance_cost(repeat: int) -> float:
+    """Median real-time factors of the rigid nominal flight with PEG and with the stored
+    profile alone, the runs interleaved (A, B, A, B …); returns the relative drop."""
+    from hydra import compose, initialize_config_dir
+
+    from savant_cli.config import validate
+    from savant_cli.paths import hydra_search_dirs, shipped_config_dir
+    from savant_cli.sim.run import simulate
+    from savant_cli.sim.setup import prepare
+
+    models = {}
+    for name in ("ares_i_peg", "ares_i_iss"):
+        with initialize_config_dir(config_dir=str(shipped_config_dir()), version_base="1.3"):
+            cfg = validate(compose(config_name="config", overrides=[f"guidance={name}"]))
+        models[name] = prepare(cfg, hydra_search_dirs()).model
+        simulate(models[name], progress=False)  # warm
+    rtf: dict[str, list[float]] = {name: [] for name in models}
+    for _ in range(repeat):
+        for name, model in models.items():
+            res = simulate(model, progress=False)
+            rtf[name].append(res.t_final / res.sim_wall_time_s)
+    peg, stored = statistics.median(rtf["ares_i_peg"]), statistics.median(rtf["ares_i_iss"])
+    drop = 1.0 - peg / stored
+    print(f"closed-loop guidance: PEG {peg:,.0f}x, stored profile {stored:,.0f}x real time (medians of {repeat}, "
+          f"interleaved): {100 * drop:+.1f} % (target: a drop below 5 %)")
+    return drop
 
 
 def jsbsim_j246(repeat: int) -> float | None:
@@ -109,6 +140,7 @@ def main() -> None:
     j246 = jsbsim_j246(args.repeat)
     if j246:
         print(f"rigid savant / JSBSim J246 (medians, same run): {rigid / j246:.2f}")
+    guidance_cost(max(args.repeat, 9))
     whole_process()
 
 

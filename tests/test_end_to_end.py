@@ -72,7 +72,7 @@ def test_outputs_are_self_describing(nominal):
         # the recorded gravity is the zonal model's: about 9.8 m/s^2 at liftoff
         assert np.linalg.norm(th["gravity_eci"][0]) == pytest.approx(9.79, abs=0.03)
     pngs = sorted(p.name for p in (run_dir / "plots").glob("*.png"))
-    assert len(pngs) == 7
+    assert len(pngs) == 8 and "guidance.png" in pngs  # the paper's seven and PEG's
     assert (run_dir / ".hydra" / "config.yaml").is_file()
     assert "perigee" in proc.stdout  # the console summary
 
@@ -84,7 +84,7 @@ def test_report_redraws_plots(nominal, tmp_path):
     shutil.rmtree(copy / "plots")
     proc = run(["report", str(copy)], cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr
-    assert len(list((copy / "plots").glob("*.png"))) == 7
+    assert len(list((copy / "plots").glob("*.png"))) == 8
 
 
 def test_bad_config_exits_2_before_computing(tmp_path):

@@ -214,7 +214,7 @@ def test_engine_feeds_gyros_rigid_plus_flex_rate_and_nav_unit_flex_rotation(conf
     rates = E.Rates(dt=dt, n_sensor=1, n_fcs=4, n_guid=200, n_log=4)
     gyro = E.GyroModel(*gyro_discrete(25.0, 0.7, dt))
     gt = E.GuidanceTable(time=np.array([0.0, 1.0e4]), quat=np.tile([1.0, 0.0, 0.0, 0.0], (2, 1)),
-                         rate=np.zeros((2, 3)))
+                         rate=np.zeros((2, 3)), speed=np.zeros(0))
     ft = fcs_tables(validate(compose_config()).controller)
     sched = np.zeros(E.N_SCHED)
     sched[E.S_T_SEP] = sched[E.S_T_MAX] = 1.0e9

@@ -24,7 +24,7 @@ EVENTS = [("separation", 130.0), ("upper_stage_ignition", 131.0), ("les_jettison
 
 def ascent_record(n: int = 30_000, complete: bool = True, fidelity: bool = False) -> RunRecord:
     """All signals the seven figures use, shaped like a real ascent; with ``fidelity``
-    also the flex and slosh signals of their three figures."""
+    also the flex, slosh and closed-loop guidance signals of their four figures."""
     rng = np.random.default_rng(3)
     t = np.linspace(0.0, 600.0, n)
 
@@ -57,6 +57,11 @@ def ascent_record(n: int = 30_000, complete: bool = True, fidelity: bool = False
             "sensed_rate": Signal(walk(9, 1e-4), "rad/s", "gyros"),
             "slosh_position": Signal(walk(4, 1e-3), "m", "slosh", ("lox_y", "lox_z", "lh2_y", "lh2_z"), "body"),
             "slosh_frequency": Signal(0.5 + walk(2, 1e-4), "Hz", "slosh frequency", ("lox", "lh2")),
+            "peg_time_to_go": Signal(np.maximum(560.0 - t, 0.0) * (t > 170.0), "s", "time to go"),
+            "peg_velocity_to_go_magnitude": Signal(np.maximum(560.0 - t, 0.0) * 15.0 * (t > 170.0), "m/s", "v_go"),
+            "peg_steering_angles": Signal(walk(2, 1e-4), "rad", "steering", ("elevation", "out_of_plane")),
+            "peg_converged": Signal((t > 170.0).astype(float), "1", "converged"),
+            "peg_active": Signal((t > 170.0).astype(float), "1", "engaged"),
         }
     return RunRecord(
         signals=signals, events=list(EVENTS),
@@ -102,7 +107,7 @@ def _figure(rec: RunRecord, filename: str):
 
 
 def test_fidelity_figures_drawn_only_with_their_signals(tmp_path: Path) -> None:
-    extra = {"flex_modes.png", "gyro_rates.png", "slosh.png"}
+    extra = {"flex_modes.png", "gyro_rates.png", "slosh.png", "guidance.png"}
     paths = plot_ascent(ascent_record(n=400, fidelity=True), tmp_path / "a")
     assert {p.name for p in paths} == EXPECTED | extra
     fig = ascent._draw(next(s for s in FIGURES if s.filename == "flex_modes.png"), ascent_record(n=400, fidelity=True),

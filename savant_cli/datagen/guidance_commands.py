@@ -50,6 +50,7 @@ from savant_cli.models.configurations import CONFIG_STACK, CONFIG_UPPER, CONFIG_
 from savant_cli.models.gravity import gravity_zonal
 from savant_cli.sim import build
 from savant_cli.sim.plant import PlantTables, pack_tables
+from savant_cli.io.guidance_file import SPEED_COLUMN
 from savant_cli.vehicle import Vehicle
 
 G0 = C.G0
@@ -336,12 +337,14 @@ def solve(cfg: SavantConfig, vehicle: Vehicle, verbose: bool = True):
 
 
 def commands(ref: Reference, sols, turn, azimuth: float, steer, sol_upper, rate_hz: float = 1.0):
-    """Sample the attitude program at ``rate_hz``: times, quaternions q_c2i, eigenaxis rates."""
+    """Sample the attitude program at ``rate_hz``: times, quaternions q_c2i, eigenaxis
+    rates, the cutoff time and the reference's Earth-relative speed at each sample (m/s)."""
     t_cut = sol_upper.t_events[0][0] if sol_upper.t_events[0].size else sol_upper.t[-1]
     t_end = np.ceil(t_cut + ref.prog.extend_s)
     ext = ref.fly_upper(sol_upper.y[:, 0], azimuth, steer, turn, t_end=t_end)
     times = np.arange(0.0, t_end + 0.5 / rate_hz, 1.0 / rate_hz)
     quats = np.empty((times.size, 4))
+    speeds = np.empty(times.size)
     for i, t in enumerate(times):
         if t <= sols[0].t[-1]:
             y = sols[0].sol(t)
@@ -352,6 +355,7 @@ def commands(ref: Reference, sols, turn, azimuth: float, steer, sol_upper, rate_
         else:
             y = ext.sol(min(t, ext.t[-1]))
         quats[i] = qt.from_dcm(ref.attitude(t, y, azimuth, steer, turn))
+        speeds[i] = np.linalg.norm(earth.velocity_relative_eci(y[0:3], y[3:6], C.OMEGA_EARTH))
     # keep the sign continuous (q and −q are the same attitude)
     for i in range(1, times.size):
         if np.dot(quats[i], quats[i - 1]) < 0.0:
@@ -361,7 +365,37 @@ def commands(ref: Reference, sols, turn, azimuth: float, steer, sol_upper, rate_
         dq = qt.qmul(qt.qconj(quats[i]), quats[i + 1])
         rates[i] = qt.to_rotation_vector(dq) / (times[i + 1] - times[i])
     rates[-1] = rates[-2]
-    return times, quats, rates, t_cut
+    return times, quats, rates, t_cut, speeds
+
+
+def add_speed_column(path: Path, times: np.ndarray, quats: np.ndarray, speeds: np.ndarray) -> None:
+    """Append the reference speed to each row of an existing CSV command file, keeping
+    every other byte, after checking that it holds this reference's samples (times equal,
+    attitudes within 1e-5 rad)."""
+    from savant_cli.io.atomic import atomic_path
+    from savant_cli.io.guidance_file import SPEED_COLUMN, read_guidance
+
+    table = read_guidance(path)
+    if table.speed.size:
+        raise SystemExit(f"{path} already has the {SPEED_COLUMN} column")
+    if table.time.shape != times.shape or np.any(table.time != times):
+        raise SystemExit(f"{path}: its sample times are not this reference's")
+    dots = np.abs(np.sum(table.quat * quats, axis=1))
+    worst = float(np.max(2.0 * np.arccos(np.clip(dots, -1.0, 1.0))))
+    if worst > 1e-5:
+        raise SystemExit(f"{path}: its attitudes differ from this reference's by up to {worst:.3g} rad")
+    lines = path.read_text().splitlines()
+    out, row = [], 0
+    for line in lines:
+        if line.lstrip().startswith("#") or not line.strip():
+            out.append(line)
+        elif line.startswith("time_s"):
+            out.append(f"{line},{SPEED_COLUMN}")
+        else:
+            out.append(f"{line},{speeds[row]:.12g}")
+            row += 1
+    with atomic_path(path) as tmp:
+        tmp.write_text("\n".join(out) + "\n")
 
 
 def _compose(overrides: list[str]):
@@ -379,6 +413,9 @@ def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("overrides", nargs="*", help="Hydra overrides, as for `savant run`")
     ap.add_argument("--out", type=Path, default=None, help="output CSV (default: conf/guidance/<command_file>)")
+    ap.add_argument("--add-speed", action="store_true",
+                    help="only add the v_rel_m_s column to the existing command file, its other bytes unchanged "
+                         "(refused unless the regenerated attitudes match the file's)")
     args = ap.parse_args(argv)
     from savant_cli.paths import resolve_data_path, shipped_config_dir
     from savant_cli.io.guidance_file import write_guidance_csv
@@ -388,9 +425,13 @@ def main(argv: list[str] | None = None) -> None:
     vdir = resolve_data_path("vehicle.data_dir", "vehicle", cfg.vehicle["data_dir"], [shipped_config_dir()], must_be_dir=True)
     vehicle = load_vehicle(cfg.vehicle, vdir)
     ref, sols, turn, azimuth, steer, sol = solve(cfg, vehicle)
-    times, quats, rates, t_cut = commands(ref, sols, turn, azimuth, steer, sol)
+    times, quats, rates, t_cut, speeds = commands(ref, sols, turn, azimuth, steer, sol)
     y_cut = sol.y_events[0][0]
     out = args.out or (shipped_config_dir() / "guidance" / cfg.guidance.command_file)
+    if args.add_speed:
+        add_speed_column(out, times, quats, speeds)
+        print(f"added the {SPEED_COLUMN} column to {out}")
+        return
     tgt = cfg.guidance.target
     header = (f"savant guidance commands for vehicle {cfg.vehicle['name']}, generated by "
               f"savant_cli.datagen.guidance_commands {' '.join(args.overrides)}\n"
@@ -402,7 +443,7 @@ def main(argv: list[str] | None = None) -> None:
               f"B = {steer[1]:.7f} 1/s; reference cutoff at {t_cut:.2f} s, "
               f"{(np.linalg.norm(y_cut[0:3]) - C.WGS84_A) / 1e3:.2f} km\n"
               f"q = q_c2i (commanded body to ECI, scalar first); rate = eigenaxis rate to the next sample, commanded-body axes")
-    write_guidance_csv(out, times, quats, rates, header)
+    write_guidance_csv(out, times, quats, rates, header, speed=speeds)
     print(header)
     print(f"wrote {out} ({times.size} samples)")
 

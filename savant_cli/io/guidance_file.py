@@ -5,8 +5,10 @@ quaternion ``q_c2i`` (commanded body → ECI, Hamilton, scalar first; ECI X thro
 Greenwich at liftoff) and the commanded body rate (commanded-body axes).
 
 CSV columns: ``time_s, q_w, q_x, q_y, q_z, rate_x_rad_s, rate_y_rad_s, rate_z_rad_s``
-(``rate_*_deg_s`` also accepted). HDF5: datasets ``time_s`` (n), ``quaternion`` (n, 4),
-``rate_rad_s`` (n, 3).
+(``rate_*_deg_s`` also accepted), optionally ``v_rel_m_s``: the reference ascent's
+Earth-relative speed at each sample, which ``guidance.first_stage_schedule =
+relative_velocity`` indexes the first stage by. HDF5: datasets ``time_s`` (n),
+``quaternion`` (n, 4), ``rate_rad_s`` (n, 3), optionally ``v_rel_m_s`` (n).
 """
 
 from __future__ import annotations
@@ -21,9 +23,11 @@ from savant_cli.io.atomic import atomic_path
 from savant_cli.sim.engine import GuidanceTable
 
 CSV_COLUMNS = ("time_s", "q_w", "q_x", "q_y", "q_z", "rate_x_rad_s", "rate_y_rad_s", "rate_z_rad_s")
+SPEED_COLUMN = "v_rel_m_s"
 
 
-def _check(key: str, time: np.ndarray, quat: np.ndarray, rate: np.ndarray) -> GuidanceTable:
+def _check(key: str, time: np.ndarray, quat: np.ndarray, rate: np.ndarray,
+           speed: np.ndarray | None = None) -> GuidanceTable:
     if time.ndim != 1 or time.size < 2:
         raise ConfigError(f"{key}:time_s", time.shape, "needs at least 2 command samples")
     if not np.all(np.diff(time) > 0):
@@ -36,8 +40,11 @@ def _check(key: str, time: np.ndarray, quat: np.ndarray, rate: np.ndarray) -> Gu
         i = int(np.argmax(np.abs(norms - 1.0)))
         raise ConfigError(f"{key}:q", float(norms[i]), f"quaternions must have unit norm (row {i})")
     quat = quat / norms[:, None]
+    if speed is not None and (speed.shape != time.shape or not np.all(np.isfinite(speed)) or np.any(speed < 0.0)):
+        raise ConfigError(f"{key}:v_rel_m_s", "bad value", "one finite, non-negative speed per sample")
     return GuidanceTable(time=np.ascontiguousarray(time, float), quat=np.ascontiguousarray(quat, float),
-                         rate=np.ascontiguousarray(rate, float))
+                         rate=np.ascontiguousarray(rate, float),
+                         speed=np.ascontiguousarray(speed if speed is not None else np.zeros(0), float))
 
 
 def read_guidance(path: Path, key: str = "guidance.command_file") -> GuidanceTable:
@@ -46,7 +53,8 @@ def read_guidance(path: Path, key: str = "guidance.command_file") -> GuidanceTab
     if path.suffix.lower() in (".h5", ".hdf5"):
         try:
             with h5py.File(path, "r") as f:
-                return _check(key, f["time_s"][()], f["quaternion"][()], f["rate_rad_s"][()])
+                return _check(key, f["time_s"][()], f["quaternion"][()], f["rate_rad_s"][()],
+                              f["v_rel_m_s"][()] if "v_rel_m_s" in f else None)
         except (OSError, KeyError) as exc:
             raise ConfigError(key, str(path), f"unreadable HDF5 command file ({exc}); needs time_s, quaternion, rate_rad_s") from None
     try:
@@ -66,15 +74,18 @@ def read_guidance(path: Path, key: str = "guidance.command_file") -> GuidanceTab
     rate = np.column_stack([col[c] for c in need[5:8]])
     if deg:
         rate = np.radians(rate)
-    return _check(key, col["time_s"], quat, rate)
+    return _check(key, col["time_s"], quat, rate, col.get(SPEED_COLUMN))
 
 
-def write_guidance_csv(path: Path, time: np.ndarray, quat: np.ndarray, rate: np.ndarray, header: str = "") -> None:
-    """Write a command file in the CSV layout above (atomically)."""
-    table = np.column_stack([time, quat, rate])
+def write_guidance_csv(path: Path, time: np.ndarray, quat: np.ndarray, rate: np.ndarray, header: str = "",
+                       speed: np.ndarray | None = None) -> None:
+    """Write a command file in the CSV layout above (atomically); ``speed`` (m/s) adds
+    the ``v_rel_m_s`` column."""
+    columns = CSV_COLUMNS + ((SPEED_COLUMN,) if speed is not None else ())
+    table = np.column_stack([time, quat, rate] + ([speed] if speed is not None else []))
     comment = "".join(f"# {line}\n" for line in header.splitlines())
     with atomic_path(Path(path)) as tmp:
         with open(tmp, "w") as f:
             f.write(comment)
-            f.write(",".join(CSV_COLUMNS) + "\n")
+            f.write(",".join(columns) + "\n")
             np.savetxt(f, table, delimiter=",", fmt="%.12g")

@@ -17,7 +17,7 @@ import numpy as np
 SummaryValue = float | int | str | None
 
 #: ``RunRecord.status`` values.
-STATUSES = ("complete", "limit_cycle", "saturated", "diverged", "interrupted", "failed")
+STATUSES = ("complete", "limit_cycle", "saturated", "diverged", "guidance_failed", "interrupted", "failed")
 #: The statuses of a run that flew to its end: ``complete`` is healthy, ``limit_cycle``
 #: and ``saturated`` are not (``savant_cli/sim/health.py``).
 FLOWN = ("complete", "limit_cycle", "saturated")
@@ -75,7 +75,8 @@ class RunRecord:
     status : str
         One of :data:`STATUSES`: ``"complete"`` (flew to its end, healthy),
         ``"limit_cycle"`` or ``"saturated"`` (flew to its end, unhealthy), ``"diverged"``,
-        ``"interrupted"`` or ``"failed"``.
+        ``"guidance_failed"`` (closed-loop guidance stopped the run), ``"interrupted"`` or
+        ``"failed"``.
     message : str
         Why the run stopped (``"cutoff on target energy"``, ``"NaN in body_rate at t=..."``).
     """

@@ -63,8 +63,11 @@ def read_staging_state(path: Path, key: str = "phase.staging_state_file") -> Sta
         raise ConfigError(key, str(path), f"the state must start with the core states {list(L.STATE_NAMES)}")
     d = np.asarray(doc["discrete"], float)
     u = np.asarray(doc["inputs"], float)
-    if d.size != L.N_DISC or u.size != L.N_INPUT:
+    if d.size > L.N_DISC or u.size != L.N_INPUT:
         raise ConfigError(key, str(path), f"needs {L.N_DISC} discrete and {L.N_INPUT} input values")
+    # discrete fields are only ever appended (models/__init__.py): those a file was
+    # written without start at their initial zero
+    d = np.concatenate([d, np.zeros(L.N_DISC - d.size)])
     x = np.array([doc["state"][n] for n in names], float)
     if not (np.all(np.isfinite(x)) and np.all(np.isfinite(d)) and np.all(np.isfinite(u))):
         raise ConfigError(key, str(path), "all values must be finite")

@@ -13,6 +13,7 @@ from savant_cli.models import earth, gravity, atmosphere, winds  # noqa: F401  (
 from savant_cli.models import rigid_body, propulsion, actuator, rcs  # noqa: F401  (core states, in order)
 from savant_cli.models import mass, aero, twd, slosh, flex  # noqa: F401
 from savant_cli.models import guidance, sensors, fcs  # noqa: F401  (flight software, discrete state in order)
+from savant_cli.models import command_schedule, peg  # noqa: F401  (appended: older staging states stay valid)
 
 #: The models that build plant parameters and tables, in build order.
-PLANT_MODELS = (earth, gravity, atmosphere, winds, propulsion, actuator, rcs, mass, aero, twd, slosh, flex, sensors)
+PLANT_MODELS = (earth, gravity, atmosphere, winds, propulsion, actuator, rcs, mass, aero, twd, slosh, flex, sensors, peg)

@@ -29,6 +29,7 @@ import numpy as np
 from savant_cli.config import LinearStudyConfig, SavantConfig
 from savant_cli.errors import ConfigError
 from savant_cli.linear.requirements import AXIS_NAMES, CHECK_ARRAY_COLUMNS, checks_array, mode_code
+from savant_cli.models.peg import insertion_target
 from savant_cli.montecarlo.spec import DispersionSet
 from savant_cli.montecarlo.targets import apply_samples, build_dispersed
 from savant_cli.processes import process_context
@@ -159,7 +160,7 @@ def fly_run(case: Case, run: int, keep: bool = False):
         lap(1)
         sig = signals(result, model)
         health = assess(result, sig, model, case.cfg.sim.health)
-        summ = {**summarize(result, sig), **health}
+        summ = {**summarize(result, sig, target=insertion_target(applied.cfg.guidance)), **health}
         keys = [k for k, v in summ.items() if isinstance(v, (int, float)) and not isinstance(v, bool)
                 and k not in WALL_KEYS]
         lap(2)

@@ -30,6 +30,7 @@ from savant_cli.config import ReliabilitySpec, RequirementSet
 from savant_cli.linear.requirements import (CHECK_ARRAY_COLUMNS, CRITERIA, STAGES, mode_code, mode_name, verdict_line,
                                             verdicts_of_array)
 from savant_cli.montecarlo.batch import AXIS_CODES, BAND_CODES, KIND_CODES, MARGIN_ARRAY_COLUMNS, read_outcome
+from savant_cli.montecarlo.insertion import insertion_statistics, print_insertion
 from savant_cli.montecarlo.reliability import reliability
 from savant_cli.sim.engine import EVENT_NAMES
 
@@ -106,8 +107,8 @@ class Tables:
     @property
     def ok(self) -> np.ndarray:
         """Runs with usable results: those that flew to their end (healthy or not) and the
-        diverged ones (a diverged run still flew)."""
-        return np.array([s in (*FLOWN, "diverged") for s in self.status])
+        diverged or guidance-failed ones (they still flew, up to their stop)."""
+        return np.array([s in (*FLOWN, "diverged", "guidance_failed") for s in self.status])
 
 
 def _write_tables(h5: h5py.Group, inv: Inventory, runs: list[int], history_names: list[str],
@@ -255,6 +256,8 @@ def write_outputs(out_dir: Path, inv: Inventory, expected: list[int], dispersion
         tb = _write_tables(g, inv, runs, history_names, history_time)
         rel = reliability(list(tb.status), tuple(spec.success_statuses), spec.confidence, spec.target_probability)
         g.attrs["reliability"] = json.dumps(rel.as_dict())
+        insertion = insertion_statistics(tb.runs, tb.message, tb.summary_keys, tb.summary)
+        g.attrs["insertion"] = json.dumps(insertion)
         rg = g.create_group("runs")
         rg.create_dataset("run", data=tb.runs)
         rg.create_dataset("status", data=_strings(tb.status))
@@ -296,10 +299,13 @@ def write_outputs(out_dir: Path, inv: Inventory, expected: list[int], dispersion
     failures = [{"run": int(r), "status": s, "message": m, "t_final_s": t}
                 for r, s, m, t in zip(tb.runs, tb.status, tb.message, tb.t_final) if s != "complete"]
     counts = {s: tb.status.count(s) for s in sorted(set(tb.status))}
+    if insertion["accuracy"]:
+        _csv(out_dir / "insertion_accuracy.csv", insertion["accuracy"])
     summary = {"study": "montecarlo", "n_runs_expected": len(expected), "n_runs_present": len(runs),
                "missing_runs": ranges_text(missing), "status_counts": counts, "reliability": rel.as_dict(),
                "failures": failures,
-               "statistics": stats, "dispersion_statistics": disp_stats, "margin_spread": spread}
+               "statistics": stats, "dispersion_statistics": disp_stats, "margin_spread": spread,
+               "insertion": insertion}
     if tb.checks.size:
         summary.update({"requirements_met": verdict["passed"], "requirements_verdict": verdict["line"],
                         "requirements": verdict})
@@ -308,6 +314,7 @@ def write_outputs(out_dir: Path, inv: Inventory, expected: list[int], dispersion
         _plots(out_dir, tb, dispersions, bands or None)
     if console is not None:
         print_tables(console, stats, spread, counts, missing, verdict if tb.checks.size else None)
+        print_insertion(console, insertion)
         print_verdict(rel.line(), rel.target_met, console)
     return summary
 

@@ -20,6 +20,8 @@ Drawn when the model is on:
 - ``flex_modes.png`` (flex): ``flex_q`` and ``flex_qdot`` of up to 8 modes
 - ``gyro_rates.png`` (flex): pitch and yaw ``sensed_rate`` of each gyro vs the rigid ``body_rate``
 - ``slosh.png`` (slosh): ``slosh_position`` per tank and ``slosh_frequency``
+- ``guidance.png`` (closed-loop guidance): ``peg_time_to_go``,
+  ``peg_velocity_to_go_magnitude``, ``peg_steering_angles`` and ``peg_converged``
 """
 
 from __future__ import annotations
@@ -141,6 +143,14 @@ FIGURES: tuple[FigureSpec, ...] = (
         Panel("LH2 slosh mass", "m", (Line("slosh_position", 2, "y"), Line("slosh_position", 3, "z"))),
         Panel("slosh frequency", "Hz", (Line("slosh_frequency", 0, "LOX"), Line("slosh_frequency", 1, "LH2"))),
     ), requires="slosh_position"),
+    FigureSpec("guidance.png", "Powered Explicit Guidance", (
+        Panel("time to go", "s", (Line("peg_time_to_go", None, "t_go"),)),
+        Panel("velocity to go", "m/s", (Line("peg_velocity_to_go_magnitude", None, "|v_go|"),)),
+        Panel("thrust direction", "deg", (Line("peg_steering_angles", 0, "elevation above horizontal"),
+                                          Line("peg_steering_angles", 1, "out of the target plane"))),
+        Panel("converged", "", (Line("peg_converged", None, "converged"), Line("peg_active", None, "engaged",
+                                                                              dashed=True))),
+    ), requires="peg_time_to_go"),
 )
 
 

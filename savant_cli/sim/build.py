@@ -11,7 +11,9 @@ import numpy as np
 
 from savant_cli import constants as C
 from savant_cli.config import SavantConfig
+from savant_cli.errors import ConfigError
 from savant_cli.models import PLANT_MODELS, blocks, earth, quaternion as qt, rigid_body
+from savant_cli.models.command_schedule import SCHEDULES
 from savant_cli.models.fcs import FcsTables, fcs_tables
 from savant_cli.models.sensors import GYRO_MISALIGN, gyro_discrete, gyro_steady_state, misalignment
 from savant_cli.sim import engine as E
@@ -134,6 +136,30 @@ def pad_state(cfg: SavantConfig, vehicle: Vehicle) -> tuple[np.ndarray, np.ndarr
     return r, v, q
 
 
+def first_stage_profile(table: GuidanceTable, cfg: SavantConfig, t_sep: float) -> GuidanceTable:
+    """The command table with its reference speeds cut to the first-stage samples it is
+    indexed by under ``guidance.first_stage_schedule=relative_velocity``: from liftoff to
+    the reference's fastest sample before separation at ``t_sep`` (s; the tail-off slows
+    the vehicle), strictly increasing (models/command_schedule.py)."""
+    if cfg.guidance.first_stage_schedule == "time":
+        return table._replace(speed=np.zeros(0))
+    key = "guidance.first_stage_schedule"
+    if table.speed.size != table.time.size:
+        raise ConfigError(key, cfg.guidance.first_stage_schedule,
+                          f"needs the command file's v_rel_m_s column (the reference ascent's Earth-relative speed); "
+                          f"{cfg.guidance.command_file} has none: add it with `python -m "
+                          f"savant_cli.datagen.guidance_commands --add-speed` or use first_stage_schedule=time")
+    n_first = int(np.searchsorted(table.time, t_sep, side="right"))
+    m = int(np.argmax(table.speed[:n_first])) + 1 if n_first else 0
+    speed = table.speed[:m]
+    if m < 2 or not np.all(np.diff(speed) > 0.0):
+        bad = float(table.time[int(np.argmin(np.diff(speed) > 0.0)) + 1]) if m >= 2 else float(table.time[0])
+        raise ConfigError(key, cfg.guidance.first_stage_schedule,
+                          f"needs the reference speed strictly increasing from liftoff to its first-stage peak; "
+                          f"{cfg.guidance.command_file} is not at t = {bad:g} s")
+    return table._replace(speed=np.ascontiguousarray(speed))
+
+
 def build_model(cfg: SavantConfig, vehicle: Vehicle, guidance: GuidanceTable) -> SimModel:
     """Numeric model of one run."""
     p, tb = plant_data(cfg, vehicle)
@@ -182,6 +208,8 @@ def build_model(cfg: SavantConfig, vehicle: Vehicle, guidance: GuidanceTable) ->
     sched[E.S_SMOOTH_WN] = cfg.guidance.smoother.natural_frequency_rad_s
     sched[E.S_MAX_RATE] = np.radians(cfg.sim.max_body_rate_deg_s)
     sched[E.S_DELAY_STEPS] = round(cfg.controller.delay_s / rt.dt)
+    sched[E.S_PROFILE_SCHEDULE] = SCHEDULES.index(cfg.guidance.first_stage_schedule)
+    guidance = first_stage_profile(guidance, cfg, sched[E.S_T_SEP])
     info = {"separation_time_s": sched[E.S_T_SEP]}
     return SimModel(p=p, tables=tb, fcs=ft, gyro=gyro, guidance=guidance, rates=rt, sched=sched,
                     x0=x0, d0=d0, u0=u0, info=info, layout=layout)

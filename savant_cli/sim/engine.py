@@ -7,7 +7,11 @@ on step boundaries, runs the discrete parts at their own rates with zero-order h
 * command smoother, flight control and roll-jet logic every ``n_fcs`` steps (50 Hz);
   their commands reach the actuators and jets ``controller.delay_s`` later (the loop's
   transport delay, a whole number of plant steps within the control period);
-* a new guidance command every ``n_guid`` steps (1 Hz);
+* a new guidance command every ``n_guid`` steps (1 Hz): from the stored profile
+  (``models/guidance.py``, read at mission time or, in the first stage, by relative
+  speed: ``models/command_schedule.py``) or, once engaged in the upper stage, from
+  Powered Explicit Guidance (``models/peg.py``), whose time to go also commands the
+  cutoff at the plant step nearest its predicted time;
 * events (separation, J-2X ignition, LES jettison, cutoff) at the first step boundary at
   or after their time or condition.
 
@@ -22,11 +26,12 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from savant_cli.models import actuator, earth, flex, quaternion as qt, rcs, rigid_body, slosh
+from savant_cli.models import actuator, earth, flex, peg, quaternion as qt, rcs, rigid_body, slosh
+from savant_cli.models.command_schedule import BY_TIME, D_PROFILE_OFFSET, D_PROFILE_RATE, profile_time
 from savant_cli.models.earth import A_ALT, P_E2, P_OMEGA_E, P_RE
 from savant_cli.models.fcs import FCS_COAST, FCS_STACK, FCS_UPPER, FcsTables, fcs_step, reset_phase
 from savant_cli.models.gravity import P_MU
-from savant_cli.models.guidance import guidance_sample, smoother_step
+from savant_cli.models.guidance import D_TG, D_VG, guidance_sample, smoother_step
 from savant_cli.models.sensors import (
     GYRO_MISALIGN, GYRO_POINTS, N_GYROS, P_IMU_MISALIGN, gyro_step, misalignment,
 )
@@ -40,13 +45,15 @@ from savant_cli.sim.plant import derivative, derivative_state, reference_cg
 
 # status codes returned by advance()
 RUNNING = 0
-STOP_CUTOFF = 1  # target energy reached
+STOP_CUTOFF = 1  # target energy reached (stored profile)
 STOP_DEPLETION = 2  # an upper-stage propellant ran out
 STOP_SEPARATION = 3  # phase ends at separation
 STOP_TIME = 4  # maximum time reached
+STOP_GUIDANCE_CUTOFF = 5  # PEG's time to go elapsed
 DIVERGED_NONFINITE = 10
 DIVERGED_GROUND = 11
 DIVERGED_RATE = 12
+GUIDANCE_FAILED = 13  # PEG failed in flight (the detail says why)
 
 # event slots in `events`
 EV_SEPARATION = 0
@@ -66,7 +73,8 @@ S_SMOOTH_ZETA = 6
 S_SMOOTH_WN = 7
 S_MAX_RATE = 8  # divergence threshold on |ω|, rad/s
 S_DELAY_STEPS = 9  # plant steps from the flight-control cycle to its commands (controller.delay_s)
-N_SCHED = 10
+S_PROFILE_SCHEDULE = 10  # the stored profile's first-stage index (command_schedule.BY_*)
+N_SCHED = 11
 
 
 class Rates(NamedTuple):
@@ -90,6 +98,8 @@ class GuidanceTable(NamedTuple):
     time: np.ndarray  # (n,) s
     quat: np.ndarray  # (n, 4) q_c2i
     rate: np.ndarray  # (n, 3) rad/s, commanded-body axes
+    speed: np.ndarray  # (m,) m/s: the reference ascent's Earth-relative speed at time[:m]
+    #                    (the first-stage samples; empty when the file has none)
 
 
 @njit(cache=True, error_model="numpy")
@@ -250,21 +260,46 @@ def _advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0
     q_imu = misalignment(p[P_IMU_MISALIGN:P_IMU_MISALIGN + 3])[0]
     q_nav = np.empty(4)
     has_flex = int(p[flex.P_OFFSET]) >= 0
+    peg_on = p[peg.P_ON] != 0.0
     for j in range(n_steps):
         k = k0 + j
         t = k * dt
         status = handle_events(t, x, u, d, events, sched, p, tb)
         if status != RUNNING:
             return status, j, log_row, ""
-        if int(u[U_ENGINE]) == ENGINE_UPPER and specific_energy(x, p[P_MU]) >= sched[S_ENERGY_TARGET]:
-            events[EV_CUTOFF] = t
-            return STOP_CUTOFF, j, log_row, ""
+        if int(u[U_ENGINE]) == ENGINE_UPPER:
+            if peg_on:  # PEG's cutoff: the plant step nearest its predicted time
+                if d[peg.D_ACTIVE] != 0.0 and t + 0.5 * dt >= d[peg.D_T_CUTOFF]:
+                    events[EV_CUTOFF] = t
+                    return STOP_GUIDANCE_CUTOFF, j, log_row, ""
+            elif specific_energy(x, p[P_MU]) >= sched[S_ENERGY_TARGET]:
+                events[EV_CUTOFF] = t
+                return STOP_CUTOFF, j, log_row, ""
         if t > sched[S_T_MAX]:
             return STOP_TIME, j, log_row, ""
         phase = fcs_phase(events)
 
         if k % rates.n_guid == 0:
-            guidance_sample(d, t, gt.time, gt.quat, gt.rate, k == 0)
+            steered = False
+            if peg_on and not np.isnan(events[EV_IGNITION]):
+                code = peg.guidance_cycle(d, t, x[R:R + 3], x[V:V + 3], events[EV_IGNITION], rates.n_guid * dt,
+                                          p, p[P_RE])
+                if code != peg.PEG_OK:
+                    return GUIDANCE_FAILED, j, log_row, peg.failure_message(code)
+                steered = d[peg.D_ACTIVE] != 0.0
+                peg.blend_with_profile(d, t, t + d[D_PROFILE_OFFSET], rates.n_guid * dt, p, gt.time, gt.quat, gt.rate)
+            if not steered:
+                if sched[S_PROFILE_SCHEDULE] == BY_TIME:
+                    guidance_sample(d, t, gt.time, gt.quat, gt.rate, k == 0)
+                else:
+                    ex, ey, ez = earth.earth_relative_velocity_xyz(x[R], x[R + 1], x[V], x[V + 1], x[V + 2],
+                                                                  p[P_OMEGA_E])
+                    tau = profile_time(d, t, np.sqrt(ex * ex + ey * ey + ez * ez), phase == FCS_STACK, gt.speed,
+                                       gt.time[:gt.speed.size], k == 0)
+                    guidance_sample(d, tau, gt.time, gt.quat, gt.rate, k == 0)
+                    d[D_TG] = t  # the smoother extrapolates in mission time
+                    for i in range(3):
+                        d[D_VG + i] *= d[D_PROFILE_RATE]
         config = int(u[U_CONFIG])
         if k % rates.n_sensor == 0:
             for g in range(N_GYROS):  # each gyro reads rigid plus flex rate at its node, in its own axes

@@ -12,8 +12,8 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from savant_cli import constants as C
 from savant_cli.io.record import Signal
 from savant_cli.models import (
-    actuator, aero, atmosphere, earth, flex, gravity, mass, propulsion, quaternion as qt, rcs, rigid_body, slosh, twd,
-    winds,
+    actuator, aero, atmosphere, earth, flex, gravity, mass, peg, propulsion, quaternion as qt, rcs, rigid_body, slosh,
+    twd, winds,
 )
 from savant_cli.sim import engine as E
 from savant_cli.sim import layout as L
@@ -22,6 +22,7 @@ from savant_cli.sim.plant import derivative
 
 STOP_MESSAGES = {
     E.STOP_CUTOFF: "cutoff: target orbital energy reached",
+    E.STOP_GUIDANCE_CUTOFF: "cutoff: PEG time to go elapsed",
     E.STOP_DEPLETION: "cutoff: upper-stage propellant depleted before the target",
     E.STOP_SEPARATION: "end of phase at first-stage separation",
     E.STOP_TIME: "maximum simulation time reached",
@@ -68,8 +69,8 @@ def simulate(model: SimModel, progress: bool = True, chunk_s: float = 10.0,
              snapshot_steps: tuple[int, ...] = ()) -> SimResult:
     """Fly one run from the model's initial state until a stop condition.
 
-    A diverging run returns normally with ``status = "diverged"`` and the history up to
-    the failure; ``KeyboardInterrupt`` returns ``status = "interrupted"``. The complete
+    A diverging run returns normally with ``status = "diverged"`` (``"guidance_failed"``
+    when closed-loop guidance stopped it) and the history up to the failure; ``KeyboardInterrupt`` returns ``status = "interrupted"``. The complete
     state at each of ``snapshot_steps`` (plant step indices) reached is kept in
     ``result.snapshots``.
     """
@@ -123,6 +124,9 @@ def simulate(model: SimModel, progress: bool = True, chunk_s: float = 10.0,
     elif code in DIVERGED:
         status = "diverged"
         message = f"diverged at t = {t_final:.3f} s: {detail}"
+    elif code == E.GUIDANCE_FAILED:
+        status = "guidance_failed"
+        message = f"guidance failed at t = {t_final:.3f} s: {detail}"
     else:
         message = STOP_MESSAGES.get(code, f"stopped with code {code}")
     # close the history with the final state (for summaries at cutoff)
@@ -155,6 +159,47 @@ def launch_frame(model: SimModel) -> np.ndarray:
     r0 = model.x0[L.R:L.R + 3]
     lat, lon, _ = earth.ecef_to_geodetic(r0, C.WGS84_A, C.WGS84_E2)
     return earth.dcm_ecef_to_ned(lat, lon)  # ECI = ECEF at t = 0
+
+
+def guidance_signals(t: np.ndarray, r: np.ndarray, d: np.ndarray, p: np.ndarray) -> dict[str, Signal]:
+    """Powered Explicit Guidance's histories (``models/peg.py``), from the logged
+    discrete state (each holds its latest cycle's value between cycles) and the position
+    ``r`` (ECI, m) at the logged times ``t`` (s); ``p``: the plant parameters (the target
+    plane)."""
+    xyz = ("x", "y", "z")
+    active = d[:, peg.D_ACTIVE] > 0.0
+    lam, lam_dot = d[:, peg.D_LAMBDA:peg.D_LAMBDA + 3], d[:, peg.D_LAMBDA_DOT:peg.D_LAMBDA_DOT + 3]
+    i_f = lam + lam_dot * (t - d[:, peg.D_T_LAMBDA])[:, None]
+    i_f /= np.maximum(np.linalg.norm(i_f, axis=1), 1e-300)[:, None]
+    up = r / np.linalg.norm(r, axis=1)[:, None]
+    normal = -p[peg.P_IY:peg.P_IY + 3]
+    steering = np.column_stack([np.arcsin(np.clip(np.sum(i_f * up, axis=1), -1, 1)),
+                                np.arcsin(np.clip(i_f @ normal, -1, 1))])
+    steering[~active] = 0.0
+    return {
+        "peg_active": Signal(d[:, peg.D_ACTIVE], "1", "1 once PEG steers the vehicle"),
+        "peg_converged": Signal(d[:, peg.D_CONVERGED], "1", "1: the latest PEG cycle converged"),
+        "peg_time_to_go": Signal(d[:, peg.D_TGO], "s", "PEG burn time to go (0 before PEG engages)"),
+        "peg_cutoff_time": Signal(d[:, peg.D_T_CUTOFF], "s", "predicted cutoff time (0 before PEG engages)"),
+        "peg_velocity_to_go": Signal(d[:, peg.D_VGO:peg.D_VGO + 3], "m/s", "velocity to be gained", xyz, "ECI"),
+        "peg_velocity_to_go_magnitude": Signal(np.linalg.norm(d[:, peg.D_VGO:peg.D_VGO + 3], axis=1), "m/s",
+                                               "magnitude of the velocity to be gained"),
+        "peg_steering_angles": Signal(steering, "rad", "PEG's thrust direction: elevation above the local horizontal, "
+                                      "and out of the target plane toward its angular momentum (0 before PEG engages)",
+                                      ("elevation", "out_of_plane")),
+        "peg_lambda": Signal(d[:, peg.D_LAMBDA:peg.D_LAMBDA + 3], "1", "steering unit vector (thrust direction "
+                             "at t_lambda)", xyz, "ECI"),
+        "peg_lambda_dot": Signal(d[:, peg.D_LAMBDA_DOT:peg.D_LAMBDA_DOT + 3], "1/s", "steering turning rate", xyz,
+                                 "ECI"),
+        "peg_t_lambda": Signal(d[:, peg.D_T_LAMBDA], "s", "time at which the thrust points along lambda"),
+        "peg_cutoff_position": Signal(d[:, peg.D_RD:peg.D_RD + 3], "m", "predicted (target) cutoff position", xyz,
+                                      "ECI"),
+        "peg_cutoff_velocity": Signal(d[:, peg.D_VD:peg.D_VD + 3], "m/s", "target cutoff velocity at the predicted "
+                                      "cutoff position", xyz, "ECI"),
+        "peg_thrust_acceleration": Signal(d[:, peg.D_ACCEL], "m/s^2", "sensed thrust acceleration over the last "
+                                          "guidance cycle"),
+        "peg_terminal": Signal(d[:, peg.D_TERMINAL], "1", "1: steering frozen near cutoff"),
+    }
 
 
 def signals(result: SimResult, model: SimModel) -> dict[str, Signal]:
@@ -230,6 +275,8 @@ def signals(result: SimResult, model: SimModel) -> dict[str, Signal]:
                             ("pitch_kp", "pitch_ki", "pitch_kd", "pitch_kir", "yaw_kp", "yaw_ki", "yaw_kd", "yaw_kir")),
         "configuration": Signal(config, "1", "0 integrated stack, 1 upper stage with LES, 2 upper stage"),
     }
+    if model.p[peg.P_ON] != 0.0:
+        s.update(guidance_signals(t, x[:, L.R:L.R + 3], d, model.p))
     if lay.simplex:
         s["actuator_ram_position"] = Signal(x[:, [L.ACT_P + 2, L.ACT_Y + 2]], "rad",
                                             "simplex ram position as an equivalent gimbal angle", pq, "body")

@@ -46,8 +46,52 @@ def _on_time(t: np.ndarray, command: np.ndarray) -> float:
     return float(np.sum(dt[np.abs(command) >= 0.5]))
 
 
-def summarize(result: SimResult, sig: dict[str, Signal], study_wall_s: float | None = None) -> dict:
-    """Summary scalars of a run (SI units named in the keys)."""
+#: the keys of :func:`insertion_errors`
+INSERTION_KEYS = ("insertion_radius_error_m", "insertion_speed_error_mps", "insertion_flight_path_angle_error_deg",
+                  "insertion_velocity_error_mps", "insertion_perigee_error_km", "insertion_apogee_error_km",
+                  "insertion_inclination_error_deg", "insertion_node_error_deg")
+
+
+def insertion_errors(r_eci: np.ndarray, v_eci: np.ndarray, target) -> dict[str, float]:
+    """The cutoff state against the insertion target (:class:`savant_cli.models.peg.InsertionTarget`).
+
+    Radius, speed and flight-path angle errors; the velocity error ``|v − v_d|`` against
+    the target velocity at the cutoff position (target speed and flight-path angle, in the
+    target plane: what a perfect cutoff still had to gain or lose); perigee, apogee,
+    inclination and node (right ascension of the ascending node, ECI at liftoff) of the
+    osculating two-body orbit against the target orbit's.
+    """
+    r = float(np.linalg.norm(r_eci))
+    v = float(np.linalg.norm(v_eci))
+    gamma = float(np.arcsin(np.clip(np.dot(r_eci, v_eci) / (r * v), -1.0, 1.0)))
+    n = target.plane_normal
+    ix = r_eci / r
+    iz = np.cross(n, ix)  # downrange in the target plane, normal to r
+    iz /= np.linalg.norm(iz)
+    ix = np.cross(iz, n)  # the in-plane vertical nearest the actual one
+    v_d = target.speed_mps * (np.sin(target.flight_path_angle_rad) * ix + np.cos(target.flight_path_angle_rad) * iz)
+    orbit = orbit_elements(r_eci, v_eci)
+    rp, ra = target.apsis_altitudes_km
+    h = np.cross(r_eci, v_eci)
+    node = float(np.arctan2(h[0], -h[1]))
+    d_node = float(np.degrees(np.angle(np.exp(1j * (node - target.node_rad)))))
+    return {
+        "insertion_radius_error_m": r - target.radius_m,
+        "insertion_speed_error_mps": v - target.speed_mps,
+        "insertion_flight_path_angle_error_deg": float(np.degrees(gamma - target.flight_path_angle_rad)),
+        "insertion_velocity_error_mps": float(np.linalg.norm(v_eci - v_d)),
+        "insertion_perigee_error_km": orbit["perigee_altitude_km"] - rp,
+        "insertion_apogee_error_km": orbit["apogee_altitude_km"] - ra,
+        "insertion_inclination_error_deg": orbit["inclination_deg"] - float(np.degrees(target.inclination_rad)),
+        "insertion_node_error_deg": d_node,
+    }
+
+
+def summarize(result: SimResult, sig: dict[str, Signal], study_wall_s: float | None = None,
+              target=None) -> dict:
+    """Summary scalars of a run (SI units named in the keys); ``target`` (an
+    :class:`~savant_cli.models.peg.InsertionTarget`) adds the insertion errors at cutoff
+    (None when the run did not cut off)."""
     t = sig["time"].data
     out: dict[str, float | int | str | None] = {"status": result.status, "message": result.message}
     if t.size == 0:
@@ -91,6 +135,13 @@ def summarize(result: SimResult, sig: dict[str, Signal], study_wall_s: float | N
         "sim_wall_time_s": result.sim_wall_time_s,
         "realtime_factor": float(result.t_final / result.sim_wall_time_s) if result.sim_wall_time_s > 0 else None,
     })
+    if target is not None:
+        cut = not np.isnan(result.events[E.EV_CUTOFF])
+        out.update(insertion_errors(r_f, v_f, target) if cut else dict.fromkeys(INSERTION_KEYS))
+    if "peg_time_to_go" in sig:
+        active = sig["peg_active"].data > 0.0
+        out["peg_engage_time_s"] = float(t[np.argmax(active)]) if active.any() else None
+        out["peg_converged_at_cutoff"] = int(sig["peg_converged"].data[-1]) if active.any() else None
     if study_wall_s is not None:
         out["study_wall_time_s"] = study_wall_s
     return out

@@ -21,6 +21,7 @@ from savant_cli.io.atomic import write_json_atomic
 from savant_cli.io.hdf5 import write_run
 from savant_cli.io.provenance import collect_provenance
 from savant_cli.io.record import FLOWN, RunRecord, Signal
+from savant_cli.models.peg import insertion_target
 from savant_cli.sim.build import rates
 from savant_cli.sim.health import assess
 from savant_cli.sim.engine import EVENT_NAMES
@@ -47,7 +48,8 @@ def fly(cfg: SavantConfig, progress: bool | None = None, snapshot_steps: tuple[i
                       chunk_s=cfg.sim.chunk_s, snapshot_steps=snapshot_steps)
     sig = signals(result, prep.model)
     health = assess(result, sig, prep.model, cfg.sim.health)  # may turn "complete" into a verdict
-    return Flight(prep=prep, result=result, signals=sig, summary={**summarize(result, sig), **health})
+    summary = summarize(result, sig, target=insertion_target(cfg.guidance))
+    return Flight(prep=prep, result=result, signals=sig, summary={**summary, **health})
 
 
 def control_steps(cfg: SavantConfig, times: list[float]) -> tuple[int, ...]:
