@@ -85,7 +85,7 @@ def guidance_cost(repeat: int) -> float:
     peg, stored = statistics.median(rtf["ares_i_peg"]), statistics.median(rtf["ares_i_iss"])
     drop = 1.0 - peg / stored
     print(f"closed-loop guidance: PEG {peg:,.0f}x, stored profile {stored:,.0f}x real time (medians of {repeat}, "
-          f"interleaved): {100 * drop:+.1f} % (target: a drop below 5 %)")
+          f"interleaved): a drop of {100 * drop:.1f} % (target: below 5 %)")
     return drop
 
 

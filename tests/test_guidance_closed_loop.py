@@ -156,3 +156,42 @@ def test_speed_schedule_needs_the_speed_column(tmp_path):
     with pytest.raises(ConfigError) as exc:
         first_stage_profile(table._replace(speed=np.zeros(0)), cfg, 130.0)
     assert exc.value.key == "guidance.first_stage_schedule" and "v_rel_m_s" in str(exc.value)
+
+
+def test_insertion_statistics_and_reserve():
+    """The accuracy band and the reserve by order statistics, against hand counts: 1000
+    runs with remaining propellant 1 … 1000 kg (the 0.135 percentile of 1 … 1000 is at
+    rank 0.00135 × 999 = 1.34865 of the sorted values, 2.34865 kg), nominal 800 kg; then one of
+    them out of propellant (fewer than 0.135 % of 1000 = 1.35 runs: still covered) and
+    then two (more: not covered)."""
+    from savant_cli.montecarlo.insertion import DEPLETED, insertion_statistics
+
+    n = 1000
+    runs = np.arange(n)
+    remaining = np.arange(1.0, n + 1.0)
+    remaining[0] = 800.0  # the nominal
+    remaining[799] = 1.0  # (the value the nominal displaced)
+    perigee = np.linspace(-1.0, 1.0, n)
+    keys = ["propellant_remaining_kg", "insertion_perigee_error_km"]
+    table = np.column_stack([remaining, perigee])
+    msgs = ["cutoff: PEG time to go elapsed"] * n
+    msgs[5] = "saturated: 1.2 s on the upper stage gimbal stop (more than …; cutoff: PEG time to go elapsed)"
+    ins = insertion_statistics(runs, msgs, keys, table)
+    assert ins["runs_cut_off_on_guidance"] == n
+    row = ins["accuracy"][0]
+    assert row["variable"] == "insertion_perigee_error_km"
+    assert row["p99.865"] == pytest.approx(np.percentile(perigee, 99.865))
+    assert row["half_spread"] == pytest.approx(0.5 * (np.percentile(perigee, 99.865) - np.percentile(perigee, 0.135)))
+    r = ins["reserve"]
+    assert r["remaining_p0.135_kg"] == pytest.approx(2.34865)
+    assert r["flight_performance_reserve_kg"] == pytest.approx(800.0 - 2.34865)
+    assert r["covered"]
+    msgs[10] = DEPLETED
+    ins = insertion_statistics(runs, msgs, keys, table)
+    assert ins["runs_depleted"] == 1 and ins["reserve"]["covered"]
+    # the run that ran out ranks lowest: rank 0.00135 × 999 = 1.34865 is now 0.34865 of the
+    # way from the smallest remaining (1 kg) to the next (2 kg)
+    assert ins["reserve"]["remaining_p0.135_kg"] == pytest.approx(1.0 + 0.34865 * (2.0 - 1.0))
+    msgs[20] = DEPLETED
+    ins = insertion_statistics(runs, msgs, keys, table)
+    assert ins["reserve"]["flight_performance_reserve_kg"] is None and not ins["reserve"]["covered"]

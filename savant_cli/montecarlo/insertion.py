@@ -10,11 +10,11 @@ the 0.135–99.865 % band: the ±3σ-equivalent spread a performance analyst quo
 **Flight-performance reserve (FPR).** The propellant the vehicle must carry, beyond what
 the nominal flight burns, for 99.865 % of dispersed flights to reach the target:
 ``FPR = R_nominal − R_0.135``, with ``R`` the upper-stage propellant remaining at cutoff
-and ``R_0.135`` its 0.135 percentile over the runs that reached cutoff on guidance or ran
-out of propellant (those count as having less than any run that cut off). When the
-runs that ran out are more than 0.135 % of them, the 3σ-low flight does not reach the
-target and the reserve is reported as not covered (``covered: false``), with their
-count.
+and ``R_0.135`` its 0.135 percentile (linear interpolation between order statistics) over
+the runs that reached cutoff on guidance or ran out of propellant (those rank below any
+run that cut off). When that percentile falls on or next to a run that ran out, the
+3σ-low flight does not reach the target and the reserve is reported as not covered
+(``covered: false``), with their count.
 """
 
 from __future__ import annotations
@@ -43,13 +43,14 @@ def insertion_statistics(runs: np.ndarray, messages: list[str], keys: list[str],
     runs : ndarray (n,)
         Run numbers (0 is the nominal).
     messages : list of str
-        Each run's stop message.
+        Each run's stop message (a health verdict's message quotes it).
     keys : list of str
         The summary table's column names; ``summary`` (n, len(keys)) its values.
     """
     col = {k: j for j, k in enumerate(keys)}
-    guided = np.array([m in GUIDED_CUTOFFS for m in messages], dtype=bool)
-    depleted = np.array([m == DEPLETED for m in messages], dtype=bool)
+    # a health verdict (limit cycle, saturated) keeps the stop message in its own
+    guided = np.array([any(c in m for c in GUIDED_CUTOFFS) for m in messages], dtype=bool)
+    depleted = np.array([DEPLETED in m for m in messages], dtype=bool)
     rows = []
     for key in ACCURACY_KEYS:
         if key not in col:
@@ -67,11 +68,13 @@ def insertion_statistics(runs: np.ndarray, messages: list[str], keys: list[str],
     key = "propellant_remaining_kg"
     if key in col and (guided | depleted).any():
         counted = guided | depleted
-        short = -1e30  # a run that ran out ranks below every run that cut off
-        remaining = np.where(depleted, short, summary[:, col[key]])[counted]
+        # the runs that ran out rank below every run that cut off (−inf): a percentile
+        # interpolated from one of them is not finite, and the reserve is not covered
+        remaining = np.where(depleted, -np.inf, summary[:, col[key]])[counted]
+        with np.errstate(invalid="ignore"):
+            low = float(np.percentile(remaining, TAIL))
+        low = low if np.isfinite(low) else None
         nominal = summary[runs == 0, col[key]]
-        low = float(np.percentile(remaining, TAIL))
-        low = low if low > 0.5 * short else None
         nominal_value = float(nominal[0]) if nominal.size and np.isfinite(nominal[0]) else None
         out["reserve"] = {
             "runs": int(counted.sum()),
@@ -91,7 +94,7 @@ def reserve_line(ins: dict[str, Any]) -> str:
         return "flight-performance reserve: no run reached cutoff"
     if r["flight_performance_reserve_kg"] is None:
         return (f"flight-performance reserve: NOT COVERED — {ins['runs_depleted']} of {r['runs']} runs ran out of "
-                f"propellant before the target (more than {TAIL} %)")
+                f"propellant before the target, and the {TAIL} percentile of the propellant remaining falls on them")
     return (f"flight-performance reserve (99.865 %): {r['flight_performance_reserve_kg']:.0f} kg "
             f"(nominal remaining {r['nominal_remaining_kg']:.0f} kg, 3σ-low {r['remaining_p0.135_kg']:.0f} kg; "
             f"{ins['runs_depleted']} of {r['runs']} runs ran out)")
@@ -107,4 +110,5 @@ def print_insertion(console: Console, ins: dict[str, Any]) -> None:
             tb.add_row(r["variable"].removeprefix("insertion_"), f"{r['p0.135']:.4g}", f"{r['p50']:.4g}",
                        f"{r['p99.865']:.4g}", f"{r['half_spread']:.4g}", f"{r['max_abs']:.4g}")
         console.print(tb)
-    console.print(reserve_line(ins))
+    covered = (ins.get("reserve") or {}).get("covered", False)
+    console.print(reserve_line(ins), style=None if covered else "bold red")
