@@ -14,8 +14,8 @@ Navigation, and Control", J. Astronaut. Sci. 27(1), 1979; the equations are in
 2. ``v_go ← v_go − Δv_s``; burn time to go from the rocket equation,
    ``t_go = τ (1 − exp(−|v_go| / v_e))``;
 3. thrust integrals ``L, J, S, Q, P, H`` of a constant-thrust burn of duration ``t_go``;
-4. steering: ``λ = v_go/|v_go|``; the position to go ``r_go`` (its downrange part free,
-   set so that ``λ · r_go = S``); turning rate ``λ̇ = (r_go − S λ)/(Q − S J/L)``; the
+4. steering: ``λ = v_go/|v_go|``; ``r_grav ← (t_go/t_go,prev)² r_grav``; the position to
+   go ``r_go`` (its downrange part free, set so that ``λ · r_go = S``); turning rate ``λ̇ = (r_go − S λ)/(Q − S J/L)``; the
    thrust direction ``i_F(t) = unit(λ + λ̇ (t − t_λ))`` with ``t_λ = t + J/L``;
 5. gravity over the rest of the burn, by integrating a coast from the thrust-weighted
    mean state (``v_grav``, ``r_grav``);
@@ -25,7 +25,8 @@ Navigation, and Control", J. Astronaut. Sci. 27(1), 1979; the equations are in
    v_bias``.
 
 The cycle is converged when ``t_go`` changes from the previous cycle's value (less the
-cycle time) by at most ``convergence_tolerance`` × ``t_go``. At engagement it iterates
+cycle time) by at most ``convergence_tolerance`` × max(``t_go``,
+``terminal_time_to_go_s``). At engagement it iterates
 at the same state, up to ``max_iterations`` times, until ``t_go`` settles so and the
 thrust direction moves by at most ``steering_tolerance_deg`` between passes; the
 command then turns from the stored profile's to PEG's along a cosine ramp of
@@ -229,7 +230,8 @@ def thrust_integrals(ve: float, tau: float, tgo: float) -> tuple[float, float, f
 
 
 @njit(cache=True, error_model="numpy")
-def coast(r: np.ndarray, v: np.ndarray, duration: float, grav: np.ndarray, n_steps: int) -> tuple[np.ndarray, np.ndarray]:
+def coast(r: np.ndarray, v: np.ndarray, duration: float, grav: np.ndarray,
+          n_steps: int) -> tuple[np.ndarray, np.ndarray]:
     """Position and velocity after a coast of ``duration`` s under gravity alone.
 
     ``grav = [μ, R_e, J2, J3, J4, g_x, g_y, g_z]``: zonal gravity (m³/s², m) with

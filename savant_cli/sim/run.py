@@ -70,9 +70,9 @@ def simulate(model: SimModel, progress: bool = True, chunk_s: float = 10.0,
     """Fly one run from the model's initial state until a stop condition.
 
     A diverging run returns normally with ``status = "diverged"`` (``"guidance_failed"``
-    when closed-loop guidance stopped it) and the history up to the failure; ``KeyboardInterrupt`` returns ``status = "interrupted"``. The complete
-    state at each of ``snapshot_steps`` (plant step indices) reached is kept in
-    ``result.snapshots``.
+    when closed-loop guidance stopped it) and the history up to the failure;
+    ``KeyboardInterrupt`` returns ``status = "interrupted"``. The complete state at each
+    of ``snapshot_steps`` (plant step indices) reached is kept in ``result.snapshots``.
     """
     rt = model.rates
     x = model.x0.copy()
