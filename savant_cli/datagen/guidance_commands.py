@@ -48,6 +48,7 @@ from savant_cli.config import SavantConfig
 from savant_cli.models import aero, atmosphere as atm, earth, mass as mass_model, quaternion as qt
 from savant_cli.models.configurations import CONFIG_STACK, CONFIG_UPPER, CONFIG_UPPER_LES
 from savant_cli.models.gravity import gravity_zonal
+from savant_cli.models.peg import insertion_state
 from savant_cli.sim import build
 from savant_cli.sim.plant import PlantTables, pack_tables
 from savant_cli.io.guidance_file import SPEED_COLUMN
@@ -109,13 +110,8 @@ class Reference:
         self.t_les = self.t_ign + vehicle.events.les_jettison_delay_s
         self.energy_target = build.target_energy(cfg)
         tgt = cfg.guidance.target
-        rp = C.WGS84_A + 1e3 * tgt.perigee_altitude_km
-        ra = C.WGS84_A + 1e3 * tgt.apogee_altitude_km
-        self.r_cut = C.WGS84_A + 1e3 * tgt.cutoff_altitude_km
-        a = 0.5 * (rp + ra)
-        h = np.sqrt(C.MU_EARTH * 2.0 * rp * ra / (rp + ra))
-        v_cut = np.sqrt(C.MU_EARTH * (2.0 / self.r_cut - 1.0 / a))
-        self.fpa_cut = float(np.arccos(np.clip(h / (self.r_cut * v_cut), -1.0, 1.0)))  # ascending branch
+        self.r_cut, _, self.fpa_cut = insertion_state(tgt.perigee_altitude_km, tgt.apogee_altitude_km,
+                                                      tgt.cutoff_altitude_km)  # ascending branch
         self.inclination = np.radians(tgt.inclination_deg)
 
     # ----------------------------------------------------------------- attitude

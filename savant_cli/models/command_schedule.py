@@ -21,10 +21,9 @@ from numba import njit
 
 from savant_cli.models import blocks
 
-#: guidance.first_stage_schedule values, by their code in the engine's schedule
+#: guidance.first_stage_schedule values; a value's code in the engine's schedule is its index
 SCHEDULES = ("time", "relative_velocity")
 BY_TIME = 0
-BY_RELATIVE_VELOCITY = 1
 
 _DISCRETE = blocks.DISCRETE.block("command_schedule")
 D_PROFILE_TIME = _DISCRETE.scalar("profile_time", "s", "time in the command table of the latest guidance sample")

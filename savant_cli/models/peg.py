@@ -44,7 +44,7 @@ from numba import njit
 from savant_cli import constants as C
 from savant_cli.models import blocks
 from savant_cli.models import quaternion as qt
-from savant_cli.models.gravity import P_J2, P_J3, P_J4, P_MU, P_ORDER, gravity_at, gravity_zonal_xyz
+from savant_cli.models.gravity import P_J2, P_J3, P_J4, P_MU, P_ORDER, gravity_at, gravity_zonal, gravity_zonal_xyz
 from savant_cli.models.guidance import D_QG, D_TG, D_VG, command_at
 
 _PARAMS = blocks.PARAMETERS.block("peg")
@@ -342,7 +342,7 @@ def upfg_pass(r: np.ndarray, v: np.ndarray, vgo: np.ndarray, rd: np.ndarray, rbi
     L, J, S, Q, P, H = thrust_integrals(ve, tau, tgo)
     j_over_l = J / L
     if first:
-        g0 = _gravity(r, grav)
+        g0 = grav[5:8] if grav[0] == 0.0 else gravity_zonal(r, grav[0], grav[1], grav[2], grav[3], grav[4])
         rgrav = 0.5 * tgo * tgo * g0
         rbias = np.zeros(3)
     else:
@@ -378,15 +378,6 @@ def upfg_pass(r: np.ndarray, v: np.ndarray, vgo: np.ndarray, rd: np.ndarray, rbi
     vd = _target_velocity(rd, target, grav)
     vgo = vd - v - v_grav + v_bias
     return tgo, vgo, rd, rbias, rgrav, vd, lam, lam_dot, j_over_l
-
-
-@njit(cache=True, error_model="numpy")
-def _gravity(r: np.ndarray, grav: np.ndarray) -> np.ndarray:
-    if grav[0] == 0.0:
-        return grav[5:8].copy()
-    out = np.empty(3)
-    out[0], out[1], out[2] = gravity_zonal_xyz(r[0], r[1], r[2], grav[0], grav[1], grav[2], grav[3], grav[4])
-    return out
 
 
 @njit(cache=True, error_model="numpy")

@@ -73,7 +73,7 @@ S_SMOOTH_ZETA = 6
 S_SMOOTH_WN = 7
 S_MAX_RATE = 8  # divergence threshold on |ω|, rad/s
 S_DELAY_STEPS = 9  # plant steps from the flight-control cycle to its commands (controller.delay_s)
-S_PROFILE_SCHEDULE = 10  # the stored profile's first-stage index (command_schedule.BY_*)
+S_PROFILE_SCHEDULE = 10  # the stored profile's first-stage index (its position in command_schedule.SCHEDULES)
 N_SCHED = 11
 
 
