@@ -189,6 +189,9 @@ class LinearStudyConfig:
     times: list[float] = field(default_factory=lambda: [55.0, 130.0, 180.0, 230.0])
     every: float = 0.0  # > 0: points every `every` s over the whole flight instead of `times`
     event_clearance_s: float = 0.1  # a time this close to an event is refused (skipped with `every`)
+    # points in the first stage's tail-off below this fraction of its peak thrust are
+    # analysed and reported but not judged against the requirement set (0: judge all)
+    tailoff_thrust_fraction: float = 0.12
     jacobian: str = "auto"  # auto: per-state steps; fixed: one user step
     jacobian_step: float = 1e-6  # the fixed step, as an attitude perturbation in rad
     charts: str = "auto"  # all | none | auto (per-point charts up to 20 points)
@@ -1250,6 +1253,9 @@ def _check_linear(s: LinearStudyConfig) -> None:
     if s.every == 0:
         _flight_times(s.times)
     _non_negative("study.event_clearance_s", s.event_clearance_s)
+    if not 0.0 <= s.tailoff_thrust_fraction < 1.0:
+        raise ConfigError("study.tailoff_thrust_fraction", s.tailoff_thrust_fraction,
+                          "must be a fraction of the first stage's peak thrust in [0, 1) (0: judge every point)")
     _one_of("study.jacobian", s.jacobian, ("auto", "fixed"))
     _positive("study.jacobian_step", s.jacobian_step)
     _one_of("study.charts", s.charts, ("auto", "all", "none"))

@@ -234,3 +234,14 @@ def test_sim_rates_have_documented_bounds():
     assert exc.value.key == "sim.plant_rate_hz" and "10000" in exc.value.allowed
     for name, (low, high) in SIM_BOUNDS.items():
         assert 0 < low < high, name
+
+
+@pytest.mark.parametrize("value", [-0.1, 1.0, 2.5])
+def test_a_tailoff_fraction_outside_zero_to_one_is_refused(value):
+    from conftest import compose_config
+    from savant_cli.config import validate
+
+    with pytest.raises(ConfigError) as exc:
+        validate(compose_config(["study=linear", f"study.tailoff_thrust_fraction={value}"]))
+    assert exc.value.key == "study.tailoff_thrust_fraction" and exc.value.value == value
+    assert "[0, 1)" in exc.value.allowed

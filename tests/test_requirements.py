@@ -182,3 +182,20 @@ def test_bad_requirements_are_refused_naming_the_key(override, key):
     with pytest.raises(ConfigError) as err:
         validate(compose_config([override]))
     assert err.value.key == key
+
+
+def test_tailoff_window_closed_form():
+    """A thrust rising linearly to 100 at 5 s and falling linearly to 0 at 10 s crosses
+    12 % of its peak on the way down at 5 + 5·0.88 = 9.4 s; separation at 9.8 s ends the
+    window. No window without a separation, with fraction 0, or when the thrust never
+    falls below the fraction before separation."""
+    from savant_cli.studies.linear import tailoff_window
+
+    t = np.linspace(0.0, 12.0, 121)
+    thrust = np.where(t <= 5.0, 20.0 * t, np.maximum(100.0 - 20.0 * (t - 5.0), 0.0))
+    start, end = tailoff_window(t, thrust, 9.8, 0.12)
+    assert start == pytest.approx(9.4, abs=1e-12) and end == 9.8
+    assert tailoff_window(t, thrust, float("nan"), 0.12) is None
+    assert tailoff_window(t, thrust, None, 0.12) is None
+    assert tailoff_window(t, thrust, 9.8, 0.0) is None
+    assert tailoff_window(t, thrust, 8.0, 0.12) is None  # 40 % of peak at separation

@@ -70,7 +70,8 @@ def _names(labels) -> np.ndarray:
 
 def write_linear_group(f: h5py.File, points: list[LinearPoint], rows: list[MarginRow],
                        charts: dict[float, PointCharts] | None = None, requirements: RequirementSet | None = None,
-                       exclusion_zones: bool = True, verdicts: list[PointVerdict] | None = None) -> None:
+                       exclusion_zones: bool = True, verdicts: list[PointVerdict] | None = None,
+                       judged: list[bool] | None = None, verdict_text: str | None = None) -> None:
     """Write every point's systems, chart data, the margin table and the requirement
     checks into ``f["linear"]``.
 
@@ -91,6 +92,11 @@ def write_linear_group(f: h5py.File, points: list[LinearPoint], rows: list[Margi
     verdicts : list of PointVerdict, optional
         The points' requirement verdicts: group ``linear/requirements``
         (:func:`write_checks`).
+    judged : list of bool, optional
+        Whether each verdict counts in the study's verdict (False: a point of the
+        first-stage tail-off window, reported but not judged); default all.
+    verdict_text : str, optional
+        The study's verdict line; default the line of the judged verdicts.
     """
     g = f.create_group("linear", track_order=True)
     g.attrs["note"] = "roll (on/off jets) is not part of the linear analysis"
@@ -111,7 +117,7 @@ def write_linear_group(f: h5py.File, points: list[LinearPoint], rows: list[Margi
                 sg.create_dataset(attr, data=_names(labels), dtype=_STR)
     write_margin_table(g.create_group("margins"), rows, requirements, exclusion_zones)
     if verdicts is not None:
-        write_checks(g.create_group("requirements", track_order=True), verdicts, requirements)
+        write_checks(g.create_group("requirements", track_order=True), verdicts, requirements, judged, verdict_text)
 
 
 def write_margin_table(mg: h5py.Group, rows: list[MarginRow], requirements: RequirementSet | None,
@@ -132,18 +138,24 @@ def write_margin_table(mg: h5py.Group, rows: list[MarginRow], requirements: Requ
         mg.create_dataset("meets_requirement", data=np.array([r.meets_requirement for r in rows], bool))
 
 
-def write_checks(g: h5py.Group, verdicts: list[PointVerdict], requirements: RequirementSet | None) -> None:
+def write_checks(g: h5py.Group, verdicts: list[PointVerdict], requirements: RequirementSet | None,
+                 judged: list[bool] | None = None, verdict_text: str | None = None) -> None:
     """The requirement verdicts into ``g``: attributes ``set`` (the requirement set as
-    JSON), ``verdict`` (the one-line verdict) and ``passed``; ``points/{time_s, stage,
-    passed}`` and ``checks/<column>`` (:data:`CHECK_COLUMNS`, every check of every point)."""
+    JSON), ``verdict`` (the one-line verdict, ``verdict_text`` when given) and ``passed``
+    (every judged point passes); ``points/{time_s, stage, passed, judged}`` and
+    ``checks/<column>`` (:data:`CHECK_COLUMNS`, every check of every point, judged or not).
+    ``judged``: whether each point counts in the verdict (default all)."""
+    judged = [True] * len(verdicts) if judged is None else list(judged)
+    counted = [v for v, j in zip(verdicts, judged) if j]
     if requirements is not None:
         g.attrs["set"] = json.dumps(OmegaConf.to_container(OmegaConf.structured(requirements)))
-        g.attrs["verdict"] = verdict_line([("", [v]) for v in verdicts], requirements.name)
-    g.attrs["passed"] = all(v.passed for v in verdicts)
+        g.attrs["verdict"] = verdict_text or verdict_line([("", [v]) for v in counted], requirements.name)
+    g.attrs["passed"] = all(v.passed for v in counted)
     pg = g.create_group("points", track_order=True)
     pg.create_dataset("time_s", data=np.array([v.time_s for v in verdicts], float))
     pg.create_dataset("stage", data=_names([v.stage for v in verdicts]), dtype=_STR)
     pg.create_dataset("passed", data=np.array([v.passed for v in verdicts], bool))
+    pg.create_dataset("judged", data=np.array(judged, bool))
     checks = [c for v in verdicts for c in v.checks]
     cg = g.create_group("checks", track_order=True)
     for col in CHECK_COLUMNS:
@@ -242,7 +254,7 @@ def read_linear_group(path: Path | str) -> tuple[list[PointCharts], list[MarginR
                                                  bool, list[float]]:
     """What ``savant report`` draws of a linear study: the chart data of every point that
     has it (in time order), the margin table, the requirements, ``exclusion_zones`` and
-    the times of the points that fail their requirement set."""
+    the times of the judged points that fail their requirement set."""
     with h5py.File(path, "r") as f:
         g = f["linear"]
         charts = [read_charts(g[k]["charts"]) for k in point_keys(g) if "charts" in g[k]]
@@ -250,7 +262,8 @@ def read_linear_group(path: Path | str) -> tuple[list[PointCharts], list[MarginR
         failed = []
         if "requirements" in g:
             pts = g["requirements/points"]
-            failed = [float(t) for t, ok in zip(pts["time_s"][()], pts["passed"][()]) if not ok]
+            judged = pts["judged"][()] if "judged" in pts else np.ones(pts["passed"].shape, bool)
+            failed = [float(t) for t, ok, j in zip(pts["time_s"][()], pts["passed"][()], judged) if j and not ok]
     return sorted(charts, key=lambda c: c.time_s), rows, req, zones, failed
 
 

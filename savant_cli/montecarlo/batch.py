@@ -113,19 +113,25 @@ def _decimate(sig: dict, names: list[str], grid: np.ndarray) -> np.ndarray:
     return out
 
 
-def _margins(case: Case, model: SimModel, result) -> tuple[np.ndarray, np.ndarray]:
-    """The run's margin rows (:data:`MARGIN_ARRAY_COLUMNS`) and requirement checks
-    (``linear/requirements.py::CHECK_ARRAY_COLUMNS``) at its linear times."""
-    from savant_cli.studies.linear import analyse
+def _margins(case: Case, model: SimModel, result, sig: dict) -> tuple[np.ndarray, np.ndarray]:
+    """The run's margin rows (:data:`MARGIN_ARRAY_COLUMNS`) at its linear times, and the
+    requirement checks (``linear/requirements.py::CHECK_ARRAY_COLUMNS``) of those outside
+    the run's own first-stage tail-off window (``study=linear``'s default
+    ``tailoff_thrust_fraction``; docs/requirements.md): the window's margins are kept,
+    its points not judged."""
+    from savant_cli.studies.linear import analyse, tailoff_window
 
     rows, verdicts = [], []
     dt_fcs = model.rates.dt * model.rates.n_fcs
     lin_cfg = LinearStudyConfig(times=list(case.linear_times))
+    window = tailoff_window(sig["time"].data, sig["thrust"].data,
+                            float(result.events[EVENT_NAMES.index("separation")]), lin_cfg.tailoff_thrust_fraction)
     for k, snap in sorted(result.snapshots.items()):
         if any(abs(snap.t - te) < lin_cfg.event_clearance_s for te in result.events if te == te):
             continue  # on this run's event: no frozen-time point there
         a = analyse(model, snap, lin_cfg, dt_fcs, case.cfg.requirements)
-        verdicts.append(a.verdict)
+        if window is None or not window[0] <= snap.t < window[1]:
+            verdicts.append(a.verdict)
         rows += [(r.time_s, AXIS_CODES.index(r.axis), KIND_CODES.index(r.kind), BAND_CODES.index(r.band), r.value,
                   r.frequency_hz, mode_code(r.mode), float(r.meets_requirement)) for r in a.rows]
     return np.array(rows, dtype=float).reshape(-1, len(MARGIN_ARRAY_COLUMNS)), checks_array(verdicts)
@@ -166,7 +172,7 @@ def fly_run(case: Case, run: int, keep: bool = False):
         lap(2)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            margins, checks = _margins(case, model, result) if case.linear_times else (None, None)
+            margins, checks = _margins(case, model, result, sig) if case.linear_times else (None, None)
         lap(3)
         outcome = RunOutcome(run, result.status, result.message, float(result.t_final), 0.0, values, keys,
                              np.array([float(summ[k]) for k in keys]), np.asarray(result.events, float),

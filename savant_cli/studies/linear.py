@@ -4,7 +4,9 @@ A time run (the nominal flight, written like ``study=nominal``) sets the operati
 points; at each, the plant is linearized (``linear/plant.py``), assembled with the
 discrete flight control (``linear/loops.py``) and analysed (``linear/margins.py``).
 Every margin and point is judged against the requirement set (``requirements`` group,
-``linear/requirements.py``). Outputs: ``savant.h5`` (time history + ``linear`` group:
+``linear/requirements.py``), except the points of the first stage's tail-off window
+(:func:`tailoff_window`, ``study.tailoff_thrust_fraction``): analysed and reported with
+what they would score, left out of the verdict (docs/requirements.md). Outputs: ``savant.h5`` (time history + ``linear`` group:
 systems, margins, requirement checks, and the chart data of every charted point),
 ``linear.mat``, ``margins.csv`` (every crossing with its verdict), ``requirements.csv``
 (every check of every point), ``summary.json`` (``margins``, ``requirements`` and the
@@ -69,6 +71,46 @@ def check_times(times: list[float], t_final: float, events: dict[str, float], st
                               f"(keep {study.event_clearance_s} s away, study.event_clearance_s)")
         keep.append(t)
     return keep
+
+
+def tailoff_window(time_s: np.ndarray, thrust_n: np.ndarray, separation_s: float | None,
+                   fraction: float) -> tuple[float, float] | None:
+    """The first stage's tail-off window (start, separation) in s: from the first time
+    after the stage's thrust peak at which its thrust falls below ``fraction`` of that
+    peak (linear between samples), to separation.
+
+    Parameters
+    ----------
+    time_s, thrust_n : ndarray
+        The flight's time (s) and thrust magnitude (N) histories.
+    separation_s : float or None
+        Separation time (s); None or NaN: no separation in the flight, no window.
+    fraction : float
+        Of the first stage's peak thrust; 0: no window.
+    """
+    if fraction <= 0.0 or separation_s is None or not np.isfinite(separation_s):
+        return None
+    stage = time_s < separation_s
+    t, f = time_s[stage], thrust_n[stage]
+    if t.size < 2:
+        return None
+    peak = int(np.argmax(f))
+    level = fraction * f[peak]
+    below = np.flatnonzero(f[peak:] < level)
+    if below.size == 0:
+        return None
+    i = peak + int(below[0])  # f[i - 1] >= level > f[i]
+    start = float(np.interp(level, [f[i], f[i - 1]], [t[i], t[i - 1]]))
+    return start, float(separation_s)
+
+
+def not_judged_line(window: tuple[float, float], fraction: float, verdicts: list[PointVerdict]) -> str:
+    """The verdict line's note on the points of the tail-off window: when it runs, and
+    each point with what it would score against the requirements."""
+    pts = "; ".join(f"{v.time_s:.1f} s passes" if v.passed else f"would fail: {v.worst.text()}"
+                    for v in verdicts) or "no point"
+    return (f"not judged, first-stage tail-off below {100 * fraction:g} % of peak thrust "
+            f"({window[0]:.2f}-{window[1]:.2f} s): {pts}")
 
 
 @dataclass
@@ -158,7 +200,18 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
                            "frequency_hz": r.frequency_hz, "band": r.band, "mode": r.mode,
                            "meets_requirement": r.meets_requirement} for r in rows]
     summary["margins_meeting_requirements"] = f"{sum(r.meets_requirement for r in rows)} of {len(rows)}"
-    verdict = requirement_summary(verdicts, req)
+    # the tail-off window's points are analysed and reported, not judged (docs/requirements.md)
+    window = tailoff_window(sig["time"].data, sig["thrust"].data, events.get("separation"), study.tailoff_thrust_fraction)
+    in_window = [window is not None and window[0] <= v.time_s < window[1] for v in verdicts]
+    judged = [v for v, w in zip(verdicts, in_window) if not w]
+    aside = [v for v, w in zip(verdicts, in_window) if w]
+    verdict = requirement_summary(judged, req)
+    if window is not None:
+        verdict["line"] += "; " + not_judged_line(window, study.tailoff_thrust_fraction, aside)
+        verdict["not_judged"] = requirement_summary(aside, req)["points"]
+    summary["tailoff_window_start_s"] = window[0] if window else None
+    summary["tailoff_window_end_s"] = window[1] if window else None
+    summary["points_not_judged"] = len(aside)
     summary["requirements_met"] = verdict["passed"]
     summary["requirements_verdict"] = verdict["line"]
     summary["requirements"] = verdict
@@ -168,14 +221,15 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
     hdf_summary = {k: v for k, v in summary.items() if not isinstance(v, (list, dict))}
     record = flight_mod.record(result, sig, hdf_summary, raw_cfg, summary["study_wall_time_s"])
     flight_mod.write(out_dir, record, cfg, json_summary=summary,
-                     extra=lambda f: write_linear_group(f, points, rows, charts, req, study.exclusion_zones, verdicts))
+                     extra=lambda f: write_linear_group(f, points, rows, charts, req, study.exclusion_zones, verdicts,
+                                                             [not w for w in in_window], verdict["line"]))
     if cfg.output.hdf5:
         write_mat(out_dir / "linear.mat", points)
     write_margins_csv(out_dir / "margins.csv", rows)
     write_checks_csv(out_dir / "requirements.csv", verdicts)
     if cfg.output.plots:
         draw_linear(list(charts.values()), rows, req.by_band(), study.exclusion_zones, out_dir / "plots",
-                    [v.time_s for v in verdicts if not v.passed])
+                    [v.time_s for v in judged if not v.passed])
     print_run_summary({k: v for k, v in hdf_summary.items() if k not in ("linear_note", "requirements_verdict")},
                       record.status, record.message, console)
     console.print(_table(rows))
