@@ -390,10 +390,37 @@ class FcsDesignStudyConfig:
     optimizer: DesignOptimizer = field(default_factory=DesignOptimizer)
 
 
+@dataclass
+class TimeMarginsStudyConfig:
+    """``study=time_margins``: gain and delay margins measured in the nonlinear time
+    simulation, beside the frequency-domain ones (docs/design_studies.md)."""
+
+    name: str = "time_margins"
+    times: list[float] = field(default_factory=lambda: [55.0, 130.0, 180.0, 230.0])
+    axes: list[str] = field(default_factory=lambda: ["pitch", "yaw"])
+    kinds: list[str] = field(default_factory=lambda: ["gain_high", "gain_low", "delay"])
+    lead_s: float = 10.0  # the perturbation starts this long before the point
+    window_s: float = 20.0  # and is held this long
+    min_periods: float = 3.0  # the window stretched to hold this many periods of the frequency-domain crossing
+    max_window_s: float = 60.0  # longest stretched window
+    event_clearance_s: float = 0.2  # the window keeps this far from events
+    gain_bound_dB: float = 20.0  # search bound of the gain margins
+    delay_bound_ms: float = 1000.0  # search bound of the delay margin
+    gain_tolerance_dB: float = 0.1  # bisection tolerance
+    delay_tolerance_ms: float = 2.0
+    scan_points: int = 8  # coarse scan before the bisection
+    excitation_deg: float = 0.5  # doublet amplitude at the gimbal command
+    excitation_s: float = 0.4  # doublet duration
+    settle_s: float = 2.0  # left out of the growth analysis after the window starts
+    workers: int = 0  # processes; 0: all cores
+    jacobian: str = "auto"  # of the frequency-domain side (as study=linear)
+    jacobian_step: float = 1e-6
+
+
 STUDY_SCHEMAS: dict[str, type] = {"nominal": StudyConfig, "linear": LinearStudyConfig,
                                   "montecarlo": MonteCarloStudyConfig, "flex_sweep": FlexSweepStudyConfig,
                                   "flyoff": FlyoffStudyConfig, "mode_retention": ModeRetentionStudyConfig,
-                                  "fcs_design": FcsDesignStudyConfig}
+                                  "fcs_design": FcsDesignStudyConfig, "time_margins": TimeMarginsStudyConfig}
 
 
 @dataclass
@@ -1113,6 +1140,8 @@ def _study(node: Any) -> Any:
         _check_mode_retention(study)
     if isinstance(study, FcsDesignStudyConfig):
         _check_fcs_design(study)
+    if isinstance(study, TimeMarginsStudyConfig):
+        _check_time_margins(study)
     return study
 
 
@@ -1185,6 +1214,37 @@ def _flight_times(times: list[float]) -> None:
     for i, t in enumerate(times):
         if not (t > 0.0 and np.isfinite(t)):
             raise ConfigError(f"study.times[{i}]", t, "must be a positive flight time in s")
+
+
+def _check_time_margins(s: TimeMarginsStudyConfig) -> None:
+    from savant_cli.timedomain.search import KINDS
+
+    _flight_times(s.times)
+    if not s.axes:
+        raise ConfigError("study.axes", [], "must name at least one loop (pitch, yaw)")
+    for i, axis in enumerate(s.axes):
+        _one_of(f"study.axes[{i}]", axis, ("pitch", "yaw"))
+    if not s.kinds:
+        raise ConfigError("study.kinds", [], f"must name at least one of {', '.join(KINDS)}")
+    for i, kind in enumerate(s.kinds):
+        _one_of(f"study.kinds[{i}]", kind, KINDS)
+    for key in ("window_s", "max_window_s", "gain_bound_dB", "delay_bound_ms", "gain_tolerance_dB",
+                "delay_tolerance_ms", "excitation_deg", "excitation_s"):
+        _positive(f"study.{key}", getattr(s, key))
+    for key in ("lead_s", "min_periods", "event_clearance_s", "settle_s"):
+        _non_negative(f"study.{key}", getattr(s, key))
+    if s.lead_s > s.window_s:
+        raise ConfigError("study.lead_s", s.lead_s, f"must not exceed study.window_s ({s.window_s} s)")
+    if s.max_window_s < s.window_s:
+        raise ConfigError("study.max_window_s", s.max_window_s, f"must be at least study.window_s ({s.window_s} s)")
+    if s.settle_s >= s.window_s:
+        raise ConfigError("study.settle_s", s.settle_s, f"must be shorter than study.window_s ({s.window_s} s)")
+    if s.scan_points < 1:
+        raise ConfigError("study.scan_points", s.scan_points, "must be a positive count")
+    if s.workers < 0:
+        raise ConfigError("study.workers", s.workers, "must be 0 (all cores) or a positive process count")
+    _one_of("study.jacobian", s.jacobian, ("auto", "fixed"))
+    _positive("study.jacobian_step", s.jacobian_step)
 
 
 def _check_mode_retention(s: ModeRetentionStudyConfig) -> None:

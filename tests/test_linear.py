@@ -240,7 +240,7 @@ def test_every_crossing_of_a_flex_loop_is_listed():
 def _closed_loop_gust_response(model, snap, gust: float, seconds: float) -> np.ndarray:
     """Pitch gimbal angle at every flight-control cycle of the time run (engine.advance,
     flight software in the loop) from ``snap`` with a constant body-z gust (m/s)."""
-    from savant_cli.sim import engine as E
+    from savant_cli.sim import engine as E, loop_perturbation
     from savant_cli.sim.run import log_columns
 
     x, d, u, ev = snap.x.copy(), snap.d.copy(), snap.u.copy(), snap.events.copy()
@@ -250,7 +250,7 @@ def _closed_loop_gust_response(model, snap, gust: float, seconds: float) -> np.n
     out, k, row = [x[L.ACT_P]], snap.step, 0
     for _ in range(int(round(seconds / (rt.dt * rt.n_fcs)))):
         status, done, row, _ = E.advance(x, d, u, ev, k, rt.n_fcs, rt, model.p, model.packed_tables, model.fcs,
-                                         model.gyro, model.guidance, model.sched, log, row)
+                                         model.gyro, model.guidance, model.sched, log, row, loop_perturbation.NONE)
         assert status == E.RUNNING and done == rt.n_fcs
         k += done
         out.append(x[L.ACT_P])

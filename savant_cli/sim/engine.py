@@ -40,6 +40,7 @@ from savant_cli.sim.layout import (
     D_FLEX_NAV, D_GYRO_X, D_GYRO_Y, ENGINE_OFF, ENGINE_UPPER, MFS, MLH2, MLOX, N_AUX, N_STATE,
     Q, R, RCS_NEG, RCS_POS, U_CONFIG, U_DPC, U_DYC, U_ENGINE, U_RCS, U_T_IGN, V, W,
 )
+from savant_cli.sim import loop_perturbation
 from savant_cli.sim.borrow import borrowed
 from savant_cli.sim.plant import derivative, derivative_state, reference_cg
 
@@ -228,24 +229,26 @@ def specific_energy(x: np.ndarray, mu: float) -> float:
 def advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0: int,
             n_steps: int, rates: Rates, p: np.ndarray, tb: np.ndarray, ft: FcsTables,
             gyro: GyroModel, gt: GuidanceTable, sched: np.ndarray, log: np.ndarray,
-            log_row: int) -> tuple[int, int, int, str]:
+            log_row: int, pert: np.ndarray) -> tuple[int, int, int, str]:
     """Advance the coupled plant and flight software by up to ``n_steps`` plant steps.
 
     ``x``, ``d``, ``u`` and ``events`` are updated in place; logged rows are written to
-    ``log`` from row ``log_row``. Returns ``(status, steps_done, next_log_row, detail)``.
+    ``log`` from row ``log_row``. ``pert``: a gain and delay inserted at one gimbal
+    command (``sim/loop_perturbation.py``; its ``NONE``: nothing, updated in place).
+    Returns ``(status, steps_done, next_log_row, detail)``.
     """
     aux = np.zeros(N_AUX)
     work = work_array(x.size)
     # the loop runs on reference-count-free views (sim/borrow.py): every array it borrows
     # is held here, or by the caller, until it returns
-    return _advance(x, d, u, events, k0, n_steps, rates, p, tb, ft, gyro, gt, sched, log, log_row, aux, work)
+    return _advance(x, d, u, events, k0, n_steps, rates, p, tb, ft, gyro, gt, sched, log, log_row, pert, aux, work)
 
 
 @njit(cache=True, error_model="numpy")
 def _advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0: int,
              n_steps: int, rates: Rates, p: np.ndarray, tb: np.ndarray, ft: FcsTables,
              gyro: GyroModel, gt: GuidanceTable, sched: np.ndarray, log: np.ndarray,
-             log_row: int, aux: np.ndarray, work: np.ndarray) -> tuple[int, int, int, str]:
+             log_row: int, pert: np.ndarray, aux: np.ndarray, work: np.ndarray) -> tuple[int, int, int, str]:
     """:func:`advance` with its scratch arrays (``aux``: diagnostics, ``work``: RK4)."""
     x, d, u, p, tb, log = borrowed(x), borrowed(d), borrowed(u), borrowed(p), borrowed(tb), borrowed(log)
     aux, work = borrowed(aux), borrowed(work)
@@ -261,6 +264,7 @@ def _advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0
     q_nav = np.empty(4)
     has_flex = int(p[flex.P_OFFSET]) >= 0
     peg_on = p[peg.P_ON] != 0.0
+    perturbed = pert[loop_perturbation.AXIS] >= 0.0
     for j in range(n_steps):
         k = k0 + j
         t = k * dt
@@ -319,11 +323,14 @@ def _advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0
                 d[D_FLEX_NAV:D_FLEX_NAV + 3] = flex3
             qt.qmul_into(x[Q:Q + 4], q_imu, q_nav)  # sensed attitude q_b2i ⊗ q_s2b
             fcs_step(d, q_nav, phase, sched_var, dt_fcs, ft)
-        if (k - int(sched[S_DELAY_STEPS])) % rates.n_fcs == 0:  # the commands, after the loop delay
+        command_update = (k - int(sched[S_DELAY_STEPS])) % rates.n_fcs == 0
+        if command_update:  # the commands, after the loop delay
             u[U_DPC] = d[D_CMD_P]
             u[U_DYC] = d[D_CMD_Y]
             u[U_RCS] = d[D_CMD_RCS]
             rcs.step_jets(x, p, u[U_RCS])  # jets without a ramp open and shut at once
+        if perturbed:
+            loop_perturbation.apply(pert, k, t, dt, command_update, u)
 
         logging = k % rates.n_log == 0 and log_row < log.shape[0]
         if logging:  # the state before the step, the diagnostics of its first stage

@@ -17,6 +17,7 @@ from savant_cli.models import (
 )
 from savant_cli.sim import engine as E
 from savant_cli.sim import layout as L
+from savant_cli.sim import loop_perturbation
 from savant_cli.sim.build import SimModel
 from savant_cli.sim.plant import derivative
 
@@ -66,27 +67,36 @@ def log_columns(n_state: int) -> int:
 
 
 def simulate(model: SimModel, progress: bool = True, chunk_s: float = 10.0,
-             snapshot_steps: tuple[int, ...] = ()) -> SimResult:
+             snapshot_steps: tuple[int, ...] = (), start: Snapshot | None = None, t_stop: float | None = None,
+             perturbation: np.ndarray | None = None) -> SimResult:
     """Fly one run from the model's initial state until a stop condition.
 
     A diverging run returns normally with ``status = "diverged"`` (``"guidance_failed"``
     when closed-loop guidance stopped it) and the history up to the failure;
     ``KeyboardInterrupt`` returns ``status = "interrupted"``. The complete state at each
     of ``snapshot_steps`` (plant step indices) reached is kept in ``result.snapshots``.
+
+    ``start``: fly on from this snapshot instead of liftoff; ``t_stop``: stop at this
+    mission time (s) as at ``sim.max_time_s`` (``STOP_TIME``), if earlier;
+    ``perturbation``: a gain and delay inserted at a gimbal command
+    (:mod:`savant_cli.sim.loop_perturbation`; the run works on a copy).
     """
     rt = model.rates
-    x = model.x0.copy()
-    d = model.d0.copy()
-    u = model.u0.copy()
-    events = model.events0.copy()
-    t_max = model.sched[E.S_T_MAX]
+    src = start if start is not None else Snapshot(model.k0, model.k0 * rt.dt, model.x0, model.d0, model.u0,
+                                                   model.events0)
+    x = src.x.copy()
+    d = src.d.copy()
+    u = src.u.copy()
+    events = src.events.copy()
+    pert = loop_perturbation.NONE if perturbation is None else perturbation.copy()
+    t_max = model.sched[E.S_T_MAX] if t_stop is None else min(t_stop, model.sched[E.S_T_MAX])
     n_total = int(np.ceil(t_max / rt.dt)) + 1
-    n_rows = n_total // rt.n_log + 2
+    n_rows = (n_total - src.step) // rt.n_log + 2
     nx = x.size
     log = np.empty((n_rows, log_columns(nx)))  # every kept row is fully written
     tb = model.packed_tables
     chunk = max(1, int(round(chunk_s / rt.dt)))
-    k = model.k0
+    k = src.step
     pending = sorted(s for s in set(snapshot_steps) if s >= k)
     snaps: dict[int, Snapshot] = {}
     row = 0
@@ -109,7 +119,7 @@ def simulate(model: SimModel, progress: bool = True, chunk_s: float = 10.0,
                 t0 = time.perf_counter()
                 code, done, row, detail = E.advance(
                     x, d, u, events, k, n_next, rt, model.p, tb,
-                    model.fcs, model.gyro, model.guidance, model.sched, log, row)
+                    model.fcs, model.gyro, model.guidance, model.sched, log, row, pert)
                 wall += time.perf_counter() - t0
                 k += done
                 bar.update(task, completed=k * rt.dt, t=k * rt.dt)

@@ -1,0 +1,167 @@
+"""Time-domain stability margins (``study=time_margins``): the growth detector against a
+delay loop of known critical delay, the inserted perturbation against its definition, the
+window rules, and the nonlinear margins of the rigid vehicle at 55 s against
+python-control-based frequency-domain margins of the same point."""
+
+from __future__ import annotations
+
+import csv
+import json
+import warnings
+
+import numpy as np
+import pytest
+
+from conftest import compose_config
+from savant_cli.config import TimeMarginsStudyConfig, validate
+from savant_cli.errors import ConfigError
+from savant_cli.linear.margins import MarginRow
+from savant_cli.sim import layout as L
+from savant_cli.sim import loop_perturbation as LP
+from savant_cli.studies import flight as flight_mod
+from savant_cli.studies.linear import analyse
+from savant_cli.studies.time_margins import COLUMNS, frequency_margin, window
+from savant_cli.timedomain.growth import assess
+from savant_cli.timedomain.search import Search, find_margin
+
+
+def delay_loop(k: float, tau: float, t_end: float = 60.0, dt: float = 1e-3) -> tuple[np.ndarray, np.ndarray]:
+    """y' = −k y(t − τ) after a unit pulse of y' over the first 0.1 s (forward Euler on a
+    delay line): characteristic equation s + k e^{−sτ} = 0, stable exactly while
+    k τ < π/2, oscillating at ω = k at the boundary (a lightly damped loop near it)."""
+    n = int(t_end / dt)
+    lag = int(round(tau / dt))
+    y = np.zeros(n)
+    for i in range(1, n):
+        past = y[i - 1 - lag] if i - 1 - lag >= 0 else 0.0
+        y[i] = y[i - 1] + dt * (-k * past + (1.0 if i * dt < 0.1 else 0.0))
+    return np.arange(n) * dt, y
+
+
+@pytest.mark.parametrize("factor,unstable", [(0.97, False), (1.03, True)])
+def test_detector_on_a_loop_of_known_delay_margin(factor, unstable):
+    k = 1.0  # rad/s: critical delay π/2 s, oscillation 1/(2π) Hz
+    tau_c = np.pi / (2 * k)
+    t, y = delay_loop(k, factor * tau_c)
+    g = assess(t, y, settle_s=5.0)
+    assert g.unstable is unstable
+    assert g.frequency_hz == pytest.approx(k / (2 * np.pi), rel=0.05)
+    # the growth rate: the real part of the dominant root, small near the boundary
+    assert abs(g.rate_per_s) < 0.05 and (g.rate_per_s > 0) is unstable
+
+
+def test_detector_on_a_divergence_and_on_noise_free_decay():
+    t = np.linspace(0.0, 20.0, 2001)
+    assert assess(t, 1e-3 * np.exp(0.2 * t), 1.0).unstable  # no oscillation: a divergence
+    g = assess(t, np.exp(-0.2 * t) * np.sin(2 * np.pi * 0.5 * t), 1.0)
+    assert not g.unstable and g.rate_per_s == pytest.approx(-0.2, abs=0.03)
+    assert g.frequency_hz == pytest.approx(0.5, rel=0.02)
+
+
+def test_perturbation_applies_gain_delay_and_doublet():
+    """Feed a ramp command through apply() step by step: the output is K·c(t − τ) (linear
+    between plant steps), plus +a then −a over the doublet, and the held command outside
+    the window; the yaw slot is untouched."""
+    dt = 0.005
+    pert = LP.perturbation("pitch", 1.0, 2.0, gain=2.0, delay_s=0.0123, pulse_rad=0.1, pulse_s=0.2, dt=dt)
+    u = np.zeros(L.N_INPUT)
+    out = []
+    for k in range(600):
+        t = k * dt
+        u[L.U_DPC] = 0.5 + t  # a new command every step
+        u[L.U_DYC] = 7.0
+        LP.apply(pert, k, t, dt, True, u)
+        out.append(u[L.U_DPC])
+        assert u[L.U_DYC] == 7.0
+    out = np.array(out)
+    t = np.arange(600) * dt
+    expect = np.where((t >= 1.0) & (t < 2.0), 2.0 * (0.5 + t - 0.0123), 0.5 + t)
+    tp = t - 1.0  # time into the window, as apply() forms it
+    expect += np.where((tp >= 0.0) & (tp < 0.1), 0.1, 0.0) - np.where((tp >= 0.1) & (tp < 0.2), 0.1, 0.0)
+    assert np.allclose(out, expect, atol=1e-12)
+
+
+def test_frequency_margin_picks_the_nearest_crossings():
+    rows = [MarginRow(55.0, "pitch", "gain", -6.0, 0.06, "rigid/aero", "aero"),
+            MarginRow(55.0, "pitch", "gain", -12.0, 0.02, "rigid/aero", "aero"),
+            MarginRow(55.0, "pitch", "gain", 13.0, 0.8, "rigid/aero", "rigid"),
+            MarginRow(55.0, "pitch", "gain", 9.0, 2.5, "flex", "flex_1"),
+            MarginRow(55.0, "pitch", "phase", 36.0, 0.2, "rigid/aero", "rigid"),
+            MarginRow(55.0, "pitch", "phase", -300.0, 2.5, "flex", "flex_1"),
+            MarginRow(55.0, "yaw", "gain", 1.0, 0.8, "rigid/aero", "rigid")]
+    assert frequency_margin(rows, "pitch", "gain_high") == (9.0, 2.5, "flex_1")
+    assert frequency_margin(rows, "pitch", "gain_low") == (-6.0, 0.06, "aero")
+    # 36°/(360°·0.2 Hz) = 500 ms; −300° ≡ 60°: 60/(360·2.5) = 66.7 ms, the smaller
+    value, f, mode = frequency_margin(rows, "pitch", "delay")
+    assert value == pytest.approx(1000 * 60 / (360 * 2.5)) and mode == "flex_1"
+    assert np.isnan(frequency_margin(rows, "yaw", "gain_low")[0])
+
+
+def test_window_stretches_and_keeps_clear_of_events():
+    s = TimeMarginsStudyConfig()  # lead 10, window 20, 3 periods, up to 60 s, clearance 0.2
+    assert window(55.0, 1.0, s, [130.5], 500.0)[:2] == (45.0, 65.0)
+    start, end, notes = window(55.0, 0.0638, s, [130.5], 500.0)  # 3/0.0638 = 47.0 s, lead 23.5 s
+    assert (start, end) == pytest.approx((55.0 - 23.51, 55.0 + 23.51), abs=0.01) and "stretched" in notes[0]
+    start, end, notes = window(130.0, 1.0, s, [130.47], 500.0)  # moved back from separation
+    assert (start, end) == pytest.approx((110.27, 130.27)) and not notes
+    assert "before the point" in window(130.3, 1.0, s, [130.47], 500.0)[2][-1]
+    start, end, _ = window(135.0, 1.0, s, [130.47, 132.0, 160.0], 500.0)  # moved forward from an event behind
+    assert (start, end) == pytest.approx((132.2, 152.2))
+    start, end, notes = window(140.0, 1.0, s, [132.0, 150.0], 500.0)
+    assert (start, end) == pytest.approx((132.2, 149.8)) and "cut" in notes[-1]
+
+
+@pytest.mark.parametrize("override,message", [("study.kinds=[gain]", "study.kinds[0]"),
+                                              ("study.lead_s=30", "study.lead_s"),
+                                              ("study.axes=[roll]", "study.axes[0]"),
+                                              ("study.delay_bound_ms=0", "study.delay_bound_ms")])
+def test_bad_study_keys_are_refused(override, message):
+    with pytest.raises(ConfigError, match=message.replace("[", r"\[")):
+        validate(compose_config(["study=time_margins", override]))
+
+
+def test_rigid_55s_margins_agree_with_the_frequency_domain():
+    """Issue 15's acceptance: on the rigid vehicle at 55 s (saturations inactive at the
+    margins), the nonlinear time-domain gain margins agree with the frequency-domain ones
+    within 1 dB and the delay margin with PM / ω_c within 10 %."""
+    cfg = validate(compose_config(["study=time_margins", "sim.progress=false", "study.times=[55]"]))
+    s = cfg.study
+    flight = flight_mod.fly(cfg, progress=False, snapshot_steps=flight_mod.control_steps(cfg, [55.0]))
+    model, result = flight.prep.model, flight.result
+    rt = model.rates
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        rows = analyse(model, result.snapshots[flight_mod.control_steps(cfg, [55.0])[0]], s, rt.dt * rt.n_fcs).rows
+    for kind, tol in (("gain_high", 1.0), ("gain_low", 1.0), ("delay", None)):
+        fd, f_fd, _ = frequency_margin(rows, "pitch", kind)
+        start, end, _ = window(55.0, f_fd, s, [te for _, te in flight_mod.events_of(result)], result.t_final)
+        k = flight_mod.control_steps(cfg, [start])[0]
+        snap = flight_mod.fly(cfg, progress=False, snapshot_steps=(k,)).result.snapshots[k]
+        bound, step = (20.0, 0.1) if tol else (1000.0, 2.0)
+        res = find_margin(model, snap, Search(55.0, "pitch", kind, 0, k * rt.dt, end, bound, step, 8,
+                                              np.radians(0.5), 0.4, 2.0))
+        td = -res.margin if kind == "gain_low" else res.margin
+        if tol:
+            assert td == pytest.approx(fd, abs=tol), kind
+        else:
+            pm = next(r for r in rows if r.axis == "pitch" and r.kind == "phase")
+            assert td == pytest.approx(1000 * pm.value / (360 * pm.frequency_hz), rel=0.10)
+        assert res.frequency_hz == pytest.approx(f_fd, rel=0.15)  # the growing oscillation is the crossing's
+
+
+@pytest.mark.slow
+def test_time_margins_command_writes_its_table(tmp_path):
+    from test_end_to_end import run
+
+    run_dir = tmp_path / "run"
+    proc = run(["run", "study=time_margins", "study.times=[180]", "study.axes=[yaw]", f"hydra.run.dir={run_dir}",
+                "sim.progress=false"], cwd=tmp_path)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    rows = list(csv.DictReader((run_dir / "time_margins.csv").open()))
+    assert tuple(rows[0]) == COLUMNS and [r["kind"] for r in rows] == ["gain_high", "gain_low", "delay"]
+    s = json.loads((run_dir / "summary.json").read_text())
+    assert s["time_margins_verdict"] in proc.stdout.replace("\n", "")
+    for r, js in zip(rows, s["time_margins"]):
+        assert float(r["time_domain"]) == pytest.approx(js["time_domain"], rel=1e-5)
+    assert len(list((run_dir / "plots" / "time_margins").glob("*.png"))) == 3
+    assert (run_dir / "time_margin_trials.csv").is_file()
