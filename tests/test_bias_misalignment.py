@@ -113,12 +113,14 @@ def test_controller_trims_a_gimbal_bias_out():
 def _first_cycle(model, w0=None) -> np.ndarray:
     """The flight-software state after the first plant step (guidance, gyros and flight
     control all run on step 0, from the model's initial state)."""
+    from savant_cli.sim import loop_perturbation
+
     x, d, u, ev = model.x0.copy(), model.d0.copy(), model.u0.copy(), model.events0.copy()
     if w0 is not None:
         x[L.W:L.W + 3] = w0
     log = np.empty((1, log_columns(x.size)))
     E.advance(x, d, u, ev, model.k0, 1, model.rates, model.p, model.packed_tables, model.fcs, model.gyro,
-              model.guidance, model.sched, log, 0)
+              model.guidance, model.sched, log, 0, loop_perturbation.NONE)
     return d
 
 

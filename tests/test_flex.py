@@ -188,7 +188,7 @@ def test_engine_feeds_gyros_rigid_plus_flex_rate_and_nav_unit_flex_rotation(conf
 
     from savant_cli.config import validate
     from savant_cli.models.sensors import gyro_discrete
-    from savant_cli.sim import engine as E
+    from savant_cli.sim import engine as E, loop_perturbation
     from savant_cli.models.fcs import fcs_tables
     from savant_cli.sim.run import log_columns
 
@@ -225,7 +225,7 @@ def test_engine_feeds_gyros_rigid_plus_flex_rate_and_nav_unit_flex_rotation(conf
     events = np.full(4, np.nan)
     n = 400
     log = np.empty((n // rates.n_log + 2, log_columns(lay.n)))
-    status, done, _, detail = E.advance(x, d, u, events, 0, n, rates, p, tb, ft, gyro, gt, sched, log, 0)
+    status, done, _, detail = E.advance(x, d, u, events, 0, n, rates, p, tb, ft, gyro, gt, sched, log, 0, loop_perturbation.NONE)
     assert status == E.RUNNING and done == n, detail
 
     np.testing.assert_allclose(x[L.W:L.W + 3], w_body, rtol=1e-12)  # torque-free sphere

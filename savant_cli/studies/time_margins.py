@@ -148,7 +148,7 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
     t_start = time.perf_counter()
     for i, t in enumerate(study.times):
         if t >= cfg.sim.max_time_s:
-            raise ConfigError(f"study.times[{i}]", t, f"must lie inside the flight (before sim.max_time_s)")
+            raise ConfigError(f"study.times[{i}]", t, "must lie inside the flight (before sim.max_time_s)")
     times = sorted({float(t) for t in study.times})
     # first flight: the points' snapshots (frequency domain) and the events
     flight = flight_mod.fly(cfg, snapshot_steps=flight_mod.control_steps(cfg, times))
