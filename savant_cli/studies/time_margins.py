@@ -151,14 +151,14 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
             raise ConfigError(f"study.times[{i}]", t, "must lie inside the flight (before sim.max_time_s)")
     times = sorted({float(t) for t in study.times})
     # first flight: the points' snapshots (frequency domain) and the events
-    flight = flight_mod.fly(cfg, snapshot_steps=flight_mod.control_steps(cfg, times))
+    steps = flight_mod.control_steps(cfg, times)
+    flight = flight_mod.fly(cfg, snapshot_steps=steps)
     model, result, sig, summary = flight.prep.model, flight.result, flight.signals, flight.summary
     rt = model.rates
     events = [te for _, te in flight_mod.events_of(result)]
     for i, t in enumerate(study.times):
         if not 0.0 < t < result.t_final:
             raise ConfigError(f"study.times[{i}]", t, f"must lie inside the flight (0, {result.t_final:.2f}) s")
-    steps = flight_mod.control_steps(cfg, times)
     rows: dict[float, list[MarginRow]] = {}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
