@@ -50,6 +50,9 @@ WALL_CLOCK_KEYS = ("study_wall_time_s", "process_wall_time_s", "sim_wall_time_s"
                    "simulation_wall_time_s", "elapsed_s", "runs_per_minute", "stage_wall_s")
 #: Root attributes of a run file that describe the flight (the rest is provenance).
 RUN_ATTRS = ("complete", "status", "message")
+#: The summary's load-indicator keys (issue 15), a regex alternation.
+LOAD_KEYS = (r"time_max_qalpha_s|max_qalpha_pitch_Pa_deg|time_max_qalpha_pitch_s|max_qbeta_Pa_deg|time_max_qbeta_s"
+             r"|qalpha_limit_Pa_deg|qalpha_limit_ratio|time_above_qalpha_limit_s|qalpha_limit_exceeded")
 #: Deliberate additions since the reference (a15cafb): output that only the new file may
 #: hold, by ``compare_h5`` location (regex) → why. Anything else present in one file only
 #: is a difference.
@@ -61,10 +64,14 @@ NAMED_ADDITIONS = {
     r"summary@(insertion_.*)": "issue 14: the insertion errors against the target at cutoff",
     r"montecarlo/summary/insertion_.*": "issue 14: the insertion errors of every run",
     r"montecarlo@insertion": "issue 14: the batch's insertion accuracy and flight-performance reserve",
+    rf"summary@({LOAD_KEYS})": "issue 15: the load indicators (q-alpha, q-beta, their times, the q-alpha limit)",
+    rf"montecarlo/summary/({LOAD_KEYS})": "issue 15: the load indicators of every run",
+    r"montecarlo@loads": "issue 15: the batch's q-alpha extremes and runs above the limit",
 }
 #: Deliberate additions to the JSON summaries, the CSV tables and the journal records
 #: (a key, a statistics row or a summary column only the new output holds), by name.
-NAMED_KEYS = {r"insertion(_.*)?": "issue 14: insertion errors and statistics"}
+NAMED_KEYS = {r"insertion(_.*)?": "issue 14: insertion errors and statistics",
+              rf"{LOAD_KEYS}|loads": "issue 15: load indicators and the batch's load extremes"}
 
 
 def cases() -> dict[str, list[str]]:
