@@ -147,8 +147,11 @@ def compare_h5(a: Path, b: Path) -> list[str]:
             for at in (at_a, at_b):  # provenance of a group (e.g. the Monte Carlo's): the machine, not the flight
                 for k in [k for k in at if k.startswith("provenance_")]:
                     del at[k]
-            if "__none__" in at_b:  # the summary's null keys: a named addition may be null
-                at_b["__none__"] = np.array([x for x in at_b["__none__"] if not _named(str(x))], dtype=object)
+                at.pop("config_yaml", None)  # a batch's resolved config text, like /config: not an output
+            if "__none__" in at_b:  # the summary's null keys: a named addition (not in the reference) may be null
+                old_none = {str(x) for x in at_a.get("__none__", [])}
+                at_b["__none__"] = np.array([x for x in at_b["__none__"] if str(x) in old_none or not _named(str(x))],
+                                            dtype=object)
             for k in sorted(set(at_a) | set(at_b)):
                 if k not in at_a:
                     diffs.append(f"{name}@{k}: only in the new file")
@@ -224,7 +227,8 @@ def compare_csv(a: Path, b: Path) -> list[str]:
     la, lb = a.read_text().splitlines(), b.read_text().splitlines()
     if la == lb:
         return []
-    kept = [ln for ln in lb if not _named(ln.split(",", 1)[0])]
+    old_rows = {ln.split(",", 1)[0] for ln in la}  # rows named as additions but already in the reference stay
+    kept = [ln for ln in lb if ln.split(",", 1)[0] in old_rows or not _named(ln.split(",", 1)[0])]
     return [] if kept == la else ["bytes differ"]
 
 
@@ -260,8 +264,8 @@ def compare_npz(a: Path, b: Path) -> list[str]:
         za, zb = dict(za), dict(zb)
         if "summary_keys" in za and "summary_keys" in zb:  # the summary by key; named columns added
             ka, kb = list(za["summary_keys"]), list(zb["summary_keys"])
-            if [k for k in kb if not _named(str(k))] == ka:
-                keep = [i for i, k in enumerate(kb) if not _named(str(k))]
+            if [k for k in kb if k in ka or not _named(str(k))] == ka:
+                keep = [i for i, k in enumerate(kb) if k in ka or not _named(str(k))]
                 zb["summary_keys"], zb["summary"] = zb["summary_keys"][keep], zb["summary"][keep]
     keys = (set(za) | set(zb)) - set(WALL_CLOCK_KEYS)
     return [f"{k}: {'only in one file' if k not in za or k not in zb else _deviation(za[k], zb[k])}"
