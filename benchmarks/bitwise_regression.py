@@ -50,6 +50,9 @@ WALL_CLOCK_KEYS = ("study_wall_time_s", "process_wall_time_s", "sim_wall_time_s"
                    "simulation_wall_time_s", "elapsed_s", "runs_per_minute", "stage_wall_s")
 #: Root attributes of a run file that describe the flight (the rest is provenance).
 RUN_ATTRS = ("complete", "status", "message")
+#: The summary's load-indicator keys (issue 15), a regex alternation.
+LOAD_KEYS = (r"time_max_qalpha_s|max_qalpha_pitch_Pa_deg|time_max_qalpha_pitch_s|max_qbeta_Pa_deg|time_max_qbeta_s"
+             r"|qalpha_limit_Pa_deg|qalpha_limit_ratio|time_above_qalpha_limit_s|qalpha_limit_exceeded")
 #: Deliberate additions since the reference (a15cafb): output that only the new file may
 #: hold, by ``compare_h5`` location (regex) → why. Anything else present in one file only
 #: is a difference.
@@ -61,10 +64,14 @@ NAMED_ADDITIONS = {
     r"summary@(insertion_.*)": "issue 14: the insertion errors against the target at cutoff",
     r"montecarlo/summary/insertion_.*": "issue 14: the insertion errors of every run",
     r"montecarlo@insertion": "issue 14: the batch's insertion accuracy and flight-performance reserve",
+    rf"summary@({LOAD_KEYS})": "issue 15: the load indicators (q-alpha, q-beta, their times, the q-alpha limit)",
+    rf"montecarlo/summary/({LOAD_KEYS})": "issue 15: the load indicators of every run",
+    r"montecarlo@loads": "issue 15: the batch's q-alpha extremes and runs above the limit",
 }
 #: Deliberate additions to the JSON summaries, the CSV tables and the journal records
 #: (a key, a statistics row or a summary column only the new output holds), by name.
-NAMED_KEYS = {r"insertion(_.*)?": "issue 14: insertion errors and statistics"}
+NAMED_KEYS = {r"insertion(_.*)?": "issue 14: insertion errors and statistics",
+              rf"{LOAD_KEYS}|loads": "issue 15: load indicators and the batch's load extremes"}
 
 
 def cases() -> dict[str, list[str]]:
@@ -140,8 +147,11 @@ def compare_h5(a: Path, b: Path) -> list[str]:
             for at in (at_a, at_b):  # provenance of a group (e.g. the Monte Carlo's): the machine, not the flight
                 for k in [k for k in at if k.startswith("provenance_")]:
                     del at[k]
-            if "__none__" in at_b:  # the summary's null keys: a named addition may be null
-                at_b["__none__"] = np.array([x for x in at_b["__none__"] if not _named(str(x))], dtype=object)
+                at.pop("config_yaml", None)  # a batch's resolved config text, like /config: not an output
+            if "__none__" in at_b:  # the summary's null keys: a named addition (not in the reference) may be null
+                old_none = {str(x) for x in at_a.get("__none__", [])}
+                at_b["__none__"] = np.array([x for x in at_b["__none__"] if str(x) in old_none or not _named(str(x))],
+                                            dtype=object)
             for k in sorted(set(at_a) | set(at_b)):
                 if k not in at_a:
                     diffs.append(f"{name}@{k}: only in the new file")
@@ -217,7 +227,8 @@ def compare_csv(a: Path, b: Path) -> list[str]:
     la, lb = a.read_text().splitlines(), b.read_text().splitlines()
     if la == lb:
         return []
-    kept = [ln for ln in lb if not _named(ln.split(",", 1)[0])]
+    old_rows = {ln.split(",", 1)[0] for ln in la}  # rows named as additions but already in the reference stay
+    kept = [ln for ln in lb if ln.split(",", 1)[0] in old_rows or not _named(ln.split(",", 1)[0])]
     return [] if kept == la else ["bytes differ"]
 
 
@@ -253,8 +264,8 @@ def compare_npz(a: Path, b: Path) -> list[str]:
         za, zb = dict(za), dict(zb)
         if "summary_keys" in za and "summary_keys" in zb:  # the summary by key; named columns added
             ka, kb = list(za["summary_keys"]), list(zb["summary_keys"])
-            if [k for k in kb if not _named(str(k))] == ka:
-                keep = [i for i, k in enumerate(kb) if not _named(str(k))]
+            if [k for k in kb if k in ka or not _named(str(k))] == ka:
+                keep = [i for i, k in enumerate(kb) if k in ka or not _named(str(k))]
                 zb["summary_keys"], zb["summary"] = zb["summary_keys"][keep], zb["summary"][keep]
     keys = (set(za) | set(zb)) - set(WALL_CLOCK_KEYS)
     return [f"{k}: {'only in one file' if k not in za or k not in zb else _deviation(za[k], zb[k])}"

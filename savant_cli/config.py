@@ -430,12 +430,48 @@ class WindProfile:
     east_mps: list[float] = field(default_factory=list)
 
 
+#: ``winds.gust.onset``, ``winds.gust.frame`` and ``winds.shear.shape`` options.
+GUST_ONSETS = ("altitude", "time")
+GUST_FRAMES = ("ned", "flight_path")
+SHEAR_SHAPES = ("linear", "cosine")
+
+
+@dataclass
+class GustConfig:
+    """``winds.gust``: a discrete 1 − cos gust (``models/winds.py``, docs/models.md)."""
+
+    enabled: bool = False
+    amplitude_mps: float = 9.0  # peak speed A, reached at mid-length
+    onset: str = "altitude"  # altitude | time: what the gust coordinate s runs in
+    onset_altitude_m: float = 12000.0  # onset: altitude: where the gust starts (geodetic)
+    length_m: float = 240.0  # onset: altitude: full thickness d (build-up d/2, peak at d/2)
+    onset_time_s: float = 60.0  # onset: time: when the gust starts (mission time)
+    duration_s: float = 1.0  # onset: time: full duration d
+    frame: str = "flight_path"  # ned: horizontal toward direction_deg; flight_path: across the path
+    direction_deg: float = 0.0  # ned: azimuth from north; flight_path: clock angle (0 up: +alpha, 90 left: +beta)
+
+
+@dataclass
+class ShearConfig:
+    """``winds.shear``: a build-up of the horizontal wind by ``delta_mps`` over an altitude band."""
+
+    enabled: bool = False
+    delta_mps: float = 0.0  # Δv over the band (m/s, may be negative)
+    base_altitude_m: float = 9000.0  # bottom of the band (geodetic)
+    thickness_m: float = 1000.0  # band thickness Δh
+    return_thickness_m: float = 0.0  # > 0: Δv is removed again over this thickness above the band
+    shape: str = "linear"  # linear | cosine ramp
+    direction_deg: float = 90.0  # azimuth the added wind blows toward, from north
+
+
 @dataclass
 class WindsConfig:
     name: str = "none"
     enabled: bool = False
     scale: float = 1.0
     profile: WindProfile = field(default_factory=WindProfile)
+    gust: GustConfig = field(default_factory=GustConfig)
+    shear: ShearConfig = field(default_factory=ShearConfig)
 
 
 @dataclass
@@ -963,6 +999,7 @@ def check_physics(cfg: SavantConfig) -> None:
             vals = list(getattr(w.profile, comp))
             if len(vals) != n:
                 raise ConfigError(f"winds.profile.{comp}", vals, f"must have one value per altitude ({n})")
+    check_gust_shear(w)
     _check_controller(cfg.controller)
     g = cfg.guidance
     if not g.command_file:
@@ -977,6 +1014,38 @@ def check_physics(cfg: SavantConfig) -> None:
     check_peg(g.peg, cfg.sim)
     _positive("guidance.smoother.damping", g.smoother.damping)
     _positive("guidance.smoother.natural_frequency_rad_s", g.smoother.natural_frequency_rad_s)
+
+
+def _finite(key: str, value: float) -> None:
+    if not np.isfinite(value):
+        raise ConfigError(key, value, "must be a finite number")
+
+
+def check_gust_shear(w: WindsConfig) -> None:
+    """``winds.gust`` and ``winds.shear`` (checked whether enabled or not, so a switched-off
+    gust is ready to fly): options from their lists, a gust amplitude within ±50 m/s, a
+    positive length (``onset: altitude``) or duration (``onset: time``), an onset above
+    the ground or after liftoff, a shear of at most ±100 m/s over a positive band."""
+    g = w.gust
+    _one_of("winds.gust.onset", g.onset, GUST_ONSETS)
+    _one_of("winds.gust.frame", g.frame, GUST_FRAMES)
+    if not (np.isfinite(g.amplitude_mps) and abs(g.amplitude_mps) <= 50.0):
+        raise ConfigError("winds.gust.amplitude_mps", g.amplitude_mps, "must be a finite speed within ±50 m/s")
+    _finite("winds.gust.direction_deg", g.direction_deg)
+    if g.onset == "altitude":
+        _non_negative("winds.gust.onset_altitude_m", g.onset_altitude_m)
+        _positive("winds.gust.length_m", g.length_m)
+    else:
+        _non_negative("winds.gust.onset_time_s", g.onset_time_s)
+        _positive("winds.gust.duration_s", g.duration_s)
+    s = w.shear
+    _one_of("winds.shear.shape", s.shape, SHEAR_SHAPES)
+    if not (np.isfinite(s.delta_mps) and abs(s.delta_mps) <= 100.0):
+        raise ConfigError("winds.shear.delta_mps", s.delta_mps, "must be a finite speed within ±100 m/s")
+    _finite("winds.shear.base_altitude_m", s.base_altitude_m)
+    _positive("winds.shear.thickness_m", s.thickness_m)
+    _non_negative("winds.shear.return_thickness_m", s.return_thickness_m)
+    _finite("winds.shear.direction_deg", s.direction_deg)
 
 
 def check_target(g: GuidanceConfig) -> None:

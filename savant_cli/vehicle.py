@@ -246,6 +246,9 @@ class Vehicle:
     data_dir: Path | None = None
     flex_spec: dict | None = None  # raw ``flex`` section, loaded by savant_cli.flex_slosh when flex is on
     slosh_spec: dict | None = None  # raw ``slosh`` section, loaded when slosh is on
+    #: structural load allowable on the total q·α (Pa·deg, ``loads.qalpha_limit_Pa_deg``;
+    #: None: no limit declared). The run summary reports the time above it.
+    qalpha_limit_Pa_deg: float | None = None
 
 
 # ------------------------------------------------------------------------- key schema
@@ -266,11 +269,12 @@ SCHEMA: dict[str, Any] = {
             "ramp_up_s": float, "ramp_down_s": float, "location_m": _VEC3},
     "sensors": {"imu_m": _VEC3, "rate_gyro_upper_stage_m": _VEC3, "rate_gyro_first_stage_m": _VEC3},
     "events": {"separation_thrust_fraction": float, "ignition_delay_s": float, "les_jettison_delay_s": float},
+    "loads": {"qalpha_limit_Pa_deg": float},
 }
 _MAPPING = "mapping"  # a free-form section checked by its own loader (savant_cli.flex_slosh)
 SCHEMA["flex"] = _MAPPING
 SCHEMA["slosh"] = _MAPPING
-_OPTIONAL = {"description", "flex", "slosh"}
+_OPTIONAL = {"description", "flex", "slosh", "loads"}
 
 
 def _is_number(v: Any) -> bool:
@@ -638,9 +642,13 @@ def load_vehicle(vehicle_cfg: Mapping, data_dir: Path) -> Vehicle:
                     ignition_delay_s=_positive("vehicle.events.ignition_delay_s", en["ignition_delay_s"], True),
                     les_jettison_delay_s=_positive("vehicle.events.les_jettison_delay_s",
                                                    en["les_jettison_delay_s"], True))
+    qalpha_limit = None
+    if node.get("loads") is not None:
+        qalpha_limit = _positive("vehicle.loads.qalpha_limit_Pa_deg", node["loads"]["qalpha_limit_Pa_deg"])
     vehicle = Vehicle(name=str(node["name"]), description=str(node.get("description") or ""), length_m=length,
                       configurations=configs, first_stage=fs, upper_stage=us, rcs=rcs, sensors=sensors,
-                      events=events, data_dir=vdir, flex_spec=node.get("flex"), slosh_spec=node.get("slosh"))
+                      events=events, data_dir=vdir, flex_spec=node.get("flex"), slosh_spec=node.get("slosh"),
+                      qalpha_limit_Pa_deg=qalpha_limit)
     check_consistency(vehicle, {n: node["configurations"][n]["mass_table"] for n in CONFIG_NAMES})
     return vehicle
 

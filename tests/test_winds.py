@@ -31,8 +31,8 @@ def test_wind_profile_interpolates_linearly_and_holds_its_ends(alt, scale, expec
 
 def test_scale_zero_is_still_air():
     tb, p = _packed(0.0)
-    assert winds.air_relative_velocity(3000.0, 0.3, 0.9, 0.2, 0.8, 1.0, 0.0, 1.0, 2.0, 3.0, tb, p) == (
-        1.0, 2.0, 3.0, 0.0, 0.0)
+    assert winds.air_relative_velocity(10.0, 3000.0, 0.3, 0.9, 0.2, 0.8, 1.0, 0.0, 1.0, 2.0, 3.0, tb, p) == (
+        1.0, 2.0, 3.0, 0.0, 0.0, 0.0)
 
 
 @pytest.mark.parametrize("lat_deg, lon_deg, t", [(0.0, 0.0, 0.0), (40.0, -100.0, 777.0), (-28.5, 80.6, 3.0)])
@@ -42,9 +42,9 @@ def test_air_velocity_subtracts_the_wind_rotated_into_eci(lat_deg, lon_deg, t):
     wind_ned = np.array([*winds.wind_ned(3000.0, tb, p), 0.0])
     expect_wind = E.dcm_eci_to_ecef(t, W).T @ (E.dcm_ecef_to_ned(lat, lon).T @ wind_ned)
     v_earth = np.array([100.0, -50.0, 20.0])
-    got = winds.air_relative_velocity(3000.0, np.sin(lat), np.cos(lat), np.sin(lon), np.cos(lon), np.cos(W * t),
+    got = winds.air_relative_velocity(t, 3000.0, np.sin(lat), np.cos(lat), np.sin(lon), np.cos(lon), np.cos(W * t),
                                       np.sin(W * t), *v_earth, tb, p)
     np.testing.assert_allclose(got[:3], v_earth - expect_wind, atol=1e-12)
-    np.testing.assert_allclose(got[3:], wind_ned[:2], rtol=1e-15)
+    np.testing.assert_allclose(got[3:], wind_ned, rtol=1e-15)
     if lat_deg == 0.0 and lon_deg == 0.0 and t == 0.0:  # north is ECI +Z and east ECI +Y there
         np.testing.assert_allclose(expect_wind, [0.0, wind_ned[1], wind_ned[0]], atol=1e-15)

@@ -166,7 +166,8 @@ def fly_run(case: Case, run: int, keep: bool = False):
         lap(1)
         sig = signals(result, model)
         health = assess(result, sig, model, case.cfg.sim.health)
-        summ = {**summarize(result, sig, target=insertion_target(applied.cfg.guidance)), **health}
+        summ = {**summarize(result, sig, target=insertion_target(applied.cfg.guidance),
+                                  qalpha_limit=applied.vehicle.qalpha_limit_Pa_deg), **health}
         keys = [k for k, v in summ.items() if isinstance(v, (int, float)) and not isinstance(v, bool)
                 and k not in WALL_KEYS]
         lap(2)

@@ -219,6 +219,54 @@ def requirement_verdicts(checks: np.ndarray, requirement_set: str) -> dict[str, 
             "passed": bool(per_run) and not failed, "line": line, "failed_runs": failed}
 
 
+#: (summary key, label) of the load indicators :func:`load_extremes` reports
+LOAD_EXTREMES = (("max_qalpha_Pa_deg", "max q-alpha total"), ("max_qalpha_pitch_Pa_deg", "max q-alpha pitch"),
+                 ("max_qbeta_Pa_deg", "max q-beta"), ("time_above_qalpha_limit_s", "time above q-alpha limit"))
+
+
+def load_extremes(tb: "Tables") -> dict[str, Any]:
+    """The batch's aerodynamic load extremes over the runs with results (``Tables.ok``):
+    per indicator the largest value and its run; the q·α limit and the runs whose total
+    q·α exceeded it (``qalpha_limit_exceeded``), counted and listed. Empty when the runs
+    carry no load indicators (a batch recorded before them)."""
+    keys = tb.summary_keys
+    if "max_qalpha_pitch_Pa_deg" not in keys:
+        return {}
+    ok = tb.ok
+    runs = tb.runs[ok]
+    out: dict[str, Any] = {"runs_with_results": int(ok.sum())}
+    for key, _ in LOAD_EXTREMES:
+        if key not in keys:
+            continue
+        col = tb.summary[ok, keys.index(key)]
+        good = np.isfinite(col)
+        out[key] = ({"max": float(col[good].max()), "max_run": int(runs[good][np.argmax(col[good])])}
+                    if good.any() else None)
+    limit = tb.summary[ok, keys.index("qalpha_limit_Pa_deg")] if "qalpha_limit_Pa_deg" in keys else np.zeros(0)
+    limit = limit[np.isfinite(limit)]
+    out["qalpha_limit_Pa_deg"] = float(limit.max()) if limit.size else None
+    if "qalpha_limit_exceeded" in keys:
+        exc = tb.summary[ok, keys.index("qalpha_limit_exceeded")]
+        above = [int(r) for r, e in zip(runs, exc) if e == 1.0]
+        out["runs_above_qalpha_limit"] = len(above)
+        out["runs_above_qalpha_limit_list"] = ranges_text(above)
+    return out
+
+
+def print_loads(console: Console, loads: dict[str, Any]) -> None:
+    """The load extremes on the console (a red count when runs exceeded the limit)."""
+    if not loads:
+        return
+    parts = [f"{label} {loads[key]['max']:.4g} [run {loads[key]['max_run']}]"
+             for key, label in LOAD_EXTREMES if loads.get(key)]
+    console.print("loads: " + "; ".join(parts))
+    if loads.get("qalpha_limit_Pa_deg") is not None:
+        n = loads.get("runs_above_qalpha_limit", 0)
+        text = (f"{n} of {loads['runs_with_results']} runs above the q-alpha limit "
+                f"{loads['qalpha_limit_Pa_deg']:.4g} Pa deg" + (f" (runs {loads['runs_above_qalpha_limit_list']})" if n else ""))
+        console.print(f"[red]{text}[/red]" if n else text)
+
+
 def _csv(path: Path, rows: list[dict[str, Any]]) -> None:
     buf = io.StringIO()
     if rows:
@@ -258,6 +306,9 @@ def write_outputs(out_dir: Path, inv: Inventory, expected: list[int], dispersion
         g.attrs["reliability"] = json.dumps(rel.as_dict())
         insertion = insertion_statistics(tb.runs, tb.message, tb.summary_keys, tb.summary)
         g.attrs["insertion"] = json.dumps(insertion)
+        loads = load_extremes(tb)
+        if loads:
+            g.attrs["loads"] = json.dumps(loads)
         rg = g.create_group("runs")
         rg.create_dataset("run", data=tb.runs)
         rg.create_dataset("status", data=_strings(tb.status))
@@ -306,6 +357,8 @@ def write_outputs(out_dir: Path, inv: Inventory, expected: list[int], dispersion
                "failures": failures,
                "statistics": stats, "dispersion_statistics": disp_stats, "margin_spread": spread,
                "insertion": insertion}
+    if loads:
+        summary["loads"] = loads
     if tb.checks.size:
         summary.update({"requirements_met": verdict["passed"], "requirements_verdict": verdict["line"],
                         "requirements": verdict})
@@ -315,6 +368,7 @@ def write_outputs(out_dir: Path, inv: Inventory, expected: list[int], dispersion
     if console is not None:
         print_tables(console, stats, spread, counts, missing, verdict if tb.checks.size else None)
         print_insertion(console, insertion)
+        print_loads(console, loads)
         print_verdict(rel.line(), rel.target_met, console)
     return summary
 

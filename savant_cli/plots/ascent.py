@@ -8,7 +8,9 @@ interactive session. Each figure is written atomically as a 120-dpi PNG.
 Figures (file, paper figure, signals):
 
 - ``body_rates.png`` (Fig. 8): ``body_rate`` in deg/s, roll/pitch/yaw
-- ``alpha_beta.png`` (Fig. 9): ``alpha``, ``beta`` in deg
+- ``alpha_beta.png`` (Fig. 9): ``alpha``, ``beta`` in deg, and the load indicators q·α (pitch
+  plane, signed), q·β and the total q·α_total in kPa·deg (derived from ``dynamic_pressure``,
+  ``alpha`` and ``beta``; cos α_total = cos α cos β)
 - ``attitude_tracking.png`` (Fig. 10): ``attitude_euler`` vs ``attitude_euler_command`` (dashed)
 - ``velocity_dynamic_pressure.png`` (Fig. 11): ``velocity_relative`` (m/s), ``dynamic_pressure`` (kPa)
 - ``altitude_mach.png`` (Fig. 12): ``altitude`` (km), ``mach``
@@ -26,6 +28,7 @@ Drawn when the model is on:
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -57,6 +60,7 @@ _CONVERSIONS = {
     ("rad/s", "deg/s"): 180.0 / np.pi,
     ("m", "km"): 1e-3,
     ("Pa", "kPa"): 1e-3,
+    ("Pa*deg", "kPa*deg"): 1e-3,
     ("1", ""): 1.0,
     ("Hz", "Hz"): 1.0,
 }
@@ -109,6 +113,8 @@ FIGURES: tuple[FigureSpec, ...] = (
     FigureSpec("alpha_beta.png", "Angle of attack and sideslip (cf. Fig. 9)", (
         Panel("angle of attack α", "deg", (Line("alpha", None, "α"),)),
         Panel("sideslip β", "deg", (Line("beta", None, "β"),)),
+        Panel("load indicator", "kPa*deg", (Line("q_alpha_total", None, "q·α total"), Line("q_alpha", None, "q·α"),
+                                             Line("q_beta", None, "q·β"))),
     )),
     FigureSpec("attitude_tracking.png", "Attitude command tracking, 3-2-1 Euler angles (cf. Fig. 10)",
                _rpy_panels("attitude_euler", "attitude_euler_command", "deg", "angle", wrap=True)),
@@ -216,7 +222,15 @@ def _event_lines(ax, events: list[tuple[str, float]], t0: float, t1: float, labe
                     bbox={"facecolor": "white", "alpha": 0.75, "edgecolor": "none", "pad": 1.0})
 
 
+#: the signals :func:`load_signals` derives
+LOAD_SIGNALS = ("q_alpha", "q_beta", "q_alpha_total")
+
+
 def _draw(spec: FigureSpec, record: RunRecord, t: np.ndarray, idx: np.ndarray) -> Figure | None:
+    if any(line.signal in LOAD_SIGNALS for p in spec.panels for line in p.lines):
+        derived = load_signals(record.signals)
+        if derived:
+            record = dataclasses.replace(record, signals={**record.signals, **derived})
     if spec.requires is not None and spec.requires not in record.signals:
         return None
     panels = [p for p in spec.panels if p.lines[0].signal in record.signals
@@ -267,6 +281,24 @@ def _draw(spec: FigureSpec, record: RunRecord, t: np.ndarray, idx: np.ndarray) -
         verdict = "INCOMPLETE" if not record.complete else record.status.replace("_", " ").upper()
         fig.suptitle(f"{spec.title}\n{verdict}: {msg}", fontsize=11, color="red", y=1.0 - 0.15 / height, va="top")
     return fig
+
+
+def load_signals(signals: dict[str, Signal]) -> dict[str, Signal]:
+    """The derived load-indicator signals (Pa·deg) of a run's ``dynamic_pressure``,
+    ``alpha`` and ``beta``: ``q_alpha`` = q·α and ``q_beta`` = q·β (signed, deg), and
+    ``q_alpha_total`` = q·α_total with cos α_total = cos α cos β, as the run summary
+    computes them (empty when a signal is missing)."""
+    if not all(k in signals for k in ("dynamic_pressure", "alpha", "beta")):
+        return {}
+    q = np.asarray(signals["dynamic_pressure"].data, dtype=np.float64)
+    a = np.asarray(signals["alpha"].data, dtype=np.float64)
+    b = np.asarray(signals["beta"].data, dtype=np.float64)
+    if q.ndim != 1 or a.shape != q.shape or b.shape != q.shape:
+        return {}
+    total = np.degrees(np.arccos(np.clip(np.cos(a) * np.cos(b), -1.0, 1.0)))
+    return {"q_alpha": Signal(q * np.degrees(a), "Pa*deg", "dynamic pressure times angle of attack"),
+            "q_beta": Signal(q * np.degrees(b), "Pa*deg", "dynamic pressure times sideslip"),
+            "q_alpha_total": Signal(q * total, "Pa*deg", "dynamic pressure times total angle of attack")}
 
 
 def plot_ascent(record: RunRecord, out_dir: Path) -> list[Path]:

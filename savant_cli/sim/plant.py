@@ -132,8 +132,8 @@ def compose(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarra
     temp, pres, rho, sos = atmosphere.air_at(alt, tb)
     gx, gy, gz = gravity.gravity_at(rx, ry, rz, p, p[earth.P_RE])
     ex, ey, ez = earth.earth_relative_velocity(rx, ry, vx, vy, vz, p)
-    air_x, air_y, air_z, wind_n, wind_e = winds.air_relative_velocity(
-        alt, sin_lat, cos_lat, sin_lon, cos_lon, cos_et, sin_et, ex, ey, ez, tb, p)
+    air_x, air_y, air_z, wind_n, wind_e, wind_d = winds.air_relative_velocity(
+        t, alt, sin_lat, cos_lat, sin_lon, cos_lon, cos_et, sin_et, ex, ey, ez, tb, p)
     # air-relative velocity in body axes (Rᵀ v), less the gust the air moves with
     ub = m00 * air_x + m10 * air_y + m20 * air_z - u[U_GUST]
     vb = m01 * air_x + m11 * air_y + m21 * air_z - u[U_GUST + 1]
@@ -240,7 +240,7 @@ def compose(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarra
     aux[aero.A_VREL] = vair
     aux[winds.A_WIND] = wind_n
     aux[winds.A_WIND + 1] = wind_e
-    aux[winds.A_WIND + 2] = 0.0
+    aux[winds.A_WIND + 2] = wind_d
     aux[gravity.A_GRAV] = gx
     aux[gravity.A_GRAV + 1] = gy
     aux[gravity.A_GRAV + 2] = gz

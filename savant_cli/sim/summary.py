@@ -87,11 +87,47 @@ def insertion_errors(r_eci: np.ndarray, v_eci: np.ndarray, target) -> dict[str, 
     }
 
 
+#: the keys of :func:`load_indicators`
+LOAD_KEYS = ("time_max_qalpha_s", "max_qalpha_pitch_Pa_deg", "time_max_qalpha_pitch_s", "max_qbeta_Pa_deg",
+             "time_max_qbeta_s", "qalpha_limit_Pa_deg", "qalpha_limit_ratio", "time_above_qalpha_limit_s",
+             "qalpha_limit_exceeded")
+
+
+def load_indicators(t: np.ndarray, qbar: np.ndarray, alpha: np.ndarray, beta: np.ndarray,
+                    qalpha_total: np.ndarray, limit: float | None) -> dict[str, float | int | None]:
+    """Aerodynamic load indicators of the logged flight (Pa·deg, s).
+
+    ``max_qalpha_pitch_Pa_deg``: max of q·|α| (pitch plane); ``max_qbeta_Pa_deg``: max of
+    q·|β| (yaw plane); with ``max_qalpha_Pa_deg`` (the total, q·α_total with
+    cos α_total = cos α cos β) each with its time. Against the vehicle's allowable
+    ``limit`` on the total (``vehicle.loads.qalpha_limit_Pa_deg``; None: no limit, the
+    four limit keys None): the ratio max/limit, the time the total spends above the limit
+    (by the log's sample spacing) and ``qalpha_limit_exceeded`` (1 when the maximum is
+    above it, else 0)."""
+    qa = qbar * np.abs(np.degrees(alpha))
+    qb = qbar * np.abs(np.degrees(beta))
+    i_t, i_a, i_b = int(np.argmax(qalpha_total)), int(np.argmax(qa)), int(np.argmax(qb))
+    out: dict[str, float | int | None] = {
+        "time_max_qalpha_s": float(t[i_t]),
+        "max_qalpha_pitch_Pa_deg": float(qa[i_a]), "time_max_qalpha_pitch_s": float(t[i_a]),
+        "max_qbeta_Pa_deg": float(qb[i_b]), "time_max_qbeta_s": float(t[i_b]),
+        "qalpha_limit_Pa_deg": None, "qalpha_limit_ratio": None, "time_above_qalpha_limit_s": None,
+        "qalpha_limit_exceeded": None}
+    if limit is not None:
+        dt = np.diff(t, append=t[-1]) if t.size > 1 else np.zeros(t.size)
+        peak = float(qalpha_total[i_t])
+        out.update({"qalpha_limit_Pa_deg": float(limit), "qalpha_limit_ratio": peak / float(limit),
+                    "time_above_qalpha_limit_s": float(np.sum(dt[qalpha_total > limit])),
+                    "qalpha_limit_exceeded": int(peak > limit)})
+    return out
+
+
 def summarize(result: SimResult, sig: dict[str, Signal], study_wall_s: float | None = None,
-              target=None) -> dict:
+              target=None, qalpha_limit: float | None = None) -> dict:
     """Summary scalars of a run (SI units named in the keys); ``target`` (an
     :class:`~savant_cli.models.peg.InsertionTarget`) adds the insertion errors at cutoff
-    (None when the run did not cut off)."""
+    (None when the run did not cut off); ``qalpha_limit`` (Pa·deg) the vehicle's q·α
+    allowable the load indicators are judged against (:func:`load_indicators`)."""
     t = sig["time"].data
     out: dict[str, float | int | str | None] = {"status": result.status, "message": result.message}
     if t.size == 0:
@@ -107,13 +143,14 @@ def summarize(result: SimResult, sig: dict[str, Signal], study_wall_s: float | N
     r_f = sig["position_eci"].data[-1]
     v_f = sig["velocity_eci"].data[-1]
     orbit = orbit_elements(r_f, v_f)
+    qalpha_total = qbar * alpha_total
     out.update({
         "max_dynamic_pressure_Pa": float(qbar[i_q]),
         "time_max_dynamic_pressure_s": float(t[i_q]),
         "mach_at_max_dynamic_pressure": float(sig["mach"].data[i_q]),
         "altitude_at_max_dynamic_pressure_m": float(sig["altitude"].data[i_q]),
         "max_alpha_deg": float(alpha_total[dense].max()) if dense.any() else 0.0,
-        "max_qalpha_Pa_deg": float(np.max(qbar * alpha_total)),
+        "max_qalpha_Pa_deg": float(np.max(qalpha_total)),
         "max_gimbal_deg": float(gimbal.max()),
         "max_gimbal_rate_deg_s": float(np.degrees(np.abs(sig["gimbal_rate"].data)).max()),
         "max_attitude_error_deg": float(att_err.max()),
@@ -135,6 +172,7 @@ def summarize(result: SimResult, sig: dict[str, Signal], study_wall_s: float | N
         "sim_wall_time_s": result.sim_wall_time_s,
         "realtime_factor": float(result.t_final / result.sim_wall_time_s) if result.sim_wall_time_s > 0 else None,
     })
+    out.update(load_indicators(t, qbar, sig["alpha"].data, sig["beta"].data, qalpha_total, qalpha_limit))
     if target is not None:
         cut = not np.isnan(result.events[E.EV_CUTOFF])
         out.update(insertion_errors(r_f, v_f, target) if cut else dict.fromkeys(INSERTION_KEYS))

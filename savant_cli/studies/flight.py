@@ -48,7 +48,8 @@ def fly(cfg: SavantConfig, progress: bool | None = None, snapshot_steps: tuple[i
                       chunk_s=cfg.sim.chunk_s, snapshot_steps=snapshot_steps)
     sig = signals(result, prep.model)
     health = assess(result, sig, prep.model, cfg.sim.health)  # may turn "complete" into a verdict
-    summary = summarize(result, sig, target=insertion_target(cfg.guidance))
+    summary = summarize(result, sig, target=insertion_target(cfg.guidance),
+                        qalpha_limit=prep.vehicle.qalpha_limit_Pa_deg)
     return Flight(prep=prep, result=result, signals=sig, summary={**summary, **health})
 
 

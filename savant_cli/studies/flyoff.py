@@ -43,6 +43,9 @@ METRICS: dict[str, tuple[str, str, str]] = {
     "RMS attitude error": ("rms_attitude_error_deg", "low", "deg"),
     "max alpha": ("max_alpha_deg", "low", "deg"),
     "max q-alpha": ("max_qalpha_Pa_deg", "low", "Pa deg"),
+    "max pitch q-alpha": ("max_qalpha_pitch_Pa_deg", "low", "Pa deg"),
+    "max q-beta": ("max_qbeta_Pa_deg", "low", "Pa deg"),
+    "time above q-alpha limit": ("time_above_qalpha_limit_s", "low", "s"),
     "max gimbal angle": ("max_gimbal_deg", "low", "deg"),
     "max gimbal rate": ("max_gimbal_rate_deg_s", "low", "deg/s"),
     "propellant remaining": ("propellant_remaining_kg", "high", "kg"),
@@ -123,8 +126,10 @@ def _meets(g: h5py.Group, runs: np.ndarray) -> np.ndarray:
 def compare(tables: dict[str, dict[str, np.ndarray]]) -> list[dict]:
     """Per metric: each controller's nominal (run 0) value and its dispersed worst-case
     percentile (``<controller>_dispersed``: 99.865 % for lower-is-better, 0.135 % for
-    higher-is-better, over the runs that completed), and the winner on that percentile
-    (on the nominal alone when there are no dispersed runs)."""
+    higher-is-better, over the runs that completed), its worst run's value and number
+    (``<controller>_worst``, ``<controller>_worst_run``: the largest value for
+    lower-is-better, the smallest for higher-is-better; −1 when none), and the winner on
+    that percentile (on the nominal alone when there are no dispersed runs)."""
     rows = []
     for metric, (_, better, unit) in METRICS.items():
         pct = PERCENTILES[2] if better == "low" else PERCENTILES[0]
@@ -137,6 +142,12 @@ def compare(tables: dict[str, dict[str, np.ndarray]]) -> list[dict]:
             tail = float(np.percentile(good, pct)) if good.size > 1 else nominal
             row[f"{ctrl}_nominal"] = nominal
             row[f"{ctrl}_dispersed"] = tail
+            sel = t["ok"] & np.isfinite(v)
+            if sel.any():
+                j = int(np.argmax(v[sel]) if better == "low" else np.argmin(v[sel]))
+                row[f"{ctrl}_worst"], row[f"{ctrl}_worst_run"] = float(v[sel][j]), int(t["run"][sel][j])
+            else:
+                row[f"{ctrl}_worst"], row[f"{ctrl}_worst_run"] = float("nan"), -1
             if np.isfinite(tail):
                 score[ctrl] = tail
         if score:
@@ -217,7 +228,7 @@ def _meeting(t: dict[str, np.ndarray]) -> str:
 
 
 def _table(rows: list[dict], names: list[str]) -> Table:
-    tb = Table(title="controller fly-off (nominal / dispersed worst-case percentile; ★ = best)")
+    tb = Table(title="controller fly-off (nominal / dispersed worst-case percentile, worst run in brackets; ★ = best)")
     tb.add_column("metric")
     for n in names:
         tb.add_column(n, justify="right")
@@ -226,7 +237,8 @@ def _table(rows: list[dict], names: list[str]) -> Table:
         for n in names:
             tail = r[f"{n}_dispersed"]
             star = " ★" if r["winner"] == n else ""
-            cells.append(f"{r[f'{n}_nominal']:.4g} / {tail:.4g}{star}")
+            worst = f" [{int(r[f'{n}_worst_run'])}]" if r.get(f"{n}_worst_run", -1) >= 0 else ""
+            cells.append(f"{r[f'{n}_nominal']:.4g} / {tail:.4g}{worst}{star}")
         tb.add_row(f"{r['metric']} [{r['unit']}]", *cells)
     return tb
 
