@@ -11,7 +11,8 @@ What is drawn depends on what the file holds:
 * group ``montecarlo`` (a Monte Carlo batch, or the folder of one fly-off controller):
   histograms, dispersion histograms, envelopes and the margin spread;
 * group ``flyoff``: the nominal-history overlays and the metric histograms;
-* group ``mode_retention``: the step-response overlays and the margins against the count.
+* group ``mode_retention``: the step-response overlays and the margins against the count;
+* group ``time_margins``: one figure per search (``plots/time_margins/``).
 
 The figures have the names, and show the data, of the ones the study drew itself.
 """
@@ -106,7 +107,12 @@ def report(run_dir: Path | str, console: Console | None = None) -> list[Path]:
         from savant_cli.studies import fcs_design
 
         paths += fcs_design.draw(*fcs_design.read_group(h5), folder)
-    studies = sorted(groups & {"linear", "flex_sweep", "montecarlo", "flyoff", "mode_retention", "fcs_design"})
+    if "time_margins" in groups:
+        from savant_cli.studies import time_margins
+
+        paths += time_margins.draw(time_margins.read_group(h5), folder)
+    studies = sorted(groups & {"linear", "flex_sweep", "montecarlo", "flyoff", "mode_retention", "fcs_design",
+                               "time_margins"})
     if studies:
         console.print(f"redrawn from {RUN_FILE}: {', '.join(studies)}")
     return paths

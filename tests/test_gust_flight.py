@@ -105,18 +105,16 @@ def th_beta(run_dir):
 
 
 def test_dispersed_gusts_report_load_extremes_with_run_numbers(tmp_path):
+    """The committed gust set (conf/dispersions/ares_i_gust.yaml): every dispersed run
+    draws its own gust; the load extremes name the runs that hold them, in summary.json,
+    the h5 attribute and the console."""
     from savant_cli.studies.montecarlo import fly_batch
 
-    cfg = validate(compose_config(["study=montecarlo", "winds=design_gust", "study.n_runs=5", "study.workers=1",
-                                   "study.histories.signals=[]", *FIRST]))
-    cfg.dispersions = DispersionSetConfig(name="gusts", items={
-        "gust_amplitude": DispersionSpec(target="winds.gust.amplitude_mps", apply="offset", sigma=2.0),
-        "gust_onset": DispersionSpec(target="winds.gust.onset_altitude_m", apply="offset", dist="uniform",
-                                     low=-1500.0, high=1500.0),
-        "gust_direction": DispersionSpec(target="winds.gust.direction_deg", apply="value", dist="uniform",
-                                         low=0.0, high=360.0),
-    })
-    summary, stop = fly_batch(cfg, "{}", tmp_path, Console(quiet=True), print_tables=False)
+    cfg = validate(compose_config(["study=montecarlo", "winds=design_gust", "dispersions=ares_i_gust",
+                                   "study.n_runs=5", "study.workers=1", "study.histories.signals=[]", *FIRST]))
+    assert cfg.dispersions.items["wind_profile"].value == "design_gust"
+    console = Console(record=True, width=300)
+    summary, stop = fly_batch(cfg, "{}", tmp_path, console)
     assert stop.reason == "done" and summary["status_counts"] == {"complete": 5}
     with h5py.File(tmp_path / "savant.h5") as f:
         g = f["montecarlo"]
@@ -126,17 +124,21 @@ def test_dispersed_gusts_report_load_extremes_with_run_numbers(tmp_path):
         qa_pitch = g["summary/max_qalpha_pitch_Pa_deg"][()]
         above = g["summary/qalpha_limit_exceeded"][()]
         loads_attr = json.loads(g.attrs["loads"])
-    for name, v in draws.items():  # every dispersed run draws its own gust
-        assert len(set(v[runs > 0].tolist())) == 4, name
+    for name in ("gust_amplitude", "gust_onset_altitude", "gust_direction"):  # each run its own gust
+        assert len(set(draws[name][runs > 0].tolist())) == 4, name
     assert len(set(qa.tolist())) == 5
     loads = summary["loads"]
     assert loads == loads_attr
-    assert loads["max_qalpha_Pa_deg"] == {"max": float(qa.max()), "max_run": int(runs[np.argmax(qa)])}
+    worst = int(runs[np.argmax(qa)])
+    assert loads["max_qalpha_Pa_deg"] == {"max": float(qa.max()), "max_run": worst}
     assert loads["max_qalpha_pitch_Pa_deg"]["max_run"] == int(runs[np.argmax(qa_pitch)])
     assert loads["runs_above_qalpha_limit"] == int(above.sum())
     assert loads["qalpha_limit_Pa_deg"] == 160000.0
     row = next(r for r in summary["statistics"] if r["variable"] == "max_qbeta_Pa_deg")
     assert row["max_run"] in runs.tolist()
+    text = console.export_text()
+    assert f"max q-alpha total {qa.max():,.0f} Pa deg (run {worst})" in text
+    assert f"{int(above.sum())} of 5 runs above the q-alpha limit 160,000 Pa deg" in text
 
 
 @pytest.mark.slow

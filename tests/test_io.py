@@ -12,7 +12,7 @@ import pytest
 from rich.console import Console
 
 from savant_cli.io.atomic import atomic_path, to_jsonable, write_json_atomic, write_text_atomic
-from savant_cli.io.console import print_run_summary, split_unit
+from savant_cli.io.console import loads_line, print_run_summary, split_unit
 from savant_cli.io.hdf5 import FORMAT, FORMAT_VERSION, RunFileError, read_run, write_run
 from savant_cli.io.provenance import collect_provenance
 from savant_cli.io.record import RunRecord, Signal
@@ -268,3 +268,22 @@ def test_print_run_summary() -> None:
     assert "status: diverged" in console.export_text(clear=False)
     html = console.export_html(inline_styles=True)
     assert "color: #800000" in html  # status in red
+
+
+def test_loads_line_on_the_console() -> None:
+    """A run above its q·α allowable keeps its status but the console says so, in red,
+    with the ratio and the time above; without an allowable no loads line is printed."""
+    base = {"max_qalpha_Pa_deg": 236000.0, "time_max_qalpha_s": 58.1, "qalpha_limit_Pa_deg": 160000.0,
+            "qalpha_limit_ratio": 236000.0 / 160000.0, "time_above_qalpha_limit_s": 2.54,
+            "qalpha_limit_exceeded": 1}
+    console = Console(record=True, width=200, color_system="truecolor", force_terminal=True)
+    print_run_summary(base, "complete", "cutoff", console)
+    text = console.export_text(clear=False)
+    assert "status: complete" in text
+    assert "1.475 of the limit 160,000 Pa·deg: EXCEEDED for 2.54 s" in text
+    assert "color: #800000" in console.export_html(inline_styles=True)
+    under = {**base, "max_qalpha_Pa_deg": 64000.0, "qalpha_limit_ratio": 0.4, "time_above_qalpha_limit_s": 0.0,
+             "qalpha_limit_exceeded": 0}
+    assert loads_line(under) == ("loads: max q·α_total 64,000 Pa·deg at 58.10 s is 0.400 of the limit "
+                                 "160,000 Pa·deg", False)
+    assert loads_line({**base, "qalpha_limit_Pa_deg": None}) is None

@@ -12,7 +12,7 @@ import warnings
 import numpy as np
 import pytest
 
-from conftest import compose_config
+from conftest import assert_report_redraws, compose_config
 from savant_cli.config import TimeMarginsStudyConfig, validate
 from savant_cli.errors import ConfigError
 from savant_cli.linear.margins import MarginRow
@@ -20,7 +20,7 @@ from savant_cli.sim import layout as L
 from savant_cli.sim import loop_perturbation as LP
 from savant_cli.studies import flight as flight_mod
 from savant_cli.studies.linear import analyse
-from savant_cli.studies.time_margins import COLUMNS, frequency_margin, window
+from savant_cli.studies.time_margins import COLUMNS, frequency_margin, read_group, window
 from savant_cli.timedomain.growth import assess
 from savant_cli.timedomain.search import Search, find_margin
 
@@ -165,3 +165,14 @@ def test_time_margins_command_writes_its_table(tmp_path):
         assert float(r["time_domain"]) == pytest.approx(js["time_domain"], rel=1e-5)
     assert len(list((run_dir / "plots" / "time_margins").glob("*.png"))) == 3
     assert (run_dir / "time_margin_trials.csv").is_file()
+    # savant report redraws the figures from savant.h5 alone, byte for byte; the stored
+    # trials are the CSV's
+    drawn = assert_report_redraws(run_dir)
+    assert sorted(n for n in drawn if n.startswith("time_margins/")) == [
+        "time_margins/t180_yaw_delay.png", "time_margins/t180_yaw_gain_high.png", "time_margins/t180_yaw_gain_low.png"]
+    stored = read_group(run_dir / "savant.h5")
+    trials = list(csv.DictReader((run_dir / "time_margin_trials.csv").open()))
+    assert [(r.search.kind, tr.value, tr.growth.unstable) for r in stored for tr in r.trials] == [
+        (t["kind"], pytest.approx(float(t["value"]), rel=1e-5), t["unstable"] == "yes") for t in trials]
+    assert [r.margin for r in stored] == [pytest.approx(js["time_domain"] * (-1 if js["kind"] == "gain_low" else 1))
+                                           for js in s["time_margins"]]

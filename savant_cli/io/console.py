@@ -124,6 +124,26 @@ def print_run_summary(record_summary: Mapping[str, Any], status: str, message: s
     if message:
         line.append(f" — {message}", style="green" if ok else "red")
     console.print(line)
+    loads = loads_line(record_summary)
+    if loads is not None:
+        console.print(loads[0], style="red" if loads[1] else None, highlight=False, soft_wrap=True)
+
+
+def loads_line(summary: Mapping[str, Any]) -> tuple[str, bool] | None:
+    """The load verdict of a run summary against its vehicle's q·α allowable: the line
+    and whether the limit was exceeded; None when the vehicle declares no limit (or the
+    run has no load indicators). A run above the limit keeps its status (docs/outputs.md,
+    *Load indicators*), so this line is where the console says so."""
+    limit = summary.get("qalpha_limit_Pa_deg")
+    peak = summary.get("max_qalpha_Pa_deg")
+    if limit is None or peak is None:
+        return None
+    exceeded = summary.get("qalpha_limit_exceeded") == 1
+    text = (f"loads: max q·α_total {peak:,.0f} Pa·deg at {summary.get('time_max_qalpha_s', float('nan')):.2f} s "
+            f"is {summary.get('qalpha_limit_ratio', peak / limit):.3f} of the limit {limit:,.0f} Pa·deg")
+    if exceeded:
+        text += f": EXCEEDED for {summary.get('time_above_qalpha_limit_s') or 0.0:.2f} s"
+    return text, exceeded
 
 
 def print_verdict(line: str, passed: bool, console: Console) -> None:

@@ -219,9 +219,11 @@ def requirement_verdicts(checks: np.ndarray, requirement_set: str) -> dict[str, 
             "passed": bool(per_run) and not failed, "line": line, "failed_runs": failed}
 
 
-#: (summary key, label) of the load indicators :func:`load_extremes` reports
-LOAD_EXTREMES = (("max_qalpha_Pa_deg", "max q-alpha total"), ("max_qalpha_pitch_Pa_deg", "max q-alpha pitch"),
-                 ("max_qbeta_Pa_deg", "max q-beta"), ("time_above_qalpha_limit_s", "time above q-alpha limit"))
+#: (summary key, label, unit) of the load indicators :func:`load_extremes` reports
+LOAD_EXTREMES = (("max_qalpha_Pa_deg", "max q-alpha total", "Pa deg"),
+                 ("max_qalpha_pitch_Pa_deg", "max q-alpha pitch", "Pa deg"),
+                 ("max_qbeta_Pa_deg", "max q-beta", "Pa deg"),
+                 ("time_above_qalpha_limit_s", "time above q-alpha limit", "s"))
 
 
 def load_extremes(tb: "Tables") -> dict[str, Any]:
@@ -235,7 +237,7 @@ def load_extremes(tb: "Tables") -> dict[str, Any]:
     ok = tb.ok
     runs = tb.runs[ok]
     out: dict[str, Any] = {"runs_with_results": int(ok.sum())}
-    for key, _ in LOAD_EXTREMES:
+    for key, _, _ in LOAD_EXTREMES:
         if key not in keys:
             continue
         col = tb.summary[ok, keys.index(key)]
@@ -257,14 +259,14 @@ def print_loads(console: Console, loads: dict[str, Any]) -> None:
     """The load extremes on the console (a red count when runs exceeded the limit)."""
     if not loads:
         return
-    parts = [f"{label} {loads[key]['max']:.4g} [run {loads[key]['max_run']}]"
-             for key, label in LOAD_EXTREMES if loads.get(key)]
-    console.print("loads: " + "; ".join(parts))
+    parts = [f"{label} {loads[key]['max']:,.{0 if unit == 'Pa deg' else 2}f} {unit} (run {loads[key]['max_run']})"
+             for key, label, unit in LOAD_EXTREMES if loads.get(key)]
+    console.print("loads: " + "; ".join(parts), markup=False, highlight=False, soft_wrap=True)
     if loads.get("qalpha_limit_Pa_deg") is not None:
         n = loads.get("runs_above_qalpha_limit", 0)
         text = (f"{n} of {loads['runs_with_results']} runs above the q-alpha limit "
-                f"{loads['qalpha_limit_Pa_deg']:.4g} Pa deg" + (f" (runs {loads['runs_above_qalpha_limit_list']})" if n else ""))
-        console.print(f"[red]{text}[/red]" if n else text)
+                f"{loads['qalpha_limit_Pa_deg']:,.0f} Pa deg" + (f" (runs {loads['runs_above_qalpha_limit_list']})" if n else ""))
+        console.print(text, style="red" if n else None, markup=False, highlight=False, soft_wrap=True)
 
 
 def _csv(path: Path, rows: list[dict[str, Any]]) -> None:

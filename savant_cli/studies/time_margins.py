@@ -35,7 +35,8 @@ from savant_cli.linear.margins import MarginRow
 from savant_cli.processes import default_workers
 from savant_cli.studies import flight as flight_mod
 from savant_cli.studies.linear import analyse
-from savant_cli.timedomain.search import UNITS, Search, SearchResult, run_searches
+from savant_cli.timedomain.growth import Growth
+from savant_cli.timedomain.search import UNITS, Search, SearchResult, Trial, run_searches
 
 COLUMNS = ("time_s", "axis", "kind", "time_domain", "frequency_domain", "unit", "oscillation_hz", "note")
 #: Agreement expected where the frozen-time linear model holds (issue 15's acceptance).
@@ -215,10 +216,7 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
     write_csv(out_dir / "time_margins.csv", out_rows)
     write_trials_csv(out_dir / "time_margin_trials.csv", results)
     if cfg.output.plots:
-        from savant_cli.plots.time_margins import plot_search
-
-        for res in results:
-            plot_search(res, out_dir / "plots" / "time_margins")
+        draw(results, out_dir / "plots")
     print_run_summary({k: v for k, v in hdf_summary.items() if k != "time_margins_verdict"}, record.status,
                       record.message, console)
     console.print(_table(out_rows))
@@ -279,21 +277,72 @@ def write_trials_csv(path: Path, results: list[SearchResult]) -> None:
     write_text_atomic(path, "\n".join(lines) + "\n")
 
 
+#: the :class:`Search` fields stored as attributes of each search's group
+_SEARCH_ATTRS = ("time_s", "axis", "kind", "snapshot", "start_s", "end_s", "bound", "tolerance", "scan_points",
+                 "pulse_rad", "pulse_s", "settle_s", "max_saturation_s")
+
+
 def write_group(f: h5py.File, results: list[SearchResult]) -> None:
-    """Group ``time_margins``: per search, its trials and bracketing responses."""
+    """Group ``time_margins``: per search, its settings, its trials (value, verdict,
+    growth rate, frequency, amplitude, time saturated, reason) and the bracketing
+    responses; :func:`read_group` reads it back."""
     root = f.create_group("time_margins")
     for i, res in enumerate(results):
         s = res.search
         g = root.create_group(f"{i:03d}_{s.time_s:g}s_{s.axis}_{s.kind}")
-        for key in ("time_s", "axis", "kind", "start_s", "end_s", "bound", "tolerance"):
+        for key in _SEARCH_ATTRS:
             g.attrs[key] = getattr(s, key)
         g.attrs["margin"] = res.margin
         g.attrs["unit"] = UNITS[s.kind]
         g.attrs["oscillation_hz"] = res.frequency_hz
+        g.attrs["unstable_at_zero"] = res.unstable_at_zero
+        g.attrs["bracket"] = np.asarray(res.bracket, dtype=np.float64)
         g.create_dataset("trial_value", data=np.array([tr.value for tr in res.trials]))
         g.create_dataset("trial_unstable", data=np.array([tr.growth.unstable for tr in res.trials]))
         g.create_dataset("trial_growth_rate", data=np.array([tr.growth.rate_per_s for tr in res.trials]))
+        g.create_dataset("trial_frequency_hz", data=np.array([tr.growth.frequency_hz for tr in res.trials]))
+        g.create_dataset("trial_amplitude", data=np.array([tr.growth.amplitude for tr in res.trials]))
+        g.create_dataset("trial_saturated_s", data=np.array([tr.saturated_s for tr in res.trials]))
+        g.create_dataset("trial_reason", data=np.array([tr.growth.reason for tr in res.trials], dtype=h5py.string_dtype()))
         for name, resp in (("last_stable", res.last_stable), ("first_unstable", res.first_unstable)):
             if resp is not None:
                 g.create_dataset(f"{name}_time", data=resp[0])
                 g.create_dataset(f"{name}_gimbal_deg", data=resp[1])
+
+
+def read_group(h5: Path) -> list[SearchResult]:
+    """The searches of a ``savant.h5`` group ``time_margins``, in the order they were
+    run (what ``savant report`` redraws the figures from)."""
+    out = []
+    with h5py.File(h5, "r") as f:
+        for name in sorted(f["time_margins"]):
+            g = f["time_margins"][name]
+            a = {k: (v.decode() if isinstance(v, bytes) else v) for k, v in g.attrs.items()}
+            search = Search(**{k: a[k] for k in _SEARCH_ATTRS})
+            n = g["trial_value"].shape[0]
+
+            def col(key: str, default):
+                return g[key][()] if key in g else np.full(n, default)
+            reasons = [r.decode() if isinstance(r, bytes) else str(r) for r in col("trial_reason", "")]
+            trials = [Trial(value=float(v), saturated_s=float(sat),
+                            growth=Growth(unstable=bool(u), rate_per_s=float(r), frequency_hz=float(fr),
+                                          amplitude=float(am), reason=why))
+                      for v, u, r, fr, am, sat, why in zip(g["trial_value"][()], g["trial_unstable"][()],
+                                                           g["trial_growth_rate"][()], col("trial_frequency_hz", np.nan),
+                                                           col("trial_amplitude", np.nan),
+                                                           col("trial_saturated_s", np.nan), reasons)]
+            resp = {r: (g[f"{r}_time"][()], g[f"{r}_gimbal_deg"][()]) if f"{r}_time" in g else None
+                    for r in ("last_stable", "first_unstable")}
+            out.append(SearchResult(search=search, margin=float(a["margin"]), frequency_hz=float(a["oscillation_hz"]),
+                                    trials=trials, last_stable=resp["last_stable"],
+                                    first_unstable=resp["first_unstable"],
+                                    unstable_at_zero=bool(a.get("unstable_at_zero", False)),
+                                    bracket=tuple(float(b) for b in a.get("bracket", (np.nan, np.nan)))))
+    return out
+
+
+def draw(results: list[SearchResult], folder: Path) -> list[Path]:
+    """One figure per search into ``folder/time_margins`` (:func:`plot_search`)."""
+    from savant_cli.plots.time_margins import plot_search  # matplotlib only when drawing
+
+    return [plot_search(res, folder / "time_margins") for res in results]
