@@ -23,3 +23,14 @@ except PackageNotFoundError:  # running from a source tree without installation
 from savant_cli import jit_cache as _jit_cache
 
 _jit_cache.configure()
+
+
+def __getattr__(name: str):
+    """``savant_cli.run``, ``savant_cli.load``, ``savant_cli.Result``: the Python API
+    (savant_cli/api.py, docs/api.md), imported on first use so that the command line
+    does not pay for it."""
+    if name in ("run", "load", "Result"):
+        from savant_cli import api
+
+        return getattr(api, name)
+    raise AttributeError(f"module 'savant_cli' has no attribute {name!r}")

@@ -82,14 +82,14 @@ def _run_hydra(argv: list[str]) -> None:
         # unknown key, bad override syntax) with exit status 1 before our task runs: those
         # are configuration errors, status 2.
         if exc.code == 1 and not _task_started:
-            hint = _variant_hint(argv)
+            hint = variant_hint(argv)
             if hint:
                 Console(stderr=True).print(f"[bold red]configuration error[/]: {hint}")
             raise SystemExit(ConfigError.exit_code) from None
         raise
 
 
-def _variant_hint(argv: list[str]) -> str:
+def variant_hint(argv: list[str]) -> str:
     """Our explanation of an override Hydra refused because it names a key of another
     option of its group (the shipped defaults say which option is chosen)."""
     from omegaconf import OmegaConf

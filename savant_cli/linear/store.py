@@ -282,12 +282,23 @@ def load_point(path: Path | str, time_s: float, system: str = "open_pitch") -> c
         if key not in g:
             have = sorted(float(g[k].attrs["time_s"]) for k in point_keys(g))
             raise KeyError(f"no linear point at t = {time_s} s; stored: {have}")
-        sg = g[key][system]
-        dt = float(sg.attrs["dt"])
-        return ct.ss(sg["A"][()], sg["B"][()], sg["C"][()], sg["D"][()], dt if dt > 0 else 0,
-                     states=list(_strs(sg["states"][()])) or None, inputs=list(_strs(sg["inputs"][()])),
-                     outputs=list(_strs(sg["outputs"][()])),
-                     name=f"{system}_{key}")
+        return read_system(g[key], system)
+
+
+def read_system(pg: h5py.Group, system: str) -> ct.StateSpace:
+    """One stored system of a point's group as a python-control ``StateSpace`` (named
+    ``<system>_<point key>``, with its state, input and output labels)."""
+    sg = pg[system]
+    dt = float(sg.attrs["dt"])
+    return ct.ss(sg["A"][()], sg["B"][()], sg["C"][()], sg["D"][()], dt if dt > 0 else 0,
+                 states=list(_strs(sg["states"][()])) or None, inputs=list(_strs(sg["inputs"][()])),
+                 outputs=list(_strs(sg["outputs"][()])),
+                 name=f"{system}_{point_key(float(pg.attrs['time_s']))}")
+
+
+def system_names(pg: h5py.Group) -> list[str]:
+    """The names of the systems stored in a point's group (:func:`systems`)."""
+    return [k for k in pg if isinstance(pg[k], h5py.Group) and "A" in pg[k]]
 
 
 def write_mat(path: Path, points: list[LinearPoint]) -> None:

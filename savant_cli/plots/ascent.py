@@ -226,15 +226,21 @@ def _event_lines(ax, events: list[tuple[str, float]], t0: float, t1: float, labe
 LOAD_SIGNALS = ("q_alpha", "q_beta", "q_alpha_total")
 
 
-def _draw(spec: FigureSpec, record: RunRecord, t: np.ndarray, idx: np.ndarray) -> Figure | None:
+def _panels(spec: FigureSpec, record: RunRecord) -> tuple[RunRecord, list[Panel]]:
+    """The record (with the derived load signals when the figure draws them) and the
+    panels of ``spec`` it has the signals for (none: the figure is not drawn)."""
     if any(line.signal in LOAD_SIGNALS for p in spec.panels for line in p.lines):
         derived = load_signals(record.signals)
         if derived:
             record = dataclasses.replace(record, signals={**record.signals, **derived})
     if spec.requires is not None and spec.requires not in record.signals:
-        return None
-    panels = [p for p in spec.panels if p.lines[0].signal in record.signals
-              and _column(record.signals[p.lines[0].signal], p.lines[0].column) is not None]
+        return record, []
+    return record, [p for p in spec.panels if p.lines[0].signal in record.signals
+                    and _column(record.signals[p.lines[0].signal], p.lines[0].column) is not None]
+
+
+def _draw(spec: FigureSpec, record: RunRecord, t: np.ndarray, idx: np.ndarray) -> Figure | None:
+    record, panels = _panels(spec, record)
     if not panels:
         return None
     # fixed margins in inches instead of a layout engine (which would draw every figure
@@ -301,6 +307,38 @@ def load_signals(signals: dict[str, Signal]) -> dict[str, Signal]:
             "q_alpha_total": Signal(q * total, "Pa*deg", "dynamic pressure times total angle of attack")}
 
 
+def _time_base(record: RunRecord | None) -> tuple[np.ndarray, np.ndarray] | None:
+    time_sig = record.signals.get("time") if record is not None else None
+    if time_sig is None or np.ndim(time_sig.data) != 1 or np.size(time_sig.data) == 0:
+        return None
+    t = np.asarray(time_sig.data, dtype=np.float64)
+    return t, _indices(t.size)
+
+
+def figure_names(record: RunRecord | None) -> list[str]:
+    """The ascent figures a run has the signals for (file names without ``.png``)."""
+    if _time_base(record) is None:
+        return []
+    return [spec.filename.removesuffix(".png") for spec in FIGURES if _panels(spec, record)[1]]
+
+
+def figure(record: RunRecord, name: str) -> Figure:
+    """One ascent figure of a run, by its file name without ``.png`` (``alpha_beta`` …),
+    as a new matplotlib ``Figure`` (what ``savant_cli.Result.plot`` returns).
+
+    Raises
+    ------
+    KeyError
+        No such figure, or the run lacks its signals.
+    """
+    base = _time_base(record)
+    spec = next((s for s in FIGURES if s.filename == f"{name}.png"), None)
+    fig = _draw(spec, record, *base) if spec is not None and base is not None else None
+    if fig is None:
+        raise KeyError(f"no ascent figure {name!r} for this run; known: {', '.join(figure_names(record))}")
+    return fig
+
+
 def plot_ascent(record: RunRecord, out_dir: Path) -> list[Path]:
     """Draw the ascent figures of a run as PNG files.
 
@@ -327,11 +365,10 @@ def plot_ascent(record: RunRecord, out_dir: Path) -> list[Path]:
     ``SATURATED: <message>``).
     """
     out_dir = Path(out_dir)
-    time_sig = record.signals.get("time")
-    if time_sig is None or np.ndim(time_sig.data) != 1 or np.size(time_sig.data) == 0:
+    base = _time_base(record)
+    if base is None:
         return []
-    t = np.asarray(time_sig.data, dtype=np.float64)
-    idx = _indices(t.size)
+    t, idx = base
     written: list[Path] = []
     for spec in FIGURES:
         fig = _draw(spec, record, t, idx)

@@ -163,6 +163,8 @@ def _sheet(key: tuple, layout: Callable[[], tuple[Figure, list]]) -> tuple[Figur
     (measured). One set per thread, so concurrent threads never share a figure. A figure
     returned here is valid until the same chart is drawn again in the same thread.
     """
+    if getattr(_SHEETS, "fresh", False):  # chart_figure: a figure of the caller's own
+        return layout()
     sheets = getattr(_SHEETS, "sheets", None)
     if sheets is None:
         sheets = _SHEETS.sheets = {}
@@ -797,6 +799,32 @@ def plot_linear_point(charts: PointCharts, margins: Sequence[MarginRow], out_dir
         )
         jobs = [worker.submit(_write_png, _render(build()), out_dir / filename) for filename, build in figures]
         return [job.result() for job in jobs]
+
+
+def chart_figure(name: str, charts: PointCharts, margins: Sequence[MarginRow], exclusion_zones: bool = True) -> Figure:
+    """One of :func:`plot_linear_point`'s charts as a new figure the caller keeps (not a
+    reused sheet): ``name`` one of ``bode``, ``nichols``, ``nyquist``, ``rootlocus``,
+    ``pzmap``, ``response`` (what ``savant_cli.Result.plot`` draws)."""
+    t = charts.time_s
+    builders = {"bode": lambda: _bode_figure(t, charts.loops, margins),
+                "nichols": lambda: _nichols_figure(t, charts.loops, margins, exclusion_zones),
+                "nyquist": lambda: _nyquist_figure(t, charts.loops),
+                "rootlocus": lambda: _root_locus_figure(t, charts.root_loci),
+                "pzmap": lambda: _pzmap_figure(t, charts.pzmap),
+                "response": lambda: _response_figure(t, charts.responses)}
+    if name not in builders:
+        raise KeyError(f"no linear chart {name!r}; known: {', '.join(builders)}")
+    _SHEETS.fresh = True
+    try:
+        return builders[name]()
+    finally:
+        _SHEETS.fresh = False
+
+
+def envelope_figure(rows: list[MarginRow], requirements: dict[str, tuple[float, float]] | None = None,
+                    failed_times: Sequence[float] = ()) -> Figure:
+    """:func:`plot_margin_envelope`'s figure, returned instead of written."""
+    return _envelope_figure(rows, requirements, failed_times)
 
 
 def plot_margin_envelope(rows: list[MarginRow], out_path: Path,

@@ -1,0 +1,158 @@
+"""The Python API (docs/api.md): run a study from a notebook or a script, the way
+``savant run`` does, and get its results back as Python objects.
+
+:func:`run` composes the config with Hydra's compose API from the same tree and search
+path as the command line (the shipped ``conf/``, or ``config_dir`` in its place with the
+shipped tree behind it), applies the same overrides and validation, and writes the same
+run folder: ``.hydra/`` (``config.yaml``, ``hydra.yaml``, ``overrides.yaml``),
+``savant.log`` and the study's files. A configuration problem raises
+:class:`~savant_cli.errors.ConfigError` naming the key (the command line prints it and
+exits 2); a run that does not fly to its end returns its result with ``exit_code`` 1
+and its status, as the command line exits 1. :func:`load` reads a finished folder back.
+"""
+
+from __future__ import annotations
+
+import copy
+import logging
+import re
+from collections.abc import Sequence
+from pathlib import Path
+
+from savant_cli.errors import ConfigError
+from savant_cli.result import Result, load
+
+__all__ = ["run", "load", "Result", "ConfigError"]
+
+#: The log format of Hydra's job logging (what ``savant run`` writes to ``savant.log``).
+LOG_FORMAT = "[%(asctime)s][%(name)s][%(levelname)s] - %(message)s"
+
+
+def _compose(overrides: list[str], config_dir: Path | None):
+    """The composed config with its ``hydra`` node; Hydra's errors as ConfigError.
+
+    The search path is the command line's: the shipped tree as the primary config
+    folder and, with ``config_dir``, that folder in front of it (what ``savant run -cd``
+    does, Hydra's ``command-line`` search-path entry)."""
+    from hydra import compose, version
+    from hydra._internal.hydra import Hydra
+    from hydra._internal.utils import create_config_search_path
+    from hydra.core.global_hydra import GlobalHydra
+    from hydra.errors import HydraException
+    from hydra.initialize import get_gh_backup, restore_gh_from_backup
+
+    from savant_cli.paths import shipped_config_dir
+
+    backup = get_gh_backup()  # a notebook may have its own Hydra initialised: keep it
+    GlobalHydra.instance().clear()
+    try:
+        version.setbase("1.3")
+        search_path = create_config_search_path(search_path_dir=f"file://{shipped_config_dir()}")
+        if config_dir is not None:
+            search_path.prepend(provider="command-line", path=f"file://{config_dir}")
+        Hydra.create_main_hydra2(task_name="savant", config_search_path=search_path)
+        return compose(config_name="config", overrides=overrides, return_hydra_config=True)
+    except HydraException as exc:
+        from savant_cli.cli import variant_hint
+
+        text = str(exc).strip()
+        culprit = next((o for o in overrides if o in text or o.split("=", 1)[0].lstrip("+~") in text), None)
+        if culprit is None:
+            key, value = "overrides", overrides
+        else:
+            key, _, value = culprit.partition("=")
+            key = key.lstrip("+~") or culprit
+        hint = variant_hint(overrides)
+        raise ConfigError(key, value, f"{hint} (Hydra: {text.splitlines()[0]})" if hint else text) from None
+    finally:
+        restore_gh_from_backup(backup)
+
+
+def _write_hydra_files(out_dir: Path, cfg, task_cfg, overrides: list[str]) -> None:
+    """``.hydra/config.yaml``, ``hydra.yaml`` and ``overrides.yaml``, as Hydra writes them."""
+    from omegaconf import OmegaConf
+
+    from savant_cli.io.atomic import write_text_atomic
+
+    folder = out_dir / ".hydra"
+    folder.mkdir(parents=True, exist_ok=True)
+    write_text_atomic(folder / "config.yaml", OmegaConf.to_yaml(task_cfg))
+    write_text_atomic(folder / "hydra.yaml", OmegaConf.to_yaml(OmegaConf.create({"hydra": cfg.hydra})))
+    write_text_atomic(folder / "overrides.yaml", OmegaConf.to_yaml(OmegaConf.create(list(overrides))))
+
+
+def run(overrides: Sequence[str] | None = None, config_dir: str | Path | None = None,
+        out_dir: str | Path | None = None) -> Result:
+    """Run the configured study, as ``savant run OVERRIDES`` does, and return its result.
+
+    Parameters
+    ----------
+    overrides : sequence of str, optional
+        Hydra overrides, as on the command line (``["study=linear", "flex=on",
+        "study.times=[55]"]``). A sweep (``a=1,2``, ``-m``) is refused: run one job per
+        call, or use ``savant run -m``.
+    config_dir : str or pathlib.Path, optional
+        A config tree used in place of the shipped ``conf/`` (``savant run -cd DIR``);
+        the shipped groups stay on the search path behind it.
+    out_dir : str or pathlib.Path, optional
+        The run folder; default ``hydra.run.dir`` of the config
+        (``outputs/<date>/<time>_<study>`` below the working directory).
+
+    Returns
+    -------
+    Result
+        The run folder read back (:func:`savant_cli.load`), ``exit_code`` the command
+        line's: 0 when the study's flight flew to its end, 1 when not.
+
+    Raises
+    ------
+    ConfigError
+        An override Hydra refuses (unknown key or option, bad syntax) or a value the
+        validation refuses, naming the key, the value and what is allowed.
+    """
+    from hydra.core.hydra_config import HydraConfig
+    from omegaconf import OmegaConf, open_dict, read_write
+
+    from savant_cli.config import validate
+    from savant_cli.studies import get_study
+
+    if isinstance(overrides, (str, bytes)):
+        raise ConfigError("overrides", overrides, "must be a list of override strings, e.g. ['study=linear']")
+    overrides = [str(o) for o in (overrides or [])]
+    for o in overrides:
+        if o in ("-m", "--multirun") or re.match(r"^-", o):
+            raise ConfigError("overrides", o, "must be Hydra overrides; savant_cli.run runs one job (no flags)")
+    cdir = None if config_dir is None else Path(config_dir).expanduser().resolve()
+    if cdir is not None and not cdir.is_dir():
+        raise ConfigError("config_dir", str(config_dir), "must be an existing config folder")
+    cfg = _compose(overrides, cdir)
+    target = Path(out_dir) if out_dir is not None else Path(OmegaConf.select(cfg, "hydra.run.dir"))
+    target = target.expanduser().resolve()
+    with open_dict(cfg):
+        cfg.hydra.runtime.output_dir = str(target)
+        cfg.hydra.run.dir = str(target)
+    task_cfg = copy.deepcopy(cfg)  # what Hydra hands a task: the config without its node
+    with read_write(task_cfg), open_dict(task_cfg):
+        del task_cfg["hydra"]
+    hydra_config = HydraConfig.instance()
+    previous = hydra_config.cfg
+    hydra_config.set_config(cfg)  # paths.hydra_search_dirs reads the config sources from it
+    handler = None
+    root = logging.getLogger()
+    level = root.level
+    try:
+        typed = validate(task_cfg)  # before anything is written: a bad value leaves no folder
+        target.mkdir(parents=True, exist_ok=True)
+        _write_hydra_files(target, cfg, task_cfg, overrides)
+        handler = logging.FileHandler(target / "savant.log")
+        handler.setFormatter(logging.Formatter(LOG_FORMAT))
+        root.addHandler(handler)
+        root.setLevel(logging.INFO if level in (logging.NOTSET, logging.WARNING) else min(level, logging.INFO))
+        code = get_study(typed.study.name).run(typed, task_cfg, target)
+    finally:
+        hydra_config.cfg = previous
+        if handler is not None:
+            root.removeHandler(handler)
+            root.setLevel(level)
+            handler.close()
+    return load(target, exit_code=code)
