@@ -28,7 +28,7 @@ __all__ = ["run", "load", "Result", "ConfigError"]
 LOG_FORMAT = "[%(asctime)s][%(name)s][%(levelname)s] - %(message)s"
 
 
-def _compose(overrides: list[str], config_dir: Path | None):
+def compose_config(overrides: list[str], config_dir: Path | None):
     """The composed config with its ``hydra`` node; Hydra's errors as ConfigError.
 
     The search path is the command line's: the shipped tree as the primary config
@@ -66,6 +66,16 @@ def _compose(overrides: list[str], config_dir: Path | None):
         raise ConfigError(key, value, f"{hint} (Hydra: {text.splitlines()[0]})" if hint else text) from None
     finally:
         restore_gh_from_backup(backup)
+
+
+def task_config(cfg):
+    """What Hydra hands a task: a copy of the composed config without its ``hydra`` node."""
+    from omegaconf import open_dict, read_write
+
+    task = copy.deepcopy(cfg)
+    with read_write(task), open_dict(task):
+        del task["hydra"]
+    return task
 
 
 def _write_hydra_files(out_dir: Path, cfg, task_cfg, overrides: list[str]) -> None:
@@ -111,10 +121,10 @@ def run(overrides: Sequence[str] | None = None, config_dir: str | Path | None = 
         validation refuses, naming the key, the value and what is allowed.
     """
     from hydra.core.hydra_config import HydraConfig
-    from omegaconf import OmegaConf, open_dict, read_write
+    from omegaconf import OmegaConf, open_dict
 
     from savant_cli.config import validate
-    from savant_cli.studies import get_study
+    from savant_cli.studies import run_study
 
     if isinstance(overrides, (str, bytes)):
         raise ConfigError("overrides", overrides, "must be a list of override strings, e.g. ['study=linear']")
@@ -125,15 +135,13 @@ def run(overrides: Sequence[str] | None = None, config_dir: str | Path | None = 
     cdir = None if config_dir is None else Path(config_dir).expanduser().resolve()
     if cdir is not None and not cdir.is_dir():
         raise ConfigError("config_dir", str(config_dir), "must be an existing config folder")
-    cfg = _compose(overrides, cdir)
+    cfg = compose_config(overrides, cdir)
     target = Path(out_dir) if out_dir is not None else Path(OmegaConf.select(cfg, "hydra.run.dir"))
     target = target.expanduser().resolve()
     with open_dict(cfg):
         cfg.hydra.runtime.output_dir = str(target)
         cfg.hydra.run.dir = str(target)
-    task_cfg = copy.deepcopy(cfg)  # what Hydra hands a task: the config without its node
-    with read_write(task_cfg), open_dict(task_cfg):
-        del task_cfg["hydra"]
+    task_cfg = task_config(cfg)
     hydra_config = HydraConfig.instance()
     previous = hydra_config.cfg
     hydra_config.set_config(cfg)  # paths.hydra_search_dirs reads the config sources from it
@@ -148,7 +156,7 @@ def run(overrides: Sequence[str] | None = None, config_dir: str | Path | None = 
         handler.setFormatter(logging.Formatter(LOG_FORMAT))
         root.addHandler(handler)
         root.setLevel(logging.INFO if level in (logging.NOTSET, logging.WARNING) else min(level, logging.INFO))
-        code = get_study(typed.study.name).run(typed, task_cfg, target)
+        code = run_study(typed, task_cfg, target)
     finally:
         hydra_config.cfg = previous
         if handler is not None:

@@ -21,7 +21,7 @@ usage: savant <command> [arguments]
 commands:
   run [overrides]     fly the configured study (Hydra: -m for sweeps, --cfg job to
                       print the config, --help for the config groups)
-  report RUN_DIR      redraw the plots and console summary of a finished run
+  report RUN_DIR      redraw the plots, report.html and console summary of a finished run
   collect DIR         merge the shard folders of a Monte Carlo multirun into DIR
   rerun DIR run=N     fly run N of the Monte Carlo batch in DIR again, with its
                       whole time history and plots (DIR/rerun_<N>/)
@@ -51,7 +51,7 @@ def _hydra_task(cfg) -> int:
     from hydra.types import RunMode
 
     from savant_cli.config import validate
-    from savant_cli.studies import get_study
+    from savant_cli.studies import run_study
 
     console = Console(stderr=True)
     hc = HydraConfig.get()
@@ -59,7 +59,7 @@ def _hydra_task(cfg) -> int:
     multirun = hc.mode == RunMode.MULTIRUN
     try:
         typed = validate(cfg)
-        code = get_study(typed.study.name).run(typed, cfg, out_dir)
+        code = run_study(typed, cfg, out_dir)
     except ConfigError as exc:
         console.print(f"[bold red]configuration error[/]: {exc}")
         code = ConfigError.exit_code
@@ -186,16 +186,22 @@ def _batch_command(cmd: str, rest: list[str]) -> int:
     if not folder.is_dir():
         err.print(f"[bold red]error[/]: {folder} is not a folder\n{usage}")
         return 2
-    from savant_cli.studies import montecarlo
+    from savant_cli.studies import montecarlo, write_report_or_say
 
     try:
         if cmd == "collect":
-            return montecarlo.collect(folder)
+            code = montecarlo.collect(folder)
+            if (folder / "savant.h5").is_file():
+                write_report_or_say(folder, err)
+            return code
         try:
             number = int(rest[1][4:])
         except ValueError:
             raise ConfigError("run", rest[1][4:], "must be an integer run number") from None
-        return montecarlo.rerun(folder, number)
+        code = montecarlo.rerun(folder, number)
+        if (folder / f"rerun_{number}" / "savant.h5").is_file():
+            write_report_or_say(folder / f"rerun_{number}", err)
+        return code
     except ConfigError as exc:
         err.print(f"[bold red]error[/]: {exc}")
         return ConfigError.exit_code

@@ -1,5 +1,6 @@
 """``savant report RUN_DIR``: redraw every figure of a finished run from its ``savant.h5``
-alone, and print its summary again.
+alone, write its ``report.html`` again (:mod:`savant_cli.html_report`) and print its
+summary again.
 
 What is drawn depends on what the file holds:
 
@@ -39,7 +40,8 @@ def _contents(h5: Path) -> tuple[str, set[str]]:
 
 
 def report(run_dir: Path | str, console: Console | None = None) -> list[Path]:
-    """Redraw all figures of a run into ``run_dir/plots/`` and print its summary again.
+    """Redraw all figures of a run into ``run_dir/plots/``, write ``run_dir/report.html``
+    and print its summary again.
 
     Parameters
     ----------
@@ -115,4 +117,7 @@ def report(run_dir: Path | str, console: Console | None = None) -> list[Path]:
                                "time_margins"})
     if studies:
         console.print(f"redrawn from {RUN_FILE}: {', '.join(studies)}")
+    from savant_cli.studies import write_report_or_say
+
+    write_report_or_say(run_dir, console)  # report.html, with the figures just drawn
     return paths

@@ -43,7 +43,9 @@ def imported_names(path) -> list[str]:
 def assert_report_redraws(run_dir) -> list[str]:
     """``savant report`` on a finished study: with the study's own ``plots/`` moved away,
     it draws every figure again from ``savant.h5`` alone, byte for byte the same PNGs
-    (same names, same pixels), and nothing else. Returns the relative names."""
+    (same names, same pixels), and nothing else; it writes ``report.html`` again, the
+    same bytes as the study's own when the study wrote one (:func:`assert_report_page`).
+    Returns the relative names."""
     import shutil
     from pathlib import Path
 
@@ -52,10 +54,15 @@ def assert_report_redraws(run_dir) -> list[str]:
     from savant_cli.report import report
 
     run_dir = Path(run_dir)
+    page = run_dir / "report.html"
+    page_as_written = page.read_bytes() if page.is_file() else None
     first = run_dir.parent / f"{run_dir.name}_plots_as_drawn"
     shutil.move(run_dir / "plots", first)
     try:
         paths = report(run_dir, console=Console(quiet=True))
+        assert_report_page(run_dir)
+        if page_as_written is not None:
+            assert page.read_bytes() == page_as_written
         drawn = sorted(str(p.relative_to(first)) for p in first.rglob("*.png"))
         again = sorted(str(p.relative_to(run_dir / "plots")) for p in (run_dir / "plots").rglob("*.png"))
         assert again == drawn, (set(drawn) ^ set(again))
@@ -65,3 +72,43 @@ def assert_report_redraws(run_dir) -> list[str]:
         return drawn
     finally:
         shutil.rmtree(first, ignore_errors=True)
+
+
+def assert_report_page(run_dir) -> None:
+    """``report.html`` of a run folder is one self-contained page: every image a PNG
+    embedded as a ``data:`` URI that decodes (one per PNG of ``plots/``), no external
+    resource (``src``/``href`` to anything but an in-page anchor or data), no script,
+    and the six sections."""
+    import base64
+    import html.parser
+    from pathlib import Path
+
+    run_dir = Path(run_dir)
+
+    class Page(html.parser.HTMLParser):
+        def __init__(self):
+            super().__init__()
+            self.images, self.external, self.scripts, self.sections = [], [], 0, []
+
+        def handle_starttag(self, tag, attrs):
+            a = dict(attrs)
+            if tag == "img":
+                self.images.append(a.get("src", ""))
+            if tag == "script":
+                self.scripts += 1
+            if tag == "section":
+                self.sections.append(a.get("id"))
+            for key in ("src", "href"):
+                v = a.get(key)
+                if v is not None and not (v.startswith("#") or v.startswith("data:")):
+                    self.external.append(v)
+
+    page = Page()
+    page.feed((run_dir / "report.html").read_text(encoding="utf-8"))
+    assert page.sections == ["verdicts", "summary", "events", "figures", "config", "provenance"]
+    assert not page.external and page.scripts == 0
+    n_png = len(list((run_dir / "plots").rglob("*.png"))) if (run_dir / "plots").is_dir() else 0
+    assert len(page.images) == n_png
+    for src in page.images:
+        assert src.startswith("data:image/png;base64,")
+        assert base64.b64decode(src.split(",", 1)[1])[:8] == b"\x89PNG\r\n\x1a\n"

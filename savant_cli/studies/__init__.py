@@ -20,3 +20,34 @@ def get_study(name: str) -> ModuleType:
     if name not in STUDIES:
         raise ConfigError("study.name", name, f"must be one of {', '.join(STUDIES)}")
     return importlib.import_module(f"savant_cli.studies.{name}")
+
+
+def run_study(cfg, raw_cfg, out_dir) -> int:
+    """Run the configured study into ``out_dir``, then write its ``report.html``
+    (:mod:`savant_cli.html_report`); the study's exit code. What ``savant run`` and
+    :func:`savant_cli.run` both call.
+
+    A report that cannot be written (no ``savant.h5`` with ``output.hdf5=false``, or an
+    error while building it) is said on stderr and leaves the study's files and exit
+    code as they are."""
+    from pathlib import Path
+
+    from rich.console import Console
+
+    code = get_study(cfg.study.name).run(cfg, raw_cfg, out_dir)
+    write_report_or_say(Path(out_dir), Console(stderr=True))
+    return code
+
+
+def write_report_or_say(folder, console) -> None:
+    """``report.html`` into ``folder``, or a line on ``console`` saying why not."""
+    from savant_cli.html_report import write_report
+
+    try:
+        path = write_report(folder)
+    except FileNotFoundError as exc:
+        console.print(f"no report.html: {exc}", highlight=False)
+    except Exception as exc:  # noqa: BLE001 - the study's own outputs stand without the page
+        console.print(f"[red]report.html not written[/red]: {type(exc).__name__}: {exc}", highlight=False)
+    else:
+        console.print(f"report: {path}", highlight=False)

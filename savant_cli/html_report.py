@@ -1,0 +1,309 @@
+"""``report.html``: one self-contained page of a finished study, for a design review.
+
+Every study writes it into its run folder (:func:`savant_cli.studies.run_study`);
+``savant report DIR`` writes it again after redrawing the figures. It is built from the
+folder's files alone (:func:`savant_cli.result.load`): ``summary.json``, ``savant.h5``
+and ``plots/``. Sections, in order:
+
+1. the verdicts: the run's status and every verdict line of the study (requirements,
+   time margins, the Monte Carlo's demonstrated success and loads, the q·α allowable),
+   green when met and red when not;
+2. the summary: every scalar of ``summary.json`` with its unit, then every table the
+   summary holds (margins, statistics, margin spread, time margins …), up to
+   :data:`MAX_ROWS` rows each (the CSV files have them all);
+3. the events timeline: an SVG time axis with the flight's events, and their table;
+4. the figures: every PNG of ``plots/``, embedded, by folder;
+5. the configuration as a diff from the shipped defaults (``savant run`` with no
+   overrides), key by key;
+6. the provenance (versions, host, git commit, time).
+
+The page has no script, font, style sheet or image outside itself: inline CSS, PNGs as
+``data:`` URIs, the timeline as inline SVG. It reads on a laptop screen: one column of at
+most 1,150 px, tables that scroll sideways when wide, figures scaled to the column.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import math
+from collections.abc import Iterable, Mapping
+from pathlib import Path
+from typing import Any
+
+from savant_cli.io.atomic import write_text_atomic
+from savant_cli.io.console import format_value, loads_line, split_unit
+from savant_cli.result import Result, load
+
+REPORT_FILE = "report.html"
+#: Rows shown of a table of the summary (the rest are in the study's CSV files).
+MAX_ROWS = 200
+
+_CSS = """
+body { font-family: system-ui, -apple-system, "Segoe UI", Roboto, Helvetica, Arial, sans-serif;
+       margin: 0; color: #1d2330; background: #f5f6f8; line-height: 1.4; }
+main { max-width: 1150px; margin: 0 auto; padding: 16px 20px 40px; background: #fff; }
+h1 { font-size: 1.5em; margin: 0.3em 0; } h2 { font-size: 1.2em; margin-top: 1.6em;
+     border-bottom: 1px solid #d5d9e0; padding-bottom: 4px; } h3 { font-size: 1.0em; margin: 1.2em 0 0.4em; }
+.sub { color: #5a6272; font-size: 0.9em; }
+.verdict { padding: 6px 10px; margin: 4px 0; border-radius: 4px; font-family: ui-monospace, Menlo, Consolas, monospace;
+           font-size: 0.88em; white-space: pre-wrap; word-break: break-word; }
+.ok { background: #e6f4ea; border-left: 4px solid #1e7b34; } .bad { background: #fbe9e7; border-left: 4px solid #b3261e; }
+.neutral { background: #eef1f6; border-left: 4px solid #6b7a90; }
+.scroll { overflow-x: auto; max-height: 520px; overflow-y: auto; border: 1px solid #e2e5ea; }
+table { border-collapse: collapse; font-size: 0.84em; width: 100%; }
+th, td { padding: 3px 8px; border-bottom: 1px solid #eceef2; text-align: left; vertical-align: top; }
+th { background: #f0f2f5; position: sticky; top: 0; } td.num { text-align: right; font-variant-numeric: tabular-nums; }
+tr.changed td { background: #fff8e1; }
+figure { margin: 10px 0 18px; } figure img { max-width: 100%; height: auto; border: 1px solid #e2e5ea; }
+figcaption { font-size: 0.82em; color: #5a6272; }
+nav a { margin-right: 12px; font-size: 0.9em; }
+code { font-size: 0.9em; }
+"""
+
+
+def _esc(value: Any) -> str:
+    return html.escape(str(value), quote=True)
+
+
+def _cell(value: Any, fmt: str | None = None) -> str:
+    text = format_value(value, fmt) if not isinstance(value, (list, dict)) else str(value)
+    numeric = isinstance(value, (int, float)) and not isinstance(value, bool)
+    return f'<td class="num">{_esc(text)}</td>' if numeric else f"<td>{_esc(text)}</td>"
+
+
+def _table(header: Iterable[str], rows: Iterable[Iterable[str]], classes: Iterable[str] | None = None) -> str:
+    head = "".join(f"<th>{_esc(h)}</th>" for h in header)
+    cls = list(classes) if classes is not None else None
+    body = "".join(f'<tr{f" class={chr(34)}{cls[i]}{chr(34)}" if cls and cls[i] else ""}>{"".join(r)}</tr>'
+                   for i, r in enumerate(rows))
+    return f'<div class="scroll"><table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table></div>'
+
+
+# ------------------------------------------------------------------------------ verdicts
+
+def verdicts(result: Result) -> list[tuple[str, bool | None]]:
+    """The verdict lines of a study, each with whether it is met (None: no judgement)."""
+    s = result.summary
+    out: list[tuple[str, bool | None]] = []
+    status = f"status: {result.status}" + (f" — {result.message}" if result.message else "")
+    out.append((status, result.status == "complete"))
+    if isinstance(s.get("requirements_verdict"), str):
+        out.append((s["requirements_verdict"], bool(s.get("requirements_met"))))
+    if isinstance(s.get("time_margins_verdict"), str):
+        rows = s.get("time_margins") or []
+        bad = any(r.get("unstable_at_zero") or "differs by" in str(r.get("note", "")) for r in rows)
+        out.append((s["time_margins_verdict"], not bad))
+    rel = s.get("reliability")
+    if isinstance(rel, Mapping) and rel.get("line"):
+        out.append((str(rel["line"]), bool(rel.get("target_met"))))
+    loads = s.get("loads")
+    if isinstance(loads, Mapping) and loads.get("qalpha_limit_Pa_deg") is not None:
+        n = int(loads.get("runs_above_qalpha_limit", 0))
+        line = (f"loads: {n} of {loads.get('runs_with_results')} runs above the q-alpha limit "
+                f"{loads['qalpha_limit_Pa_deg']:,.0f} Pa deg" + (f" (runs {loads.get('runs_above_qalpha_limit_list')})"
+                                                                 if n else ""))
+        out.append((line, n == 0))
+    single = loads_line(s)
+    if single is not None:
+        out.append((single[0], not single[1]))
+    for key, value in s.items():  # any other study's verdict line (flex sweep, FCS design …)
+        if key.endswith("verdict") and key not in ("requirements_verdict", "time_margins_verdict") \
+                and isinstance(value, str):
+            out.append((value, None))
+    return out
+
+
+def _verdict_html(lines: list[tuple[str, bool | None]]) -> str:
+    cls = {True: "ok", False: "bad", None: "neutral"}
+    return "".join(f'<div class="verdict {cls[ok]}">{_esc(text)}</div>' for text, ok in lines)
+
+
+# ------------------------------------------------------------------------------- summary
+
+def _scalars(summary: Mapping[str, Any]) -> str:
+    rows = []
+    for key, value in summary.items():
+        if isinstance(value, (list, dict)) or key in ("status", "message"):
+            continue
+        name, unit, fmt = split_unit(key)
+        rows.append([f"<td>{_esc(name)}</td>", _cell(value, fmt), f"<td>{_esc(unit)}</td>"])
+    return _table(("quantity", "value", "unit"), rows) if rows else "<p>No scalar results.</p>"
+
+
+def _records_table(records: list[Mapping[str, Any]]) -> str:
+    cols: list[str] = []
+    for r in records:
+        cols += [k for k in r if k not in cols]
+    shown = records[:MAX_ROWS]
+    rows = [[_cell(r.get(c)) for c in cols] for r in shown]
+    more = (f'<p class="sub">{len(records) - MAX_ROWS} more rows in the study\'s CSV files.</p>'
+            if len(records) > MAX_ROWS else "")
+    return _table(cols, rows) + more
+
+
+def _mapping_table(mapping: Mapping[str, Any]) -> str:
+    rows = []
+    for k, v in mapping.items():
+        if isinstance(v, list) and v and all(isinstance(x, Mapping) for x in v):
+            continue  # drawn as its own table
+        rows.append([f"<td>{_esc(k)}</td>", _cell(v if not isinstance(v, Mapping) else dict(v))])
+    return _table(("key", "value"), rows) if rows else ""
+
+
+def _structured(summary: Mapping[str, Any]) -> str:
+    parts = []
+    for key, value in summary.items():
+        title = key.replace("_", " ")
+        if isinstance(value, list) and value and all(isinstance(x, Mapping) for x in value):
+            parts.append(f"<h3>{_esc(title)}</h3>{_records_table(value)}")
+        elif isinstance(value, Mapping) and value:
+            parts.append(f"<h3>{_esc(title)}</h3>{_mapping_table(value)}")
+            for sub, inner in value.items():
+                if isinstance(inner, list) and inner and all(isinstance(x, Mapping) for x in inner):
+                    parts.append(f"<h3>{_esc(title)}: {_esc(sub.replace('_', ' '))}</h3>{_records_table(inner)}")
+    return "".join(parts)
+
+
+# -------------------------------------------------------------------------------- events
+
+def _timeline(events: Mapping[str, float], t_final: float | None) -> str:
+    if not events:
+        return "<p>No events (a study without a single flight, or a run that stopped before any).</p>"
+    t_end = max([*events.values(), t_final or 0.0]) or 1.0
+    width, left, right, axis_y = 1000, 30, 30, 150
+    scale = (width - left - right) / t_end
+
+    def x(t: float) -> float:
+        return left + t * scale
+
+    ticks = []
+    step = 10 ** math.floor(math.log10(t_end)) if t_end > 0 else 1.0
+    if t_end / step < 4:
+        step /= 2
+    k = 0.0
+    while k <= t_end + 1e-9:
+        ticks.append(f'<line x1="{x(k):.1f}" y1="{axis_y}" x2="{x(k):.1f}" y2="{axis_y + 6}" stroke="#6b7a90"/>'
+                     f'<text x="{x(k):.1f}" y="{axis_y + 20}" font-size="11" text-anchor="middle" fill="#5a6272">'
+                     f"{k:g}</text>")
+        k += step
+    marks = []
+    for name, t in events.items():
+        marks.append(f'<line x1="{x(t):.1f}" y1="{axis_y - 8}" x2="{x(t):.1f}" y2="{axis_y}" stroke="#b3261e" '
+                     f'stroke-width="2"/><text transform="translate({x(t) + 3:.1f},{axis_y - 12}) rotate(-35)" '
+                     f'font-size="11" fill="#1d2330">{_esc(name)} {t:.2f} s</text>')
+    svg = (f'<svg viewBox="0 0 {width} 185" width="100%" role="img" aria-label="events timeline">'
+           f'<line x1="{left}" y1="{axis_y}" x2="{x(t_end):.1f}" y2="{axis_y}" stroke="#1d2330" stroke-width="1.5"/>'
+           f'{"".join(ticks)}{"".join(marks)}<text x="{width - right}" y="{axis_y + 36}" font-size="11" '
+           f'text-anchor="end" fill="#5a6272">mission time (s)</text></svg>')
+    rows = [[f"<td>{_esc(n)}</td>", _cell(float(t), "{:.3f}")] for n, t in events.items()]
+    return svg + _table(("event", "time (s)"), rows)
+
+
+# ------------------------------------------------------------------------------- figures
+
+def _figures(run_dir: Path) -> tuple[str, int]:
+    folder = run_dir / "plots"
+    pngs = sorted(folder.rglob("*.png")) if folder.is_dir() else []
+    if not pngs:
+        return "<p>No figures (output.plots=false).</p>", 0
+    parts, current = [], None
+    for path in pngs:
+        group = str(path.parent.relative_to(folder))
+        if group != current:
+            current = group
+            parts.append(f"<h3>{_esc('plots/' if group == '.' else f'plots/{group}/')}</h3>")
+        data = base64.b64encode(path.read_bytes()).decode("ascii")
+        rel = path.relative_to(run_dir)
+        parts.append(f'<figure><img alt="{_esc(rel)}" src="data:image/png;base64,{data}">'
+                     f"<figcaption>{_esc(rel)}</figcaption></figure>")
+    return "".join(parts), len(pngs)
+
+
+# -------------------------------------------------------------------------------- config
+
+def _flatten(node: Any, prefix: str = "") -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    if isinstance(node, Mapping):
+        for k, v in node.items():
+            out.update(_flatten(v, f"{prefix}.{k}" if prefix else str(k)))
+        if not node and prefix:
+            out[prefix] = {}
+    else:
+        out[prefix] = node
+    return out
+
+
+def config_diff(result: Result) -> list[tuple[str, Any, Any]] | None:
+    """``(key, shipped default, this run)`` of every config key that differs from the
+    configuration ``savant run`` composes without overrides (a key only one side has:
+    the other side ``"—"``); None when the defaults cannot be composed."""
+    from omegaconf import OmegaConf
+
+    from savant_cli.api import compose_config, task_config
+
+    try:
+        default = OmegaConf.to_container(task_config(compose_config([], None)), resolve=True)
+    except Exception:  # noqa: BLE001 - the report says so instead of failing
+        return None
+    mine = OmegaConf.to_container(result.config, resolve=True)
+    a, b = _flatten(default), _flatten(mine)
+    missing = "—"
+    return [(k, a.get(k, missing), b.get(k, missing)) for k in sorted(set(a) | set(b)) if a.get(k, missing) != b.get(k, missing)]
+
+
+def _config_html(result: Result) -> str:
+    diff = config_diff(result)
+    if diff is None:
+        return "<p>The shipped defaults could not be composed; the full configuration is in <code>.hydra/config.yaml</code>.</p>"
+    if not diff:
+        return "<p>The shipped defaults, unchanged (<code>savant run</code> with no overrides).</p>"
+    rows = [[f"<td><code>{_esc(k)}</code></td>", f"<td>{_esc(d)}</td>", f"<td>{_esc(v)}</td>"] for k, d, v in diff]
+    return (f'<p class="sub">{len(diff)} keys differ from the shipped defaults (<code>savant run</code> with no '
+            f"overrides); the whole configuration is in <code>.hydra/config.yaml</code> and <code>savant.h5</code>.</p>"
+            + _table(("key", "shipped default", "this run"), rows, ["changed"] * len(rows)))
+
+
+# ---------------------------------------------------------------------------------- page
+
+def render(result: Result) -> str:
+    """The page of a loaded study (:func:`savant_cli.result.load`)."""
+    lines = verdicts(result)
+    figures, n_figures = _figures(result.run_dir)
+    t_final = result.summary.get("t_final_s") if isinstance(result.summary.get("t_final_s"), (int, float)) else None
+    prov = [[f"<td>{_esc(k)}</td>", f"<td>{_esc(v)}</td>"] for k, v in sorted(result.provenance.items())]
+    vehicle = result.config.get("vehicle", {}).get("name", "") if hasattr(result.config, "get") else ""
+    title = f"savant {result.study}: {vehicle}".strip(": ")
+    ok = all(v is not False for _, v in lines)
+    sections = [
+        ("verdicts", "Verdicts", _verdict_html(lines)),
+        ("summary", "Summary", _scalars(result.summary) + _structured(result.summary)),
+        ("events", "Events", _timeline(result.events, t_final)),
+        ("figures", f"Figures ({n_figures})", figures),
+        ("config", "Configuration (difference from the shipped defaults)", _config_html(result)),
+        ("provenance", "Provenance", _table(("", ""), prov) if prov else "<p>None recorded.</p>"),
+    ]
+    nav = "".join(f'<a href="#{sid}">{_esc(head)}</a>' for sid, head, _ in sections)
+    body = "".join(f'<section id="{sid}"><h2>{_esc(head)}</h2>{content}</section>' for sid, head, content in sections)
+    created = result.provenance.get("created_utc", "")
+    return (f'<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">'
+            f'<meta name="viewport" content="width=device-width, initial-scale=1">'
+            f"<title>{_esc(title)}</title><style>{_CSS}</style></head><body><main>"
+            f"<h1>{_esc(title)}</h1>"
+            f'<p class="sub">{_esc(result.run_dir)} · {_esc(created)} · '
+            f'<span style="color:{"#1e7b34" if ok else "#b3261e"}">{"every verdict met" if ok else "a verdict is not met"}'
+            f"</span></p><nav>{nav}</nav>{body}</main></body></html>\n")
+
+
+def write_report(run_dir: Path | str) -> Path:
+    """Write ``run_dir/report.html`` (atomically) from the folder's files; returns its path.
+
+    Raises
+    ------
+    FileNotFoundError
+        The folder holds no ``savant.h5`` (``output.hdf5=false``).
+    """
+    result = load(Path(run_dir).resolve())
+    path = result.run_dir / REPORT_FILE
+    write_text_atomic(path, render(result))
+    return path
