@@ -26,6 +26,8 @@ import h5py
 import numpy as np
 from omegaconf import DictConfig, OmegaConf
 
+from savant_cli.io.hdf5 import as_str as _text
+
 if TYPE_CHECKING:  # imported when used: pandas, xarray and python-control are slow to import
     import control
     import pandas
@@ -36,14 +38,6 @@ RUN_FILE = "savant.h5"
 SUMMARY_FILE = "summary.json"
 #: Linear-chart names :meth:`Result.plot` draws for one point (``time=`` required).
 LINEAR_CHARTS = ("bode", "nichols", "nyquist", "rootlocus", "pzmap", "response")
-
-
-def _text(value: Any) -> str:
-    if isinstance(value, bytes):
-        return value.decode("utf-8")
-    if isinstance(value, np.ndarray) and value.shape == ():
-        return _text(value[()])
-    return str(value)
 
 
 def _frame(group: h5py.Group, index: str | None = None) -> "pandas.DataFrame":
@@ -294,7 +288,7 @@ class Result:
         from savant_cli.plots.ascent import figure_names
 
         names = figure_names(self._record) if self._record is not None else []
-        if self.linear:
+        if "linear" in self._groups():
             names += [*LINEAR_CHARTS, "margin_envelope"]
         return names
 

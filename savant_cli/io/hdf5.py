@@ -233,17 +233,18 @@ def write_study_file(path: Path | str, study: str, config_yaml: str, provenance:
             fill(f)
 
 
-def _as_str(value: Any) -> str:
+def as_str(value: Any) -> str:
+    """A string attribute or dataset value as ``str`` (bytes decoded as UTF-8, 0-d arrays unwrapped)."""
     if isinstance(value, bytes):
         return value.decode("utf-8")
     if isinstance(value, np.ndarray) and value.shape == ():
-        return _as_str(value[()])
+        return as_str(value[()])
     return str(value)
 
 
 def _as_python(value: Any) -> Any:
     if isinstance(value, (bytes, str)):
-        return _as_str(value)
+        return as_str(value)
     if isinstance(value, np.generic):
         return value.item()
     return value
@@ -253,10 +254,10 @@ def _read_signal(ds: h5py.Dataset) -> Signal:
     cols = ds.attrs.get("columns", np.array([], dtype=object))
     return Signal(
         data=ds[()],
-        units=_as_str(ds.attrs.get("units", "")),
-        description=_as_str(ds.attrs.get("description", "")),
-        columns=tuple(_as_str(c) for c in np.atleast_1d(cols)),
-        frame=_as_str(ds.attrs.get("frame", "")),
+        units=as_str(ds.attrs.get("units", "")),
+        description=as_str(ds.attrs.get("description", "")),
+        columns=tuple(as_str(c) for c in np.atleast_1d(cols)),
+        frame=as_str(ds.attrs.get("frame", "")),
     )
 
 
@@ -287,19 +288,19 @@ def read_run(path: Path | str) -> RunRecord:
     if not path.is_file():
         raise FileNotFoundError(f"no such run file: {path}")
     with h5py.File(path, "r") as f:
-        fmt = _as_str(f.attrs.get("format", ""))
+        fmt = as_str(f.attrs.get("format", ""))
         if fmt != FORMAT:
             raise RunFileError(f"{path} is not a savant run file (format attribute {fmt!r}, expected {FORMAT!r})")
         version = int(f.attrs.get("format_version", 0))
         if version > FORMAT_VERSION:
             raise RunFileError(
                 f"{path} has format_version {version}; this savant reads up to {FORMAT_VERSION} (upgrade savant)")
-        provenance = {k: _as_str(v) for k, v in f.attrs.items() if k not in RESERVED_ROOT_ATTRS}
+        provenance = {k: as_str(v) for k, v in f.attrs.items() if k not in RESERVED_ROOT_ATTRS}
         signals = {name: _read_signal(ds) for name, ds in f["time_history"].items()}
-        names = [_as_str(s) for s in f["events/name"][()]]
+        names = [as_str(s) for s in f["events/name"][()]]
         times = [float(t) for t in f["events/time_s"][()]]
         sg = f["summary"]
-        none_keys = {_as_str(k) for k in np.atleast_1d(sg.attrs.get(NONE_MARKER, np.array([], dtype=object)))}
+        none_keys = {as_str(k) for k in np.atleast_1d(sg.attrs.get(NONE_MARKER, np.array([], dtype=object)))}
         summary: dict[str, Any] = {}
         for key, value in sg.attrs.items():
             if key == NONE_MARKER:
@@ -312,9 +313,9 @@ def read_run(path: Path | str) -> RunRecord:
             signals=signals,
             events=list(zip(names, times)),
             summary=summary,
-            config_yaml=_as_str(f["config"][()]),
+            config_yaml=as_str(f["config"][()]),
             provenance=provenance,
             complete=bool(f.attrs.get("complete", False)),
-            status=_as_str(f.attrs.get("status", "")),
-            message=_as_str(f.attrs.get("message", "")),
+            status=as_str(f.attrs.get("status", "")),
+            message=as_str(f.attrs.get("message", "")),
         )
