@@ -151,3 +151,58 @@ def test_resume_fills_exactly_the_gaps_and_collect_refuses_a_partial_set(root, s
     assert any("resuming: 1 of 2 runs already" in " ".join(t.split()) for t in logs)
     assert _shard_folders(sweep) == ["0", "1", "2"]
     _collected_equals_single(root, sweep)
+
+
+def _launcher(name: str, overrides: list[str]) -> dict:
+    """The resolved ``hydra.launcher`` of ``savant run -m … hydra/launcher=<name>``."""
+    from hydra import compose, initialize_config_dir
+    from omegaconf import OmegaConf
+
+    from savant_cli.paths import shipped_config_dir
+
+    with initialize_config_dir(config_dir=str(shipped_config_dir()), version_base="1.3"):
+        cfg = compose(config_name="config", overrides=[f"hydra/launcher={name}", *overrides], return_hydra_config=True)
+    return OmegaConf.to_container(cfg.hydra.launcher, resolve=True)
+
+
+def test_slurm_config_makes_one_array_task_per_shard(tmp_path, monkeypatch):
+    """savant_slurm as the submitit launcher hands it to submitit (no scheduler here): the
+    sbatch script of a 40-shard batch is one array of 40 tasks, 40 at once, each with
+    study.workers CPUs, the partition, account, time limit and memory asked for."""
+    require("hydra_plugins.hydra_submitit_launcher", "submitit")
+    import submitit
+    from submitit.slurm.slurm import _make_sbatch_string
+
+    params = _launcher("savant_slurm", ["study=montecarlo", "study.shards=40", "study.workers=8",
+                                        "hydra.launcher.partition=compute", "hydra.launcher.account=proj",
+                                        "hydra.launcher.array_parallelism=40", f"hydra.sweep.dir={tmp_path}"])
+    assert params["_target_"].endswith("SlurmLauncher") and params["cpus_per_task"] == 8
+    # the launcher's own mapping (hydra_submitit_launcher.submitit_launcher.BaseSubmititLauncher.launch)
+    from hydra_plugins.hydra_submitit_launcher.config import BaseQueueConf
+    from omegaconf import OmegaConf
+
+    base = set(OmegaConf.structured(BaseQueueConf).keys())
+    (tmp_path / "bin").mkdir()
+    (tmp_path / "bin" / "srun").write_text("#!/bin/sh\nexit 1\n")  # submitit only looks for it on PATH
+    (tmp_path / "bin" / "srun").chmod(0o755)
+    monkeypatch.setenv("PATH", f"{tmp_path / 'bin'}{os.pathsep}{os.environ['PATH']}")
+    ex = submitit.AutoExecutor(cluster="slurm", folder=params["submitit_folder"],
+                               slurm_max_num_timeout=params["max_num_timeout"])
+    ex.update_parameters(**{k if k in base else f"slurm_{k}": v for k, v in params.items()
+                            if k not in ("submitit_folder", "max_num_timeout", "_target_")})
+    script = _make_sbatch_string(command="savant", folder=ex.folder, map_count=40, **ex._executor.parameters)
+    for line in ("#SBATCH --array=0-39%40", "#SBATCH --cpus-per-task=8", "#SBATCH --partition=compute",
+                 "#SBATCH --account=proj", "#SBATCH --time=120", "#SBATCH --mem=8GB", "#SBATCH --ntasks-per-node=1",
+                 "#SBATCH --nodes=1"):
+        assert line in script.splitlines(), (line, script)
+    assert f"#SBATCH --output={tmp_path}/.submitit/%A_%a/%A_%a_0_log.out" in script.splitlines()
+
+
+def test_local_launcher_configs_resolve(tmp_path):
+    require("hydra_plugins.hydra_submitit_launcher", "hydra_plugins.hydra_ray_launcher")
+    local = _launcher("savant_submitit_local", ["study=montecarlo", "study.workers=2", f"hydra.sweep.dir={tmp_path}"])
+    assert local["_target_"].endswith("LocalLauncher") and local["cpus_per_task"] == 2
+    ray = _launcher("savant_ray", ["study=montecarlo", "study.workers=1"])
+    assert ray["_target_"].endswith("RayLauncher")
+    assert ray["ray"]["init"]["address"] is None and ray["ray"]["init"]["num_cpus"] == 2
+    assert ray["ray"]["remote"] == {"num_cpus": 1, "max_retries": 0}
