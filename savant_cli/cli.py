@@ -23,9 +23,10 @@ commands:
                       print the config, --help for the config groups)
   report RUN_DIR      redraw the plots, report.html and console summary of a finished run
   collect DIR [--allow-missing]
-                      merge the shard folders of a Monte Carlo multirun into DIR;
-                      with runs missing it lists them and writes nothing (exit 1),
-                      or, with --allow-missing, writes the partial result (exit 1)
+                      merge the shard folders of a Monte Carlo multirun
+                      into DIR; with runs missing it lists them and writes
+                      nothing (exit 1), or with --allow-missing writes the
+                      partial result (exit 1)
   rerun DIR run=N     fly run N of the Monte Carlo batch in DIR again, with its
                       whole time history and plots (DIR/rerun_<N>/)
   compare RUN_DIR REFERENCE --map MAP.yaml [--out DIR]
@@ -40,8 +41,9 @@ examples:
   savant report outputs/2026-11-23/10-00-00_nominal
   savant run study=montecarlo study.n_runs=200
   savant rerun outputs/2026-11-23/11-00-00_montecarlo run=137
-  savant run -m study=montecarlo study.shards=40 'study.shard=range(0,40)' study.workers=8 \
-      hydra/launcher=savant_slurm hydra.launcher.partition=compute
+  savant run -m study=montecarlo study.shards=40 'study.shard=range(0,40)' \\
+      study.workers=8 hydra/launcher=savant_slurm \\
+      hydra.launcher.partition=compute
   savant collect multirun/2026-11-23/12-00-00
 """
 
