@@ -106,7 +106,7 @@ def configure() -> None:
     where = (f"compiled kernels go to {fallback} for now (node-local, lost on a reboot)" if fallback_reason is None
              else f"nor is {fallback} ({fallback_reason}): numba compiles anew in every process")
     hint = (f"set {var} to a writable directory" if var == "NUMBA_CACHE_DIR"
-            else "set SAVANT_CACHE_DIR to a writable directory (docs/montecarlo.md, \"The numba cache\")")
+            else "set SAVANT_CACHE_DIR to a writable directory (docs/montecarlo.md, \"The numba cache on clusters\")")
     sys.stderr.write(f"savant: warning: the numba cache {cache} is not writable ({reason}); {where}; {hint}\n")
     if fallback_reason is None:
         _use(fallback)  # child processes inherit it: one warning per command

@@ -187,9 +187,11 @@ def rerun(run_dir: Path, run_number: int, console: Console | None = None) -> int
 
 
 def _shard_gaps(run_dirs: list[Path], n_runs: int, missing: list[int]) -> list[str]:
-    """Where the missing runs belong: per shard of the batch (``study.shards`` of the
-    shard folders' configs, when they all agree), ``shard k: no shard folder`` or
-    ``shard k (FOLDER): runs …``; empty when that cannot be told."""
+    """Where the missing runs belong, one line per shard of the batch that lacks runs
+    (``study.shards`` and ``study.shard`` of the shard folders' ``.hydra/config.yaml``,
+    when they all agree on ``study.shards``): ``shard k (FOLDER): runs …``, or
+    ``shard k (no shard folder with a journal): runs …``; empty when that cannot be told."""
+    lost = set(missing)
     found: dict[int, Path] = {}
     counts = set()
     for d in run_dirs:
@@ -204,7 +206,7 @@ def _shard_gaps(run_dirs: list[Path], n_runs: int, missing: list[int]) -> list[s
     shards = counts.pop()
     lines = []
     for k in range(shards):
-        gap = [r for r in shard_runs(n_runs, shards, k) if r in set(missing)]
+        gap = [r for r in shard_runs(n_runs, shards, k) if r in lost]
         if not gap:
             continue
         where = f"({found[k]})" if k in found else "(no shard folder with a journal)"
