@@ -13,9 +13,9 @@ full fidelity, and a 20-run full-fidelity Monte Carlo. Each case runs as its own
 under test, so the reference is the reference commit's own code, not an import of it.
 
 What is compared, exactly (``numpy.array_equal`` with NaNs equal, byte equality for
-strings): every dataset and every group attribute of ``savant.h5`` except provenance and
-the stored config text, and of the root attributes the run's ``complete``, ``status``
-and ``message`` (the others are provenance: host, time, versions, wall time); every key of
+strings; ``savant_cli/io/bitwise.py``): every dataset and every group attribute of
+``savant.h5`` except provenance and the stored config text, and of the root attributes
+the run's ``complete``, ``status`` and ``message`` (the others are provenance: host, time, versions, wall time); every key of
 every JSON file except the wall-clock ones and the Monte Carlo journal's config
 fingerprint; every array of the journal's run records; and the bytes of every CSV the
 study writes.
@@ -38,6 +38,9 @@ from pathlib import Path
 import h5py
 import numpy as np
 
+from savant_cli.io import bitwise
+from savant_cli.io.bitwise import WALL_CLOCK_KEYS
+
 ROOT = Path(__file__).resolve().parents[1]
 FULL = ["flex=on", "flex.n_modes=4", "slosh=on", "twd=on", "actuator=third_order"]
 COMMON = ["output.plots=false", "sim.progress=false"]
@@ -45,11 +48,6 @@ COMMON = ["output.plots=false", "sim.progress=false"]
 #: Keys that hash the configuration's layout, not the flight (the Monte Carlo journal's
 #: resume fingerprint changes whenever the config schema does).
 CONFIG_HASH_KEYS = ("fingerprint",)
-#: Summary keys and root attributes that measure the machine, not the flight.
-WALL_CLOCK_KEYS = ("study_wall_time_s", "process_wall_time_s", "sim_wall_time_s", "realtime_factor", "wall_time_s", "wall_s",
-                   "simulation_wall_time_s", "elapsed_s", "runs_per_minute", "stage_wall_s")
-#: Root attributes of a run file that describe the flight (the rest is provenance).
-RUN_ATTRS = ("complete", "status", "message")
 #: The summary's load-indicator keys (issue 15), a regex alternation.
 LOAD_KEYS = (r"time_max_qalpha_s|max_qalpha_pitch_Pa_deg|time_max_qalpha_pitch_s|max_qbeta_Pa_deg|time_max_qbeta_s"
              r"|qalpha_limit_Pa_deg|qalpha_limit_ratio|time_above_qalpha_limit_s|qalpha_limit_exceeded")
@@ -109,68 +107,10 @@ def record(source: Path, out_dir: Path, jobs: int = 2, extra: tuple[str, ...] = 
             print(line, flush=True)
 
 
-def _equal(a: np.ndarray, b: np.ndarray) -> bool:
-    if a.shape != b.shape or a.dtype.kind != b.dtype.kind:
-        return False
-    if a.dtype.kind == "f":
-        return bool(np.array_equal(a, b, equal_nan=True))
-    return bool(np.array_equal(a, b))
-
-
-def _deviation(a: np.ndarray, b: np.ndarray) -> str:
-    if a.shape == b.shape and a.dtype.kind in "fiu" and b.dtype.kind in "fiu":
-        with np.errstate(invalid="ignore"):
-            d = np.abs(a.astype(float) - b.astype(float))
-        return f"max |Δ| = {np.nanmax(d) if d.size else 0.0:.3e}"
-    return f"shape {a.shape} vs {b.shape}, dtype {a.dtype} vs {b.dtype}"
-
-
-def _attrs(obj: h5py.HLObject, skip: tuple[str, ...] = ()) -> dict[str, np.ndarray]:
-    return {k: np.asarray(v) for k, v in obj.attrs.items() if k not in skip}
-
-
 def compare_h5(a: Path, b: Path) -> list[str]:
-    """Differences between two run files (empty: bitwise identical)."""
-    diffs: list[str] = []
-    with h5py.File(a, "r") as fa, h5py.File(b, "r") as fb:
-        names_a, names_b = [], []
-        fa.visit(names_a.append)
-        fb.visit(names_b.append)
-        for only, side in ((set(names_a) - set(names_b), "reference"), (set(names_b) - set(names_a), "new")):
-            diffs += [f"{n}: only in the {side} file" for n in sorted(only)]
-        for name in [n for n in names_a if n in set(names_b)]:
-            oa, ob = fa[name], fb[name]
-            if name == "config":
-                continue  # the resolved config text (key order, new schema keys) is not an output
-            skip = WALL_CLOCK_KEYS if name.endswith("summary") else ()
-            at_a, at_b = _attrs(oa, skip), _attrs(ob, skip)
-            for at in (at_a, at_b):  # provenance of a group (e.g. the Monte Carlo's): the machine, not the flight
-                for k in [k for k in at if k.startswith("provenance_")]:
-                    del at[k]
-                at.pop("config_yaml", None)  # a batch's resolved config text, like /config: not an output
-            if "__none__" in at_b:  # the summary's null keys: a named addition (not in the reference) may be null
-                old_none = {str(x) for x in at_a.get("__none__", [])}
-                at_b["__none__"] = np.array([x for x in at_b["__none__"] if str(x) in old_none or not _named(str(x))],
-                                            dtype=object)
-            for k in sorted(set(at_a) | set(at_b)):
-                if k not in at_a:
-                    diffs.append(f"{name}@{k}: only in the new file")
-                elif k not in at_b:
-                    diffs.append(f"{name}@{k}: only in the reference file")
-                elif not _equal(at_a[k], at_b[k]):
-                    diffs.append(f"{name}@{k}: {_deviation(at_a[k], at_b[k])}")
-            if isinstance(oa, h5py.Dataset):
-                if name.endswith("wall_time_s"):
-                    continue
-                da, db = oa[()], ob[()]
-                da, db = np.asarray(da), np.asarray(db)
-                if not _equal(da, db):
-                    diffs.append(f"{name}: {_deviation(da, db)}")
-        ra, rb = _attrs(fa), _attrs(fb)
-        for k in RUN_ATTRS:  # (a Monte Carlo batch file has none of them)
-            if (k in ra or k in rb) and (k not in ra or k not in rb or not _equal(ra[k], rb[k])):
-                diffs.append(f"/@{k}: {ra.get(k)} vs {rb.get(k)}")
-    return diffs
+    """Differences between two run files (empty: bitwise identical); the summary keys of
+    :data:`NAMED_KEYS` may be new (``savant_cli/io/bitwise.py`` says what is compared)."""
+    return bitwise.compare_h5(a, b, addition=_named)
 
 
 def named_additions(diffs: list[str]) -> tuple[list[str], list[str]]:
@@ -268,8 +208,8 @@ def compare_npz(a: Path, b: Path) -> list[str]:
                 keep = [i for i, k in enumerate(kb) if k in ka or not _named(str(k))]
                 zb["summary_keys"], zb["summary"] = zb["summary_keys"][keep], zb["summary"][keep]
     keys = (set(za) | set(zb)) - set(WALL_CLOCK_KEYS)
-    return [f"{k}: {'only in one file' if k not in za or k not in zb else _deviation(za[k], zb[k])}"
-            for k in sorted(keys) if k not in za or k not in zb or not _equal(za[k], zb[k])]
+    return [f"{k}: {'only in one file' if k not in za or k not in zb else bitwise.deviation(za[k], zb[k])}"
+            for k in sorted(keys) if k not in za or k not in zb or not bitwise.equal(za[k], zb[k])]
 
 
 def divergence_fix_only(ref: Path, new: Path) -> str | None:
@@ -311,7 +251,7 @@ def divergence_fix_only(ref: Path, new: Path) -> str | None:
         ta, tb = ha["time_history/time"][()], hb["time_history/time"][()]
         n = min(ta.size, tb.size) - 1
         for k in ha["time_history"]:
-            if not _equal(ha["time_history"][k][()][:n], hb["time_history"][k][()][:n]):
+            if not bitwise.equal(ha["time_history"][k][()][:n], hb["time_history"][k][()][:n]):
                 return None
         return (f"histories identical to t = {ta[n - 1]:.2f} s; {ha.attrs['message']} → {hb.attrs['message']}")
 

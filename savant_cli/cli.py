@@ -22,7 +22,11 @@ commands:
   run [overrides]     fly the configured study (Hydra: -m for sweeps, --cfg job to
                       print the config, --help for the config groups)
   report RUN_DIR      redraw the plots, report.html and console summary of a finished run
-  collect DIR         merge the shard folders of a Monte Carlo multirun into DIR
+  collect DIR [--allow-missing]
+                      merge the shard folders of a Monte Carlo multirun
+                      into DIR; with runs missing it lists them and writes
+                      nothing (exit 1), or with --allow-missing writes the
+                      partial result (exit 1)
   rerun DIR run=N     fly run N of the Monte Carlo batch in DIR again, with its
                       whole time history and plots (DIR/rerun_<N>/)
   compare RUN_DIR REFERENCE --map MAP.yaml [--out DIR]
@@ -37,6 +41,10 @@ examples:
   savant report outputs/2026-11-23/10-00-00_nominal
   savant run study=montecarlo study.n_runs=200
   savant rerun outputs/2026-11-23/11-00-00_montecarlo run=137
+  savant run -m study=montecarlo study.shards=40 'study.shard=range(0,40)' \\
+      study.workers=8 hydra/launcher=savant_slurm \\
+      hydra.launcher.partition=compute
+  savant collect multirun/2026-11-23/12-00-00
 """
 
 
@@ -176,13 +184,19 @@ def _compare_command(rest: list[str]) -> int:
 
 
 def _batch_command(cmd: str, rest: list[str]) -> int:
-    """``savant collect DIR`` and ``savant rerun DIR run=N``."""
+    """``savant collect DIR [--allow-missing]`` and ``savant rerun DIR run=N``."""
     err = Console(stderr=True)
-    usage = "usage: savant collect DIR" if cmd == "collect" else "usage: savant rerun DIR run=N"
+    usage = "usage: savant collect DIR [--allow-missing]" if cmd == "collect" else "usage: savant rerun DIR run=N"
+    allow_missing = cmd == "collect" and "--allow-missing" in rest
+    if allow_missing:
+        rest = [a for a in rest if a != "--allow-missing"]
     if (cmd == "collect" and len(rest) != 1) or (cmd == "rerun" and (len(rest) != 2 or not rest[1].startswith("run="))):
         err.print(usage)
         return 2
     folder = Path(rest[0])
+    if folder.name.startswith("-"):
+        err.print(f"[bold red]error[/]: unknown option {rest[0]!r}\n{usage}")
+        return 2
     if not folder.is_dir():
         err.print(f"[bold red]error[/]: {folder} is not a folder\n{usage}")
         return 2
@@ -190,8 +204,8 @@ def _batch_command(cmd: str, rest: list[str]) -> int:
 
     try:
         if cmd == "collect":
-            code = montecarlo.collect(folder)
-            if (folder / "savant.h5").is_file():
+            code = montecarlo.collect(folder, allow_missing=allow_missing)
+            if (code == 0 or allow_missing) and (folder / "savant.h5").is_file():  # written just now
                 write_report_or_say(folder, err)
             return code
         try:
@@ -199,8 +213,8 @@ def _batch_command(cmd: str, rest: list[str]) -> int:
         except ValueError:
             raise ConfigError("run", rest[1][4:], "must be an integer run number") from None
         code = montecarlo.rerun(folder, number)
-        if (folder / f"rerun_{number}" / "savant.h5").is_file():
-            write_report_or_say(folder / f"rerun_{number}", err)
+        if (folder / f"rerun_{number:06d}" / "savant.h5").is_file():  # montecarlo.rerun's folder
+            write_report_or_say(folder / f"rerun_{number:06d}", err)
         return code
     except ConfigError as exc:
         err.print(f"[bold red]error[/]: {exc}")

@@ -88,6 +88,9 @@ def verdicts(result: Result) -> list[tuple[str, bool | None]]:
     out: list[tuple[str, bool | None]] = []
     status = f"status: {result.status}" + (f" — {result.message}" if result.message else "")
     out.append((status, result.status == "complete"))
+    if s.get("missing_runs"):  # a Monte Carlo collected with --allow-missing: never looks complete
+        out.append((f"PARTIAL batch: {s.get('n_runs_present')} of {s.get('n_runs_expected')} runs present, "
+                    f"missing runs {s['missing_runs']}", False))
     if isinstance(s.get("requirements_verdict"), str):
         out.append((s["requirements_verdict"], bool(s.get("requirements_met"))))
     if isinstance(s.get("time_margins_verdict"), str):

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from conftest import assert_report_redraws
+from savant_cli.io.bitwise import compare_h5
 from test_end_to_end import run
 
 pytestmark = pytest.mark.slow
@@ -74,6 +75,7 @@ def test_joblib_shards_collected_equal_the_single_batch(batches):
         assert np.array_equal(a[k], b[k], equal_nan=True), k
     for k in da:
         assert np.array_equal(da[k], db[k], equal_nan=True), k
+    assert compare_h5(batches / "single" / "savant.h5", multi / "savant.h5") == []  # every dataset, bit for bit
 
 
 def test_rerun_reproduces_one_run_with_its_history(batches):
@@ -96,5 +98,7 @@ def test_collect_names_missing_runs(batches, tmp_path):
     proc = run(["collect", str(copy)], cwd=tmp_path)
     assert proc.returncode == 1
     assert "missing runs" in proc.stdout and "4" in proc.stdout
+    text = " ".join(proc.stdout.split())  # the console wraps at 80 columns
+    assert "shard 2 (" in text and "): runs 4" in text and "nothing written" in text  # without --allow-missing
     bad = run(["rerun", str(batches / "single"), "run=99"], cwd=tmp_path)
     assert bad.returncode == 2 and "run" in bad.stderr

@@ -186,9 +186,56 @@ def rerun(run_dir: Path, run_number: int, console: Console | None = None) -> int
     return 0 if outcome.status in FLOWN else 1  # flown to its end (its health is in its status)
 
 
-def collect(folder: Path, console: Console | None = None) -> int:
+def _shard_gaps(run_dirs: list[Path], n_runs: int, missing: list[int]) -> list[str]:
+    """Where the missing runs belong, one line per shard of the batch that lacks runs
+    (``study.shards`` and ``study.shard`` of the shard folders' ``.hydra/config.yaml``,
+    when they all agree on ``study.shards``): ``shard k (FOLDER): runs …``, or
+    ``shard k (no shard folder with a journal): runs …``; empty when that cannot be told."""
+    lost = set(missing)
+    found: dict[int, Path] = {}
+    counts = set()
+    for d in run_dirs:
+        path = d / ".hydra" / "config.yaml"
+        if not path.is_file():
+            return []
+        study = OmegaConf.load(path).get("study", {})
+        counts.add(int(study.get("shards", 1)))
+        found[int(study.get("shard", 0))] = d
+    if len(counts) != 1:
+        return []  # shards of different splits (allowed on resume): only the run numbers tell
+    shards = counts.pop()
+    lines = []
+    for k in range(shards):
+        gap = [r for r in shard_runs(n_runs, shards, k) if r in lost]
+        if not gap:
+            continue
+        where = f"({found[k]})" if k in found else "(no shard folder with a journal)"
+        lines.append(f"shard {k} {where}: runs {ranges_text(gap)}")
+    return lines
+
+
+def collect(folder: Path, console: Console | None = None, allow_missing: bool = False) -> int:
     """Merge the shard folders under ``folder`` (a Hydra multirun folder) into one
-    ``savant.h5`` and report there; 0 when every run is present exactly once."""
+    ``savant.h5``, tables and ``summary.json`` there.
+
+    Parameters
+    ----------
+    folder : Path
+        The multirun folder holding the shard folders (``*/runs/manifest.json``).
+    console : rich.console.Console, optional
+        Where the tables and the missing runs are printed.
+    allow_missing : bool
+        With runs missing, write the partial result anyway (its ``summary.json``
+        ``missing_runs`` and the ``savant.h5`` attribute name them). Without it a partial
+        set writes nothing into ``folder``.
+
+    Returns
+    -------
+    int
+        0 when every run of the batch is present exactly once and the result was
+        written; 1 when runs are missing (written or not: a partial result never exits
+        0).
+    """
     console = console or Console()
     run_dirs = sorted(p.parent for p in folder.rglob("runs/manifest.json"))
     if not run_dirs:
@@ -198,14 +245,23 @@ def collect(folder: Path, console: Console | None = None) -> int:
         dup = ", ".join(f"run {r} in {', '.join(str(p.parent.parent) for p in ps)}" for r, ps in inv.duplicates.items())
         raise ConfigError("collect", str(folder), f"holds runs more than once ({dup}): shards overlap")
     cfg, raw = _load_config(run_dirs[0].parent)
-    case, names = make_case(cfg)
     expected = list(range(cfg.study.n_runs))
     missing = inv.missing(expected)
+    if missing:
+        console.print(f"[bold red]missing runs[/] ({len(missing)} of {len(expected)}): {ranges_text(missing)}")
+        for line in _shard_gaps([d.parent for d in run_dirs], cfg.study.n_runs, missing):
+            console.print(f"  {line}", highlight=False)
+        if not allow_missing:
+            console.print(f"nothing written into {folder}: resume the missing shards (docs/montecarlo.md, "
+                          "\"Resume a batch with missing shards\"), or collect the partial set with --allow-missing")
+            return 1
+    case, names = make_case(cfg)
     write_outputs(folder, inv, expected, dispersion_table(case.dispersions), OmegaConf.to_yaml(raw, resolve=True),
                   collect_provenance(), names, case.history_time, cfg.requirements, cfg.output.plots, console,
                   cfg.study.reliability)
     console.print(f"collected {len(inv.files)} runs from {len(run_dirs)} shard folder(s) into {folder}")
     if missing:
-        console.print(f"[bold red]missing runs[/]: {ranges_text(missing)}")
+        console.print(f"[bold red]PARTIAL result[/] (--allow-missing): {len(missing)} of {len(expected)} runs "
+                      f"missing ({ranges_text(missing)}), listed in summary.json missing_runs")
         return 1
     return 0
