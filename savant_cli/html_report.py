@@ -237,20 +237,58 @@ def _flatten(node: Any, prefix: str = "") -> dict[str, Any]:
     return out
 
 
+def shipped_defaults() -> dict[str, Any]:
+    """The flattened configuration ``savant run`` composes with no overrides.
+
+    Composing takes about half a second, so the result is kept as JSON in the numba
+    cache folder (:mod:`savant_cli.jit_cache`), keyed by a hash of every file of the
+    shipped config tree and the savant version; a changed tree composes anew."""
+    import hashlib
+    import json
+    import os
+
+    from omegaconf import OmegaConf
+
+    from savant_cli import __version__
+    from savant_cli.api import compose_config, task_config
+    from savant_cli.paths import shipped_config_dir
+
+    root = shipped_config_dir()
+    h = hashlib.sha256(__version__.encode())
+    for path in sorted(root.rglob("*")):
+        if path.is_file() and "__pycache__" not in path.parts:
+            h.update(str(path.relative_to(root)).encode())
+            h.update(path.read_bytes())
+    folder = os.environ.get("NUMBA_CACHE_DIR")
+    cached = Path(folder) / f"shipped_defaults-{h.hexdigest()[:16]}.json" if folder else None
+    if cached is not None and cached.is_file():
+        try:
+            return json.loads(cached.read_text())
+        except (OSError, ValueError):
+            pass
+    flat = _flatten(OmegaConf.to_container(task_config(compose_config([], None)), resolve=True))
+    if cached is not None:
+        try:
+            write_text_atomic(cached, json.dumps(flat))
+        except OSError:
+            pass  # an unwritable cache only costs the composition next time
+    return flat
+
+
 def config_diff(result: Result) -> list[tuple[str, Any, Any]] | None:
     """``(key, shipped default, this run)`` of every config key that differs from the
     configuration ``savant run`` composes without overrides (a key only one side has:
     the other side ``"—"``); None when the defaults cannot be composed."""
+    import json
+
     from omegaconf import OmegaConf
 
-    from savant_cli.api import compose_config, task_config
-
     try:
-        default = OmegaConf.to_container(task_config(compose_config([], None)), resolve=True)
+        a = shipped_defaults()
     except Exception:  # noqa: BLE001 - the report says so instead of failing
         return None
-    mine = OmegaConf.to_container(result.config, resolve=True)
-    a, b = _flatten(default), _flatten(mine)
+    # through JSON like the cached defaults, so both sides compare alike
+    b = json.loads(json.dumps(_flatten(OmegaConf.to_container(result.config, resolve=True))))
     missing = "—"
     return [(k, a.get(k, missing), b.get(k, missing)) for k in sorted(set(a) | set(b)) if a.get(k, missing) != b.get(k, missing)]
 
