@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import copy
 import logging
-import re
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -130,7 +129,7 @@ def run(overrides: Sequence[str] | None = None, config_dir: str | Path | None = 
         raise ConfigError("overrides", overrides, "must be a list of override strings, e.g. ['study=linear']")
     overrides = [str(o) for o in (overrides or [])]
     for o in overrides:
-        if o in ("-m", "--multirun") or re.match(r"^-", o):
+        if o.startswith("-"):
             raise ConfigError("overrides", o, "must be Hydra overrides; savant_cli.run runs one job (no flags)")
     cdir = None if config_dir is None else Path(config_dir).expanduser().resolve()
     if cdir is not None and not cdir.is_dir():

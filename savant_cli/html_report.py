@@ -33,6 +33,7 @@ from typing import Any
 
 from savant_cli.io.atomic import write_text_atomic
 from savant_cli.io.console import format_value, loads_line, split_unit
+from savant_cli.montecarlo.results import loads_verdict
 from savant_cli.result import Result, load
 
 REPORT_FILE = "report.html"
@@ -100,13 +101,9 @@ def verdicts(result: Result) -> list[tuple[str, bool | None]]:
     rel = s.get("reliability")
     if isinstance(rel, Mapping) and rel.get("line"):
         out.append((str(rel["line"]), bool(rel.get("target_met"))))
-    loads = s.get("loads")
-    if isinstance(loads, Mapping) and loads.get("qalpha_limit_Pa_deg") is not None:
-        n = int(loads.get("runs_above_qalpha_limit", 0))
-        line = (f"loads: {n} of {loads.get('runs_with_results')} runs above the q-alpha limit "
-                f"{loads['qalpha_limit_Pa_deg']:,.0f} Pa deg" + (f" (runs {loads.get('runs_above_qalpha_limit_list')})"
-                                                                 if n else ""))
-        out.append((line, n == 0))
+    batch = loads_verdict(s["loads"]) if isinstance(s.get("loads"), Mapping) else None
+    if batch is not None:
+        out.append((f"loads: {batch[0]}", batch[1]))
     single = loads_line(s)
     if single is not None:
         out.append((single[0], not single[1]))

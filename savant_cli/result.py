@@ -211,11 +211,11 @@ class Result:
     @cached_property
     def linear(self) -> LinearPoints | None:
         """The operating points of a linear study by flight time (s); None when the run
-        file has no group ``linear`` (``study=linear``, ``study=fcs_design`` and a
-        Monte Carlo's per-run margins are elsewhere: :attr:`montecarlo`)."""
+        file has no group ``linear`` (a Monte Carlo's per-run margins are in
+        :attr:`montecarlo`)."""
         import pandas as pd
 
-        from savant_cli.linear.store import point_keys, read_system, system_names
+        from savant_cli.linear.store import point_keys, point_verdicts, read_system, system_names
 
         if "linear" not in self._groups():
             return None
@@ -224,12 +224,7 @@ class Result:
             g = f["linear"]
             margins = _frame(g["margins"])
             checks = _frame(g["requirements/checks"]) if "requirements/checks" in g else None
-            verdicts: dict[float, tuple[bool, bool]] = {}
-            if "requirements/points" in g:
-                pts = g["requirements/points"]
-                judged = pts["judged"][()] if "judged" in pts else np.ones(pts["passed"].shape, bool)
-                verdicts = {float(t): (bool(ok), bool(j)) for t, ok, j in zip(pts["time_s"][()], pts["passed"][()],
-                                                                              judged)}
+            verdicts = point_verdicts(g)
             for key in point_keys(g):
                 pg = g[key]
                 t = float(pg.attrs["time_s"])

@@ -250,6 +250,16 @@ def read_margins(g: h5py.Group) -> tuple[list[MarginRow], dict[str, tuple[float,
     return rows, req, bool(mg.attrs.get("exclusion_zones", True))
 
 
+def point_verdicts(g: h5py.Group) -> dict[float, tuple[bool, bool]]:
+    """Each point's requirement verdict in a ``linear`` group, time (s) → (passed,
+    judged); empty without a requirement set (files before issue 13: all judged)."""
+    if "requirements/points" not in g:
+        return {}
+    pts = g["requirements/points"]
+    judged = pts["judged"][()] if "judged" in pts else np.ones(pts["passed"].shape, bool)
+    return {float(t): (bool(ok), bool(j)) for t, ok, j in zip(pts["time_s"][()], pts["passed"][()], judged)}
+
+
 def read_linear_group(path: Path | str) -> tuple[list[PointCharts], list[MarginRow], dict[str, tuple[float, float]],
                                                  bool, list[float]]:
     """What ``savant report`` draws of a linear study: the chart data of every point that
@@ -259,11 +269,7 @@ def read_linear_group(path: Path | str) -> tuple[list[PointCharts], list[MarginR
         g = f["linear"]
         charts = [read_charts(g[k]["charts"]) for k in point_keys(g) if "charts" in g[k]]
         rows, req, zones = read_margins(g)
-        failed = []
-        if "requirements" in g:
-            pts = g["requirements/points"]
-            judged = pts["judged"][()] if "judged" in pts else np.ones(pts["passed"].shape, bool)
-            failed = [float(t) for t, ok, j in zip(pts["time_s"][()], pts["passed"][()], judged) if j and not ok]
+        failed = [t for t, (ok, judged) in point_verdicts(g).items() if judged and not ok]
     return sorted(charts, key=lambda c: c.time_s), rows, req, zones, failed
 
 

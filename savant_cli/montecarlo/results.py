@@ -262,11 +262,20 @@ def print_loads(console: Console, loads: dict[str, Any]) -> None:
     parts = [f"{label} {loads[key]['max']:,.{0 if unit == 'Pa deg' else 2}f} {unit} (run {loads[key]['max_run']})"
              for key, label, unit in LOAD_EXTREMES if loads.get(key)]
     console.print("loads: " + "; ".join(parts), markup=False, highlight=False, soft_wrap=True)
-    if loads.get("qalpha_limit_Pa_deg") is not None:
-        n = loads.get("runs_above_qalpha_limit", 0)
-        text = (f"{n} of {loads['runs_with_results']} runs above the q-alpha limit "
-                f"{loads['qalpha_limit_Pa_deg']:,.0f} Pa deg" + (f" (runs {loads['runs_above_qalpha_limit_list']})" if n else ""))
-        console.print(text, style="red" if n else None, markup=False, highlight=False, soft_wrap=True)
+    verdict = loads_verdict(loads)
+    if verdict is not None:
+        console.print(verdict[0], style=None if verdict[1] else "red", markup=False, highlight=False, soft_wrap=True)
+
+
+def loads_verdict(loads: dict[str, Any]) -> tuple[str, bool] | None:
+    """The batch's q·α verdict line (:func:`load_extremes`) and whether no run exceeded
+    the limit; None without a limit (what the console and report.html show)."""
+    if not loads or loads.get("qalpha_limit_Pa_deg") is None:
+        return None
+    n = int(loads.get("runs_above_qalpha_limit", 0))
+    text = (f"{n} of {loads['runs_with_results']} runs above the q-alpha limit "
+            f"{loads['qalpha_limit_Pa_deg']:,.0f} Pa deg" + (f" (runs {loads['runs_above_qalpha_limit_list']})" if n else ""))
+    return text, n == 0
 
 
 def _csv(path: Path, rows: list[dict[str, Any]]) -> None:
