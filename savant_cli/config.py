@@ -137,6 +137,20 @@ class FlexRequirement:
 
 
 @dataclass
+class MissionRequirement:
+    """Which mission failure classes (``savant_cli/sim/mission.py``) count as a failed
+    mission: a run succeeds when none of its classes is listed. All, by default."""
+
+    failure_classes: list[str] = field(default_factory=lambda: list(_failure_classes()))
+
+
+def _failure_classes() -> tuple[str, ...]:
+    from savant_cli.io.record import FAILURE_CLASSES
+
+    return FAILURE_CLASSES
+
+
+@dataclass
 class RequirementSet:
     """The stability-margin requirement set (group ``requirements``, selected by the
     vehicle config): what every linear margin, point and study is judged against
@@ -148,6 +162,7 @@ class RequirementSet:
     aero: AeroRequirement = field(default_factory=AeroRequirement)
     slosh: SloshRequirement = field(default_factory=SloshRequirement)
     flex: FlexRequirement = field(default_factory=FlexRequirement)
+    mission: MissionRequirement = field(default_factory=MissionRequirement)
 
     def flex_mode(self, stage: str, mode: str) -> FlexModeRequirement:
         """The requirement of bending mode ``mode`` (``flex_<n>``) in ``stage``
@@ -179,6 +194,12 @@ def check_requirements(r: RequirementSet) -> None:
             _one_of(f"{key}.stabilization", m.stabilization, STABILIZATIONS)
             _non_negative(f"{key}.gain_dB", m.gain_dB)
             _non_negative(f"{key}.phase_deg", m.phase_deg)
+    allowed = _failure_classes()
+    for i, c in enumerate(r.mission.failure_classes):
+        _one_of(f"requirements.mission.failure_classes[{i}]", c, allowed)
+    if len(set(r.mission.failure_classes)) != len(r.mission.failure_classes):
+        raise ConfigError("requirements.mission.failure_classes", list(r.mission.failure_classes),
+                          "names each class at most once")
 
 
 @dataclass
@@ -256,9 +277,9 @@ class ReliabilitySpec:
 
     confidence: float = 0.9  # one-sided confidence level of the demonstrated probability
     target_probability: float = 0.9973  # the success probability the batch is to demonstrate
-    # a run succeeds with one of these statuses (flown to its end under control; a
-    # diverged or failed run is a loss)
-    success_statuses: list[str] = field(default_factory=lambda: ["complete", "limit_cycle", "saturated"])
+    # the flight-performance reserve covers this fraction of dispersed flights, at
+    # ``confidence`` (montecarlo/insertion.py): 99.865 %, the 3-sigma-low flight
+    reserve_probability: float = 0.99865
 
 
 @dataclass
@@ -742,6 +763,18 @@ class LaunchSite:
 
 
 @dataclass
+class InsertionTolerance:
+    """``guidance.target.tolerance``: the largest |error| of the cut-off orbit against the
+    target that is still a successful insertion (mission class ``insertion_tolerance``).
+    Defaults: the 3σ LEO injection accuracies launcher users' guides quote (e.g. ±10 km
+    in each apsis altitude, ±0.1° in inclination) [E]."""
+
+    perigee_km: float = 10.0
+    apogee_km: float = 10.0
+    inclination_deg: float = 0.1
+
+
+@dataclass
 class OrbitTarget:
     """``guidance.target``: the insertion orbit (apsis altitudes above the WGS84
     equatorial radius) and the cutoff altitude on it; every key is required. The plane
@@ -753,6 +786,7 @@ class OrbitTarget:
     inclination_deg: Optional[float] = None
     cutoff_altitude_km: Optional[float] = None
     in_plane_time_s: float = 0.0
+    tolerance: InsertionTolerance = field(default_factory=InsertionTolerance)
 
 
 @dataclass
@@ -1070,6 +1104,8 @@ def check_target(g: GuidanceConfig) -> None:
                           f"change: allowed [{lat:g}, {180.0 - lat:g}]")
     if not -86400.0 <= t.in_plane_time_s <= 86400.0:
         raise ConfigError("guidance.target.in_plane_time_s", t.in_plane_time_s, "must be within one day of liftoff")
+    for name in ("perigee_km", "apogee_km", "inclination_deg"):
+        _positive(f"guidance.target.tolerance.{name}", getattr(t.tolerance, name))
 
 
 def check_peg(peg: PegConfig, sim: SimConfig) -> None:
@@ -1364,16 +1400,11 @@ def _check_montecarlo(s: MonteCarloStudyConfig) -> None:
     for i, t in enumerate(s.linear_times):
         if not (t > 0.0 and np.isfinite(t)):
             raise ConfigError(f"study.linear_times[{i}]", t, "must be a positive flight time in s")
-    from savant_cli.io.record import STATUSES
-
     r = s.reliability
-    for key, value in (("confidence", r.confidence), ("target_probability", r.target_probability)):
+    for key, value in (("confidence", r.confidence), ("target_probability", r.target_probability),
+                       ("reserve_probability", r.reserve_probability)):
         if not 0.0 < value < 1.0:
             raise ConfigError(f"study.reliability.{key}", value, "must be a probability strictly between 0 and 1")
-    if not r.success_statuses:
-        raise ConfigError("study.reliability.success_statuses", [], f"must name at least one of {', '.join(STATUSES)}")
-    for i, status in enumerate(r.success_statuses):
-        _one_of(f"study.reliability.success_statuses[{i}]", status, tuple(st for st in STATUSES if st != "interrupted"))
 
 
 def _check_linear(s: LinearStudyConfig) -> None:

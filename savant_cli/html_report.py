@@ -98,9 +98,17 @@ def verdicts(result: Result) -> list[tuple[str, bool | None]]:
         rows = s.get("time_margins") or []
         bad = any(r.get("unstable_at_zero") or "differs by" in str(r.get("note", "")) for r in rows)
         out.append((s["time_margins_verdict"], not bad))
+    if isinstance(s.get("mission_verdict"), str):  # one run
+        out.append((s["mission_verdict"], s.get("mission_success") == 1))
     rel = s.get("reliability")
-    if isinstance(rel, Mapping) and rel.get("line"):
+    if isinstance(rel, Mapping) and rel.get("line"):  # a Monte Carlo
+        out += _mission_lines(s.get("mission"), "")
         out.append((str(rel["line"]), bool(rel.get("target_met"))))
+    elif isinstance(rel, Mapping):  # a fly-off: per controller
+        for ctrl, r in rel.items():
+            if isinstance(r, Mapping) and r.get("line"):
+                out += _mission_lines((s.get("mission") or {}).get(ctrl), f"{ctrl}: ")
+                out.append((f"{ctrl}: {r['line']}", bool(r.get("target_met"))))
     batch = loads_verdict(s["loads"]) if isinstance(s.get("loads"), Mapping) else None
     if batch is not None:
         out.append((f"loads: {batch[0]}", batch[1]))
@@ -108,10 +116,22 @@ def verdicts(result: Result) -> list[tuple[str, bool | None]]:
     if single is not None:
         out.append((single[0], not single[1]))
     for key, value in s.items():  # any other study's verdict line (flex sweep, FCS design …)
-        if key.endswith("verdict") and key not in ("requirements_verdict", "time_margins_verdict") \
+        if key.endswith("verdict") and key not in ("requirements_verdict", "time_margins_verdict", "mission_verdict") \
                 and isinstance(value, str):
             out.append((value, None))
     return out
+
+
+def _mission_lines(mission: Any, prefix: str) -> list[tuple[str, bool | None]]:
+    """A batch's mission outcome by class (``montecarlo.results.mission_outcomes``): a
+    line per class with runs in it (failing when the class counts), or one passing line."""
+    if not isinstance(mission, Mapping) or not isinstance(mission.get("by_class"), list):
+        return []
+    rows = [c for c in mission["by_class"] if c.get("runs")]
+    if not rows:
+        return [(f"{prefix}mission: no run of {mission.get('runs')} in any failure class", True)]
+    return [(f"{prefix}mission {c['label']}: {c['runs']} of {mission.get('runs')} runs (runs {c['run_list']})"
+             + ("" if c["counted"] else "; not counted as a failure"), False if c["counted"] else None) for c in rows]
 
 
 def _verdict_html(lines: list[tuple[str, bool | None]]) -> str:

@@ -159,39 +159,43 @@ def test_speed_schedule_needs_the_speed_column(tmp_path):
 
 
 def test_insertion_statistics_and_reserve():
-    """The accuracy band and the reserve by order statistics, against hand counts: 1000
-    runs with remaining propellant 1 … 1000 kg (the 0.135 percentile of 1 … 1000 is at
-    rank 0.00135 × 999 = 1.34865 of the sorted values, 2.34865 kg), nominal 800 kg; then one of
-    them out of propellant (fewer than 0.135 % of 1000 = 1.35 runs: still covered) and
-    then two (more: not covered)."""
+    """The accuracy band, and the reserve by order statistic against hand counts: 5000 runs
+    with usable propellant 1 … 5000 kg, nominal 4000 kg. At 99.865 % and 90 % the order
+    statistic is k = 4 (P(Binomial(5000, 0.00135) ≥ 4) = 0.904, ≥ 5: 0.803), so R_(4) =
+    4 kg; the total remaining (usable + unusable 900 kg) is never the reserve. Then
+    three runs out of propellant (ranked lowest: R_(4) is still a run that cut off), then
+    four (R_(4) is one of them: not covered); and 500 runs: too few."""
     from savant_cli.montecarlo.insertion import DEPLETED, insertion_statistics
 
-    n = 1000
+    n = 5000
     runs = np.arange(n)
-    remaining = np.arange(1.0, n + 1.0)
-    remaining[0] = 800.0  # the nominal
-    remaining[799] = 1.0  # (the value the nominal displaced)
+    usable = np.arange(1.0, n + 1.0)
+    usable[0], usable[3999] = 4000.0, 1.0  # the nominal, and the value it displaced
     perigee = np.linspace(-1.0, 1.0, n)
-    keys = ["propellant_remaining_kg", "insertion_perigee_error_km"]
-    table = np.column_stack([remaining, perigee])
+    keys = ["usable_propellant_remaining_kg", "unusable_propellant_kg", "propellant_remaining_kg",
+            "insertion_perigee_error_km"]
+    table = np.column_stack([usable, np.full(n, 900.0), usable + 900.0, perigee])
     msgs = ["cutoff: PEG time to go elapsed"] * n
     msgs[5] = "saturated: 1.2 s on the upper stage gimbal stop (more than …; cutoff: PEG time to go elapsed)"
-    ins = insertion_statistics(runs, msgs, keys, table)
+    ins = insertion_statistics(runs, msgs, keys, table, 0.99865, 0.9)
     assert ins["runs_cut_off_on_guidance"] == n
     row = ins["accuracy"][0]
     assert row["variable"] == "insertion_perigee_error_km"
     assert row["p99.865"] == pytest.approx(np.percentile(perigee, 99.865))
     assert row["half_spread"] == pytest.approx(0.5 * (np.percentile(perigee, 99.865) - np.percentile(perigee, 0.135)))
     r = ins["reserve"]
-    assert r["remaining_p0.135_kg"] == pytest.approx(2.34865)
-    assert r["flight_performance_reserve_kg"] == pytest.approx(800.0 - 2.34865)
-    assert r["covered"]
-    msgs[10] = DEPLETED
-    ins = insertion_statistics(runs, msgs, keys, table)
-    assert ins["runs_depleted"] == 1 and ins["reserve"]["covered"]
-    # the run that ran out ranks lowest: rank 0.00135 × 999 = 1.34865 is now 0.34865 of the
-    # way from the smallest remaining (1 kg) to the next (2 kg)
-    assert ins["reserve"]["remaining_p0.135_kg"] == pytest.approx(1.0 + 0.34865 * (2.0 - 1.0))
-    msgs[20] = DEPLETED
-    ins = insertion_statistics(runs, msgs, keys, table)
-    assert ins["reserve"]["flight_performance_reserve_kg"] is None and not ins["reserve"]["covered"]
+    lowest = np.sort(usable)
+    assert r["order_statistic"] == 4 and r["remaining_at_order_statistic_kg"] == lowest[3] == 4.0
+    assert r["flight_performance_reserve_kg"] == pytest.approx(3996.0) and r["covered"]
+    assert r["propellant"] == "usable" and r["unusable_nominal_kg"] == 900.0
+    msgs[10:13] = [DEPLETED] * 3
+    r = insertion_statistics(runs, msgs, keys, table, 0.99865, 0.9)["reserve"]
+    assert r["runs_depleted"] == 3 and r["covered"]
+    # three ran out and rank lowest: the 4th smallest is now the smallest run that cut off
+    assert r["remaining_at_order_statistic_kg"] == np.sort(np.delete(usable, [10, 11, 12]))[0]
+    msgs[13] = DEPLETED
+    r = insertion_statistics(runs, msgs, keys, table, 0.99865, 0.9)["reserve"]
+    assert r["flight_performance_reserve_kg"] is None and not r["covered"] and r["order_statistic_run"] in range(10, 14)
+    r = insertion_statistics(runs[:500], ["cutoff: PEG time to go elapsed"] * 500, keys, table[:500], 0.99865,
+                             0.9)["reserve"]
+    assert r["order_statistic"] is None and r["flight_performance_reserve_kg"] is None and r["runs_needed"] == 1705

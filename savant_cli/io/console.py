@@ -28,7 +28,7 @@ UNIT_SUFFIXES: tuple[tuple[str, str, str], ...] = (
 )
 
 #: Keys shown on the status line instead of in the table.
-_STATUS_KEYS = ("status", "message")
+_STATUS_KEYS = ("status", "message", "mission_verdict", "mission_class_mask")
 
 
 def split_unit(key: str) -> tuple[str, str, str | None]:
@@ -127,6 +127,10 @@ def print_run_summary(record_summary: Mapping[str, Any], status: str, message: s
     loads = loads_line(record_summary)
     if loads is not None:
         console.print(loads[0], style="red" if loads[1] else None, highlight=False, soft_wrap=True)
+    verdict = record_summary.get("mission_verdict")
+    if verdict:
+        console.print(verdict, style="bold green" if record_summary.get("mission_success") == 1 else "bold red",
+                      markup=False, highlight=False, soft_wrap=True)
 
 
 def loads_line(summary: Mapping[str, Any]) -> tuple[str, bool] | None:

@@ -21,6 +21,10 @@ STATUSES = ("complete", "limit_cycle", "saturated", "diverged", "guidance_failed
 #: The statuses of a run that flew to its end: ``complete`` is healthy, ``limit_cycle``
 #: and ``saturated`` are not (``savant_cli/sim/health.py``).
 FLOWN = ("complete", "limit_cycle", "saturated")
+#: A run's mission failure classes, most severe first (``savant_cli/sim/mission.py``
+#: holds their rules; the requirement set names those counted as failures).
+FAILURE_CLASSES = ("loss_of_control", "guidance_failure", "propellant_depletion", "time_limit",
+                   "insertion_tolerance", "structural_allowable", "unhealthy_flight", "run_error")
 
 
 @dataclass(frozen=True)

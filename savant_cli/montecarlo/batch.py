@@ -29,15 +29,13 @@ import numpy as np
 from savant_cli.config import LinearStudyConfig, SavantConfig
 from savant_cli.errors import ConfigError
 from savant_cli.linear.requirements import AXIS_NAMES, CHECK_ARRAY_COLUMNS, checks_array, mode_code
-from savant_cli.models.peg import insertion_target
 from savant_cli.montecarlo.spec import DispersionSet
 from savant_cli.montecarlo.targets import apply_samples, build_dispersed
 from savant_cli.processes import process_context
 from savant_cli.sim.build import SimModel
 from savant_cli.sim.engine import EVENT_NAMES
 from savant_cli.sim.run import simulate, signals
-from savant_cli.sim.health import assess
-from savant_cli.sim.summary import summarize
+from savant_cli.sim.run_summary import run_summary
 
 #: summary keys that vary from machine to machine, kept out of the run tables
 WALL_KEYS = ("sim_wall_time_s", "realtime_factor", "study_wall_time_s")
@@ -165,9 +163,7 @@ def fly_run(case: Case, run: int, keep: bool = False):
         result = simulate(model, progress=False, snapshot_steps=steps)
         lap(1)
         sig = signals(result, model)
-        health = assess(result, sig, model, case.cfg.sim.health)
-        summ = {**summarize(result, sig, target=insertion_target(applied.cfg.guidance),
-                                  qalpha_limit=applied.vehicle.qalpha_limit_Pa_deg), **health}
+        summ = run_summary(result, sig, model, applied.cfg, applied.vehicle.qalpha_limit_Pa_deg)
         keys = [k for k, v in summ.items() if isinstance(v, (int, float)) and not isinstance(v, bool)
                 and k not in WALL_KEYS]
         lap(2)

@@ -9,6 +9,11 @@ computes it. Examples: 2000 runs, 2 failures, 90 % → 99.734 %; 0 failures → 
 
 The runs a target ``p`` needs at ``C`` (allowing as many failures as the batch had) is the
 smallest ``n`` whose bound reaches ``p``; e.g. 852 failure-free runs for 99.73 % at 90 %.
+
+The same binomial argument bounds a quantile by an order statistic
+(:func:`lower_quantile_rank`): the flight-performance reserve
+(``montecarlo/insertion.py``) is read at the order statistic that lies at or below the
+0.135 % quantile of the usable propellant with the confidence of the success line.
 """
 
 from __future__ import annotations
@@ -16,7 +21,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from scipy.stats import binomtest
+import numpy as np
+from scipy.stats import binom, binomtest
 
 
 def demonstrated(successes: int, runs: int, confidence: float) -> float:
@@ -47,12 +53,13 @@ def runs_needed(target: float, confidence: float, failures: int = 0) -> int:
 @dataclass
 class Reliability:
     """A batch's demonstrated success (the ``reliability`` block of the Monte Carlo
-    summary)."""
+    summary): a run succeeds when none of its mission failure classes
+    (``savant_cli/sim/mission.py``) is among ``failure_classes``."""
 
-    runs: int  # runs counted (flown to a verdict: every status but "interrupted")
+    runs: int  # runs counted (every run with a mission outcome: all but "interrupted")
     successes: int
     failures: int
-    success_statuses: tuple[str, ...]
+    failure_classes: tuple[str, ...]  # the classes counted as a failed mission
     confidence: float
     demonstrated_probability: float  # at ``confidence``
     target_probability: float
@@ -68,16 +75,39 @@ class Reliability:
                 f"{self.failures} failure{'s' if self.failures != 1 else ''})")
 
     def as_dict(self) -> dict[str, Any]:
-        return {**self.__dict__, "success_statuses": list(self.success_statuses), "line": self.line()}
+        return {**self.__dict__, "failure_classes": list(self.failure_classes), "line": self.line()}
 
 
-def reliability(statuses: list[str], success_statuses: tuple[str, ...], confidence: float,
+def reliability(successes: list[bool], failure_classes: tuple[str, ...], confidence: float,
                 target: float) -> Reliability:
-    """The :class:`Reliability` of runs with ``statuses`` (``"interrupted"`` runs not
-    counted), a run succeeding when its status is one of ``success_statuses``."""
-    counted = [s for s in statuses if s != "interrupted"]
-    ok = sum(s in success_statuses for s in counted)
-    p = demonstrated(ok, len(counted), confidence)
-    failures = len(counted) - ok
-    return Reliability(len(counted), ok, failures, tuple(success_statuses), confidence, p, target, p >= target,
-                       runs_needed(target, confidence, failures))
+    """The :class:`Reliability` of the counted runs (one entry each: whether the run
+    succeeded under ``failure_classes``)."""
+    ok = int(sum(bool(s) for s in successes))
+    n = len(successes)
+    p = demonstrated(ok, n, confidence)
+    return Reliability(n, ok, n - ok, tuple(failure_classes), confidence, p, target, p >= target,
+                       runs_needed(target, confidence, n - ok))
+
+
+def lower_quantile_rank(runs: int, probability: float, confidence: float) -> int | None:
+    """The order statistic that bounds a low tail from below at a confidence.
+
+    With ``runs`` independent samples sorted ascending, ``X_(k)`` (1-based) is at or below
+    the distribution's ``q = 1 − probability`` quantile with probability
+    ``P(Binomial(runs, q) ≥ k)`` (the number of samples below that quantile is binomial;
+    Hanson and Beard, NASA/TP-2010-216447, the method of the success line). Returns the
+    largest ``k`` for which that probability is at least ``confidence``, or None when even
+    the lowest sample does not reach it (too few runs: see :func:`runs_for_quantile`)."""
+    q = 1.0 - probability
+    k = np.arange(1, runs + 1)
+    ok = binom.sf(k - 1, runs, q) >= confidence
+    return int(k[ok].max()) if ok.any() else None
+
+
+def runs_for_quantile(probability: float, confidence: float) -> int:
+    """The fewest runs whose lowest sample bounds the ``1 − probability`` quantile at
+    ``confidence``: ``1 − probability^n ≥ confidence``, i.e. ``n ≥ ln(1 − C) / ln(p)``."""
+    n = int(np.ceil(np.log1p(-confidence) / np.log(probability)))
+    while 1.0 - probability ** n < confidence:  # guard the ceiling against round-off
+        n += 1
+    return n

@@ -25,7 +25,7 @@ from rich.table import Table
 from savant_cli.errors import ConfigError
 from savant_cli.io.atomic import atomic_path, write_json_atomic, write_text_atomic
 from savant_cli.io.console import print_verdict, split_unit
-from savant_cli.io.record import FLOWN
+from savant_cli.io.record import FAILURE_CLASSES, FLOWN
 from savant_cli.config import ReliabilitySpec, RequirementSet
 from savant_cli.linear.requirements import (CHECK_ARRAY_COLUMNS, CRITERIA, STAGES, mode_code, mode_name, verdict_line,
                                             verdicts_of_array)
@@ -33,6 +33,7 @@ from savant_cli.montecarlo.batch import AXIS_CODES, BAND_CODES, KIND_CODES, MARG
 from savant_cli.montecarlo.insertion import insertion_statistics, print_insertion
 from savant_cli.montecarlo.reliability import reliability
 from savant_cli.sim.engine import EVENT_NAMES
+from savant_cli.sim.mission import CLASS_LABELS, ERROR_STATUSES, class_mask, classes_of
 
 PERCENTILES = (0.135, 50.0, 99.865)  # the ±3σ-equivalent tails of a normal distribution
 N_MARGIN = 1 + len(MARGIN_ARRAY_COLUMNS)  # run, then the margin row
@@ -278,6 +279,54 @@ def loads_verdict(loads: dict[str, Any]) -> tuple[str, bool] | None:
     return text, n == 0
 
 
+def mission_outcomes(tb: Tables, counted: tuple[str, ...]) -> dict[str, Any]:
+    """The batch's mission outcome by class (``savant_cli/sim/mission.py``).
+
+    Each run's classes come from its ``mission_class_mask``; a run that was not flown to a
+    verdict (status ``failed`` or ``invalid``) is ``run_error``; an ``interrupted`` run
+    has no outcome and is left out. Returns ``counted_classes``, ``runs`` (with an
+    outcome), ``successes``, ``failures``, ``by_class`` (per class: runs in it, whether it
+    counts, the run list), ``failed_runs`` (``run``, ``classes``) and ``success`` (per
+    counted run, for the reliability)."""
+    col = tb.summary_keys.index("mission_class_mask") if "mission_class_mask" in tb.summary_keys else None
+    counted_mask = class_mask(counted)
+    masks: list[tuple[int, int]] = []  # (run, mask) of every run with an outcome
+    for i, (run, status) in enumerate(zip(tb.runs, tb.status)):
+        if status == "interrupted":
+            continue
+        if status in ERROR_STATUSES:
+            mask = class_mask(["run_error"])
+        else:
+            value = tb.summary[i, col] if col is not None else np.nan
+            mask = int(value) if np.isfinite(value) else class_mask(["run_error"])
+        masks.append((int(run), mask))
+    by_class = []
+    for c in FAILURE_CLASSES:
+        bit = class_mask([c])
+        in_class = [r for r, m in masks if m & bit]
+        by_class.append({"class": c, "label": CLASS_LABELS[c], "runs": len(in_class), "counted": c in counted,
+                         "run_list": ranges_text(in_class)})
+    success = [not (m & counted_mask) for _, m in masks]
+    failed = [{"run": r, "classes": ",".join(c for c in classes_of(m) if c in counted)}
+              for (r, m), ok in zip(masks, success) if not ok]
+    return {"counted_classes": list(counted), "runs": len(masks), "successes": int(sum(success)),
+            "failures": len(failed), "by_class": by_class, "failed_runs": failed, "success": success}
+
+
+def print_mission(console: Console, mission: dict[str, Any]) -> None:
+    """The mission outcome by class: one line per class with runs in it (red when it
+    counts as a failure), or one green line when no run falls in any class."""
+    rows = [c for c in mission["by_class"] if c["runs"]]
+    if not rows:
+        console.print(f"mission: no run of {mission['runs']} in any failure class", style="green", markup=False,
+                      highlight=False)
+        return
+    for c in rows:
+        console.print(f"mission {c['label']}: {c['runs']} of {mission['runs']} runs (runs {c['run_list']})"
+                      + ("" if c["counted"] else "; not counted as a failure"),
+                      style="red" if c["counted"] else None, markup=False, highlight=False, soft_wrap=True)
+
+
 def _csv(path: Path, rows: list[dict[str, Any]]) -> None:
     buf = io.StringIO()
     if rows:
@@ -313,9 +362,13 @@ def write_outputs(out_dir: Path, inv: Inventory, expected: list[int], dispersion
         for k, v in provenance.items():
             g.attrs[f"provenance_{k}"] = str(v)
         tb = _write_tables(g, inv, runs, history_names, history_time)
-        rel = reliability(list(tb.status), tuple(spec.success_statuses), spec.confidence, spec.target_probability)
+        counted = tuple(requirements.mission.failure_classes if requirements is not None else FAILURE_CLASSES)
+        mission = mission_outcomes(tb, counted)
+        g.attrs["mission"] = json.dumps({k: v for k, v in mission.items() if k != "success"})
+        rel = reliability(mission["success"], counted, spec.confidence, spec.target_probability)
         g.attrs["reliability"] = json.dumps(rel.as_dict())
-        insertion = insertion_statistics(tb.runs, tb.message, tb.summary_keys, tb.summary)
+        insertion = insertion_statistics(tb.runs, tb.message, tb.summary_keys, tb.summary, spec.reserve_probability,
+                                         spec.confidence)
         g.attrs["insertion"] = json.dumps(insertion)
         loads = load_extremes(tb)
         if loads:
@@ -364,7 +417,8 @@ def write_outputs(out_dir: Path, inv: Inventory, expected: list[int], dispersion
     if insertion["accuracy"]:
         _csv(out_dir / "insertion_accuracy.csv", insertion["accuracy"])
     summary = {"study": "montecarlo", "n_runs_expected": len(expected), "n_runs_present": len(runs),
-               "missing_runs": ranges_text(missing), "status_counts": counts, "reliability": rel.as_dict(),
+               "missing_runs": ranges_text(missing), "status_counts": counts,
+               "mission": {k: v for k, v in mission.items() if k != "success"}, "reliability": rel.as_dict(),
                "failures": failures,
                "statistics": stats, "dispersion_statistics": disp_stats, "margin_spread": spread,
                "insertion": insertion}
@@ -380,6 +434,7 @@ def write_outputs(out_dir: Path, inv: Inventory, expected: list[int], dispersion
         print_tables(console, stats, spread, counts, missing, verdict if tb.checks.size else None)
         print_insertion(console, insertion)
         print_loads(console, loads)
+        print_mission(console, mission)
         print_verdict(rel.line(), rel.target_met, console)
     return summary
 

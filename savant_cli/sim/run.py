@@ -29,6 +29,16 @@ STOP_MESSAGES = {
     E.STOP_TIME: "maximum simulation time reached",
 }
 DIVERGED = (E.DIVERGED_NONFINITE, E.DIVERGED_GROUND, E.DIVERGED_RATE)
+#: Why a run stopped, as a word (:attr:`SimResult.stop_reason`; the mission outcome reads it).
+STOP_REASONS = {
+    E.STOP_CUTOFF: "cutoff_energy",
+    E.STOP_GUIDANCE_CUTOFF: "cutoff_guidance",
+    E.STOP_DEPLETION: "depletion",
+    E.STOP_SEPARATION: "separation",
+    E.STOP_TIME: "time_limit",
+    E.GUIDANCE_FAILED: "guidance_failed",
+    **{code: "diverged" for code in DIVERGED},
+}
 
 
 @dataclass
@@ -47,6 +57,13 @@ class SimResult:
     t_final: float
     sim_wall_time_s: float  # wall time inside the compiled loop
     snapshots: dict = field(default_factory=dict)  # step → Snapshot, for linearization
+
+    @property
+    def stop_reason(self) -> str:
+        """Why the run stopped (:data:`STOP_REASONS`; ``"interrupted"`` by the user)."""
+        if self.status == "interrupted":
+            return "interrupted"
+        return STOP_REASONS.get(self.stop_code, f"code_{self.stop_code}")
 
 
 @dataclass(frozen=True)

@@ -21,13 +21,11 @@ from savant_cli.io.atomic import write_json_atomic
 from savant_cli.io.hdf5 import write_run
 from savant_cli.io.provenance import collect_provenance
 from savant_cli.io.record import FLOWN, RunRecord, Signal
-from savant_cli.models.peg import insertion_target
 from savant_cli.sim.build import rates
-from savant_cli.sim.health import assess
 from savant_cli.sim.engine import EVENT_NAMES
 from savant_cli.sim.run import SimResult, signals, simulate
 from savant_cli.sim.setup import Prepared, prepare
-from savant_cli.sim.summary import summarize
+from savant_cli.sim.run_summary import run_summary
 
 
 @dataclass
@@ -47,10 +45,8 @@ def fly(cfg: SavantConfig, progress: bool | None = None, snapshot_steps: tuple[i
     result = simulate(prep.model, progress=cfg.sim.progress if progress is None else progress,
                       chunk_s=cfg.sim.chunk_s, snapshot_steps=snapshot_steps)
     sig = signals(result, prep.model)
-    health = assess(result, sig, prep.model, cfg.sim.health)  # may turn "complete" into a verdict
-    summary = summarize(result, sig, target=insertion_target(cfg.guidance),
-                        qalpha_limit=prep.vehicle.qalpha_limit_Pa_deg)
-    return Flight(prep=prep, result=result, signals=sig, summary={**summary, **health})
+    summary = run_summary(result, sig, prep.model, cfg, prep.vehicle.qalpha_limit_Pa_deg)
+    return Flight(prep=prep, result=result, signals=sig, summary=summary)
 
 
 def control_steps(cfg: SavantConfig, times: list[float]) -> tuple[int, ...]:

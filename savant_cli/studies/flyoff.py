@@ -17,6 +17,7 @@ from __future__ import annotations
 import copy
 import csv
 import io
+import json
 from pathlib import Path
 
 import h5py
@@ -32,7 +33,7 @@ from savant_cli.io.console import print_verdict
 from savant_cli.io.record import FLOWN
 from savant_cli.io.hdf5 import write_study_file
 from savant_cli.io.provenance import collect_provenance
-from savant_cli.montecarlo.results import PERCENTILES
+from savant_cli.montecarlo.results import PERCENTILES, print_mission
 from savant_cli.montecarlo.targets import load_group_option
 from savant_cli.paths import hydra_search_dirs
 from savant_cli.studies.montecarlo import fly_batch
@@ -183,28 +184,35 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
         console.print(f"[bold red]a batch stopped[/]; run the same command with hydra.run.dir={out_dir} to resume")
         return 1
     tables = {name: _per_run(out_dir / name / "savant.h5") for name in cfgs}
-    verdicts, passed = {}, {}
+    verdicts, passed, missions = {}, {}, {}
     for name in cfgs:
         with h5py.File(out_dir / name / "savant.h5") as f:
             g = f["montecarlo"]
             if g["requirements/checks/run"].size:  # judged: the batch had linear times
                 verdicts[name] = str(g["requirements"].attrs["verdict"])
                 passed[name] = bool(g["requirements"].attrs["passed"])
+            missions[name] = {"reliability": json.loads(g.attrs["reliability"]),
+                              "mission": json.loads(g.attrs["mission"])}
     rows = compare(tables)
-    _write(out_dir, rows, tables, study, verdicts)
+    _write(out_dir, rows, tables, study, verdicts, missions)
     time_s, histories = _nominal_histories(out_dir, list(cfgs))
     write_study_file(out_dir / "savant.h5", "flyoff", OmegaConf.to_yaml(raw_cfg, resolve=True), collect_provenance(),
                      lambda f: write_group(f, rows, tables, time_s, histories))
     console.print(_table(rows, list(cfgs)))
     for name, line in verdicts.items():
         print_verdict(f"{name}: {line}", passed[name], console)
+    for name, m in missions.items():
+        console.print(f"{name}:", style="bold", highlight=False)
+        print_mission(console, m["mission"])
+        print_verdict(f"{name}: {m['reliability']['line']}", m["reliability"]["target_met"], console)
     if cfg.output.plots:
         draw(rows, tables, time_s, histories, out_dir / "plots")
     console.print(f"outputs: {out_dir}")
     return 0
 
 
-def _write(out_dir: Path, rows: list[dict], tables: dict, study: FlyoffStudyConfig, verdicts: dict[str, str]) -> None:
+def _write(out_dir: Path, rows: list[dict], tables: dict, study: FlyoffStudyConfig, verdicts: dict[str, str],
+           missions: dict[str, dict]) -> None:
     buf = io.StringIO()
     w = csv.DictWriter(buf, fieldnames=list(rows[0]), lineterminator="\n")
     w.writeheader()
@@ -217,7 +225,10 @@ def _write(out_dir: Path, rows: list[dict], tables: dict, study: FlyoffStudyConf
         "runs_complete": {c: int(t["healthy"].sum()) for c, t in tables.items()},
         "runs_flagged": {c: int((t["ok"] & ~t["healthy"]).sum()) for c, t in tables.items()},
         "runs_meeting_requirements": {c: _meeting(t) for c, t in tables.items()},
-        "requirements_verdict": verdicts})
+        "requirements_verdict": verdicts,
+        # per controller: its batch's mission outcome by class and demonstrated success
+        "mission": {c: m["mission"] for c, m in missions.items()},
+        "reliability": {c: m["reliability"] for c, m in missions.items()}})
 
 
 def _meeting(t: dict[str, np.ndarray]) -> str:

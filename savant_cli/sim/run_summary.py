@@ -1,0 +1,36 @@
+"""The whole summary of a flown run, one way for every study: the flight scalars
+(:mod:`savant_cli.sim.summary`), the flight health (:mod:`savant_cli.sim.health`, which
+may turn a ``complete`` status into an unhealthy one) and the mission outcome
+(:mod:`savant_cli.sim.mission`)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from savant_cli.config import SavantConfig
+from savant_cli.models.peg import insertion_target
+from savant_cli.sim import mission
+from savant_cli.sim.build import SimModel
+from savant_cli.sim.health import assess
+from savant_cli.sim.run import SimResult
+from savant_cli.sim.summary import summarize
+
+
+def tolerance_of(cfg: SavantConfig) -> mission.Tolerance:
+    """The insertion tolerances of a (validated) config (``guidance.target.tolerance``)."""
+    t = cfg.guidance.target.tolerance
+    return mission.Tolerance(float(t.perigee_km), float(t.apogee_km), float(t.inclination_deg))
+
+
+def run_summary(result: SimResult, sig: dict, model: SimModel, cfg: SavantConfig,
+                qalpha_limit: float | None) -> dict[str, Any]:
+    """Summary, health and mission keys of a flown run (``cfg``: the run's own, dispersed,
+    config; ``qalpha_limit``: its vehicle's q·α allowable, Pa·deg, or None). Sets
+    ``result.status``/``message`` for an unhealthy flight, as :func:`~savant_cli.sim.health.assess`."""
+    health = assess(result, sig, model, cfg.sim.health)
+    summary = {**summarize(result, sig, target=insertion_target(cfg.guidance), qalpha_limit=qalpha_limit), **health}
+    summary["stop_reason"] = result.stop_reason
+    outcome = mission.classify(summary, result.status, result.stop_reason, cfg.phase.stop_at == "cutoff",
+                               tolerance_of(cfg))
+    summary.update(mission.mission_keys(outcome, cfg.requirements.mission.failure_classes))
+    return summary
