@@ -137,6 +137,18 @@ class FlexRequirement:
 
 
 @dataclass
+class SeparationRequirement:
+    """The vehicle's state at first-stage separation (``requirements.separation``),
+    judged in every flight: the largest body-rate magnitude (deg/s), pitch/yaw
+    attitude-error magnitude (deg) and total q·α (Pa·deg) at the separation step; None:
+    not judged. A run outside falls in the mission class ``separation_state``."""
+
+    max_body_rate_deg_s: Optional[float] = None
+    max_attitude_error_deg: Optional[float] = None
+    max_qalpha_Pa_deg: Optional[float] = None
+
+
+@dataclass
 class MissionRequirement:
     """Which mission failure classes (``savant_cli/sim/mission.py``) count as a failed
     mission: a run succeeds when none of its classes is listed. All, by default."""
@@ -162,6 +174,7 @@ class RequirementSet:
     aero: AeroRequirement = field(default_factory=AeroRequirement)
     slosh: SloshRequirement = field(default_factory=SloshRequirement)
     flex: FlexRequirement = field(default_factory=FlexRequirement)
+    separation: SeparationRequirement = field(default_factory=SeparationRequirement)
     mission: MissionRequirement = field(default_factory=MissionRequirement)
 
     def flex_mode(self, stage: str, mode: str) -> FlexModeRequirement:
@@ -194,6 +207,10 @@ def check_requirements(r: RequirementSet) -> None:
             _one_of(f"{key}.stabilization", m.stabilization, STABILIZATIONS)
             _non_negative(f"{key}.gain_dB", m.gain_dB)
             _non_negative(f"{key}.phase_deg", m.phase_deg)
+    for name in ("max_body_rate_deg_s", "max_attitude_error_deg", "max_qalpha_Pa_deg"):
+        value = getattr(r.separation, name)
+        if value is not None:
+            _positive(f"requirements.separation.{name}", value)
     allowed = _failure_classes()
     for i, c in enumerate(r.mission.failure_classes):
         _one_of(f"requirements.mission.failure_classes[{i}]", c, allowed)

@@ -85,6 +85,40 @@ def test_structural_allowable(exceeded, expected):
                      "qalpha_limit_ratio": 1.01}) == expected
 
 
+@pytest.mark.parametrize("met, expected", [(1, ()), (None, ()), (0, ("separation_state",))])
+def test_separation_state(met, expected):
+    assert _classes({"separation_requirements_met": met, "separation_violations": "body rate 2.1 deg/s > 2"}) == expected
+
+
+@pytest.mark.parametrize("value, met", [(2.0, 1), (math.nextafter(2.0, 3.0), 0), (None, None)])
+def test_separation_requirement_edges(value, met):
+    """A quantity equal to its bound meets it, the next float above does not; no
+    separation, no verdict."""
+    from savant_cli.config import SeparationRequirement
+    from savant_cli.sim.run_summary import judge_separation
+
+    out = judge_separation({"separation_body_rate_deg_s": value, "separation_attitude_error_deg": 0.1 if value else None,
+                            "separation_qalpha_Pa_deg": 100.0 if value else None},
+                           SeparationRequirement(2.0, 5.0, 1e4))
+    assert out["separation_requirements_met"] == met
+    assert ("body rate" in out["separation_violations"]) is (met == 0)
+
+
+def test_separation_state_is_the_sample_at_the_separation_step():
+    from savant_cli.sim.summary import separation_state
+
+    t = np.arange(0.0, 10.0, 0.02)
+    w = np.zeros((t.size, 3))
+    w[:, 1] = np.radians(t)  # 1 deg/s per s
+    err = np.zeros((t.size, 3))
+    err[:, 1], err[:, 2] = np.radians(3.0), np.radians(4.0)
+    s = separation_state(t, w, err, 10.0 * t, 5.01)  # between samples: the one at 5.00 s
+    assert s["separation_body_rate_deg_s"] == pytest.approx(5.0)
+    assert s["separation_attitude_error_deg"] == pytest.approx(5.0)  # 3-4-5
+    assert s["separation_qalpha_Pa_deg"] == pytest.approx(50.0)
+    assert separation_state(t, w, err, t, None) == dict.fromkeys(s)
+
+
 @pytest.mark.parametrize("flags, unhealthy", [("limit_cycle", True), ("saturated", True), ("slow_divergence", True),
                                               ("limit_cycle,saturated", True), ("", False),
                                               ("loss_of_control", False)])
@@ -142,6 +176,7 @@ def test_batch_counts_by_class_with_the_runs_listed():
     ("requirements.mission.failure_classes=[loss_of_control,crash]", "requirements.mission.failure_classes[1]"),
     ("requirements.mission.failure_classes=[time_limit,time_limit]", "requirements.mission.failure_classes"),
     ("guidance.target.tolerance.perigee_km=0", "guidance.target.tolerance.perigee_km"),
+    ("requirements.separation.max_body_rate_deg_s=-1", "requirements.separation.max_body_rate_deg_s"),
     ("guidance.target.tolerance.inclination_deg=-0.1", "guidance.target.tolerance.inclination_deg"),
     ("study.reliability.reserve_probability=1.0", "study.reliability.reserve_probability"),
 ])

@@ -24,7 +24,8 @@ FLOWN = ("complete", "limit_cycle", "saturated")
 #: A run's mission failure classes, most severe first (``savant_cli/sim/mission.py``
 #: holds their rules; the requirement set names those counted as failures).
 FAILURE_CLASSES = ("loss_of_control", "guidance_failure", "propellant_depletion", "time_limit",
-                   "insertion_tolerance", "structural_allowable", "unhealthy_flight", "run_error")
+                   "insertion_tolerance", "structural_allowable", "separation_state", "unhealthy_flight",
+                   "run_error")
 
 
 @dataclass(frozen=True)

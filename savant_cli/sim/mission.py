@@ -21,6 +21,9 @@ decided from stored numbers by a written rule (docs/outputs.md, "Mission outcome
     the tolerance is inside it). Judged only for a phase that ends at cutoff.
 ``structural_allowable``
     The total q·α exceeded the vehicle's allowable (``qalpha_limit_exceeded``).
+``separation_state``
+    At first-stage separation the body rate, attitude error or q·α was above its bound in
+    ``requirements.separation`` (``separation_requirements_met`` = 0).
 ``unhealthy_flight``
     Flight health flagged a limit cycle, a slow divergence, or time on an actuator limit
     beyond ``sim.health.max_saturation_s`` (``health_flags``).
@@ -50,7 +53,8 @@ from savant_cli.io.record import FAILURE_CLASSES
 CLASS_LABELS = {"loss_of_control": "loss of control", "guidance_failure": "guidance failure",
                 "propellant_depletion": "propellant depletion", "time_limit": "time limit",
                 "insertion_tolerance": "insertion outside tolerance",
-                "structural_allowable": "structural allowable exceeded", "unhealthy_flight": "unhealthy flight",
+                "structural_allowable": "structural allowable exceeded",
+                "separation_state": "separation state outside its requirements", "unhealthy_flight": "unhealthy flight",
                 "run_error": "run error"}
 #: Health flags (``sim/health.py``) that make a flight unhealthy.
 UNHEALTHY_FLAGS = ("limit_cycle", "slow_divergence", "saturated")
@@ -160,6 +164,8 @@ def classify(summary: Mapping[str, Any], status: str, stop_reason: str, judge_in
         reasons["structural_allowable"] = (f"q·α {_num(summary, 'max_qalpha_Pa_deg', ',.0f')} Pa·deg = "
                                            f"{_num(summary, 'qalpha_limit_ratio', '.3f')} × the allowable, "
                                            f"{_num(summary, 'time_above_qalpha_limit_s', '.2f')} s above it")
+    if summary.get("separation_requirements_met") == 0:
+        reasons["separation_state"] = str(summary.get("separation_violations") or "outside requirements.separation")
     flags = [f for f in str(summary.get("health_flags") or "").split(",") if f in UNHEALTHY_FLAGS]
     if flags:
         reasons["unhealthy_flight"] = "; ".join(_health_reason(summary, f) for f in flags)

@@ -22,6 +22,23 @@ def tolerance_of(cfg: SavantConfig) -> mission.Tolerance:
     return mission.Tolerance(float(t.perigee_km), float(t.apogee_km), float(t.inclination_deg))
 
 
+def judge_separation(summary: dict[str, Any], req) -> dict[str, Any]:
+    """``separation_requirements_met`` (1, 0, or None: no separation or nothing required)
+    and ``separation_violations`` (each quantity above its bound, with both numbers) of a
+    summary with :data:`~savant_cli.sim.summary.SEPARATION_KEYS`, against
+    ``requirements.separation`` (:class:`~savant_cli.config.SeparationRequirement`)."""
+    bounds = (("separation_body_rate_deg_s", req.max_body_rate_deg_s, "body rate", "deg/s"),
+              ("separation_attitude_error_deg", req.max_attitude_error_deg, "attitude error", "deg"),
+              ("separation_qalpha_Pa_deg", req.max_qalpha_Pa_deg, "q·α", "Pa·deg"))
+    judged = [(key, bound, name, unit) for key, bound, name, unit in bounds
+              if bound is not None and summary.get(key) is not None]
+    if not judged:
+        return {"separation_requirements_met": None, "separation_violations": ""}
+    bad = [f"{name} {summary[key]:.4g} {unit} > {bound:g}" for key, bound, name, unit in judged
+           if not summary[key] <= bound]
+    return {"separation_requirements_met": int(not bad), "separation_violations": "; ".join(bad)}
+
+
 def run_summary(result: SimResult, sig: dict, model: SimModel, cfg: SavantConfig,
                 qalpha_limit: float | None) -> dict[str, Any]:
     """Summary, health and mission keys of a flown run (``cfg``: the run's own, dispersed,
@@ -29,6 +46,7 @@ def run_summary(result: SimResult, sig: dict, model: SimModel, cfg: SavantConfig
     ``result.status``/``message`` for an unhealthy flight, as :func:`~savant_cli.sim.health.assess`."""
     health = assess(result, sig, model, cfg.sim.health)
     summary = {**summarize(result, sig, target=insertion_target(cfg.guidance), qalpha_limit=qalpha_limit), **health}
+    summary.update(judge_separation(summary, cfg.requirements.separation))
     summary["stop_reason"] = result.stop_reason
     outcome = mission.classify(summary, result.status, result.stop_reason, cfg.phase.stop_at == "cutoff",
                                tolerance_of(cfg))

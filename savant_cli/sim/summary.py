@@ -122,6 +122,24 @@ def load_indicators(t: np.ndarray, qbar: np.ndarray, alpha: np.ndarray, beta: np
     return out
 
 
+#: the keys of :func:`separation_state`
+SEPARATION_KEYS = ("separation_body_rate_deg_s", "separation_attitude_error_deg", "separation_qalpha_Pa_deg")
+
+
+def separation_state(t: np.ndarray, body_rate: np.ndarray, attitude_error: np.ndarray, qalpha_total: np.ndarray,
+                     t_sep: float | None) -> dict[str, float | None]:
+    """The vehicle's state at first-stage separation: the logged sample at the separation
+    step (the last one at or before ``t_sep``, s): body-rate magnitude |ω| (deg/s, body
+    axes, all three), pitch/yaw attitude-error magnitude (deg) and total q·α (Pa·deg).
+    None without a separation."""
+    if t_sep is None or t.size == 0 or t_sep < t[0]:
+        return dict.fromkeys(SEPARATION_KEYS)
+    i = int(np.searchsorted(t, t_sep, side="right")) - 1
+    return {"separation_body_rate_deg_s": float(np.degrees(np.linalg.norm(body_rate[i]))),
+            "separation_attitude_error_deg": float(np.degrees(np.linalg.norm(attitude_error[i, 1:3]))),
+            "separation_qalpha_Pa_deg": float(qalpha_total[i])}
+
+
 def summarize(result: SimResult, sig: dict[str, Signal], study_wall_s: float | None = None,
               target=None, qalpha_limit: float | None = None) -> dict:
     """Summary scalars of a run (SI units named in the keys); ``target`` (an
@@ -173,6 +191,8 @@ def summarize(result: SimResult, sig: dict[str, Signal], study_wall_s: float | N
         "realtime_factor": float(result.t_final / result.sim_wall_time_s) if result.sim_wall_time_s > 0 else None,
     })
     out.update(load_indicators(t, qbar, sig["alpha"].data, sig["beta"].data, qalpha_total, qalpha_limit))
+    out.update(separation_state(t, sig["body_rate"].data, sig["attitude_error"].data, qalpha_total,
+                                _event(result, E.EV_SEPARATION)))
     if target is not None:
         cut = not np.isnan(result.events[E.EV_CUTOFF])
         out.update(insertion_errors(r_f, v_f, target) if cut else dict.fromkeys(INSERTION_KEYS))
