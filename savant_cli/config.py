@@ -220,6 +220,21 @@ def check_requirements(r: RequirementSet) -> None:
 
 
 @dataclass
+class FrozenTimeSpec:
+    """``study.frozen_time``: the first-stage tail-off window, where frozen-time margins
+    are analysed and reported but not judged, and the time domain judges instead
+    (``linear/frozen_time.py``, ``timedomain/tailoff.py``; docs/requirements.md)."""
+
+    # period: crossover period >= time to separation; control_power: the control power
+    # falls within one period by the rigid gain requirement; []: no window, judge every point
+    criteria: list[str] = field(default_factory=lambda: ["period", "control_power"])
+    scan_s: float = 20.0  # s before the flown separation scanned for the criteria
+    step_s: float = 0.5  # s between scan points
+    excitation_deg: float = 0.5  # time-domain checks: doublet at the gimbal command, deg ...
+    excitation_s: float = 0.4  # ... and its duration, s
+
+
+@dataclass
 class LinearStudyConfig:
     """``study=linear``: frozen-time linearization and stability margins."""
 
@@ -227,9 +242,9 @@ class LinearStudyConfig:
     times: list[float] = field(default_factory=lambda: [55.0, 130.0, 180.0, 230.0])
     every: float = 0.0  # > 0: points every `every` s over the whole flight instead of `times`
     event_clearance_s: float = 0.1  # a time this close to an event is refused (skipped with `every`)
-    # points in the first stage's tail-off below this fraction of its peak thrust are
-    # analysed and reported but not judged against the requirement set (0: judge all)
-    tailoff_thrust_fraction: float = 0.12
+    # the first-stage tail-off window: points in it are analysed and reported but judged
+    # in the time domain (separation state with the required margins inserted)
+    frozen_time: FrozenTimeSpec = field(default_factory=FrozenTimeSpec)
     jacobian: str = "auto"  # auto: per-state steps; fixed: one user step
     jacobian_step: float = 1e-6  # the fixed step, as an attitude perturbation in rad
     charts: str = "auto"  # all | none | auto (per-point charts up to 20 points)
@@ -1424,15 +1439,28 @@ def _check_montecarlo(s: MonteCarloStudyConfig) -> None:
             raise ConfigError(f"study.reliability.{key}", value, "must be a probability strictly between 0 and 1")
 
 
+def check_frozen_time(f: FrozenTimeSpec, key: str) -> None:
+    """Criteria among ``period``, ``control_power`` (each once); positive scan span and
+    step, the step at most the span; a positive excitation."""
+    for i, c in enumerate(f.criteria):
+        _one_of(f"{key}.criteria[{i}]", c, ("period", "control_power"))
+    if len(set(f.criteria)) != len(f.criteria):
+        raise ConfigError(f"{key}.criteria", list(f.criteria), "names each criterion at most once")
+    _positive(f"{key}.scan_s", f.scan_s)
+    _positive(f"{key}.step_s", f.step_s)
+    if f.step_s > f.scan_s:
+        raise ConfigError(f"{key}.step_s", f.step_s, f"must be at most {key}.scan_s ({f.scan_s} s)")
+    _positive(f"{key}.excitation_deg", f.excitation_deg)
+    _positive(f"{key}.excitation_s", f.excitation_s)
+
+
 def _check_linear(s: LinearStudyConfig) -> None:
     if s.every < 0:
         raise ConfigError("study.every", s.every, "must be zero (use study.times) or a positive interval in s")
     if s.every == 0:
         _flight_times(s.times)
     _non_negative("study.event_clearance_s", s.event_clearance_s)
-    if not 0.0 <= s.tailoff_thrust_fraction < 1.0:
-        raise ConfigError("study.tailoff_thrust_fraction", s.tailoff_thrust_fraction,
-                          "must be a fraction of the first stage's peak thrust in [0, 1) (0: judge every point)")
+    check_frozen_time(s.frozen_time, "study.frozen_time")
     _one_of("study.jacobian", s.jacobian, ("auto", "fixed"))
     _positive("study.jacobian_step", s.jacobian_step)
     _one_of("study.charts", s.charts, ("auto", "all", "none"))

@@ -184,18 +184,59 @@ def test_bad_requirements_are_refused_naming_the_key(override, key):
     assert err.value.key == key
 
 
-def test_tailoff_window_closed_form():
-    """A thrust rising linearly to 100 at 5 s and falling linearly to 0 at 10 s crosses
-    12 % of its peak on the way down at 5 + 5·0.88 = 9.4 s; separation at 9.8 s ends the
-    window. No window without a separation, with fraction 0, or when the thrust never
-    falls below the fraction before separation."""
-    from savant_cli.studies.linear import tailoff_window
+def _scan(times, crossover_hz, mu):
+    from savant_cli.linear.frozen_time import ScanPoint
 
-    t = np.linspace(0.0, 12.0, 121)
-    thrust = np.where(t <= 5.0, 20.0 * t, np.maximum(100.0 - 20.0 * (t - 5.0), 0.0))
-    start, end = tailoff_window(t, thrust, 9.8, 0.12)
-    assert start == pytest.approx(9.4, abs=1e-12) and end == 9.8
-    assert tailoff_window(t, thrust, float("nan"), 0.12) is None
-    assert tailoff_window(t, thrust, None, 0.12) is None
-    assert tailoff_window(t, thrust, 9.8, 0.0) is None
-    assert tailoff_window(t, thrust, 8.0, 0.12) is None  # 40 % of peak at separation
+    return [ScanPoint(float(t), {"pitch": float(f), "yaw": float(f) * 1.5}, float(m))
+            for t, f, m in zip(times, crossover_hz, mu)]
+
+
+def test_period_criterion_closed_form():
+    """A crossover period growing linearly, T_c = 2 + 0.5 (t − 100) s, against the time
+    left to separation at 110 s: T_c = 110 − t at t = 105.33 s (2 + 0.5 u = 10 − u, u =
+    16/3). The window starts there (the margin is linear in t: interpolation is exact).
+    The yaw loop's higher crossover does not set it: the slower loop does."""
+    from savant_cli.linear.frozen_time import window
+
+    t = np.arange(100.0, 110.0, 0.5)
+    w = window(_scan(t, 1.0 / (2.0 + 0.5 * (t - 100.0)), np.full(t.size, 3.0)), 110.0, ("period",), 6.0)
+    assert w.starts["period"] == pytest.approx(100.0 + 16.0 / 3.0, abs=1e-9)
+    assert w.start_s == w.starts["period"] and w.bounds == (w.start_s, 110.0)
+    assert w.contains(105.4) and not w.contains(105.3) and not w.contains(110.0)
+    # a constant control power still falls to zero at separation: once a period reaches
+    # past separation the control-power criterion fails too, so it starts no later (within
+    # the scan step, where its margin jumps)
+    assert w.starts["period"] - 0.5 <= w.starts["control_power"] <= w.starts["period"]
+
+
+def test_control_power_criterion_closed_form():
+    """Control power falling linearly to zero at 120 s, μc = 3 (120 − t)/20 1/s², with a
+    constant 2 s crossover period: over one period it falls by 2/(120 − t), which reaches
+    the 6 dB limit 1 − 10^(−6/20) = 0.49881 at t = 120 − 2/0.49881 = 115.990 s (within
+    0.01 s: the fall is not linear in t between the 0.25 s scan points). The period
+    criterion starts where 2 s = 125 − t: 123 s (separation at 125 s)."""
+    from savant_cli.linear.frozen_time import gain_fall_limit, window
+
+    limit = gain_fall_limit(6.0)
+    assert limit == pytest.approx(1.0 - 10.0 ** (-0.3))
+    t = np.arange(100.0, 124.6, 0.25)
+    mu = 3.0 * np.maximum(120.0 - t, 0.0) / 20.0
+    w = window(_scan(t, np.full(t.size, 0.5), mu), 125.0, ("period", "control_power"), 6.0)
+    assert w.starts["control_power"] == pytest.approx(120.0 - 2.0 / limit, abs=0.01)
+    assert w.starts["period"] == pytest.approx(123.0, abs=1e-9)
+    assert w.start_s == w.starts["control_power"]  # the earlier of the two
+    only_period = window(_scan(t, np.full(t.size, 0.5), mu), 125.0, ("period",), 6.0)
+    assert only_period.start_s == pytest.approx(123.0)
+
+
+def test_no_crossover_fails_the_period_criterion_and_no_criterion_no_window():
+    from savant_cli.linear.frozen_time import failing_start, window
+
+    t = np.arange(100.0, 105.0, 1.0)
+    f = np.array([0.5, 0.5, 0.5, np.nan, np.nan])  # the crossover vanishes at 103 s
+    w = window(_scan(t, f, np.full(t.size, 3.0)), 200.0, ("period",), 6.0)
+    assert w.starts["period"] == 103.0  # no interpolation to an infinite margin
+    assert window(_scan(t, f, np.full(t.size, 3.0)), 200.0, (), 6.0).start_s is None
+    assert failing_start(t, np.array([-1.0, -1.0, 1.0, 1.0, 1.0])) is None  # passes at the end: no window
+    assert failing_start(t, np.array([-1.0, 1.0, 1.0, -1.0, -3.0])) == pytest.approx(102.5)  # the final stretch
+    assert failing_start(t, -np.ones(5)) == 100.0

@@ -58,6 +58,9 @@ class Case:
     history_time: np.ndarray
     linear_times: list[float]
     staging: Callable | None = None
+    # the nominal's first-stage tail-off window, as its lead before separation (s; None:
+    # no window): each run's window is its own separation less this
+    tailoff_lead_s: float | None = None
 
 
 #: The stages of one run whose wall time (s) each outcome keeps (``stage_wall_s``): drawing
@@ -114,16 +117,16 @@ def _decimate(sig: dict, names: list[str], grid: np.ndarray) -> np.ndarray:
 def _margins(case: Case, model: SimModel, result, sig: dict) -> tuple[np.ndarray, np.ndarray]:
     """The run's margin rows (:data:`MARGIN_ARRAY_COLUMNS`) at its linear times, and the
     requirement checks (``linear/requirements.py::CHECK_ARRAY_COLUMNS``) of those outside
-    the run's own first-stage tail-off window (``study=linear``'s default
-    ``tailoff_thrust_fraction``; docs/requirements.md): the window's margins are kept,
+    the run's own first-stage tail-off window: its separation less the nominal's window
+    lead (``Case.tailoff_lead_s``; docs/requirements.md): the window's margins are kept,
     its points not judged."""
-    from savant_cli.studies.linear import analyse, tailoff_window
+    from savant_cli.studies.linear import analyse
 
     rows, verdicts = [], []
     dt_fcs = model.rates.dt * model.rates.n_fcs
     lin_cfg = LinearStudyConfig(times=list(case.linear_times))
-    window = tailoff_window(sig["time"].data, sig["thrust"].data,
-                            float(result.events[EVENT_NAMES.index("separation")]), lin_cfg.tailoff_thrust_fraction)
+    t_sep = float(result.events[EVENT_NAMES.index("separation")])
+    window = (t_sep - case.tailoff_lead_s, t_sep) if case.tailoff_lead_s is not None and np.isfinite(t_sep) else None
     for k, snap in sorted(result.snapshots.items()):
         if any(abs(snap.t - te) < lin_cfg.event_clearance_s for te in result.events if te == te):
             continue  # on this run's event: no frozen-time point there

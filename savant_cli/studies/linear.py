@@ -5,8 +5,9 @@ points; at each, the plant is linearized (``linear/plant.py``), assembled with t
 discrete flight control (``linear/loops.py``) and analysed (``linear/margins.py``).
 Every margin and point is judged against the requirement set (``requirements`` group,
 ``linear/requirements.py``), except the points of the first stage's tail-off window
-(:func:`tailoff_window`, ``study.tailoff_thrust_fraction``): analysed and reported with
-what they would score, left out of the verdict (docs/requirements.md). Outputs: ``savant.h5`` (time history + ``linear`` group:
+(:func:`scan_tailoff`, ``study.frozen_time``: where frozen time fails on physical
+criteria): analysed and reported with what they would score; the time domain judges the
+window instead (``timedomain/tailoff.py``; docs/requirements.md). Outputs: ``savant.h5`` (time history + ``linear`` group:
 systems, margins, requirement checks, and the chart data of every charted point),
 ``linear.mat``, ``margins.csv`` (every crossing with its verdict), ``requirements.csv``
 (every check of every point), ``summary.json`` (``margins``, ``requirements`` and the
@@ -41,7 +42,10 @@ from savant_cli.linear.modes import ModePeak, aero_unstable, state_groups
 from savant_cli.linear.plant import linearize_plant
 from savant_cli.linear.requirements import PointVerdict, summary as requirement_summary
 from savant_cli.linear.store import write_checks_csv, write_linear_group, write_margins_csv, write_mat
+from savant_cli.linear.frozen_time import FrozenTimeWindow, scan_point, window as window_of
+from savant_cli.sim.run import simulate
 from savant_cli.studies import flight as flight_mod
+from savant_cli.timedomain.tailoff import checks as tailoff_checks, verdict_text as tailoff_verdict
 
 MAX_CHART_POINTS = 20
 
@@ -73,44 +77,37 @@ def check_times(times: list[float], t_final: float, events: dict[str, float], st
     return keep
 
 
-def tailoff_window(time_s: np.ndarray, thrust_n: np.ndarray, separation_s: float | None,
-                   fraction: float) -> tuple[float, float] | None:
-    """The first stage's tail-off window (start, separation) in s: from the first time
-    after the stage's thrust peak at which its thrust falls below ``fraction`` of that
-    peak (linear between samples), to separation.
-
-    Parameters
-    ----------
-    time_s, thrust_n : ndarray
-        The flight's time (s) and thrust magnitude (N) histories.
-    separation_s : float or None
-        Separation time (s); None or NaN: no separation in the flight, no window.
-    fraction : float
-        Of the first stage's peak thrust; 0: no window.
-    """
-    if fraction <= 0.0 or separation_s is None or not np.isfinite(separation_s):
-        return None
-    stage = time_s < separation_s
-    t, f = time_s[stage], thrust_n[stage]
-    if t.size < 2:
-        return None
-    peak = int(np.argmax(f))
-    level = fraction * f[peak]
-    below = np.flatnonzero(f[peak:] < level)
-    if below.size == 0:
-        return None
-    i = peak + int(below[0])  # f[i - 1] >= level > f[i]
-    start = float(np.interp(level, [f[i], f[i - 1]], [t[i], t[i - 1]]))
-    return start, float(separation_s)
+def scan_tailoff(model, separation_s: float | None, study: LinearStudyConfig, dt: float,
+                 requirements: RequirementSet) -> tuple[FrozenTimeWindow | None, list]:
+    """The first-stage tail-off window of a flight that separated at ``separation_s``
+    (``linear/frozen_time.py``): the flight flown again from its start to separation,
+    keeping its state every ``study.frozen_time.step_s`` over the last ``scan_s`` (the same
+    compiled model: the same trajectory), each state analysed, the criteria evaluated.
+    Returns the window (None without a separation or with no criterion configured) and
+    the scan's snapshots in time order."""
+    spec = study.frozen_time
+    if not spec.criteria or separation_s is None or not np.isfinite(separation_s):
+        return None, []
+    rt = model.rates
+    control = rt.dt * rt.n_fcs
+    first = max(separation_s - spec.scan_s, control)
+    times = np.arange(first, separation_s - study.event_clearance_s, spec.step_s)
+    steps = sorted({int(round(t / control)) * rt.n_fcs for t in times})
+    flown = simulate(model, progress=False, snapshot_steps=tuple(steps), t_stop=separation_s)
+    snaps = [flown.snapshots[k] for k in sorted(flown.snapshots) if flown.snapshots[k].t < separation_s]
+    points = []
+    for snap in snaps:
+        a = analyse(model, snap, study, dt, None)
+        points.append(scan_point(a.point, a.rows))
+    return window_of(points, separation_s, tuple(spec.criteria), requirements.rigid.gain_dB), snaps
 
 
-def not_judged_line(window: tuple[float, float], fraction: float, verdicts: list[PointVerdict]) -> str:
-    """The verdict line's note on the points of the tail-off window: when it runs, and
-    each point with what it would score against the requirements."""
+def not_judged_line(window: FrozenTimeWindow, verdicts: list[PointVerdict]) -> str:
+    """The verdict line's note on the points of the tail-off window: each with what it
+    would score against the requirements in the frequency domain."""
     pts = "; ".join(f"{v.time_s:.1f} s passes" if v.passed else f"would fail: {v.worst.text()}"
                     for v in verdicts) or "no point"
-    return (f"not judged, first-stage tail-off below {100 * fraction:g} % of peak thrust "
-            f"({window[0]:.2f}-{window[1]:.2f} s): {pts}")
+    return f"not judged in the frequency domain inside the window: {pts}"
 
 
 @dataclass
@@ -200,18 +197,31 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
                            "frequency_hz": r.frequency_hz, "band": r.band, "mode": r.mode,
                            "meets_requirement": r.meets_requirement} for r in rows]
     summary["margins_meeting_requirements"] = f"{sum(r.meets_requirement for r in rows)} of {len(rows)}"
-    # the tail-off window's points are analysed and reported, not judged (docs/requirements.md)
-    window = tailoff_window(sig["time"].data, sig["thrust"].data, events.get("separation"), study.tailoff_thrust_fraction)
-    in_window = [window is not None and window[0] <= v.time_s < window[1] for v in verdicts]
+    # the tail-off window's points are analysed and reported, judged in the time domain
+    # instead (docs/requirements.md, "The tail-off window")
+    window, scan_snaps = scan_tailoff(model, events.get("separation"), study, dt, req)
+    in_window = [window is not None and window.contains(v.time_s) for v in verdicts]
     judged = [v for v, w in zip(verdicts, in_window) if not w]
     aside = [v for v, w in zip(verdicts, in_window) if w]
     verdict = requirement_summary(judged, req)
-    if window is not None:
-        verdict["line"] += "; " + not_judged_line(window, study.tailoff_thrust_fraction, aside)
-        verdict["not_judged"] = requirement_summary(aside, req)["points"]
-    summary["tailoff_window_start_s"] = window[0] if window else None
-    summary["tailoff_window_end_s"] = window[1] if window else None
+    summary["tailoff_window"] = window.as_dict() if window is not None else None
+    summary["tailoff_window_start_s"] = window.start_s if window is not None else None
+    summary["tailoff_window_end_s"] = window.separation_s if window is not None and window.start_s is not None else None
     summary["points_not_judged"] = len(aside)
+    if window is not None and window.start_s is not None:
+        start_snap = max((sn for sn in scan_snaps if sn.t <= window.start_s), key=lambda sn: sn.t, default=scan_snaps[0])
+        checks = tailoff_checks(model, start_snap, window.separation_s, window.crossover_at_start(), req,
+                                study.frozen_time.excitation_deg, study.frozen_time.excitation_s)
+        clause, td_ok = tailoff_verdict(window.describe(), checks)
+        if verdict["passed"] and not td_ok:  # the head names the whole verdict
+            verdict["line"] = verdict["line"].replace(": PASS, ", ": FAIL, ", 1)
+        verdict["line"] += f" in the frequency domain before {window.start_s:.2f} s; {clause}"
+        if aside:
+            verdict["line"] += "; " + not_judged_line(window, aside)
+        verdict["not_judged"] = requirement_summary(aside, req)["points"]
+        verdict["passed"] = bool(verdict["passed"] and td_ok)
+        summary["tailoff_checks"] = [c.as_dict() for c in checks]
+        summary["tailoff_checks_met"] = td_ok
     summary["requirements_met"] = verdict["passed"]
     summary["requirements_verdict"] = verdict["line"]
     summary["requirements"] = verdict

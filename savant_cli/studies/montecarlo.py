@@ -67,8 +67,23 @@ def make_case(cfg: SavantConfig, search_dirs: list[Path] | None = None) -> tuple
     grid = np.arange(0.0, cfg.sim.max_time_s + 1e-9, 1.0 / study.histories.rate_hz)
     case = Case(cfg=cfg, vehicle=prep.vehicle, guidance=read_guidance(prep.command_file), dispersions=dset,
                 history_signals=list(study.histories.signals), history_time=grid,
-                linear_times=sorted(study.linear_times), staging=staging)
+                linear_times=sorted(study.linear_times), staging=staging,
+                tailoff_lead_s=_tailoff_lead(prep.model, cfg) if study.linear_times else None)
     return case, names
+
+
+def _tailoff_lead(model, cfg: SavantConfig) -> float | None:
+    """The nominal flight's first-stage tail-off window (``study=linear``'s default
+    criteria, ``linear/frozen_time.py``) as its lead before separation (s; None: no
+    window). A dispersed motor's tail-off scales with its burn rate (a few per cent), so
+    each run's window is its own separation less this lead."""
+    from savant_cli.config import LinearStudyConfig
+    from savant_cli.studies.linear import scan_tailoff
+
+    nominal = simulate(model, progress=False)
+    t_sep = float(nominal.events[E.EV_SEPARATION])
+    window, _ = scan_tailoff(model, t_sep, LinearStudyConfig(), model.rates.dt * model.rates.n_fcs, cfg.requirements)
+    return None if window is None or window.start_s is None else window.separation_s - window.start_s
 
 
 def dispersion_table(dset: DispersionSet) -> list[dict[str, Any]]:
