@@ -101,9 +101,9 @@ def _note(res: SearchResult, value: float, fd: float, f_fd: float, mode: str, wi
     s = res.search
     parts = []
     if res.unstable_at_zero:
-        parts.append("the unperturbed loop's response grows")
+        parts.append("the unperturbed loop's response is not stable")
     elif np.isnan(res.margin):
-        parts.append(f"no growth up to the search bound ({s.bound:g} {UNITS[s.kind]})")
+        parts.append(f"stable up to the search bound ({s.bound:g} {UNITS[s.kind]})")
     if s.kind == "delay" and np.isfinite(res.margin) and np.isfinite(f_fd):
         parts.append(f"= {360.0 * f_fd * res.margin / 1000.0:.1f} deg at {f_fd:.3g} Hz")
     if mode:
@@ -210,7 +210,7 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
             f"period, damping ratio {study.min_damping_ratio:g}): {len(found)} of {len(out_rows)} found within the "
             f"search bounds; "
             f"{len(differ)} differ from the frequency domain by more than {AGREE_DB:g} dB / {100 * AGREE_DELAY:g} %"
-            + (f"; the unperturbed response grows at {len(grows)}" if grows else ""))
+            + (f"; the unperturbed response is not stable at {len(grows)}" if grows else ""))
     summary["time_margins"] = out_rows
     summary["time_margins_verdict"] = line
     summary["study_wall_time_s"] = time.perf_counter() - t_start
@@ -245,7 +245,8 @@ def _table(rows: list[dict]) -> Table:
 
 
 #: Short console flags for the notes of ``time_margins.csv`` (the notes have the numbers).
-_FLAGS = (("differs by", "[red]differs[/red]"), ("no growth up to", "beyond bound"), ("response grows", "[red]grows at 0[/red]"),
+_FLAGS = (("differs by", "[red]differs[/red]"), ("stable up to", "beyond bound"),
+          ("response is not stable", "[red]not stable at 0[/red]"),
           ("stretched", "long window"), ("cut to", "window cut"), ("actuator on", "saturates"),
           ("scheduled gains", "gains vary"))
 

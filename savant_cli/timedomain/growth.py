@@ -23,8 +23,16 @@ The response is **stable** only when ρ ≤ ρ_max = exp(−2π ζ_min / √(1 �
 decay per period of a second-order mode of damping ratio ζ_min (``study.min_damping_ratio``,
 docs/design_studies.md). A constant-amplitude oscillation (ρ = 1, whatever its
 waveform or frequency, to within the envelope's sampling error, far below 1 − ρ_max)
-is therefore "not stable": at or beyond the margin. So is a diverged run. A response
-that dies below :data:`NOISE_FLOOR` of its largest value is stable.
+is therefore "not stable": at or beyond the margin. So is a diverged run.
+
+A response whose last segment has fallen to :data:`DEAD_FLOOR` (−60 dB) of its largest
+value or below has died out: stable. At the threshold damping a mode needs
+ln(1000)/(2π ζ_min) ≈ 110 periods to lose 60 dB, far more than any window holds, so only
+a response that decayed much faster than the threshold gets there; what is left is the
+small trajectory difference the doublet leaves between the two runs (not an
+oscillation of the loop), whose zero crossings would otherwise set a meaningless
+period. The limit this sets: a neutral mode excited to less than 1e-3 of the
+response's peak is not seen.
 """
 
 from __future__ import annotations
@@ -36,6 +44,7 @@ import numpy as np
 MIN_SEGMENTS = 3
 FIT_SEGMENTS = 6
 NOISE_FLOOR = 1e-9
+DEAD_FLOOR = 1e-3
 
 
 def decay_threshold(min_damping_ratio: float) -> float:
@@ -136,6 +145,9 @@ def assess(t: np.ndarray, y: np.ndarray, settle_s: float, min_damping_ratio: flo
     floor = NOISE_FLOOR * amp
     if np.all(a <= floor):
         return Growth(False, float("-inf"), f, amp, "the response died out", 0.0)
+    if a[-1] <= DEAD_FLOOR * amp:
+        return Growth(False, float("nan"), f, amp, f"the response died out: its last segment is "
+                      f"{a[-1] / amp:.1e} of its peak (at most {DEAD_FLOOR:g})")
     if a.size < 2:
         return Growth(True, float("nan"), f, amp, "too short a span to see the envelope decay")
     rate = float(np.polyfit(centres, np.log(np.maximum(a, floor)), 1)[0])

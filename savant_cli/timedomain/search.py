@@ -95,8 +95,8 @@ class Trial:
 class SearchResult:
     """A finished search.
 
-    ``margin`` is NaN when no change up to the bound grew (``unstable_at_zero``: the
-    unperturbed loop already grows). ``last_stable`` and ``first_unstable`` are the
+    ``margin`` is NaN when every change up to the bound was stable (``unstable_at_zero``: the
+    unperturbed loop is already not stable). ``last_stable`` and ``first_unstable`` are the
     responses ``(t s, gimbal deg)`` bracketing the margin."""
 
     search: Search
