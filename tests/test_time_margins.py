@@ -166,6 +166,30 @@ def test_detector_on_a_divergence_and_on_noise_free_decay():
     assert assess(t, np.sin(t), 1.0, ZETA, diverged=True).unstable
 
 
+@pytest.mark.parametrize("which", ["excited", "unexcited"])
+def test_a_saturated_oscillation_is_beyond_the_margin(monkeypatch, which):
+    """A trial whose response decays well (ζ = 0.02) but whose excited (or unexcited) run
+    rides the actuator limits longer than max_saturation_s after the settling time is
+    not stable: the search's margin lands where the saturation starts (7 dB here, the
+    trial responses built by hand in place of the flights)."""
+    from savant_cli.timedomain import search as S
+
+    t = np.arange(0.0, 20.0, 0.02)
+    decaying = np.exp(-0.02 * 2 * np.pi * t) * np.sin(2 * np.pi * t)  # x0.88 per period
+
+    def fake_response(model, snap, s, value):
+        sat = 2.0 if value >= 7.0 else 0.0
+        return t, decaying, False, (sat if which == "excited" else 0.0), (sat if which == "unexcited" else 0.0)
+
+    monkeypatch.setattr(S, "response", fake_response)
+    res = find_margin(None, None, Search(55.0, "pitch", "gain_high", 0, 0.0, 20.0, 20.0, 0.1, 8,
+                                         np.radians(0.5), 0.4, 2.0, ZETA, max_saturation_s=1.0))
+    assert res.margin == pytest.approx(7.0, abs=0.1)
+    bad = [tr for tr in res.trials if tr.growth.unstable]
+    assert bad and all(f"the {which} run rides the actuator limits" in tr.growth.reason for tr in bad)
+    assert all(tr.growth.decay_per_period < decay_threshold(ZETA) for tr in res.trials)  # the envelope: stable
+
+
 def test_perturbation_applies_gain_delay_and_doublet():
     """Feed a ramp command through apply() step by step: the output is K·c(t − τ) (linear
     between plant steps), plus +a then −a over the doublet, and the held command outside
