@@ -465,6 +465,7 @@ class TimeMarginsStudyConfig:
     excitation_deg: float = 0.5  # doublet amplitude at the gimbal command
     excitation_s: float = 0.4  # doublet duration
     settle_s: float = 2.0  # left out of the growth analysis after the window starts
+    min_damping_ratio: float = 0.01  # stable only when the envelope decays per period as a mode of this damping
     workers: int = 0  # processes; 0: all cores
     jacobian: str = "auto"  # of the frequency-domain side (as study=linear)
     jacobian_step: float = 1e-6
@@ -1378,6 +1379,10 @@ def _check_time_margins(s: TimeMarginsStudyConfig) -> None:
         raise ConfigError("study.settle_s", s.settle_s, f"must be shorter than study.window_s ({s.window_s} s)")
     if s.scan_points < 1:
         raise ConfigError("study.scan_points", s.scan_points, "must be a positive count")
+    if not 0.0 < s.min_damping_ratio < 1.0:
+        raise ConfigError("study.min_damping_ratio", s.min_damping_ratio,
+                          "must lie in (0, 1): the damping ratio whose decay per period a stable response must "
+                          "reach (0 would leave the verdict on a neutral oscillation to round-off)")
     if s.workers < 0:
         raise ConfigError("study.workers", s.workers, "must be 0 (all cores) or a positive process count")
     _one_of("study.jacobian", s.jacobian, ("auto", "fixed"))

@@ -33,7 +33,7 @@ from typing import Any
 
 from savant_cli.io.atomic import write_text_atomic
 from savant_cli.io.console import format_value, loads_line, split_unit
-from savant_cli.montecarlo.results import loads_verdict
+from savant_cli.montecarlo.results import loads_by_choice_lines, loads_verdict
 from savant_cli.result import Result, load
 
 REPORT_FILE = "report.html"
@@ -112,6 +112,7 @@ def verdicts(result: Result) -> list[tuple[str, bool | None]]:
     batch = loads_verdict(s["loads"]) if isinstance(s.get("loads"), Mapping) else None
     if batch is not None:
         out.append((f"loads: {batch[0]}", batch[1]))
+        out += loads_by_choice_lines(s["loads"])
     single = loads_line(s)
     if single is not None:
         out.append((single[0], not single[1]))

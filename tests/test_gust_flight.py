@@ -84,7 +84,9 @@ def test_design_gust_flies_to_orbit_and_shows_the_gust(tmp_path):
     calm = fly(validate(compose_config(["winds=design_gust", "winds.gust.enabled=false", "sim.progress=false"])),
                progress=False).signals
     assert np.array_equal(calm["time"].data, t)
-    in_gust = (h > 10880.0) & (h < 11120.0)
+    g = validate(compose_config(["winds=design_gust"])).winds.gust
+    lo, hi = g.onset_altitude_m, g.onset_altitude_m + g.length_m
+    in_gust = (h > lo + 0.25 * g.length_m) & (h < hi - 0.25 * g.length_m)  # the gust above half its peak
     assert in_gust.sum() >= 10
     d_alpha = np.degrees(np.abs(alpha - calm["alpha"].data))
     d_gimbal = np.degrees(np.abs(gimbal - calm["gimbal_angle"].data)).max(axis=1)
@@ -94,8 +96,8 @@ def test_design_gust_flies_to_orbit_and_shows_the_gust(tmp_path):
     assert d_gimbal.max() > 0.05
     assert (qa - qa0)[in_gust].max() > 20000.0
     gust_wind = np.linalg.norm(wind - calm["wind_ned"].data, axis=1)
-    assert gust_wind.max() == pytest.approx(9.0, abs=0.2) and gust_wind[h < 10870.0].max() == 0.0
-    after = (h > 11130.0) & (t < 120.0)  # the profile along a slightly different path
+    assert gust_wind.max() == pytest.approx(9.0, abs=0.2) and gust_wind[h < lo - 10.0].max() == 0.0
+    after = (h > hi + 10.0) & (t < 120.0)  # the profile along a slightly different path
     assert gust_wind[after].max() < 0.1
 
 
@@ -139,6 +141,89 @@ def test_dispersed_gusts_report_load_extremes_with_run_numbers(tmp_path):
     text = console.export_text()
     assert f"max q-alpha total {qa.max():,.0f} Pa deg (run {worst})" in text
     assert f"{int(above.sum())} of 5 runs above the q-alpha limit 160,000 Pa deg" in text
+    # the swept gust length: the worst q-alpha of each drawn length, with its run
+    lengths = draws["gust_length"]
+    by = loads["by_choice"]
+    assert [r["value"] for r in by] == sorted(set(lengths[runs > 0].tolist()))
+    for r in by:
+        at = (runs > 0) & (lengths == r["value"])
+        assert r["dispersion"] == "gust_length" and r["units"] == "m" and r["runs"] == int(at.sum())
+        assert r["max_qalpha_Pa_deg"] == float(qa[at].max()) and r["max_run"] == int(runs[at][np.argmax(qa[at])])
+        assert r["margin_Pa_deg"] == pytest.approx(160000.0 - r["max_qalpha_Pa_deg"])
+    assert sum(r["worst"] for r in by) == 1
+    assert "max q-alpha total by gust_length (Pa deg): " in text
+
+
+def _tables(values, qa, runs=None, status=None):
+    from savant_cli.montecarlo.results import Tables
+
+    n = len(qa)
+    runs = np.arange(n) if runs is None else np.asarray(runs)
+    keys = ["max_qalpha_Pa_deg", "qalpha_limit_Pa_deg"]
+    return Tables(runs, status or ["complete"] * n, [""] * n, np.zeros(n), np.zeros(n), np.asarray(values, float),
+                  keys, np.column_stack([qa, np.full(n, 160000.0)]), np.zeros((n, 1)), np.zeros((0, 9)), [])
+
+
+def test_loads_by_choice_takes_the_worst_run_of_each_value():
+    """Hand-built tables: per value of a numeric choice the largest q-alpha and its run,
+    the ratio and margin to the 160,000 Pa deg limit and the runs above it; the nominal
+    run 0 (NaN draw), failed runs without results and a group choice (option indices)
+    stay out."""
+    from savant_cli.montecarlo.results import loads_by_choice, loads_by_choice_lines
+
+    disp = [{"name": "gust_length", "dist": "choice", "units": "m"},
+            {"name": "wind_profile", "dist": "choice", "units": "", "choices": ["a", "b"]},
+            {"name": "gust_amplitude", "dist": "normal", "units": "m/s"}]
+    values = [[np.nan, np.nan, 0.0], [60, 0, 9], [60, 1, 9], [1086, 0, 9], [1086, 1, 9], [371, 0, 9], [60, 0, 9]]
+    qa = [500000.0, 150000.0, 170000.0, 210000.0, 120000.0, 90000.0, 900000.0]
+    tb = _tables(values, qa, status=["complete"] * 6 + ["invalid"])
+    rows = loads_by_choice(tb, disp, 160000.0)
+    assert [(r["dispersion"], r["value"], r["runs"], r["max_qalpha_Pa_deg"], r["max_run"], r["runs_above_limit"])
+            for r in rows] == [("gust_length", 60.0, 2, 170000.0, 2, 1), ("gust_length", 371.0, 1, 90000.0, 5, 0),
+                               ("gust_length", 1086.0, 2, 210000.0, 3, 1)]
+    assert [r["worst"] for r in rows] == [False, False, True]
+    assert rows[2]["ratio"] == pytest.approx(210000.0 / 160000.0) and rows[2]["margin_Pa_deg"] == -50000.0
+    (line, ok), = loads_by_choice_lines({"by_choice": rows})
+    assert ok is False and line.startswith("max q-alpha total by gust_length (Pa deg): 60 m: 170,000 (run 2, 1.06 ")
+    assert line.endswith("worst 1086 m, margin -50,000 Pa deg to the limit")
+    assert loads_by_choice(tb, disp, None)[0]["ratio"] is None
+
+
+def test_swept_gust_lengths_are_tuned_to_the_vehicles_modes_at_the_reference_altitude():
+    """conf/dispersions/ares_i_gust.yaml's gust lengths hold the two tuned ones: the
+    half-wavelength crossed at the climb rate at the 11 km reference altitude lasts half
+    the period (d = ḣ/f) of the first bending mode (the flown modal set's, at 1.00 Hz)
+    and of the closed-loop rigid-body mode (the complex closed-loop pole nearest the
+    pitch gain crossover of the linear model there); within 3 %."""
+    import warnings
+
+    import control
+
+    from savant_cli.paths import shipped_config_dir
+    from savant_cli.studies import flight as flight_mod
+    from savant_cli.studies.linear import analyse
+
+    cfg = validate(compose_config(FIRST + ["study=linear", "winds=design_gust", "study.times=[56.8]"]))
+    lengths = validate(compose_config(["study=montecarlo", "dispersions=ares_i_gust"])).dispersions.items[
+        "gust_length"].values
+    steps = flight_mod.control_steps(cfg, [56.8])
+    f = flight_mod.fly(cfg, progress=False, snapshot_steps=steps)
+    t, h = f.signals["time"].data, f.signals["altitude"].data
+    hdot = np.interp(11000.0, h, np.gradient(h, t))
+    rt = f.prep.model.rates
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        pa = analyse(f.prep.model, f.result.snapshots[steps[0]], cfg.study, rt.dt * rt.n_fcs)
+    crossover = next(r.frequency_hz for r in pa.rows if r.axis == "pitch" and r.kind == "phase")
+    wn, zeta, poles = control.damp(pa.point.closed, doprint=False)
+    osc = [(w / (2 * np.pi)) for w, z, s in zip(wn, zeta, poles) if abs(s.imag) > 1e-9 and z < 1.0]
+    f_rigid = min(osc, key=lambda fr: abs(fr - crossover))
+    text = (shipped_config_dir() / "vehicle/ares_i/flex/first_stage_liftoff_modes.csv").read_text()
+    header, first = [line.split(",") for line in text.splitlines() if not line.startswith("#")][:2]
+    f_bend = float(first[header.index("frequency_hz")])  # mode 1 of the set flown to separation
+    for f_mode in (f_rigid, f_bend):
+        assert min(abs(d - hdot / f_mode) / (hdot / f_mode) for d in lengths) < 0.03, (f_mode, hdot)
+    assert {60.0, 300.0} <= set(lengths)  # the ends of the classical 60-300 m set
 
 
 @pytest.mark.slow

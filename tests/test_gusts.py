@@ -174,10 +174,39 @@ def test_design_gust_config_builds_its_parameters(compose_cfg):
     assert cfg.winds.gust.enabled and cfg.winds.shear.enabled
     p = prepare(cfg).model.p
     assert p[winds.P_DISCRETE] == 1.0 and p[winds.P_GUST_AMP] == 9.0 and p[winds.P_GUST_FRAME] == 1.0
-    assert p[winds.P_GUST_START] == cfg.winds.gust.onset_altitude_m and p[winds.P_GUST_LENGTH] == 240.0
-    assert p[winds.P_SHEAR_DV] == 15.0 and p[winds.P_SHEAR_COSINE] == 1.0
+    assert p[winds.P_GUST_START] == cfg.winds.gust.onset_altitude_m
+    assert p[winds.P_GUST_LENGTH] == cfg.winds.gust.length_m
+    assert p[winds.P_SHEAR_DV] == cfg.winds.shear.delta_mps and p[winds.P_SHEAR_COSINE] == 1.0
     for name in ("ksc_mean_annual", "ksc_strong_jet", "none"):  # the other profiles: switched off
         assert prepare(validate(compose_cfg([f"winds={name}"]))).model.p[winds.P_DISCRETE] == 0.0
+
+
+def test_design_wind_puts_the_95th_percentile_speed_at_the_reference_altitude(compose_cfg):
+    """The design wind's construction (docs/models.md, *Design wind*): the steady profile
+    plus the shear build-up below the 11 km reference altitude reach there the
+    95th-percentile scalar speed of the data sheet, 75 m/s (shared/data/
+    ares_i_public_data.md); the build-up starts at the profile 1 km below and the wind is
+    back on the profile 1 km above; the gust (9 m/s) peaks at the reference altitude."""
+    from savant_cli.sim.setup import prepare
+
+    cfg = validate(compose_cfg(["winds=design_gust"]))
+    model = prepare(cfg).model
+    p, tb = model.p, model.packed_tables
+
+    def speed(h: float, shear: bool = True) -> float:
+        n, e = winds.wind_ned(h, tb, p)
+        sv = winds.shear_speed(h, p) if shear else 0.0
+        return math.hypot(n + sv * p[winds.P_SHEAR_NORTH], e + sv * p[winds.P_SHEAR_EAST])
+
+    assert speed(11000.0) == pytest.approx(75.0, abs=0.05)
+    assert speed(10000.0) == speed(10000.0, shear=False) and speed(12000.0) == speed(12000.0, shear=False)
+    h = np.linspace(8000.0, 14000.0, 6001)
+    v = np.array([speed(x) for x in h])
+    # the envelope's peak at the reference altitude (the steady jet still rising above it moves it 20 m up)
+    assert abs(h[np.argmax(v)] - 11000.0) <= 50.0 and v.max() < 75.1
+    g = cfg.winds.gust
+    assert g.onset_altitude_m + g.length_m / 2 == 11000.0
+    assert winds.gust_speed(0.0, 11000.0, p) == pytest.approx(9.0, abs=1e-12)
 
 
 @pytest.mark.parametrize("override, key, words", [

@@ -227,11 +227,14 @@ LOAD_EXTREMES = (("max_qalpha_Pa_deg", "max q-alpha total", "Pa deg"),
                  ("time_above_qalpha_limit_s", "time above q-alpha limit", "s"))
 
 
-def load_extremes(tb: "Tables") -> dict[str, Any]:
+def load_extremes(tb: "Tables", dispersions: list[dict[str, Any]] | None = None) -> dict[str, Any]:
     """The batch's aerodynamic load extremes over the runs with results (``Tables.ok``):
     per indicator the largest value and its run; the q·α limit and the runs whose total
-    q·α exceeded it (``qalpha_limit_exceeded``), counted and listed. Empty when the runs
-    carry no load indicators (a batch recorded before them)."""
+    q·α exceeded it (``qalpha_limit_exceeded``), counted and listed; with the batch's
+    ``dispersions`` (rows of ``studies/montecarlo.py::dispersion_table``), the worst q·α
+    per value of each numeric ``choice`` dispersion (``by_choice``,
+    :func:`loads_by_choice`). Empty when the runs carry no load indicators (a batch
+    recorded before them)."""
     keys = tb.summary_keys
     if "max_qalpha_pitch_Pa_deg" not in keys:
         return {}
@@ -253,7 +256,47 @@ def load_extremes(tb: "Tables") -> dict[str, Any]:
         above = [int(r) for r, e in zip(runs, exc) if e == 1.0]
         out["runs_above_qalpha_limit"] = len(above)
         out["runs_above_qalpha_limit_list"] = ranges_text(above)
+    by_choice = loads_by_choice(tb, dispersions or [], out["qalpha_limit_Pa_deg"])
+    if by_choice:
+        out["by_choice"] = by_choice
     return out
+
+
+def loads_by_choice(tb: "Tables", dispersions: list[dict[str, Any]], limit: float | None) -> list[dict[str, Any]]:
+    """The worst total q·α for each value of each numeric ``choice`` dispersion (a swept
+    discrete parameter, e.g. the gust length of ``dispersions=ares_i_gust``), over the
+    dispersed runs with results; one row per value, in increasing value: ``dispersion``,
+    ``value``, ``units``, ``runs``, ``max_qalpha_Pa_deg`` and its ``max_run``, and
+    against the q·α ``limit`` (Pa·deg; None: no limit) ``ratio`` (worst / limit),
+    ``margin_Pa_deg`` (limit − worst, negative when exceeded) and
+    ``runs_above_limit``; the row of the largest worst value per dispersion has
+    ``worst: True``. Group choices (a ``winds`` option) are left out: their numbers are
+    option indices."""
+    keys = tb.summary_keys
+    if "max_qalpha_Pa_deg" not in keys:
+        return []
+    qa = tb.summary[:, keys.index("max_qalpha_Pa_deg")]
+    use = tb.ok & (tb.runs > 0) & np.isfinite(qa)
+    rows: list[dict[str, Any]] = []
+    for j, d in enumerate(dispersions):
+        if d.get("dist") != "choice" or "choices" in d or j >= tb.values.shape[1]:
+            continue
+        col = tb.values[:, j]
+        mine: list[dict[str, Any]] = []
+        for v in np.unique(col[use & np.isfinite(col)]):
+            at = use & (col == v)
+            k = int(np.argmax(np.where(at, qa, -np.inf)))
+            worst = float(qa[k])
+            row = {"dispersion": d["name"], "value": float(v), "units": d.get("units", ""), "runs": int(at.sum()),
+                   "max_qalpha_Pa_deg": worst, "max_run": int(tb.runs[k]), "ratio": None, "margin_Pa_deg": None,
+                   "runs_above_limit": None, "worst": False}
+            if limit:
+                row.update(ratio=worst / limit, margin_Pa_deg=limit - worst, runs_above_limit=int((qa[at] > limit).sum()))
+            mine.append(row)
+        if mine:
+            max(mine, key=lambda r: r["max_qalpha_Pa_deg"])["worst"] = True
+        rows += mine
+    return rows
 
 
 def print_loads(console: Console, loads: dict[str, Any]) -> None:
@@ -266,6 +309,30 @@ def print_loads(console: Console, loads: dict[str, Any]) -> None:
     verdict = loads_verdict(loads)
     if verdict is not None:
         console.print(verdict[0], style=None if verdict[1] else "red", markup=False, highlight=False, soft_wrap=True)
+    for line, ok in loads_by_choice_lines(loads):
+        console.print(line, style="red" if ok is False else None, markup=False, highlight=False, soft_wrap=True)
+
+
+def loads_by_choice_lines(loads: dict[str, Any]) -> list[tuple[str, bool | None]]:
+    """One line per swept ``choice`` dispersion of ``loads["by_choice"]`` (what the
+    console and report.html show): each value's worst total q·α with its run and ratio
+    to the limit, then the worst value and its margin; with whether the worst is within
+    the limit (None without a limit)."""
+    lines = []
+    rows = loads.get("by_choice") or []
+    for name in dict.fromkeys(r["dispersion"] for r in rows):
+        mine = [r for r in rows if r["dispersion"] == name]
+        unit = f" {mine[0]['units']}" if mine[0]["units"] else ""
+        parts = [f"{r['value']:g}{unit}: {r['max_qalpha_Pa_deg']:,.0f} (run {r['max_run']}"
+                 + (f", {r['ratio']:.2f} of the limit, {r['runs_above_limit']} of {r['runs']} runs above" if r["ratio"]
+                    is not None else f", {r['runs']} runs") + ")" for r in mine]
+        worst = next(r for r in mine if r["worst"])
+        has_limit = worst["margin_Pa_deg"] is not None
+        tail = (f"; worst {worst['value']:g}{unit}, margin {worst['margin_Pa_deg']:,.0f} Pa deg to the limit"
+                if has_limit else f"; worst {worst['value']:g}{unit}")
+        lines.append((f"max q-alpha total by {name} (Pa deg): " + "; ".join(parts) + tail,
+                      worst["margin_Pa_deg"] >= 0.0 if has_limit else None))
+    return lines
 
 
 def loads_verdict(loads: dict[str, Any]) -> tuple[str, bool] | None:
@@ -370,7 +437,7 @@ def write_outputs(out_dir: Path, inv: Inventory, expected: list[int], dispersion
         insertion = insertion_statistics(tb.runs, tb.message, tb.summary_keys, tb.summary, spec.reserve_probability,
                                          spec.confidence)
         g.attrs["insertion"] = json.dumps(insertion)
-        loads = load_extremes(tb)
+        loads = load_extremes(tb, dispersions)
         if loads:
             g.attrs["loads"] = json.dumps(loads)
         rg = g.create_group("runs")

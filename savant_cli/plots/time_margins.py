@@ -1,5 +1,5 @@
 """Time-domain margin figures: one per search, its bisection history (every judged change
-in order, stable or growing) beside the last stable and first unstable responses
+in order, stable or not) beside the last stable and first unstable responses
 overlaid (same style and writer as :mod:`savant_cli.plots.montecarlo`)."""
 
 from __future__ import annotations
@@ -24,8 +24,8 @@ def plot_search(res: SearchResult, folder: Path) -> Path:
     vals = np.array([tr.value for tr in res.trials])
     bad = np.array([tr.growth.unstable for tr in res.trials], bool)
     ax1.plot(n, vals, color="0.6", lw=0.8)
-    ax1.plot(n[~bad], vals[~bad], "o", color="tab:green", ms=4, label="decays")
-    ax1.plot(n[bad], vals[bad], "x", color="tab:red", ms=5, label="grows")
+    ax1.plot(n[~bad], vals[~bad], "o", color="tab:green", ms=4, label="stable")
+    ax1.plot(n[bad], vals[bad], "x", color="tab:red", ms=5, label="not stable")
     if np.isfinite(res.margin):
         ax1.axhline(res.margin, color="k", lw=0.8, ls="--", label=f"margin {res.margin:.2f} {UNITS[s.kind]}")
     ax1.set_xlabel("trial", fontsize=8)

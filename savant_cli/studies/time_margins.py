@@ -35,7 +35,7 @@ from savant_cli.linear.margins import MarginRow
 from savant_cli.processes import default_workers
 from savant_cli.studies import flight as flight_mod
 from savant_cli.studies.linear import analyse
-from savant_cli.timedomain.growth import Growth
+from savant_cli.timedomain.growth import Growth, decay_threshold
 from savant_cli.timedomain.search import UNITS, Search, SearchResult, Trial, run_searches
 
 COLUMNS = ("time_s", "axis", "kind", "time_domain", "frequency_domain", "unit", "oscillation_hz", "note")
@@ -101,9 +101,9 @@ def _note(res: SearchResult, value: float, fd: float, f_fd: float, mode: str, wi
     s = res.search
     parts = []
     if res.unstable_at_zero:
-        parts.append("the unperturbed loop's response grows")
+        parts.append("the unperturbed loop's response is not stable")
     elif np.isnan(res.margin):
-        parts.append(f"no growth up to the search bound ({s.bound:g} {UNITS[s.kind]})")
+        parts.append(f"stable up to the search bound ({s.bound:g} {UNITS[s.kind]})")
     if s.kind == "delay" and np.isfinite(res.margin) and np.isfinite(f_fd):
         parts.append(f"= {360.0 * f_fd * res.margin / 1000.0:.1f} deg at {f_fd:.3g} Hz")
     if mode:
@@ -114,8 +114,9 @@ def _note(res: SearchResult, value: float, fd: float, f_fd: float, mode: str, wi
         diff = value - fd if s.kind != "delay" else (value - fd) / fd
         if (s.kind == "delay" and abs(diff) > AGREE_DELAY) or (s.kind != "delay" and abs(diff) > AGREE_DB):
             parts.append(f"differs by {100 * diff:+.0f} %" if s.kind == "delay" else f"differs by {diff:+.2f} dB")
-    if res.saturated_s > 0.25:  # the doublet alone touches the rate limit for a few samples
-        parts.append(f"actuator on a rate or gimbal limit {res.saturated_s:.2f} s in the first unstable run")
+    if res.saturated_s > 0.25:
+        parts.append(f"actuator on a rate or gimbal limit {res.saturated_s:.2f} s after the settling time in the "
+                     f"first unstable run")
     if gain_change > 0.05:
         parts.append(f"scheduled gains change by {100 * gain_change:.0f} % over the window")
     return "; ".join(parts)
@@ -138,7 +139,8 @@ def _search_spec(study: TimeMarginsStudyConfig, t: float, axis: str, kind: str, 
     gain = kind != "delay"
     return Search(t, axis, kind, snap_index, start, end, study.gain_bound_dB if gain else study.delay_bound_ms,
                   study.gain_tolerance_dB if gain else study.delay_tolerance_ms, study.scan_points,
-                  float(np.radians(study.excitation_deg)), study.excitation_s, study.settle_s, max_saturation_s)
+                  float(np.radians(study.excitation_deg)), study.excitation_s, study.settle_s,
+                  study.min_damping_ratio, max_saturation_s)
 
 
 def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
@@ -204,9 +206,11 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
     grows = [r for r in out_rows if r["unstable_at_zero"]]
     found = [r for r in out_rows if np.isfinite(r["time_domain"])]
     differ = [r for r in found if "differs by" in r["note"]]
-    line = (f"time-domain margins: {len(found)} of {len(out_rows)} found within the search bounds; "
+    line = (f"time-domain margins (stable: envelope x{decay_threshold(study.min_damping_ratio):.3f} or less per "
+            f"period, damping ratio {study.min_damping_ratio:g}): {len(found)} of {len(out_rows)} found within the "
+            f"search bounds; "
             f"{len(differ)} differ from the frequency domain by more than {AGREE_DB:g} dB / {100 * AGREE_DELAY:g} %"
-            + (f"; the unperturbed response grows at {len(grows)}" if grows else ""))
+            + (f"; the unperturbed response is not stable at {len(grows)}" if grows else ""))
     summary["time_margins"] = out_rows
     summary["time_margins_verdict"] = line
     summary["study_wall_time_s"] = time.perf_counter() - t_start
@@ -241,7 +245,8 @@ def _table(rows: list[dict]) -> Table:
 
 
 #: Short console flags for the notes of ``time_margins.csv`` (the notes have the numbers).
-_FLAGS = (("differs by", "[red]differs[/red]"), ("no growth up to", "beyond bound"), ("response grows", "[red]grows at 0[/red]"),
+_FLAGS = (("differs by", "[red]differs[/red]"), ("stable up to", "beyond bound"),
+          ("response is not stable", "[red]not stable at 0[/red]"),
           ("stretched", "long window"), ("cut to", "window cut"), ("actuator on", "saturates"),
           ("scheduled gains", "gains vary"))
 
@@ -266,20 +271,22 @@ def write_csv(path: Path, rows: list[dict]) -> None:
 
 def write_trials_csv(path: Path, results: list[SearchResult]) -> None:
     """``time_margin_trials.csv``: every judged change of every search, in order."""
-    lines = ["time_s,axis,kind,value,unit,unstable,growth_rate_1_per_s,oscillation_hz,saturated_s,reason"]
+    lines = ["time_s,axis,kind,value,unit,unstable,growth_rate_1_per_s,decay_per_period,oscillation_hz,saturated_s,"
+             "reason"]
     for res in results:
         s = res.search
         for tr in res.trials:
             g = tr.growth
             lines.append(",".join(_csv_text(v) for v in (s.time_s, s.axis, s.kind, tr.value, UNITS[s.kind],
                                                          "yes" if g.unstable else "no", g.rate_per_s,
-                                                         g.frequency_hz, tr.saturated_s, g.reason)))
+                                                         g.decay_per_period, g.frequency_hz, tr.saturated_s,
+                                                         g.reason)))
     write_text_atomic(path, "\n".join(lines) + "\n")
 
 
 #: the :class:`Search` fields stored as attributes of each search's group
 _SEARCH_ATTRS = ("time_s", "axis", "kind", "snapshot", "start_s", "end_s", "bound", "tolerance", "scan_points",
-                 "pulse_rad", "pulse_s", "settle_s", "max_saturation_s")
+                 "pulse_rad", "pulse_s", "settle_s", "min_damping_ratio", "max_saturation_s")
 
 
 def write_group(f: h5py.File, results: list[SearchResult]) -> None:
@@ -300,6 +307,7 @@ def write_group(f: h5py.File, results: list[SearchResult]) -> None:
         g.create_dataset("trial_value", data=np.array([tr.value for tr in res.trials]))
         g.create_dataset("trial_unstable", data=np.array([tr.growth.unstable for tr in res.trials]))
         g.create_dataset("trial_growth_rate", data=np.array([tr.growth.rate_per_s for tr in res.trials]))
+        g.create_dataset("trial_decay_per_period", data=np.array([tr.growth.decay_per_period for tr in res.trials]))
         g.create_dataset("trial_frequency_hz", data=np.array([tr.growth.frequency_hz for tr in res.trials]))
         g.create_dataset("trial_amplitude", data=np.array([tr.growth.amplitude for tr in res.trials]))
         g.create_dataset("trial_saturated_s", data=np.array([tr.saturated_s for tr in res.trials]))
@@ -318,7 +326,7 @@ def read_group(h5: Path) -> list[SearchResult]:
         for name in sorted(f["time_margins"]):
             g = f["time_margins"][name]
             a = {k: (v.decode() if isinstance(v, bytes) else v) for k, v in g.attrs.items()}
-            search = Search(**{k: a[k] for k in _SEARCH_ATTRS})
+            search = Search(**{k: a.get(k, np.nan) for k in _SEARCH_ATTRS})  # files before issue 26: no threshold
             n = g["trial_value"].shape[0]
 
             def col(key: str, default):
@@ -326,11 +334,13 @@ def read_group(h5: Path) -> list[SearchResult]:
             reasons = [r.decode() if isinstance(r, bytes) else str(r) for r in col("trial_reason", "")]
             trials = [Trial(value=float(v), saturated_s=float(sat),
                             growth=Growth(unstable=bool(u), rate_per_s=float(r), frequency_hz=float(fr),
-                                          amplitude=float(am), reason=why))
-                      for v, u, r, fr, am, sat, why in zip(g["trial_value"][()], g["trial_unstable"][()],
-                                                           g["trial_growth_rate"][()], col("trial_frequency_hz", np.nan),
-                                                           col("trial_amplitude", np.nan),
-                                                           col("trial_saturated_s", np.nan), reasons)]
+                                          amplitude=float(am), reason=why, decay_per_period=float(rho)))
+                      for v, u, r, fr, am, sat, why, rho in zip(g["trial_value"][()], g["trial_unstable"][()],
+                                                                g["trial_growth_rate"][()],
+                                                                col("trial_frequency_hz", np.nan),
+                                                                col("trial_amplitude", np.nan),
+                                                                col("trial_saturated_s", np.nan), reasons,
+                                                                col("trial_decay_per_period", np.nan))]
             resp = {r: (g[f"{r}_time"][()], g[f"{r}_gimbal_deg"][()]) if f"{r}_time" in g else None
                     for r in ("last_stable", "first_unstable")}
             out.append(SearchResult(search=search, margin=float(a["margin"]), frequency_hz=float(a["oscillation_hz"]),

@@ -1,9 +1,9 @@
 """The search for a time-domain margin: from the stored state just before the window,
 the same perturbed loop is flown with and without an excitation doublet; their
-difference is the loop's transient, judged by :func:`savant_cli.timedomain.growth.assess`.
-A coarse scan from no change to the search bound finds the first change that grows, and
-bisection between it and the last change that does not narrows the margin to the
-tolerance (a scan first, so that a stable band above an unstable one, as in a
+difference is the loop's transient, judged by :func:`savant_cli.timedomain.growth.assess`
+against the stated decay per period (``Search.min_damping_ratio``). A coarse scan from no
+change to the search bound finds the first change that is not stable, and bisection
+between it and the last stable change narrows the margin to the tolerance (a scan first, so that a stable band above an unstable one, as in a
 conditionally stable loop, cannot hide the smallest margin).
 
 Kinds and their search variable:
@@ -58,9 +58,12 @@ class Search:
         Excitation doublet amplitude (rad) and duration (s).
     settle_s : float
         Time after the window starts left out of the growth analysis (s).
+    min_damping_ratio : float
+        ζ_min: a trial is stable only when its response decays per period at least as
+        fast as a mode of this damping ratio (``study.min_damping_ratio``).
     max_saturation_s : float
-        An unexcited run longer than this on its rate limit or gimbal stop has grown
-        into a saturated limit cycle by itself: unstable (``sim.health.max_saturation_s``).
+        Either run longer than this on its rate limit or gimbal stop after the settling
+        time is in a saturated oscillation: not stable (``sim.health.max_saturation_s``).
     """
 
     time_s: float
@@ -75,6 +78,7 @@ class Search:
     pulse_rad: float
     pulse_s: float
     settle_s: float
+    min_damping_ratio: float
     max_saturation_s: float = 1.0
 
 
@@ -84,15 +88,15 @@ class Trial:
 
     value: float
     growth: Growth
-    saturated_s: float  # time on the rate limit or the gimbal stop in the excited run, s
+    saturated_s: float  # time on the rate limit or the gimbal stop in the excited run after the settling time, s
 
 
 @dataclass
 class SearchResult:
     """A finished search.
 
-    ``margin`` is NaN when no change up to the bound grew (``unstable_at_zero``: the
-    unperturbed loop already grows). ``last_stable`` and ``first_unstable`` are the
+    ``margin`` is NaN when every change up to the bound was stable (``unstable_at_zero``: the
+    unperturbed loop is already not stable). ``last_stable`` and ``first_unstable`` are the
     responses ``(t s, gimbal deg)`` bracketing the margin."""
 
     search: Search
@@ -124,14 +128,16 @@ def perturbation_of(s: Search, value: float, dt: float, excited: bool) -> np.nda
     return LP.perturbation(s.axis, s.start_s, s.end_s, gain, delay, s.pulse_rad if excited else 0.0, s.pulse_s, dt)
 
 
-def _saturated_s(log: np.ndarray, model: SimModel, engine: int, axis: int) -> float:
+def _saturated_s(log: np.ndarray, model: SimModel, engine: int, axis: int, after_s: float) -> float:
     """Time (s) the axis's actuator spends on its rate limit or gimbal stop in ``log``
-    (``engine``: the engine phase, which sets the stage's limits)."""
+    from mission time ``after_s`` on (``engine``: the engine phase, which sets the
+    stage's limits)."""
     lay = model.layout
     rate_limit, gimbal_limit = actuator.limits(model.p, engine)
     k = (L.ACT_P, L.ACT_Y)[axis]
     rate_col = 1 + (lay.valve + 2 * axis if lay.simplex else k + 1)
     on = (np.abs(log[:, 1 + k]) >= 0.999 * gimbal_limit) | (np.abs(log[:, rate_col]) >= 0.999 * rate_limit)
+    on &= log[:, 0] >= after_s
     dt_log = float(np.median(np.diff(log[:, 0]))) if log.shape[0] > 1 else 0.0
     return float(on.sum() * dt_log)
 
@@ -140,7 +146,8 @@ def response(model: SimModel, snap: Snapshot, s: Search, value: float
              ) -> tuple[np.ndarray, np.ndarray, bool, float, float]:
     """The loop's transient at ``value``: times (s), excited minus unexcited gimbal angle
     of the axis (deg), whether either run diverged, and the excited and the unexcited
-    runs' saturated times (s)."""
+    runs' saturated times after the settling time (s; the doublet itself may touch a
+    limit)."""
     dt = model.rates.dt
     runs = [simulate(model, progress=False, start=snap, t_stop=s.end_s,
                      perturbation=perturbation_of(s, value, dt, excited)) for excited in (True, False)]
@@ -150,21 +157,26 @@ def response(model: SimModel, snap: Snapshot, s: Search, value: float
     y = np.degrees(runs[0].log[:n, col] - runs[1].log[:n, col])
     diverged = any(r.status not in ("complete",) for r in runs)
     engine = int(snap.u[L.U_ENGINE])
-    return (runs[0].log[:n, 0], y, diverged, _saturated_s(runs[0].log[:n], model, engine, axis),
-            _saturated_s(runs[1].log[:n], model, engine, axis))
+    after = s.start_s + s.settle_s
+    return (runs[0].log[:n, 0], y, diverged, _saturated_s(runs[0].log[:n], model, engine, axis, after),
+            _saturated_s(runs[1].log[:n], model, engine, axis, after))
 
 
 def find_margin(model: SimModel, snap: Snapshot, s: Search) -> SearchResult:
-    """Scan, then bisect, for the smallest change of ``s`` whose response grows."""
+    """Scan, then bisect, for the smallest change of ``s`` whose response is not stable."""
     out = SearchResult(s, float("nan"), float("nan"))
     cache: dict[float, tuple] = {}
 
     def judge(value: float) -> bool:
         t, y, diverged, sat, sat_unexcited = response(model, snap, s, value)
-        g = assess(t, y, s.settle_s, diverged)
-        if sat_unexcited > s.max_saturation_s and not g.unstable:  # both runs in the same limit cycle
-            g = replace(g, unstable=True, reason=f"the unexcited run rides the actuator limits for {sat_unexcited:.2f} s "
-                        f"(a saturated limit cycle; {g.reason})")
+        g = assess(t, y, s.settle_s, s.min_damping_ratio, diverged)
+        if not g.unstable:  # a saturated oscillation is at or beyond the margin, whatever the difference shows
+            if sat > s.max_saturation_s:
+                g = replace(g, unstable=True, reason=f"the excited run rides the actuator limits for {sat:.2f} s "
+                            f"after the settling time (a saturated oscillation; {g.reason})")
+            elif sat_unexcited > s.max_saturation_s:  # both runs in the same limit cycle
+                g = replace(g, unstable=True, reason=f"the unexcited run rides the actuator limits for "
+                            f"{sat_unexcited:.2f} s (a saturated limit cycle; {g.reason})")
         out.trials.append(Trial(float(value), g, sat))
         cache[value] = (t, y)
         return g.unstable
