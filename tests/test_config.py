@@ -245,3 +245,15 @@ def test_a_tailoff_fraction_outside_zero_to_one_is_refused(value):
         validate(compose_config(["study=linear", f"study.tailoff_thrust_fraction={value}"]))
     assert exc.value.key == "study.tailoff_thrust_fraction" and exc.value.value == value
     assert "[0, 1)" in exc.value.allowed
+
+
+@pytest.mark.parametrize("overrides, key, value", [
+    (["controller.ignition_fade.start_s=-0.1"], "controller.ignition_fade.start_s", -0.1),
+    (["controller.ignition_fade.end_s=0.2"], "controller.ignition_fade.end_s", 0.2),
+    (["controller.ignition_fade.end_s=inf"], "controller.ignition_fade.end_s", float("inf")),
+])
+def test_an_ignition_fade_that_ends_before_it_starts_is_refused(compose_cfg, overrides, key, value):
+    """The fade of the upper-stage gains (controller.ignition_fade) starts at or after the
+    ignition command and ends, finitely, no earlier than it starts."""
+    err = _expect(compose_cfg(overrides), key)
+    assert err.key == key and err.value == value
