@@ -317,7 +317,10 @@ def flight_gains(ft: FcsTables, phase: int, schedule_var: float, since_ignition:
 def reset_phase(d: np.ndarray) -> None:
     """Clear integrators and filter memories at separation (the filter set and the
     integrated-rate gyro change; :func:`engagement` holds the integrators through the
-    coast, so the J-2X ignition needs no reset)."""
+    coast, so the J-2X ignition needs no reset); the gimbal commands restart at null, as
+    the upper-stage nozzle does."""
+    d[D_CMD_P] = 0.0
+    d[D_CMD_Y] = 0.0
     d[D_INT_ATT:D_INT_ATT + 2] = 0.0
     d[D_INT_RATE:D_INT_RATE + 2] = 0.0
     d[D_FILT:D_FILT + 32] = 0.0

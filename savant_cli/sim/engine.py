@@ -167,8 +167,10 @@ def handle_events(t: float, x: np.ndarray, u: np.ndarray, d: np.ndarray,
         u[U_CONFIG] = CONFIG_UPPER_LES
         u[U_ENGINE] = ENGINE_OFF
         x[MFS] = 0.0
-        x[ACT_P:ACT_P + 3] = 0.0  # the upper-stage nozzle starts at null
+        x[ACT_P:ACT_P + 3] = 0.0  # the upper-stage nozzle starts at null ...
         x[ACT_Y:ACT_Y + 3] = 0.0
+        u[U_DPC] = 0.0  # ... and so does its command (not the first stage's last one)
+        u[U_DYC] = 0.0
         vo = int(p[actuator.P_VALVE_OFFSET])
         if vo >= 0:
             x[vo:vo + actuator.N_VALVE] = 0.0
