@@ -226,8 +226,8 @@ def gain_tables(points: dict[str, list[tuple[float, float, float]]], spec: dict 
     breakpoints (``points["stack_tailoff"]``, if any) follow: the pole placement at the
     last ω, each gain capped at ``tailoff_kp_cap`` / ``tailoff_kd_cap`` (the stack's own,
     else the spec's) times its last regular value, Ki = 0 (module notes). Key
-    ``ignition_fade`` is the points' own."""
-    tables = {"ignition_fade": tuple(points["ignition_fade"])}
+    ``ignition_fade``, when the points have it, is theirs (the writer needs it)."""
+    tables = {"ignition_fade": tuple(points["ignition_fade"])} if "ignition_fade" in points else {}
     for name, axis_key in (("stack", "stack_altitudes_m"), ("upper", "upper_speeds_mps")):
         d = spec[name]
         z = d["zeta"]
