@@ -762,6 +762,18 @@ class RollControl:
 
 
 @dataclass
+class IgnitionFade:
+    """``controller.ignition_fade``: the upper-stage loop's engagement at the J-2X start
+    (``models/fcs.py::engagement``). The gains fade linearly from the coast table to the
+    upper-stage table from ``start_s`` to ``end_s`` after the ignition command (s); the
+    integrators are held until ``start_s``. The design rules write the engine's thrust
+    build-up: its last zero-thrust time and the time it reaches rated thrust."""
+
+    start_s: float = 0.3
+    end_s: float = 2.8
+
+
+@dataclass
 class ControllerDesign:
     """How a controller file was made: the design rules (``datagen/fcs_gains.py``) and the
     values ``study=fcs_design`` tuned (schedule → parameter → value; empty: the rules'
@@ -780,6 +792,7 @@ class ControllerConfig:
     flex_filters: FilterSets = field(default_factory=FilterSets)
     gains: GainTables = field(default_factory=GainTables)
     roll: RollControl = field(default_factory=RollControl)
+    ignition_fade: IgnitionFade = field(default_factory=IgnitionFade)
     # transport delay from the sensor sample to the actuator command (s): a whole number
     # of plant steps, shorter than the control period; the same in the time run and the
     # linear model
@@ -1005,6 +1018,12 @@ def _check_controller(c: ControllerConfig) -> None:
     _non_negative("controller.roll.attitude_deadband_deg", c.roll.attitude_deadband_deg)
     _non_negative("controller.roll.rate_deadband_deg_s", c.roll.rate_deadband_deg_s)
     _non_negative("controller.roll.lead_time_s", c.roll.lead_time_s)
+    fade = c.ignition_fade
+    _non_negative("controller.ignition_fade.start_s", fade.start_s)
+    if not (np.isfinite(fade.end_s) and fade.end_s >= fade.start_s):
+        raise ConfigError("controller.ignition_fade.end_s", fade.end_s,
+                          f"must be finite and at least controller.ignition_fade.start_s = {fade.start_s} s "
+                          "(the fade from the coast gains to the upper-stage gains after the ignition command)")
 
 
 def check_vehicle_match(cfg: SavantConfig) -> None:

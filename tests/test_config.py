@@ -250,3 +250,15 @@ def test_bad_frozen_time_settings_are_refused(override, key):
     with pytest.raises(ConfigError) as exc:
         validate(compose_config(["study=linear", override]))
     assert exc.value.key == key
+
+
+@pytest.mark.parametrize("overrides, key, value", [
+    (["controller.ignition_fade.start_s=-0.1"], "controller.ignition_fade.start_s", -0.1),
+    (["controller.ignition_fade.end_s=0.2"], "controller.ignition_fade.end_s", 0.2),
+    (["controller.ignition_fade.end_s=inf"], "controller.ignition_fade.end_s", float("inf")),
+])
+def test_an_ignition_fade_that_ends_before_it_starts_is_refused(compose_cfg, overrides, key, value):
+    """The fade of the upper-stage gains (controller.ignition_fade) starts at or after the
+    ignition command and ends, finitely, no earlier than it starts."""
+    err = _expect(compose_cfg(overrides), key)
+    assert err.key == key and err.value == value

@@ -68,11 +68,31 @@ def test_design_values_round_trip_through_the_controller_config():
     """The design block the study writes reads back through the schema unchanged."""
     values = {("stack", "omega"): 0.1 + 0.2, ("upper", "notch1_q"): 1 / 3}
     text = fcs_gains.controller_yaml(fcs_gains.gain_tables(
-        {"stack": [(0.0, 0.0, 1.0)], "upper": [(0.0, 0.0, 1.0)]},
+        {"stack": [(0.0, 0.0, 1.0)], "upper": [(0.0, 0.0, 1.0)], "ignition_fade": (0.3, 2.8)},
         dict(fcs_gains.DESIGN, stack_altitudes_m=[0], upper_speeds_mps=[0])), [0.5, 0.0, 0.5],
         fcs_gains.DESIGN, "ares_i", {"rules": "msfc_pid", "parameters": values})
     d = dp.controller_config(text).design
     assert d.rules == "msfc_pid" and d.parameters == {"stack": {"omega": 0.1 + 0.2}, "upper": {"notch1_q": 1 / 3}}
+
+
+def test_ignition_fade_is_the_engines_thrust_build_up():
+    """The fade window is read from the start-transient table: its last zero-thrust time
+    and the first time it reaches rated thrust (a hand-made table); every shipped
+    controller carries its vehicle's (the J-2X profile: thrust from 0.3 s, rated at 2.8 s)."""
+    from savant_cli.sim.setup import prepare
+
+    assert fcs_gains.ignition_fade(np.array([0.0, 0.5, 1.0, 1.5, 2.0]), np.array([0.0, 0.0, 0.5, 1.0, 1.0])) == (0.5, 1.5)
+    assert fcs_gains.ignition_fade(np.array([0.0, 1.0]), np.array([0.2, 1.0])) == (0.0, 1.0)
+    with pytest.raises(ValueError):
+        fcs_gains.ignition_fade(np.array([0.0, 1.0]), np.array([0.0, 0.9]))
+    for vehicle, controller in [("ares_i", "msfc_pid"), ("ares_i", "larc_pd"),
+                                ("small_launcher", "small_pid"), ("small_launcher", "small_pd")]:
+        overrides = [] if vehicle == "ares_i" else ["vehicle=small_launcher", "guidance=small_launcher_leo"]
+        cfg = validate(compose_config(overrides + [f"controller={controller}"]))
+        us = prepare(cfg).vehicle.upper_stage
+        fade = fcs_gains.ignition_fade(us.startup_time_s, us.startup_fraction)
+        assert fade == (0.3, 2.8) and (cfg.controller.ignition_fade.start_s, cfg.controller.ignition_fade.end_s) == fade
+        assert not any(any(getattr(cfg.controller.gains.coast.pitch, g)) for g in ("kp", "ki", "kd", "kir"))
 
 
 def _verdict(ratio: float) -> PointVerdict:

@@ -1,17 +1,20 @@
 """Flight-software kernels against independent references: the command smoother against
 the closed-form second-order step response, the flex-filter recursion against
 scipy.signal.lfilter, the gyro discretization against scipy's continuous step response,
-and the roll phase plane's regions and closed-loop limit cycle."""
+the roll phase plane's regions and closed-loop limit cycle, and the upper-stage loop's
+engagement at the J-2X start against its closed form."""
 
 import numpy as np
 import pytest
 from scipy import signal
 
 from savant_cli.models import quaternion as qt
-from savant_cli.models.fcs import df2t, filter_pair, roll_phase_plane
+from savant_cli.models.fcs import (
+    FCS_COAST, FCS_STACK, FCS_UPPER, FcsTables, df2t, engagement, fcs_step, filter_pair, roll_phase_plane,
+)
 from savant_cli.models.guidance import command_at, guidance_sample, smoother_step
 from savant_cli.models.sensors import gyro_discrete, gyro_step
-from savant_cli.sim.layout import D_QS, D_VS, N_DISC
+from savant_cli.sim.layout import D_CMD_P, D_GAINS, D_INT_ATT, D_QS, D_VS, N_DISC
 
 
 @pytest.mark.parametrize("zeta", [0.3, 0.5, 0.7])
@@ -131,3 +134,81 @@ def test_roll_phase_plane_closed_loop_settles_in_deadband():
     tail = np.array(hist[-int(60 / dt):])
     assert np.max(np.abs(tail[:, 0])) < 1.5 * db
     assert np.max(np.abs(tail[:, 1])) < rdb + accel * dt * 2
+
+
+# ----------------------------------------------------------- engagement at J-2X ignition
+
+FADE = np.array([0.3, 2.8])  # s after the ignition command
+
+
+@pytest.mark.parametrize("tau, expected", [(0.0, 0.0), (0.29, 0.0), (0.3, 0.0), (0.8, 0.2), (1.55, 0.5),
+                                           (2.3, 0.8), (2.8, 1.0), (10.0, 1.0)])
+def test_engagement_rises_linearly_over_the_thrust_build_up(tau, expected):
+    """φ = (τ − 0.3) / 2.5 between the fade's ends, 0 before, 1 after, in upper-stage
+    flight; 0 throughout the coast, 1 on the stack."""
+    assert engagement(FCS_UPPER, tau, FADE) == pytest.approx(expected, abs=1e-12)
+    assert engagement(FCS_COAST, tau, FADE) == 0.0
+    assert engagement(FCS_STACK, tau, FADE) == 1.0
+
+
+def test_engagement_with_equal_ends_is_a_step():
+    fade = np.array([1.0, 1.0])
+    assert engagement(FCS_UPPER, 0.999, fade) == 0.0 and engagement(FCS_UPPER, 1.0, fade) == 1.0
+
+
+def _tables(coast: tuple[float, float, float, float], upper: tuple[float, float, float, float]) -> FcsTables:
+    """Pass-through filters (y = x), the upper-stage gyro alone, one gain set per phase
+    held constant over its schedule (two breakpoints): stack (1, 1, 1, 1), the given
+    coast and upper-stage sets (Kp, Ki, Kd, Kir), the same in pitch and yaw."""
+    identity = np.array([[1.0, 0, 0, 0, 0], [1.0, 0, 0, 0, 0]])
+    filters = np.broadcast_to(identity, (2, 2, 2, 2, 5)).copy()
+    gain_data = np.array([[list((1.0, 1.0, 1.0, 1.0)) * 2] * 2, [list(coast) * 2] * 2, [list(upper) * 2] * 2])
+    return FcsTables(filters=filters, roll_filters=np.broadcast_to(identity, (2, 2, 2, 5)).copy(),
+                     blend=np.array([[1.0, 0.0, 0.0], [1.0, 0.0, 0.0]]),
+                     gain_axis=np.array([[0.0, 1e5]] * 3), gain_data=gain_data, gain_len=np.array([2, 2, 2]),
+                     roll=np.array([np.radians(1.0), np.radians(1.0), 1.0]), fade=FADE)
+
+
+def _fly_cycles(ft: FcsTables, phase: int, n: int, pitch_error: float, dt: float = 0.02):
+    """``n`` flight-control cycles after ignition (τ = 0.01 s + k dt) with the body held
+    ``pitch_error`` (rad) past a fixed command, no rates: the gains, the attitude
+    integrator and the pitch command of each cycle."""
+    d = np.zeros(N_DISC)
+    d[D_QS] = 1.0  # command: the identity attitude, no rate
+    q_nav = np.array([np.cos(pitch_error / 2), 0.0, np.sin(pitch_error / 2), 0.0])
+    out = []
+    for k in range(n):
+        tau = 0.01 + k * dt
+        fcs_step(d, q_nav, phase, 3000.0, tau, dt, ft)
+        out.append((tau, d[D_GAINS:D_GAINS + 4].copy(), d[D_INT_ATT], d[D_CMD_P]))
+    return out
+
+
+def test_gains_fade_from_the_coast_table_and_the_integrator_waits_for_thrust():
+    """Through the J-2X start the applied gains are K_coast + φ (K_upper − K_coast) with
+    φ = (τ − 0.3) / 2.5 (clipped to [0, 1]); the attitude integrator holds until the fade
+    starts, then integrates e·dt; the pitch command is −(Kp e + Ki ∫e) (no rates)."""
+    coast, upper = (0.2, 0.05, 0.4, 0.1), (0.8, 0.15, 2.0, 0.3)
+    e = np.radians(2.0)
+    err = 2.0 * np.sin(e / 2)  # the error angle of the error quaternion
+    dt = 0.02
+    integral = 0.0
+    for tau, gains, i_att, cmd in _fly_cycles(_tables(coast, upper), FCS_UPPER, 200, e, dt):
+        phi = min(max((tau - 0.3) / 2.5, 0.0), 1.0)
+        np.testing.assert_allclose(gains, np.array(coast) + phi * (np.array(upper) - coast), rtol=1e-12)
+        if phi > 0.0:
+            integral += err * dt
+        assert i_att == pytest.approx(integral, abs=1e-15)
+        assert cmd == pytest.approx(-(gains[0] * err + gains[1] * integral), rel=1e-12)
+    assert integral == pytest.approx(err * dt * (200 - 15))  # held for the 15 cycles before 0.3 s
+
+
+def test_coast_commands_with_the_coast_table_and_holds_the_integrators():
+    """In the coast (no thrust) the gains are the coast table's and nothing integrates:
+    with the shipped zero coast table the nozzle is commanded to null."""
+    e = np.radians(2.0)
+    for _, gains, i_att, cmd in _fly_cycles(_tables((0.2, 0.05, 0.4, 0.1), (0.8, 0.15, 2.0, 0.3)), FCS_COAST, 50, e):
+        np.testing.assert_allclose(gains, [0.2, 0.05, 0.4, 0.1], rtol=1e-12)
+        assert i_att == 0.0 and cmd == pytest.approx(-0.2 * 2.0 * np.sin(e / 2), rel=1e-12)
+    for _, gains, i_att, cmd in _fly_cycles(_tables((0.0, 0.0, 0.0, 0.0), (0.8, 0.15, 2.0, 0.3)), FCS_COAST, 50, e):
+        assert i_att == 0.0 and cmd == 0.0

@@ -24,6 +24,13 @@ regular breakpoint, and the integral gain is 0: with the control power collapsin
 integrator's phase lag at the falling crossover costs more margin than its trim is worth
 (the trim it holds, a lateral CG offset over the gimbal arm, is ~0.1°).
 
+**Coast and J-2X start.** Between separation and ignition the engine gives no thrust and
+the nozzle no authority: the coast table is zero (the nozzle stays at null where
+separation leaves it). From the ignition command the flight control fades its gains from
+the coast table to the upper-stage table (``models/fcs.py::engagement``) over the engine's
+thrust build-up, which :func:`ignition_fade` reads from the vehicle's start-transient
+table: from its last zero-thrust time to the time it reaches rated thrust.
+
 Design rules (:data:`CONTROLLERS`; each shipped file is ``study=fcs_design``'s tuning of
 its rules, recorded in the file's ``design`` block):
 
@@ -139,10 +146,33 @@ def pitch_coefficients(ref, t: float, y: np.ndarray, config: int) -> tuple[float
     return float(mu_alpha), float(mu_c)
 
 
+def ignition_fade(startup_time_s: np.ndarray, startup_fraction: np.ndarray) -> tuple[float, float]:
+    """The upper-stage engine's thrust build-up (s after the ignition command): the last
+    time its start-transient table gives zero thrust before the thrust rises, and the
+    first time it reaches rated thrust (fraction 1). The flight control fades its gains in
+    over this window (module notes).
+
+    Parameters
+    ----------
+    startup_time_s : ndarray
+        Start-transient times since the ignition command, s, increasing.
+    startup_fraction : ndarray
+        Fraction of rated thrust at those times.
+    """
+    t = np.asarray(startup_time_s, float)
+    f = np.asarray(startup_fraction, float)
+    rising = np.flatnonzero(f > 0.0)
+    rated = np.flatnonzero(f >= 1.0)
+    if rising.size == 0 or rated.size == 0:
+        raise ValueError("the start-transient table must rise from 0 to rated thrust (fraction 1)")
+    return float(t[max(rising[0] - 1, 0)]), float(t[rated[0]])
+
+
 def design_points(cfg, vehicle, spec: dict = DESIGN) -> dict[str, list[tuple[float, float, float]]]:
     """Per schedule (``stack`` vs altitude, ``upper`` vs relative speed): the reference
-    ascent's (t s, μα 1/s², μc 1/s²) at each breakpoint of ``spec``; and key
-    ``stack_tailoff``: (altitude m, t s, μα, μc) at the tail-off breakpoints (module
+    ascent's (t s, μα 1/s², μc 1/s²) at each breakpoint of ``spec``; key
+    ``stack_tailoff``: (altitude m, t s, μα, μc) at the tail-off breakpoints; and key
+    ``ignition_fade``: the engine's thrust build-up (:func:`ignition_fade`; module
     notes)."""
     ref, sols, turn, azimuth, steer, sol = solve(cfg, vehicle, verbose=False)
     # dense reference history
@@ -177,6 +207,7 @@ def design_points(cfg, vehicle, spec: dict = DESIGN) -> dict[str, list[tuple[flo
         if a <= (points["stack_tailoff"][-1][0] if points["stack_tailoff"] else spec["stack_altitudes_m"][-1]):
             raise ValueError(f"tail-off breakpoint at {tt:.1f} s ({a:.0f} m) is not above the previous one")
         points["stack_tailoff"].append((a, float(t[i]), *pitch_coefficients(ref, t[i], y[i], CONFIG_STACK)))
+    points["ignition_fade"] = ignition_fade(vehicle.upper_stage.startup_time_s, vehicle.upper_stage.startup_fraction)
     return points
 
 
@@ -194,8 +225,9 @@ def gain_tables(points: dict[str, list[tuple[float, float, float]]], spec: dict 
     ``kir_share`` (the schedule's own when given, else the spec's). The stack's tail-off
     breakpoints (``points["stack_tailoff"]``, if any) follow: the pole placement at the
     last ω, each gain capped at ``tailoff_kp_cap`` / ``tailoff_kd_cap`` (the stack's own,
-    else the spec's) times its last regular value, Ki = 0 (module notes)."""
-    tables = {}
+    else the spec's) times its last regular value, Ki = 0 (module notes). Key
+    ``ignition_fade``, when the points have it, is theirs (the writer needs it)."""
+    tables = {"ignition_fade": tuple(points["ignition_fade"])} if "ignition_fade" in points else {}
     for name, axis_key in (("stack", "stack_altitudes_m"), ("upper", "upper_speeds_mps")):
         d = spec[name]
         z = d["zeta"]
@@ -276,18 +308,22 @@ def controller_yaml(tables: dict, stack_blend: list[float], spec: dict = DESIGN,
         tb = tables[src]
         lines.append(f"  {name}:")
         if name == "coast":
-            lines.append("    # no thrust in the coast: the gimbal commands have no authority; the")
-            lines.append("    # upper-stage schedule is kept so the J-2X starts from continuous commands")
+            lines.append("    # no thrust in the coast: no authority, the nozzle held at null (zero gains);")
+            lines.append("    # from ignition the gains fade to the upper-stage table (ignition_fade)")
         lines.append(f"    schedule: {schedule}")
         lines.append(f"    breakpoints: {_fmt(tb['breakpoints'])}")
         lines.append("    pitch:")
         for g in ("kp", "ki", "kd", "kir"):
-            lines.append(f"      {g}: {_fmt(tb[g])}")
+            lines.append(f"      {g}: {_fmt([0.0] * len(tb[g]) if name == 'coast' else tb[g])}")
         lines.append("    yaw: ${.pitch}")
         if name != "coast":
             lines.append("    # design points (t s, mu_alpha 1/s^2, mu_c 1/s^2): " +
                          "; ".join(f"{a:.0f} {b:.3f} {c:.3f}" for a, b, c in tb["design_points"]))
+    fade = tables["ignition_fade"]
     lines += [
+        "ignition_fade:       # gains from the coast table to the upper stage's, s after the ignition",
+        f"  start_s: {fade[0]!r}        # command: the engine's thrust build-up (vehicle start-transient table)",
+        f"  end_s: {fade[1]!r}",
         "roll:                # phase plane of roll error vs roll-rate error",
         "  attitude_deadband_deg: 1.0",
         "  rate_deadband_deg_s: 1.0",

@@ -19,9 +19,10 @@ from savant_cli.linear.modes import MarginLabeler, ModePeak, aero_unstable, stat
 from savant_cli.linear.plant import PlantLinearization, linearize_plant
 from savant_cli.linear.requirements import STAGE_OF_PHASE, PointVerdict, evaluate_point
 from savant_cli.linear.response import FastResponse
-from savant_cli.models.fcs import FcsTables, scheduled_gains
+from savant_cli.models.fcs import FcsTables, flight_gains
 from savant_cli.sim.build import SimModel
 from savant_cli.sim.engine import schedule_variable
+from savant_cli.sim.layout import U_T_IGN
 from savant_cli.sim.run import Snapshot
 
 #: Closed-loop poles slower than this (rad/s) are the frozen-time trajectory's drift, not
@@ -73,6 +74,9 @@ class FrozenPoint:
         Flight-control phase at the point (``models/fcs.py``).
     schedule_var : float
         What the gains are scheduled on there (altitude m, or speed m/s).
+    since_ignition : float
+        Time since the upper-stage ignition command (s; the gains' fade-in,
+        ``models/fcs.py::engagement``; read in upper-stage flight only).
     lin : PlantLinearization
         The continuous linear plant.
     plant : control.StateSpace
@@ -84,6 +88,7 @@ class FrozenPoint:
     time_s: float
     phase: int
     schedule_var: float
+    since_ignition: float
     lin: PlantLinearization
     plant: ct.StateSpace
     aero_unstable: bool
@@ -97,16 +102,17 @@ def freeze(model: SimModel, snap: Snapshot, dt: float, jacobian: str = "auto", r
     """Linearize the plant at a snapshot once (``study.jacobian``, ``jacobian_step``)."""
     lin = linearize_plant(model, snap, mode=jacobian, rel_step=rel_step)
     phase = fcs_phase(snap.events)
-    return FrozenPoint(float(snap.t), phase, float(schedule_variable(snap.t, snap.x, phase, model.p)), lin,
-                       sensor_plant(lin, model, dt), aero_unstable(lin))
+    return FrozenPoint(float(snap.t), phase, float(schedule_variable(snap.t, snap.x, phase, model.p)),
+                       float(snap.t - snap.u[U_T_IGN]), lin, sensor_plant(lin, model, dt), aero_unstable(lin))
 
 
 def point_controller(point: FrozenPoint, ft: FcsTables, dt: float, gains: np.ndarray | None = None) -> ct.StateSpace:
-    """The flight control ``ft`` as an LTI at a frozen point: its gains scheduled at the
-    point's state as in flight, or ``gains`` (Kp, Ki, Kd, Kir of pitch then yaw)."""
+    """The flight control ``ft`` as an LTI at a frozen point: its gains at the point's
+    state as in flight (scheduled, faded in after ignition), or ``gains`` (Kp, Ki, Kd, Kir
+    of pitch then yaw)."""
     if gains is None:
         gains = np.zeros(8)
-        scheduled_gains(ft.gain_axis, ft.gain_len, ft.gain_data, point.phase, point.schedule_var, gains, 0)
+        flight_gains(ft, point.phase, point.schedule_var, point.since_ignition, gains, 0)
     return controller_lti(ft, gains, point.phase, dt)
 
 

@@ -17,6 +17,15 @@ Pitch and yaw (same architecture, uncoupled):
 * gains come from tables whose independent variable is altitude on the integrated stack
   and Earth-relative speed in coast and upper-stage flight.
 
+Engagement at upper-stage ignition (:func:`engagement`): through the coast the J-2X gives
+no thrust, so the pitch/yaw loop runs on the coast table (the shipped controllers': zero,
+the nozzle held at null where separation leaves it) with its integrators held. From the
+ignition command the gains fade from the coast table to the upper-stage table as the
+engine builds thrust, ``K = K_coast + φ(τ)(K_upper − K_coast)`` with φ rising linearly
+from 0 at ``controller.ignition_fade.start_s`` after the command to 1 at ``end_s``; the
+integrators stay held while φ = 0. The flex filters run on the upper-stage set from
+separation on and are not restarted at ignition, so the command is continuous there.
+
 Roll uses a phase plane of the flex-filtered roll error and rate error with attitude and
 rate deadbands, commanding +1 / 0 / −1 jet torque.
 """
@@ -68,7 +77,8 @@ class FcsTables(NamedTuple):
     section ``section`` of path ``path`` (0 rate, 1 integrated rate) of filter set ``s``
     (0 integrated stack, 1 upper stage). ``roll_filters[s, section, 0|1, :]`` likewise.
     ``gain_axis[phase, :gain_len[phase]]`` is altitude (m, stack) or relative speed (m/s);
-    ``gain_data[phase, i, :]`` = Kp, Ki, Kd, Kir for pitch then for yaw.
+    ``gain_data[phase, i, :]`` = Kp, Ki, Kd, Kir for pitch then for yaw. ``fade`` is the
+    ignition fade (:func:`engagement`).
     """
 
     filters: np.ndarray  # (2, 2, 2, 2, 5)
@@ -78,11 +88,12 @@ class FcsTables(NamedTuple):
     gain_data: np.ndarray  # (3, n, 8)
     gain_len: np.ndarray  # (3,) int64
     roll: np.ndarray  # (3,): attitude deadband rad, rate deadband rad/s, lead time s
+    fade: np.ndarray  # (2,): ignition fade start, end, s after the upper-stage ignition command
 
 
 def fcs_tables(c: "ControllerConfig") -> FcsTables:
     """The builder of the flight control: the ``controller`` group's filters, blending,
-    gain schedules and roll phase plane as :class:`FcsTables` (SI)."""
+    gain schedules, ignition fade and roll phase plane as :class:`FcsTables` (SI)."""
     filters = np.zeros((2, 2, 2, 2, 5))
     roll_filters = np.zeros((2, 2, 2, 5))
     blend = np.zeros((2, 3))
@@ -110,8 +121,9 @@ def fcs_tables(c: "ControllerConfig") -> FcsTables:
     gain_data, _ = blocks.stack_padded(data)
     roll = np.array([np.radians(c.roll.attitude_deadband_deg), np.radians(c.roll.rate_deadband_deg_s),
                      c.roll.lead_time_s])
+    fade = np.array([c.ignition_fade.start_s, c.ignition_fade.end_s], float)
     return FcsTables(filters=filters, roll_filters=roll_filters, blend=blend, gain_axis=gain_axis,
-                     gain_data=gain_data, gain_len=gain_len, roll=roll)
+                     gain_data=gain_data, gain_len=gain_len, roll=roll, fade=fade)
 
 
 @njit(cache=True, error_model="numpy")
@@ -158,7 +170,7 @@ def roll_phase_plane(err: float, rate_err: float, att_db: float, rate_db: float,
 
 @njit(cache=True, error_model="numpy")
 def fcs_step(d: np.ndarray, q_nav: np.ndarray, phase: int, schedule_var: float,
-             dt: float, ft: FcsTables) -> None:
+             since_ignition: float, dt: float, ft: FcsTables) -> None:
     """One 50 Hz flight-control cycle; reads sensors and smoother from ``d`` and writes
     the gimbal and jet commands back into ``d``.
 
@@ -172,8 +184,12 @@ def fcs_step(d: np.ndarray, q_nav: np.ndarray, phase: int, schedule_var: float,
         FCS_STACK, FCS_COAST or FCS_UPPER.
     schedule_var : float
         Altitude (m) on the stack, Earth-relative speed (m/s) afterwards.
+    since_ignition : float
+        Time since the upper-stage ignition command, s (read in ``FCS_UPPER`` only).
     dt : float
         Control period, s.
+    ft : FcsTables
+        The flight control's data.
 
     Notes
     -----
@@ -205,12 +221,13 @@ def fcs_step(d: np.ndarray, q_nav: np.ndarray, phase: int, schedule_var: float,
     d[D_RATE_ERR + 2] = b2 - rc2
     own = GYRO_FIRST if phase == FCS_STACK else GYRO_UPPER
 
-    scheduled_gains(ft.gain_axis, ft.gain_len, ft.gain_data, phase, schedule_var, d, D_GAINS)
+    integrate = flight_gains(ft, phase, schedule_var, since_ignition, d, D_GAINS) > 0.0
 
     for c in range(2):  # 0 pitch (body y), 1 yaw (body z)
         ax = c + 1
-        d[D_INT_ATT + c] += d[D_ERR + ax] * dt
-        d[D_INT_RATE + c] += (d[D_GYRO_Y + 3 * own + ax] - d[D_RATE_CMD_B + ax]) * dt
+        if integrate:  # held while the engine has no authority
+            d[D_INT_ATT + c] += d[D_ERR + ax] * dt
+            d[D_INT_RATE + c] += (d[D_GYRO_Y + 3 * own + ax] - d[D_RATE_CMD_B + ax]) * dt
         base = D_FILT + c * 16
         rate_f = filter_pair(d, base, ft.filters[fset, 0], d[D_RATE_ERR + ax])
         irate_f = filter_pair(d, base + 8, ft.filters[fset, 1], d[D_INT_RATE + c])
@@ -237,8 +254,73 @@ def scheduled_gains(gain_axis: np.ndarray, gain_len: np.ndarray, gain_data: np.n
 
 
 @njit(cache=True, error_model="numpy")
+def engagement(phase: int, since_ignition: float, fade: np.ndarray) -> float:
+    """The upper-stage loop's engagement φ (1) at the J-2X start.
+
+    0 in the coast (no thrust); in upper-stage flight φ rises linearly from 0 at
+    ``fade[0]`` to 1 at ``fade[1]`` seconds after the ignition command (a step at
+    ``fade[0]`` when the two are equal); 1 on the stack.
+
+    Parameters
+    ----------
+    phase : int
+        Flight-control phase (FCS_STACK, FCS_COAST, FCS_UPPER).
+    since_ignition : float
+        Time since the upper-stage ignition command, s.
+    fade : ndarray (2,)
+        Fade start and end, s after the ignition command (:class:`FcsTables` ``fade``).
+    """
+    if phase == FCS_STACK:
+        return 1.0
+    if phase == FCS_COAST or since_ignition < fade[0]:
+        return 0.0
+    if since_ignition >= fade[1]:
+        return 1.0
+    return (since_ignition - fade[0]) / (fade[1] - fade[0])
+
+
+@njit(cache=True, error_model="numpy")
+def flight_gains(ft: FcsTables, phase: int, schedule_var: float, since_ignition: float,
+                 out: np.ndarray, k0: int) -> float:
+    """The gains the flight control applies, Kp, Ki, Kd, Kir of pitch then yaw, into
+    ``out[k0:k0 + 8]``; returns the engagement φ (:func:`engagement`).
+
+    The phase's scheduled gains (:func:`scheduled_gains`); in upper-stage flight faded
+    in from the coast table's, ``K_coast + φ (K_upper − K_coast)``.
+
+    Parameters
+    ----------
+    ft : FcsTables
+        The flight control's data.
+    phase : int
+        Flight-control phase.
+    schedule_var : float
+        Altitude (m) on the stack, Earth-relative speed (m/s) afterwards.
+    since_ignition : float
+        Time since the upper-stage ignition command, s (read in ``FCS_UPPER`` only).
+    out : ndarray
+        Receives the 8 gains at ``k0``.
+    k0 : int
+        First index written.
+    """
+    scheduled_gains(ft.gain_axis, ft.gain_len, ft.gain_data, phase, schedule_var, out, k0)
+    phi = engagement(phase, since_ignition, ft.fade)
+    if phase == FCS_UPPER and phi < 1.0:
+        i, w = locate(ft.gain_axis[FCS_COAST], ft.gain_len[FCS_COAST], schedule_var)
+        for k in range(8):
+            coast = (1.0 - w) * ft.gain_data[FCS_COAST, i, k] + w * ft.gain_data[FCS_COAST, i + 1, k]
+            out[k0 + k] = coast + phi * (out[k0 + k] - coast)
+    return phi
+
+
+@njit(cache=True, error_model="numpy")
 def reset_phase(d: np.ndarray) -> None:
-    """Clear integrators and filter memories at a flight-control phase change."""
+    """Clear integrators and filter memories at separation (the filter set and the
+    integrated-rate gyro change; :func:`engagement` holds the integrators through the
+    coast, so the J-2X ignition needs no reset); the gimbal commands restart at null, as
+    the upper-stage nozzle does."""
+    d[D_CMD_P] = 0.0
+    d[D_CMD_Y] = 0.0
     d[D_INT_ATT:D_INT_ATT + 2] = 0.0
     d[D_INT_RATE:D_INT_RATE + 2] = 0.0
     d[D_FILT:D_FILT + 32] = 0.0

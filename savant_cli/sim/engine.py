@@ -167,8 +167,10 @@ def handle_events(t: float, x: np.ndarray, u: np.ndarray, d: np.ndarray,
         u[U_CONFIG] = CONFIG_UPPER_LES
         u[U_ENGINE] = ENGINE_OFF
         x[MFS] = 0.0
-        x[ACT_P:ACT_P + 3] = 0.0  # the upper-stage nozzle starts at null
+        x[ACT_P:ACT_P + 3] = 0.0  # the upper-stage nozzle starts at null ...
         x[ACT_Y:ACT_Y + 3] = 0.0
+        u[U_DPC] = 0.0  # ... and so does its command (not the first stage's last one)
+        u[U_DYC] = 0.0
         vo = int(p[actuator.P_VALVE_OFFSET])
         if vo >= 0:
             x[vo:vo + actuator.N_VALVE] = 0.0
@@ -181,8 +183,7 @@ def handle_events(t: float, x: np.ndarray, u: np.ndarray, d: np.ndarray,
     if not np.isnan(t_sep) and np.isnan(events[EV_IGNITION]) and t >= t_sep + sched[S_T_IGN_DELAY]:
         events[EV_IGNITION] = t
         u[U_ENGINE] = ENGINE_UPPER
-        u[U_T_IGN] = t
-        reset_phase(d)
+        u[U_T_IGN] = t  # the flight control fades its gains in from here (models/fcs.py)
     t_ign = events[EV_IGNITION]
     if not np.isnan(t_ign) and np.isnan(events[EV_LES]) and t >= t_ign + sched[S_T_LES_DELAY]:
         events[EV_LES] = t
@@ -322,7 +323,7 @@ def _advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0
                 flex.flex_point(x, config, p, tb, flex.PT_IMU, False, flex3)  # flex rotation at the nav unit
                 d[D_FLEX_NAV:D_FLEX_NAV + 3] = flex3
             qt.qmul_into(x[Q:Q + 4], q_imu, q_nav)  # sensed attitude q_b2i ⊗ q_s2b
-            fcs_step(d, q_nav, phase, sched_var, dt_fcs, ft)
+            fcs_step(d, q_nav, phase, sched_var, t - u[U_T_IGN], dt_fcs, ft)
         command_update = (k - int(sched[S_DELAY_STEPS])) % rates.n_fcs == 0
         if command_update:  # the commands, after the loop delay
             u[U_DPC] = d[D_CMD_P]

@@ -298,7 +298,7 @@ def signals(result: SimResult, model: SimModel) -> dict[str, Signal]:
                               tuple(f"{g}_{a}" for g in ("upper", "imu", "first") for a in ("p", "q", "r")), "body"),
         "flex_navigation_rotation": Signal(d[:, L.D_FLEX_NAV:L.D_FLEX_NAV + 3], "rad",
                                            "flex rotation at the navigation unit, added to the attitude errors", rpy, "body"),
-        "fcs_gains": Signal(d[:, L.D_GAINS:L.D_GAINS + 8], "1", "scheduled gains (Kp rad/rad, Ki 1/s, Kd s, Kir rad/rad)",
+        "fcs_gains": Signal(d[:, L.D_GAINS:L.D_GAINS + 8], "1", "applied gains: scheduled, faded in over the J-2X start (Kp rad/rad, Ki 1/s, Kd s, Kir rad/rad)",
                             ("pitch_kp", "pitch_ki", "pitch_kd", "pitch_kir", "yaw_kp", "yaw_ki", "yaw_kd", "yaw_kir")),
         "configuration": Signal(config, "1", "0 integrated stack, 1 upper stage with LES, 2 upper stage"),
     }
