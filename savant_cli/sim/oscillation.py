@@ -62,8 +62,10 @@ HARMONICS = 9  # highest harmonic of a waveform's fit (a triangle's peak to 4 %)
 _SCREEN = 0.5  # screening thresholds: this fraction of the verdict's
 _SCREEN_SAMPLES = 10  # screening: at least this many (block-mean) samples per period
 _SCREEN_HOP = 2.0  # screening: periods between windows
-_REFINE_STEPS = 10  # verdict windows per period
+_REFINE_STEPS = 40  # verdict windows per period
 _ITERATIONS = 8  # at most this many frequency corrections
+_REFINE_SAMPLES = 40  # refinement: at least this many (block-mean) samples per period
+_PERIOD_SAMPLES = 10  # a period of fewer samples is not fitted on its own (_ends_hold)
 _PHASES = 256  # samples of one period of a fitted waveform
 #: chance of a window of white noise passing the tonality test (verdict, screening)
 FALSE_ALARM = 1e-9
@@ -246,10 +248,44 @@ def _modulated(y: np.ndarray, fs: float, f: float, n: int, hop: int, harmonics: 
     return first, coef, tonal, sigma, drift
 
 
+def _ends_hold(y: np.ndarray, fs: float, f: float, n: int, first: np.ndarray, coef: np.ndarray,
+               max_damping_ratio: float) -> np.ndarray:
+    """Whether each window's first and last periods hold the fundamental's amplitude at
+    its centre within what a mode of damping ratio ``max_damping_ratio`` decays or grows
+    over the distance: a window across an oscillation's start or end fails (its linear
+    envelope cannot see a jump). Each end period, less the window's fitted trend, is
+    fitted with a sine and cosine at ``f``. Windows of periods under
+    :data:`_PERIOD_SAMPLES` samples are not tested (their edges are a sample or two)."""
+    m = int(np.floor(fs / f))
+    if m < _PERIOD_SAMPLES:
+        return np.ones(first.size, bool)
+    one = sliding_window_view(y, m)
+    tau = (np.arange(n) - 0.5 * (n - 1)) / fs
+    centre = np.hypot(coef[:, 3], coef[:, 4])
+    allow = 2.0 * np.pi * max_damping_ratio * f * (n - m) / (2.0 * fs)
+    ok = np.ones(first.size, bool)
+    for offset in (0, n - m):
+        tt = tau[offset:offset + m]
+        trend = coef[:, :3] @ np.vstack([np.ones(m), tt, tt**2])
+        wave = np.linalg.pinv(np.column_stack([np.cos(2 * np.pi * f * tt), np.sin(2 * np.pi * f * tt)]))
+        ab = (one[first + offset] - trend) @ wave.T
+        with np.errstate(invalid="ignore", divide="ignore"):
+            ok &= np.abs(np.log(np.hypot(ab[:, 0], ab[:, 1]) / centre)) <= allow
+    return ok
+
+
 def _refine(y: np.ndarray, fs: float, f: float, f_max: float, min_periods: float, min_amplitude: float,
             tonal_fraction: float, max_damping_ratio: float) -> list[Oscillation]:
     """Refinement and verdict at one cluster's frequency (module notes, steps 2 and 3);
-    times in samples of ``y``."""
+    times in samples of ``y``. Slow oscillations are refined on block means of ``y``
+    holding at least :data:`_REFINE_SAMPLES` per period (a power of two per block)."""
+    d = 1 << max(0, int(np.floor(np.log2(fs / (_REFINE_SAMPLES * f * GRID_RATIO**2)))))
+    if d > 1:
+        m = y.size // d
+        found = _refine(y[:m * d].reshape(m, d).mean(axis=1), fs / d, f, f_max, min_periods, min_amplitude,
+                        tonal_fraction, max_damping_ratio)
+        return [Oscillation(o.frequency_hz, o.amplitude_deg, o.start_s * d, o.end_s * d + d - 1, o.damping_ratio,
+                            o.tonality) for o in found]
     f0 = f
     for _ in range(_ITERATIONS):
         n = int(np.floor(min_periods * fs / f + 1e-9))
@@ -280,6 +316,7 @@ def _refine(y: np.ndarray, fs: float, f: float, f_max: float, min_periods: float
     amp = _periodic_amplitude(coef, harmonics)
     least = max(tonal_fraction, chance_tonality(n, 2 + 2 * harmonics, FALSE_ALARM))
     ok = (tonal >= least) & (amp >= min_amplitude) & (np.abs(zeta) < max_damping_ratio)
+    ok &= _ends_hold(y, fs, f, n, first, coef, max_damping_ratio)
     found = []
     idx = np.flatnonzero(ok)
     if idx.size:
