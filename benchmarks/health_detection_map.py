@@ -99,6 +99,7 @@ def main() -> None:
                 ax.loglog(FREQUENCIES, amp[:, j], marker="o", ms=3, label=f"{p:g} periods")
             ax.set_xlabel("frequency (Hz)")
             ax.set_ylabel("smallest detected amplitude (deg)")
+            ax.set_ylim(0.03, 10.0)
             ax.set_title(f"noise {noise:g} deg RMS", fontsize=9)
             ax.grid(True, which="both", lw=0.3)
             ax.legend(fontsize=7)

@@ -4,35 +4,46 @@ analysis behind the flight-health verdicts of :mod:`savant_cli.sim.health`.
 **Limit cycle** (:func:`find_limit_cycle`). The class it finds, the detector's definition:
 a segment ``y(t) = trend(t) + A·w(2πft + φ) + noise`` where ``w`` is a periodic waveform
 of unit amplitude (sine, triangle, any shape whose first harmonic dominates), ``f`` lies
-in ``[F_LOW_HZ, f_max]``, the oscillation lasts at least ``min_periods`` periods, its
-amplitude (half its peak-to-peak) is at least ``min_amplitude_deg``, its periodic part
-holds at least ``tonal_fraction`` of the detrended variance, and its envelope does not
-decay as fast as a mode of damping ratio ``max_damping_ratio`` (a slower decay, a
-constant amplitude or a growth is *sustained*). The trend is whatever a quadratic
-follows over ``min_periods`` periods (guidance-following motion, trims).
+in ``[F_LOW_HZ, f_max]`` (:func:`band_top_hz`), the oscillation lasts at least
+``min_periods`` periods, its amplitude (half its peak-to-peak) is at least
+``min_amplitude_deg``, its periodic part holds at least ``tonal_fraction`` of the
+detrended variance, and its envelope neither decays nor grows as fast as a mode of damping
+ratio ``max_damping_ratio``. The trend is whatever a quadratic follows over
+``min_periods`` periods (guidance-following motion, trims). docs/outputs.md, *Flight
+health*, gives the thresholds' reasons and the measured signal set.
 
 Method: windows sized in periods, not seconds. For a candidate frequency ``f`` every
-window holds ``min_periods`` periods of the signal; in each, a linear least-squares fit
-of a quadratic trend plus the oscillation at ``f`` gives the oscillation's share of the
-detrended variance (its *tonality*) and its amplitude.
+window holds ``min_periods`` periods (rounded down to whole samples); in each, a linear
+least-squares fit of a quadratic trend plus the oscillation at ``f`` gives the
+oscillation's share of the detrended variance (its *tonality*) and its amplitude. The
+fundamental may vary linearly in amplitude and phase over a window: y1 = (a + a'τ) cos ωτ
++ (b + b'τ) sin ωτ gives the envelope's log rate σ and the phase drift (the frequency
+error) at the window's centre.
 
-1. *Screening*: ``f`` on a log grid (ratio :data:`GRID_RATIO`) from ``F_LOW_HZ`` to
-   ``f_max``, windows one period apart, the trend plus a sine and cosine at ``f``; a
-   window is a candidate when its tonality and its first-harmonic amplitude reach half
-   their thresholds (a tone between grid points, or a burst only partly inside the
-   window, still passes). Neighbouring grid frequencies with candidates form one
-   cluster; its best-fitting frequency is refined.
-2. *Refinement*, at full resolution: windows a twentieth of a period apart; the
-   fundamental's amplitude and phase may vary linearly over the window, which gives
-   both its decay rate σ (1/s) and its frequency error (the phase drift); the frequency
-   is corrected from the median drift (three passes). Then the harmonics up to
-   ``HARMONICS`` (below the log's Nyquist frequency) are added and each window gives its
-   periodic waveform: amplitude = half its peak-to-peak, tonality = the periodic part's
-   share of the variance left by the trend, damping ratio ζ = −σ / (2πf).
-3. A window *oscillates* when its tonality ≥ ``tonal_fraction``, its amplitude ≥
-   ``min_amplitude_deg`` and ζ < ``max_damping_ratio``. Consecutive oscillating windows
-   make one oscillation, from the first window's start to the last one's end (at least
-   ``min_periods`` periods by construction), its amplitude the median of its windows'.
+1. *Screening*: ``f`` on a log grid (:func:`screening_grid`: ratio :data:`GRID_RATIO`,
+   :data:`GRID_RATIO_SHORT` where a window holds fewer than :data:`_SHORT` samples and is
+   fitted without the drift columns), on block means of at least :data:`_SCREEN_SAMPLES`
+   samples per period, windows :data:`_SCREEN_HOP` periods apart. A window is a candidate
+   when its tonality and fundamental amplitude reach :data:`_SCREEN` of the verdict's
+   thresholds and its tonality exceeds white noise's at :data:`_FALSE_ALARM_SCREEN`
+   (capped at :data:`_SCREEN_CAP`). Neighbouring grid frequencies with candidates form a
+   cluster; the frequency of its best-fitting window (tonality × amplitude), corrected by
+   that window's phase drift, is refined over the cluster's span.
+2. *Refinement*, on block means of at least :data:`_REFINE_SAMPLES` samples per period:
+   the frequency is corrected by the median phase drift of the best-fitting windows
+   until it moves less than 10⁻⁴ of itself (at most :data:`_ITERATIONS` passes); then
+   windows 1/:data:`_REFINE_STEPS` period apart are fitted with the trend, the modulated
+   fundamental and harmonics 2..:data:`HARMONICS` up to ``f_max``: each gives its periodic
+   waveform's amplitude (half its peak-to-peak), its tonality and the damping ratio
+   ζ = −σ / (2πf).
+3. A window *oscillates* when its tonality ≥ max(``tonal_fraction``, white noise's
+   tonality at :data:`FALSE_ALARM`: :func:`chance_tonality`), its amplitude ≥
+   ``min_amplitude_deg``, |ζ| < ``max_damping_ratio``, and its first and last periods
+   hold the centre's amplitude within what that damping changes over the distance
+   (:func:`_ends_hold`: a window across an oscillation's start or end fails). Oscillating
+   windows one after another (gaps shorter than a window bridged) make one oscillation,
+   from the first window's start to the last one's end, its amplitude the median of its
+   windows'.
 
 **Slow divergence** (:func:`find_slow_divergence`): the envelope E(t) (the largest |y|
 over the trailing ``1/F_LOW_HZ`` s, one period of the slowest oscillation looked for) has
