@@ -31,10 +31,15 @@ class HealthConfig:
     (``savant_cli/sim/health.py``)."""
 
     max_saturation_s: float = 1.0  # s on a rate limit or gimbal stop (per stage) → "saturated"
-    min_amplitude_deg: float = 0.1  # limit cycle: smallest gimbal-angle or attitude-error amplitude
+    min_amplitude_deg: float = 0.1  # limit cycle, slow divergence: smallest amplitude (gimbal angle, attitude error)
     min_periods: float = 5.0  # limit cycle: the oscillation holds for at least this many periods
-    window_s: float = 20.0  # limit cycle: analysis window (and the quiet time after each event)
-    tonal_fraction: float = 0.5  # limit cycle: share of a window's variance in its spectral peak
+    tonal_fraction: float = 0.5  # limit cycle: share of the detrended variance in the periodic part
+    max_damping_ratio: float = 0.005  # limit cycle: an envelope decaying (or growing) this fast is not sustained
+    event_quiet_s: float = 20.0  # limit cycle, slow divergence: s left out after each event
+    divergence_growth: float = 10.0  # slow divergence: attitude-error envelope growth (–) to the stage's end
+    max_attitude_error_deg: float = 10.0  # loss of control: pitch/yaw attitude-error magnitude bound
+    max_alpha_deg: Optional[float] = None  # loss of control: total angle-of-attack bound (None: off)
+    alpha_min_dynamic_pressure_Pa: float = 1000.0  # the α bound applies from this dynamic pressure on
 
 
 @dataclass
@@ -972,12 +977,29 @@ def _check_rates(sim: SimConfig) -> None:
                               f"must divide sim.plant_rate_hz = {sim.plant_rate_hz} into a whole number of steps")
     _positive("sim.chunk_s", sim.chunk_s)
     _positive("sim.max_body_rate_deg_s", sim.max_body_rate_deg_s)
+    _check_health(sim)
+
+
+def _check_health(sim: SimConfig) -> None:
     h = sim.health
-    _non_negative("sim.health.max_saturation_s", h.max_saturation_s)
-    for name in ("min_amplitude_deg", "min_periods", "window_s"):
+    for name in ("max_saturation_s", "event_quiet_s", "alpha_min_dynamic_pressure_Pa"):
+        _non_negative(f"sim.health.{name}", getattr(h, name))
+    for name in ("min_amplitude_deg", "max_damping_ratio"):
         _positive(f"sim.health.{name}", getattr(h, name))
+    if not (np.isfinite(h.min_periods) and h.min_periods >= 2.0):
+        raise ConfigError("sim.health.min_periods", h.min_periods,
+                          "must be a finite number of periods of at least 2 (a sustained oscillation repeats)")
     if not 0.0 < h.tonal_fraction <= 1.0:
         raise ConfigError("sim.health.tonal_fraction", h.tonal_fraction, "must lie in (0, 1]")
+    if not (np.isfinite(h.divergence_growth) and h.divergence_growth > 1.0):
+        raise ConfigError("sim.health.divergence_growth", h.divergence_growth,
+                          "must be a finite envelope growth ratio above 1")
+    if not (np.isfinite(h.max_attitude_error_deg) and 0.0 < h.max_attitude_error_deg < 180.0):
+        raise ConfigError("sim.health.max_attitude_error_deg", h.max_attitude_error_deg,
+                          "must be an angle between 0 and 180 deg (exclusive)")
+    if h.max_alpha_deg is not None and not (np.isfinite(h.max_alpha_deg) and 0.0 < h.max_alpha_deg < 180.0):
+        raise ConfigError("sim.health.max_alpha_deg", h.max_alpha_deg,
+                          "must be null (no bound) or an angle between 0 and 180 deg (exclusive)")
 
 
 def _check_controller(c: ControllerConfig) -> None:

@@ -148,7 +148,8 @@ class Result:
     config : omegaconf.DictConfig
         The composed configuration the study ran with, resolved.
     status, message : str
-        The run's verdict (``complete``, ``limit_cycle``, ``saturated``, ``diverged`` …)
+        The run's verdict (``complete``, ``loss_of_control``, ``limit_cycle``,
+        ``slow_divergence``, ``saturated``, ``diverged`` …)
         and why it stopped; a Monte Carlo's ``status`` is ``complete`` when every run is.
     exit_code : int
         What ``savant run`` exited with, or would have: 0 when the flight flew to its end

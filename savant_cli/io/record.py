@@ -17,10 +17,12 @@ import numpy as np
 SummaryValue = float | int | str | None
 
 #: ``RunRecord.status`` values.
-STATUSES = ("complete", "limit_cycle", "saturated", "diverged", "guidance_failed", "interrupted", "failed")
-#: The statuses of a run that flew to its end: ``complete`` is healthy, ``limit_cycle``
-#: and ``saturated`` are not (``savant_cli/sim/health.py``).
-FLOWN = ("complete", "limit_cycle", "saturated")
+STATUSES = ("complete", "loss_of_control", "limit_cycle", "slow_divergence", "saturated", "diverged",
+            "guidance_failed", "interrupted", "failed")
+#: The statuses of a run that flew to its end (its health in its status): ``complete`` is
+#: healthy; ``loss_of_control``, ``limit_cycle``, ``slow_divergence`` and ``saturated``
+#: are not, in this priority (``savant_cli/sim/health.py``).
+FLOWN = ("complete", "loss_of_control", "limit_cycle", "slow_divergence", "saturated")
 #: A run's mission failure classes, most severe first (``savant_cli/sim/mission.py``
 #: holds their rules; the requirement set names those counted as failures).
 FAILURE_CLASSES = ("loss_of_control", "guidance_failure", "propellant_depletion", "time_limit",
@@ -79,7 +81,8 @@ class RunRecord:
         False when the run diverged, was interrupted or failed (it did not fly to its end).
     status : str
         One of :data:`STATUSES`: ``"complete"`` (flew to its end, healthy),
-        ``"limit_cycle"`` or ``"saturated"`` (flew to its end, unhealthy), ``"diverged"``,
+        ``"loss_of_control"``, ``"limit_cycle"``, ``"slow_divergence"`` or ``"saturated"``
+        (flew to its end, unhealthy: :data:`FLOWN`), ``"diverged"``,
         ``"guidance_failed"`` (closed-loop guidance stopped the run), ``"interrupted"`` or
         ``"failed"``.
     message : str

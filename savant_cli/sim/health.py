@@ -1,11 +1,13 @@
-"""Flight health of one run: time on the actuator limits, per-stage peak rates, and a
-limit-cycle detector (issue 12 item 8).
+"""Flight health of one run: time on the actuator limits, per-stage peak rates, a
+limit-cycle detector, a slow-divergence detector and the loss-of-control bounds (issue 12
+item 8, issue 26 item 4).
 
 :func:`assess` reads a flown run's history (the log at ``sim.log_rate_hz``) and returns
-the health keys of its summary; a run that flew to its end but limit-cycled, or sat on an
-actuator limit longer than allowed, gets the status ``limit_cycle`` or ``saturated``
-instead of ``complete`` (``savant_cli/io/record.py``), with the numbers behind the
-verdict in its message and summary.
+the health keys of its summary. A run that flew to its end but is unhealthy gets, instead
+of ``complete``, the first of the statuses ``loss_of_control``, ``limit_cycle``,
+``slow_divergence``, ``saturated`` that applies (``savant_cli/io/record.py``), with the
+numbers behind the verdict in its message and summary. A run that did not fly to its end
+(``diverged`` …) keeps its status; its health keys are still computed.
 
 Limits, per stage (first stage before separation, upper stage from it on), by the log's
 sample spacing as ``rcs_on_time_s``:
@@ -16,18 +18,24 @@ sample spacing as ``rcs_on_time_s``:
 * *peak gimbal rate*: the largest nozzle rate |δ̇| of either axis (deg/s), and the
   largest body-rate magnitude |ω| over the flight.
 
-Limit cycle: a sustained periodic oscillation of a gimbal angle or an attitude error
-(pitch, yaw). Each stage's history (less ``window_s`` after each event, where transients
-are expected) is cut into windows of ``window_s`` with half-window steps; each window is
-detrended (a cubic: the guidance-following motion) and its periodogram (Hann window,
-:func:`scipy.signal.periodogram`) gives the peak frequency f, the fraction of the
-window's variance within ±15 % of f (*tonality*) and the amplitude of that narrow-band
-part, √2 × its RMS (the density integrated over the band). A window oscillates when its tonality is at least
-``tonal_fraction``, its amplitude at least ``min_amplitude_deg`` and it holds three
-periods. A limit cycle is a run of at least three consecutive oscillating windows (two window
-lengths) at one frequency (within ±15 % of their median) spanning at least
-``min_periods`` periods whose amplitude holds (the last window's at least half the first's: a decaying transient is not a limit
-cycle). The largest is reported: signal, frequency, amplitude, start and end.
+Limit cycle: a sustained oscillation of a gimbal angle or an attitude error (pitch, yaw)
+by :func:`savant_cli.sim.oscillation.find_limit_cycle` (its definition and method are in
+that module's notes), in each stage's history less ``event_quiet_s`` after each event
+(liftoff, separation, upper-stage ignition, LES jettison), from 0.05 Hz to
+:func:`~savant_cli.sim.oscillation.band_top_hz` (half the flight-control rate, below the
+log's Nyquist frequency). The one of most periods is reported.
+
+Slow divergence: the pitch or yaw attitude error's envelope grows by
+``divergence_growth`` or more to the end of a stage's quiet stretch and is still growing
+there (:func:`savant_cli.sim.oscillation.find_slow_divergence`). The attitude error is the
+regulated quantity, which a controlled flight keeps bounded; a gimbal angle is not
+tested, its trim legitimately follows the centre-of-gravity travel and the thrust
+misalignment. The largest growth is reported.
+
+Loss of control: the pitch/yaw attitude-error magnitude √(e_θ² + e_ψ²) exceeds
+``max_attitude_error_deg`` anywhere in the flown history, or (when ``max_alpha_deg`` is
+set) the total angle of attack α_t (cos α_t = cos α cos β) exceeds it while the dynamic
+pressure is at least ``alpha_min_dynamic_pressure_Pa``. The first exceedance is reported.
 """
 
 from __future__ import annotations
@@ -36,7 +44,6 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from scipy.signal import periodogram
 
 from savant_cli.io.record import Signal
 from savant_cli.models import actuator
@@ -44,17 +51,21 @@ from savant_cli.models.configurations import ENGINE_FIRST
 from savant_cli.sim import engine as E
 from savant_cli.sim import layout as L
 from savant_cli.sim.build import SimModel
+from savant_cli.sim.oscillation import band_top_hz, find_limit_cycles, find_slow_divergence
 from savant_cli.sim.run import SimResult
 
 STAGES = ("first_stage", "upper_stage")
-_BAND = 0.15  # ± relative half-width of a tonal peak and of one frequency across windows
 _ON_STOP = 1.0 - 1e-9  # a state within this fraction of its limit is on the stop
-_MIN_WINDOWS = 3  # consecutive oscillating windows (two window lengths) for a limit cycle
+#: the signals searched for a limit cycle: name → (signal, column)
+CYCLE_SIGNALS = {"gimbal_angle_pitch": ("gimbal_angle", 0), "gimbal_angle_yaw": ("gimbal_angle", 1),
+                 "attitude_error_pitch": ("attitude_error", 1), "attitude_error_yaw": ("attitude_error", 2)}
+#: the signals searched for a slow divergence
+DIVERGENCE_SIGNALS = ("attitude_error_pitch", "attitude_error_yaw")
 
 
 @dataclass
 class LimitCycle:
-    """The strongest sustained oscillation found in a run."""
+    """The sustained oscillation of most periods found in a run."""
 
     signal: str  # e.g. "gimbal_angle_pitch"
     stage: str
@@ -68,6 +79,27 @@ class LimitCycle:
         return (self.end_s - self.start_s) * self.frequency_hz
 
 
+@dataclass
+class SlowDivergence:
+    """The largest slow divergence found in a run (growth –, envelope deg, times s)."""
+
+    signal: str
+    stage: str
+    growth: float
+    start_s: float
+    end_s: float
+    start_deg: float
+    end_deg: float
+
+
+@dataclass
+class LossOfControl:
+    """The first exceedance of a loss-of-control bound."""
+
+    time_s: float
+    reason: str
+
+
 def _limits(model: SimModel, stage: int) -> tuple[float, float]:
     """(rate limit rad/s, gimbal limit rad) of a stage (0 first, 1 upper)."""
     return actuator.limits(model.p, ENGINE_FIRST if stage == 0 else L.ENGINE_UPPER)
@@ -79,70 +111,85 @@ def _stage_masks(t: np.ndarray, result: SimResult) -> list[np.ndarray]:
     return [first, ~first]
 
 
-def _window_peaks(y: np.ndarray, fs: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Peak frequency (Hz), tonality and narrow-band amplitude of each row of ``y`` (one
-    window per row, uniformly sampled at ``fs``), all windows at once: each row less its
-    least-squares cubic, then its Hann-windowed periodogram."""
-    n = y.shape[1]
-    tau = np.arange(n) / fs
-    basis = np.vander(tau - tau.mean(), 4)
-    y = y - (y @ np.linalg.pinv(basis).T) @ basis.T
-    f, pxx = periodogram(y, fs=fs, window="hann", detrend=False, scaling="density", axis=-1)
-    df = f[1] - f[0]
-    k = 1 + np.argmax(pxx[:, 1:], axis=1)
-    fk = f[k]
-    band = (f[None, :] >= (1 - _BAND) * fk[:, None]) & (f[None, :] <= (1 + _BAND) * fk[:, None])
-    # a density integrates to the mean square (the Hann window's noise bandwidth is in
-    # the scaling), so the band's share is its variance: a sine of amplitude A gives A²/2
-    power = (pxx * band).sum(axis=1) * df
-    total = pxx[:, 1:].sum(axis=1) * df
-    with np.errstate(invalid="ignore", divide="ignore"):
-        tonal = np.where(total > 0.0, power / total, 0.0)
-    return fk, tonal, np.sqrt(2.0 * power)
+def _quiet_pieces(t: np.ndarray, result: SimResult, quiet_s: float) -> list[tuple[str, np.ndarray]]:
+    """(stage, sample indices) of each contiguous stretch of a stage that lies outside
+    the ``quiet_s`` after liftoff, separation, upper-stage ignition and LES jettison."""
+    starts = [float(t[0]), result.events[E.EV_SEPARATION], result.events[E.EV_IGNITION], result.events[E.EV_LES]]
+    quiet = np.ones(t.size, bool)
+    for te in starts:
+        if np.isfinite(te):
+            quiet &= ~((t >= te) & (t < te + quiet_s))
+    out = []
+    for stage, mask in zip(STAGES, _stage_masks(t, result)):
+        idx = np.flatnonzero(mask & quiet)
+        if idx.size >= 16:
+            out += [(stage, piece) for piece in np.split(idx, np.flatnonzero(np.diff(idx) > 1) + 1) if piece.size >= 16]
+    return out
 
 
-def detect_limit_cycle(t: np.ndarray, y_deg: np.ndarray, window_s: float, min_amplitude_deg: float,
-                       tonal_fraction: float, min_periods: float) -> tuple[float, float, float, float] | None:
-    """The longest sustained oscillation of one signal segment (deg): ``(frequency Hz,
-    amplitude deg, start s, end s)``, or None (method in the module notes)."""
-    if t.size < 8 or not np.isfinite(y_deg).all():
-        return None
-    fs = 1.0 / float(np.median(np.diff(t)))
-    n = int(round(window_s * fs))
-    if n < 16 or t.size < n:
-        return None
-    starts = np.arange(0, t.size - n + 1, n // 2)
-    f, tonal, amp = _window_peaks(y_deg[starts[:, None] + np.arange(n)[None, :]], fs)
-    ok = (tonal >= tonal_fraction) & (amp >= min_amplitude_deg) & (f * window_s >= 3.0)
-    hits = [(bool(ok[w]), float(f[w]), float(amp[w]), float(t[s0]), float(t[s0 + n - 1]))
-            for w, s0 in enumerate(starts)]
+def _signal_deg(sig: dict[str, Signal], name: str) -> np.ndarray:
+    signal, column = CYCLE_SIGNALS[name]
+    return np.degrees(sig[signal].data[:, column])
+
+
+def limit_cycle(t: np.ndarray, sig: dict[str, Signal], result: SimResult, model: SimModel, cfg) -> LimitCycle | None:
+    """The limit cycle of most periods over the gimbal angles and attitude errors (pitch,
+    yaw) of both stages (module notes), or None. ``cfg`` is ``sim.health``."""
+    fs_fcs = 1.0 / (model.rates.n_fcs * model.rates.dt)
+    fs_log = 1.0 / float(np.median(np.diff(t)))
+    top = band_top_hz(fs_fcs, fs_log, cfg.min_periods)
     best = None
-    i = 0
-    while i < len(hits):
-        if not hits[i][0]:
-            i += 1
-            continue
-        j = i
-        while j + 1 < len(hits) and hits[j + 1][0]:
-            j += 1
-        run = hits[i:j + 1]
-        f_med = float(np.median([h[1] for h in run]))
-        run = [h for h in run if abs(h[1] - f_med) <= _BAND * f_med]
-        if len(run) >= _MIN_WINDOWS:
-            start, end = run[0][3], run[-1][4]
-            holds = run[-1][2] >= 0.5 * run[0][2]
-            if holds and (end - start) * f_med >= min_periods:
-                amplitude = float(np.median([h[2] for h in run]))
-                if best is None or (end - start) > best[3] - best[2]:
-                    best = (f_med, amplitude, start, end)
-        i = j + 1
+    names = list(CYCLE_SIGNALS)
+    for stage, piece in _quiet_pieces(t, result, cfg.event_quiet_s):
+        rows = np.stack([_signal_deg(sig, name)[piece] for name in names])
+        for name, found in zip(names, find_limit_cycles(t[piece], rows, top, cfg.min_amplitude_deg,
+                                                         cfg.tonal_fraction, cfg.min_periods, cfg.max_damping_ratio)):
+            if found and (best is None or found.periods > best.periods):
+                best = LimitCycle(name, stage, found.frequency_hz, found.amplitude_deg, found.start_s, found.end_s)
     return best
+
+
+def slow_divergence(t: np.ndarray, sig: dict[str, Signal], result: SimResult, cfg) -> SlowDivergence | None:
+    """The largest slow divergence of the pitch and yaw attitude errors of both stages
+    (module notes), or None."""
+    best = None
+    for stage, piece in _quiet_pieces(t, result, cfg.event_quiet_s):
+        for name in DIVERGENCE_SIGNALS:
+            found = find_slow_divergence(t[piece], _signal_deg(sig, name)[piece], cfg.divergence_growth,
+                                         cfg.min_amplitude_deg)
+            if found and (best is None or found.growth > best.growth):
+                best = SlowDivergence(name, stage, found.growth, found.start_s, found.end_s, found.start_deg,
+                                      found.end_deg)
+    return best
+
+
+def loss_of_control(t: np.ndarray, sig: dict[str, Signal], cfg) -> LossOfControl | None:
+    """The first exceedance of the attitude-error bound or the α bound (module notes)."""
+    err = np.degrees(np.hypot(sig["attitude_error"].data[:, 1], sig["attitude_error"].data[:, 2]))
+    found = []
+    over = np.flatnonzero(err > cfg.max_attitude_error_deg)
+    if over.size:
+        k = int(over[0])
+        found.append(LossOfControl(float(t[k]), f"attitude error {err[k]:.1f} deg > {cfg.max_attitude_error_deg:g} deg "
+                                                f"at {t[k]:.1f} s"))
+    if cfg.max_alpha_deg is not None:
+        cos_total = np.clip(np.cos(sig["alpha"].data) * np.cos(sig["beta"].data), -1.0, 1.0)
+        alpha_total = np.degrees(np.arccos(cos_total))
+        q = sig["dynamic_pressure"].data
+        over = np.flatnonzero((alpha_total > cfg.max_alpha_deg) & (q >= cfg.alpha_min_dynamic_pressure_Pa))
+        if over.size:
+            k = int(over[0])
+            found.append(LossOfControl(float(t[k]), f"total angle of attack {alpha_total[k]:.1f} deg > "
+                                                    f"{cfg.max_alpha_deg:g} deg at {t[k]:.1f} s "
+                                                    f"(dynamic pressure {q[k]:,.0f} Pa)"))
+    return min(found, key=lambda x: x.time_s) if found else None
 
 
 def assess(result: SimResult, sig: dict[str, Signal], model: SimModel, cfg) -> dict[str, Any]:
     """Health keys of a flown run (see the module notes); sets ``result.status`` and
-    ``result.message`` to ``limit_cycle`` or ``saturated`` for a run that flew to its end
-    but is unhealthy. ``cfg`` is the ``sim.health`` config."""
+    ``result.message`` to ``loss_of_control``, ``limit_cycle``, ``slow_divergence`` or
+    ``saturated`` (the first that applies) for a run that flew to its end but is
+    unhealthy. ``cfg`` is the ``sim.health`` config."""
     t = sig["time"].data
     out: dict[str, Any] = {}
     if t.size < 2:
@@ -164,52 +211,38 @@ def assess(result: SimResult, sig: dict[str, Signal], model: SimModel, cfg) -> d
             if dt[held].sum() > longest_hold[1]:
                 longest_hold = (f"{name.replace('_', ' ')} {what}", float(dt[held].sum()))
     out["max_body_rate_deg_s"] = float(np.degrees(np.linalg.norm(sig["body_rate"].data, axis=1)).max())
-    cycle = _limit_cycle(t, sig, result, cfg)
+    cycle = limit_cycle(t, sig, result, model, cfg)
     out["limit_cycle"] = cycle is not None
     out["limit_cycle_signal"] = cycle.signal if cycle else ""
     out["limit_cycle_frequency_hz"] = cycle.frequency_hz if cycle else None
     out["limit_cycle_amplitude_deg"] = cycle.amplitude_deg if cycle else None
     out["limit_cycle_start_s"] = cycle.start_s if cycle else None
     out["limit_cycle_end_s"] = cycle.end_s if cycle else None
-    flags = (["limit_cycle"] if cycle else []) + (["saturated"] if longest_hold[1] > cfg.max_saturation_s else [])
+    div = slow_divergence(t, sig, result, cfg)
+    out["slow_divergence"] = div is not None
+    out["slow_divergence_signal"] = div.signal if div else ""
+    out["slow_divergence_growth"] = div.growth if div else None
+    loc = loss_of_control(t, sig, cfg)
+    out["loss_of_control"] = loc is not None
+    out["loss_of_control_time_s"] = loc.time_s if loc else None
+    out["loss_of_control_reason"] = loc.reason if loc else ""
+    saturated = longest_hold[1] > cfg.max_saturation_s
+    flags = [name for name, on in (("loss_of_control", loc), ("limit_cycle", cycle), ("slow_divergence", div),
+                                   ("saturated", saturated)) if on]
     out["health_flags"] = ",".join(flags)
     if result.status == "complete" and flags:
-        if cycle:
-            result.status = "limit_cycle"
+        result.status = flags[0]
+        if loc:
+            result.message = f"loss of control: {loc.reason} ({result.message})"
+        elif cycle:
             result.message = (f"limit cycle: {cycle.signal} {cycle.amplitude_deg:.3g} deg at "
                               f"{cycle.frequency_hz:.3g} Hz, {cycle.start_s:.1f}–{cycle.end_s:.1f} s "
                               f"({result.message})")
+        elif div:
+            result.message = (f"slow divergence: {div.signal} envelope grew ×{div.growth:.3g}, "
+                              f"{div.start_deg:.3g} deg at {div.start_s:.1f} s to {div.end_deg:.3g} deg at "
+                              f"{div.end_s:.1f} s ({result.message})")
         else:
-            result.status = "saturated"
             result.message = (f"saturated: {longest_hold[1]:.2f} s on the {longest_hold[0]} "
                               f"(more than sim.health.max_saturation_s = {cfg.max_saturation_s} s; {result.message})")
     return out
-
-
-def _limit_cycle(t: np.ndarray, sig: dict[str, Signal], result: SimResult, cfg) -> LimitCycle | None:
-    """The longest limit cycle over the gimbal angles and attitude errors (pitch, yaw) of
-    both stages, each stage less ``window_s`` after its start events."""
-    starts = [0.0, result.events[E.EV_SEPARATION], result.events[E.EV_IGNITION], result.events[E.EV_LES]]
-    quiet = np.ones(t.size, bool)
-    for te in starts:
-        if np.isfinite(te):
-            quiet &= ~((t >= te) & (t < te + cfg.window_s))
-    candidates = {"gimbal_angle_pitch": sig["gimbal_angle"].data[:, 0], "gimbal_angle_yaw": sig["gimbal_angle"].data[:, 1],
-                  "attitude_error_pitch": sig["attitude_error"].data[:, 1],
-                  "attitude_error_yaw": sig["attitude_error"].data[:, 2]}
-    best = None
-    for stage, mask in zip(STAGES, _stage_masks(t, result)):
-        m = mask & quiet
-        if m.sum() < 16:
-            continue
-        # the longest contiguous quiet stretch of the stage
-        idx = np.flatnonzero(m)
-        breaks = np.flatnonzero(np.diff(idx) > 1)
-        pieces = np.split(idx, breaks + 1)
-        for piece in pieces:
-            for name, y in candidates.items():
-                found = detect_limit_cycle(t[piece], np.degrees(y[piece]), cfg.window_s, cfg.min_amplitude_deg,
-                                           cfg.tonal_fraction, cfg.min_periods)
-                if found and (best is None or (found[3] - found[2]) * found[0] > best.periods):
-                    best = LimitCycle(name, stage, found[0], found[1], found[2], found[3])
-    return best
