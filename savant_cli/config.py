@@ -37,6 +37,7 @@ class HealthConfig:
     max_damping_ratio: float = 0.005  # limit cycle: an envelope decaying (or growing) this fast is not sustained
     event_quiet_s: float = 20.0  # limit cycle, slow divergence: s left out after each event
     divergence_growth: float = 10.0  # slow divergence: attitude-error envelope growth (–) to the stage's end
+    divergence_min_amplitude_deg: float = 1.0  # slow divergence: ... reaching this (deg): 1/10 of the LOC bound
     max_attitude_error_deg: float = 10.0  # loss of control: pitch/yaw attitude-error magnitude bound
     max_alpha_deg: Optional[float] = None  # loss of control: total angle-of-attack bound (None: off)
     alpha_min_dynamic_pressure_Pa: float = 1000.0  # the α bound applies from this dynamic pressure on
@@ -997,6 +998,10 @@ def _check_health(sim: SimConfig) -> None:
     if not (np.isfinite(h.max_attitude_error_deg) and 0.0 < h.max_attitude_error_deg < 180.0):
         raise ConfigError("sim.health.max_attitude_error_deg", h.max_attitude_error_deg,
                           "must be an angle between 0 and 180 deg (exclusive)")
+    if not 0.0 < h.divergence_min_amplitude_deg <= h.max_attitude_error_deg:
+        raise ConfigError("sim.health.divergence_min_amplitude_deg", h.divergence_min_amplitude_deg,
+                          f"must be positive and at most sim.health.max_attitude_error_deg "
+                          f"({h.max_attitude_error_deg} deg): a divergence is flagged before it is a loss of control")
     if h.max_alpha_deg is not None and not (np.isfinite(h.max_alpha_deg) and 0.0 < h.max_alpha_deg < 180.0):
         raise ConfigError("sim.health.max_alpha_deg", h.max_alpha_deg,
                           "must be null (no bound) or an angle between 0 and 180 deg (exclusive)")

@@ -147,7 +147,7 @@ def test_slow_divergence_of_the_issue_and_bounded_trends():
     (under the 10 of divergence_growth) and one ending under min_amplitude_deg are not."""
     t = np.arange(0.0, 430.0, 1.0 / FS)
     grow = 0.01 * np.exp(np.log(400.0) * t / t[-1])
-    found = find_slow_divergence(t, grow, CFG.divergence_growth, CFG.min_amplitude_deg)
+    found = find_slow_divergence(t, grow, CFG.divergence_growth, CFG.divergence_min_amplitude_deg)
     assert found is not None and found.end_deg == pytest.approx(4.0, rel=1e-3)
     assert found.growth == pytest.approx(4.0 / grow[int(round(20.0 * FS)) - 1], rel=1e-3)
     assert find_slow_divergence(t, 1.0 - np.exp(-t / 50.0), 10.0, 0.1) is None  # bounded
@@ -159,6 +159,10 @@ def test_slow_divergence_of_the_issue_and_bounded_trends():
     assert find_slow_divergence(t, nine, 10.0, 0.1) is None
     assert find_slow_divergence(t, eleven, 10.0, 0.1).growth == pytest.approx(11.0, rel=1e-3)
     assert find_slow_divergence(t, grow * 0.02, 10.0, 0.1) is None  # ends at 0.08 deg
+    # the shipped floor, a tenth of the 10 deg loss-of-control bound: just under and over
+    assert CFG.divergence_min_amplitude_deg == 0.1 * CFG.max_attitude_error_deg
+    assert find_slow_divergence(t, grow * 0.99 / 4.0, 10.0, CFG.divergence_min_amplitude_deg) is None
+    assert find_slow_divergence(t, grow * 1.01 / 4.0, 10.0, CFG.divergence_min_amplitude_deg) is not None
 
 
 @pytest.fixture(scope="module")
@@ -298,7 +302,7 @@ def test_loss_of_control_bounds_and_the_status_priority(model):
     ("min_periods", 1.5), ("tonal_fraction", 0.0), ("tonal_fraction", 1.2), ("max_damping_ratio", 0.0),
     ("event_quiet_s", -1.0), ("divergence_growth", 1.0), ("max_attitude_error_deg", 0.0),
     ("max_attitude_error_deg", 180.0), ("max_alpha_deg", -5.0), ("alpha_min_dynamic_pressure_Pa", -1.0),
-    ("min_amplitude_deg", 0.0)])
+    ("min_amplitude_deg", 0.0), ("divergence_min_amplitude_deg", 0.0), ("divergence_min_amplitude_deg", 10.5)])
 def test_bad_health_settings_are_refused_by_key(key, value):
     with pytest.raises(ConfigError) as err:
         validate(compose_config([f"sim.health.{key}={value}"]))

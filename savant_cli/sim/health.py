@@ -156,7 +156,7 @@ def slow_divergence(t: np.ndarray, sig: dict[str, Signal], result: SimResult, cf
     for stage, piece in _quiet_pieces(t, result, cfg.event_quiet_s):
         for name in DIVERGENCE_SIGNALS:
             found = find_slow_divergence(t[piece], _signal_deg(sig, name)[piece], cfg.divergence_growth,
-                                         cfg.min_amplitude_deg)
+                                         cfg.divergence_min_amplitude_deg)
             if found and (best is None or found.growth > best.growth):
                 best = SlowDivergence(name, stage, found.growth, found.start_s, found.end_s, found.start_deg,
                                       found.end_deg)
