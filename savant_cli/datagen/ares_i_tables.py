@@ -394,7 +394,7 @@ def aero_table(config: str, lay: Layout = LAYOUT) -> np.ndarray:
 
 def separation_time() -> float:
     """First time after the peak when the thrust falls below the separation fraction (s);
-    the same rule as ``savant_cli.sim.build.separation_time``."""
+    the same rule as ``savant_cli.sim.build.predicted_separation_time``."""
     t = np.linspace(FS_THRUST_TIME_S[0], FS_THRUST_TIME_S[-1], 200001)
     f = np.interp(t, FS_THRUST_TIME_S, FS_THRUST_VAC_MN)
     ipk = int(np.argmax(f))

@@ -1,9 +1,18 @@
 """Propulsion: first-stage motor and upper-stage engine thrust, mass flow, propellant
 states, and the thrust force and moment of a gimbaled nozzle.
 
-First stage (solid motor): vacuum thrust ``F_vac(t)`` from a table against mission
-time, × ``thrust_scale`` (dispersions); mass flow ``ṁ = F_vac / (g0 Isp_vac)`` while
-propellant remains. Upper stage (J-2X class): ``F_vac = F_rated f(t − t_ign)`` with the
+First stage (solid motor): the mass flow is the load ``M`` spread over the burn in the
+shape of the vacuum-thrust table ``F_tab(t)`` (mission time), and the vacuum thrust is
+that flow at the motor's Isp::
+
+    ṁ(t) = M F_tab(t) / I_tab,     F_vac(t) = g0 Isp_vac ṁ(t),     I_tab = ∫ F_tab dt
+
+(zero outside the table's time span; trapezoidal ``I_tab`` is exact for the linear
+interpolation). So ``∫ ṁ dt = M`` and the delivered vacuum impulse is ``g0 Isp_vac M``
+by construction: the motor stops thrusting exactly when its propellant is gone, whatever
+the load, Isp or burn rate (a burn-rate factor k compresses the table: ``k F_tab(k t)``).
+For a consistent table (``I_tab = g0 Isp M``; the shipped Ares-I table within 0.007 %) the
+nominal thrust is the table's. Upper stage (J-2X class): ``F_vac = F_rated f(t − t_ign)`` with the
 start-up thrust fraction ``f`` from a table; ``ṁ = F_vac / (g0 Isp)``, split LOX : LH2 by
 the mixture ratio. Delivered thrust ``F = max(F_vac − p_amb A_exit, 0)``.
 
@@ -43,7 +52,8 @@ _PARAMS = blocks.PARAMETERS.block("propulsion")
 P_ON = _PARAMS.scalar("on", "1", "1: thrust applied (environment.thrust)")
 P_FS_ISP = _PARAMS.scalar("first_stage.isp_vac", "s", "first-stage vacuum specific impulse")
 P_FS_EXIT_AREA = _PARAMS.scalar("first_stage.exit_area", "m^2", "first-stage nozzle exit area")
-P_FS_THRUST_SCALE = _PARAMS.scalar("first_stage.thrust_scale", "1", "multiplier of the thrust table")
+P_FS_FLOW_PER_THRUST = _PARAMS.scalar("first_stage.flow_per_table_thrust", "kg/(N*s)",
+                                      "load / table impulse: mass flow per N of the thrust table")
 P_FS_PROP_FULL = _PARAMS.scalar("first_stage.propellant_full", "kg", "first-stage propellant at liftoff")
 P_US_THRUST = _PARAMS.scalar("upper_stage.thrust_vac", "N", "upper-stage rated vacuum thrust")
 P_US_ISP = _PARAMS.scalar("upper_stage.isp_vac", "s", "upper-stage vacuum specific impulse")
@@ -60,6 +70,10 @@ T_US_START_TIME = _TABLES.table("us_start_time", "s", "upper-stage start transie
 T_US_START_FRAC = _TABLES.table("us_start_frac", "1", "fraction of rated thrust at T_US_START_TIME")
 _AUX = blocks.DIAGNOSTICS.block("propulsion")
 A_THRUST = _AUX.scalar("thrust", "N", "delivered thrust")
+A_THRUST_VAC = _AUX.scalar("thrust_vac", "N", "vacuum thrust of the burning engine (the sensed thrust)")
+_DISCRETE = blocks.DISCRETE.block("propulsion")
+D_FS_PEAK = _DISCRETE.scalar("first_stage_peak_thrust", "N",
+                             "largest sensed first-stage vacuum thrust so far (the separation cue's reference)")
 A_MOMENT = _AUX.array("moment", 3, "N*m", "thrust moment about the CG, body")
 
 
@@ -69,7 +83,7 @@ def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarra
     p[P_ON] = 1.0 if inputs.cfg.environment.thrust else 0.0
     p[P_FS_ISP] = fs.isp_vac_s
     p[P_FS_EXIT_AREA] = fs.nozzle_exit_area_m2
-    p[P_FS_THRUST_SCALE] = 1.0
+    p[P_FS_FLOW_PER_THRUST] = fs.propellant_kg / table_impulse(fs.thrust_time_s, fs.thrust_vac_N)
     p[P_FS_PROP_FULL] = fs.propellant_kg
     p[P_US_THRUST] = us.thrust_vac_N
     p[P_US_ISP] = us.isp_vac_s
@@ -82,6 +96,27 @@ def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarra
                   us_start_frac=us.startup_fraction)
 
 
+def table_impulse(time_s: np.ndarray, thrust_N: np.ndarray) -> float:
+    """Impulse of a linearly interpolated thrust table (N·s): the trapezoidal integral,
+    exact for the interpolation the plant uses."""
+    return float(np.trapezoid(thrust_N, time_s))
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def first_stage_flow(x: np.ndarray, tb: np.ndarray, p: np.ndarray, t: float) -> tuple[float, float]:
+    """Vacuum thrust (N) and mass flow (kg/s) of the solid motor at mission time ``t``
+    (s): ``ṁ = M F_tab(t) / I_tab``, ``F_vac = g0 Isp ṁ``; zero outside the table's time
+    span and once the propellant state ``x[MFS]`` is empty. The sequencer's sensed
+    thrust (chamber pressure) is this ``F_vac``."""
+    o_ft, n_ft = tab(tb, T_FS_TIME)
+    if x[MFS] <= 0.0 or t < tb[o_ft] or t > tb[o_ft + n_ft - 1]:
+        return 0.0, 0.0
+    mdot = p[P_FS_FLOW_PER_THRUST] * interp1_at(tb, o_ft, tab_offset(tb, T_FS_THRUST), n_ft, t)
+    if not mdot > 0.0:
+        return 0.0, 0.0
+    return G0 * p[P_FS_ISP] * mdot, mdot
+
+
 @njit(cache=True, error_model="numpy", inline="always")
 def propellant_remaining(x: np.ndarray, config: int) -> float:
     """Propellant of the burning configuration (kg): first stage on the stack, LOX + LH2
@@ -91,20 +126,20 @@ def propellant_remaining(x: np.ndarray, config: int) -> float:
 
 @njit(cache=True, error_model="numpy", inline="always")
 def thrust_and_flow(x: np.ndarray, tb: np.ndarray, p: np.ndarray, engine: int, t: float, t_ign: float,
-                    pres: float) -> tuple[float, float, float]:
-    """Delivered thrust (N) and the first- and upper-stage mass flows (kg/s).
+                    pres: float) -> tuple[float, float, float, float]:
+    """Delivered thrust (N), the first- and upper-stage mass flows (kg/s) and the vacuum
+    thrust of the burning engine (N).
 
     ``engine`` is the engine phase, ``t`` mission time (s), ``t_ign`` the upper-stage
     ignition time (s), ``pres`` the ambient pressure (Pa).
     """
     thrust = 0.0
+    f_vac = 0.0
     mdot_fs = 0.0
     mdot_us = 0.0
     if engine == ENGINE_FIRST:
-        o_ft, n_ft = tab(tb, T_FS_TIME)
-        f_vac = p[P_FS_THRUST_SCALE] * interp1_at(tb, o_ft, tab_offset(tb, T_FS_THRUST), n_ft, t)
-        if x[MFS] > 0.0 and f_vac > 0.0:
-            mdot_fs = f_vac / (G0 * p[P_FS_ISP])
+        f_vac, mdot_fs = first_stage_flow(x, tb, p, t)
+        if mdot_fs > 0.0:
             thrust = max(f_vac - pres * p[P_FS_EXIT_AREA], 0.0)
     elif engine == ENGINE_UPPER and x[MLOX] > 0.0 and x[MLH2] > 0.0:
         o_st, n_st = tab(tb, T_US_START_TIME)
@@ -113,7 +148,7 @@ def thrust_and_flow(x: np.ndarray, tb: np.ndarray, p: np.ndarray, engine: int, t
         thrust = max(f_vac - pres * p[P_US_EXIT_AREA], 0.0)
     if p[P_ON] == 0.0:
         thrust = 0.0
-    return thrust, mdot_fs, mdot_us
+    return thrust, mdot_fs, mdot_us, f_vac
 
 
 @njit(cache=True, error_model="numpy", inline="always")

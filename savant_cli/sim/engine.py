@@ -12,8 +12,11 @@ on step boundaries, runs the discrete parts at their own rates with zero-order h
   speed: ``models/command_schedule.py``) or, once engaged in the upper stage, from
   Powered Explicit Guidance (``models/peg.py``), whose time to go also commands the
   cutoff at the plant step nearest its predicted time;
-* events (separation, J-2X ignition, LES jettison, cutoff) at the first step boundary at
-  or after their time or condition.
+* events at the first step boundary at or after their time or condition: separation when
+  the sensed (vacuum) thrust of the flown first-stage motor falls below
+  ``vehicle.events.separation_thrust_fraction`` of its own flown peak (the peak is kept in
+  the discrete state), J-2X ignition and LES jettison at their delays after the flown
+  separation and ignition, cutoff.
 
 Python calls :func:`advance` in chunks so that a progress bar can be drawn and an
 interrupted or diverged run still returns what it computed.
@@ -26,7 +29,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from savant_cli.models import actuator, earth, flex, peg, quaternion as qt, rcs, rigid_body, slosh
+from savant_cli.models import actuator, earth, flex, peg, propulsion, quaternion as qt, rcs, rigid_body, slosh
 from savant_cli.models.command_schedule import BY_TIME, D_PROFILE_OFFSET, D_PROFILE_RATE, profile_time
 from savant_cli.models.earth import A_ALT, P_E2, P_OMEGA_E, P_RE
 from savant_cli.models.fcs import FCS_COAST, FCS_STACK, FCS_UPPER, FcsTables, fcs_step, reset_phase
@@ -64,7 +67,7 @@ EV_CUTOFF = 3
 EVENT_NAMES = ("separation", "upper_stage_ignition", "les_jettison", "cutoff")
 
 # scheduled event times and limits in `sched`
-S_T_SEP = 0
+S_SEP_FRACTION = 0  # separation when the sensed first-stage thrust < this × its flown peak (0: never)
 S_T_IGN_DELAY = 1
 S_T_LES_DELAY = 2
 S_ENERGY_TARGET = 3  # specific orbital energy at cutoff, J/kg (point-mass μ)
@@ -157,9 +160,18 @@ def handle_events(t: float, x: np.ndarray, u: np.ndarray, d: np.ndarray,
                   events: np.ndarray, sched: np.ndarray, p: np.ndarray, tb: np.ndarray) -> int:
     """Apply time- and condition-triggered events at a step boundary; return a stop code.
 
-    At separation and at LES jettison the state's reference point moves to the new
+    Separation is decided on board: the sensed first-stage vacuum thrust at ``t``
+    (``propulsion.first_stage_flow``, the motor flown so far) is compared with the
+    largest value sensed so far (``d[D_FS_PEAK]``, updated here); the first step at which
+    it is below ``sched[S_SEP_FRACTION]`` of that peak separates. At separation and at LES jettison the state's reference point moves to the new
     configuration's CG (position and velocity of every structural point unchanged)."""
-    if np.isnan(events[EV_SEPARATION]) and t >= sched[S_T_SEP]:
+    separate = False
+    if np.isnan(events[EV_SEPARATION]):
+        f_sensed = propulsion.first_stage_flow(x, tb, p, t)[0]
+        if f_sensed > d[propulsion.D_FS_PEAK]:
+            d[propulsion.D_FS_PEAK] = f_sensed
+        separate = f_sensed < sched[S_SEP_FRACTION] * d[propulsion.D_FS_PEAK]
+    if separate:
         events[EV_SEPARATION] = t
         if sched[S_STOP_AT_SEP] != 0.0:
             return STOP_SEPARATION
