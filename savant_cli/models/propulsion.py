@@ -74,6 +74,11 @@ A_THRUST_VAC = _AUX.scalar("thrust_vac", "N", "vacuum thrust of the burning engi
 _DISCRETE = blocks.DISCRETE.block("propulsion")
 D_FS_PEAK = _DISCRETE.scalar("first_stage_peak_thrust", "N",
                              "largest sensed first-stage vacuum thrust so far (the separation cue's reference)")
+D_FS_LAST = _DISCRETE.scalar("first_stage_last_thrust", "N", "sensed first-stage vacuum thrust at the last step")
+D_FS_IMPULSE = _DISCRETE.scalar("first_stage_impulse", "N*s",
+                                "first-stage vacuum impulse delivered so far (trapezoid of the sensed thrust)")
+D_FS_PROP_SEP = _DISCRETE.scalar("first_stage_propellant_at_separation", "kg",
+                                 "first-stage propellant left in the motor at separation (NaN before)")
 A_MOMENT = _AUX.array("moment", 3, "N*m", "thrust moment about the CG, body")
 
 

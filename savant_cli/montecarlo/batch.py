@@ -167,7 +167,7 @@ def fly_run(case: Case, run: int, keep: bool = False):
         sig = signals(result, model)
         health = assess(result, sig, model, case.cfg.sim.health)
         summ = {**summarize(result, sig, target=insertion_target(applied.cfg.guidance),
-                                  qalpha_limit=applied.vehicle.qalpha_limit_Pa_deg), **health}
+                                  qalpha_limit=applied.vehicle.qalpha_limit_Pa_deg, p=model.p), **health}
         keys = [k for k, v in summ.items() if isinstance(v, (int, float)) and not isinstance(v, bool)
                 and k not in WALL_KEYS]
         lap(2)

@@ -51,6 +51,9 @@ TABLE_TARGETS: dict[str, tuple[str, tuple[str, ...], str]] = {
                                                       "÷ k; load and total impulse conserved, burn time ÷ k"),
     "tables.first_stage.propellant_load": ("1", ("scale",), "solid propellant load × k (density at a fixed grain): "
                                                             "mass flow and thrust × k at the same burn time and Isp"),
+    "tables.upper_stage.lox_load": ("1", ("scale",), "LOX loaded × k (tank fill); the upper-stage mass tables "
+                                                     "rescaled to the new total, the stack carries the difference"),
+    "tables.upper_stage.lh2_load": ("1", ("scale",), "LH2 loaded × k (tank fill); as lox_load"),
     "tables.first_stage.dry_mass": ("kg", ("offset",), "mass added at the CG of the stack configuration"),
     "tables.upper_stage.dry_mass": ("kg", ("offset",), "mass added at the CG of every configuration"),
     **{f"tables.{c}.cg_{ax}": ("m", ("offset",), f"CG shift along structure {ax} ({c})")
@@ -271,6 +274,36 @@ def load_scaled(m: MassTable, k: float) -> MassTable:
     return dataclasses.replace(m, propellant_kg=k * p, mass_kg=mass, cg_m=np.ascontiguousarray(first_moment / mass[:, None]))
 
 
+def _upper_load(vehicle: Vehicle, name: str, k_tank: float) -> Vehicle:
+    """One upper-stage tank's load × ``k_tank``. The upper
+    configurations' tables (against LOX + LH2 remaining) are rescaled to the new total
+    (:func:`load_scaled`: the extra spread like the propellant at each level); the stack,
+    which carries the upper stage full, gains the extra at every row, at the upper-stage
+    propellant's CG when full (the stack shares the structure frame)."""
+    if not k_tank > 0.0:
+        raise ConfigError(name, k_tank, "load factor must be positive")
+    us = vehicle.upper_stage
+    lox, lh2 = us.lox_kg, us.lh2_kg
+    if name.endswith("lox_load"):
+        lox *= k_tank
+    else:
+        lh2 *= k_tank
+    delta_kg = lox + lh2 - us.lox_kg - us.lh2_kg
+    k = (lox + lh2) / (us.lox_kg + us.lh2_kg)
+    les = vehicle.configurations["upper_les"].mass
+    full = les.propellant_kg[-1]
+    cg_prop = (les.mass_kg[-1] * les.cg_m[-1] - les.mass_kg[0] * les.cg_m[0]) / full  # structure frame, m
+
+    def stack(m: MassTable) -> MassTable:
+        mass = m.mass_kg + delta_kg
+        cg = (m.mass_kg[:, None] * m.cg_m + delta_kg * cg_prop[None, :]) / mass[:, None]
+        return dataclasses.replace(m, mass_kg=mass, cg_m=np.ascontiguousarray(cg))
+
+    vehicle = _mass(vehicle, UPPER_CONFIGS, lambda m: load_scaled(m, k))
+    vehicle = _mass(vehicle, ("stack",), stack)
+    return dataclasses.replace(vehicle, upper_stage=dataclasses.replace(us, lox_kg=lox, lh2_kg=lh2))
+
+
 def _apply_table(vehicle: Vehicle, name: str, v: float) -> Vehicle:
     """Vehicle-table dispersions applied before the build (aero is applied after)."""
     fs = vehicle.first_stage
@@ -284,6 +317,8 @@ def _apply_table(vehicle: Vehicle, name: str, v: float) -> Vehicle:
             raise ConfigError(name, v, "propellant-load factor must be positive")
         vehicle = _mass(vehicle, ("stack",), lambda m: load_scaled(m, v))
         return dataclasses.replace(vehicle, first_stage=dataclasses.replace(fs, propellant_kg=fs.propellant_kg * v))
+    if name in ("tables.upper_stage.lox_load", "tables.upper_stage.lh2_load"):
+        return _upper_load(vehicle, name, v)
     if name.endswith("dry_mass"):
         configs = ("stack",) if ".first_stage." in name else ("stack", *UPPER_CONFIGS)
         return _mass(vehicle, configs, lambda m: dataclasses.replace(m, mass_kg=m.mass_kg + v))

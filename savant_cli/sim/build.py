@@ -12,7 +12,7 @@ import numpy as np
 from savant_cli import constants as C
 from savant_cli.config import SavantConfig
 from savant_cli.errors import ConfigError
-from savant_cli.models import PLANT_MODELS, blocks, earth, quaternion as qt, rigid_body
+from savant_cli.models import PLANT_MODELS, blocks, earth, propulsion, quaternion as qt, rigid_body
 from savant_cli.models.command_schedule import SCHEDULES
 from savant_cli.models.fcs import FcsTables, fcs_tables
 from savant_cli.models.sensors import GYRO_MISALIGN, gyro_discrete, gyro_steady_state, misalignment
@@ -189,6 +189,7 @@ def build_model(cfg: SavantConfig, vehicle: Vehicle, guidance: GuidanceTable) ->
     rigid_body.move_reference(x0, rigid[1] - whole[1], rigid[2] - whole[2], rigid[3] - whole[3])
 
     d0 = np.zeros(L.N_DISC)
+    d0[propulsion.D_FS_PROP_SEP] = np.nan  # set at separation
     for g in range(3):
         w_sensed = misalignment(p[GYRO_MISALIGN[g]:GYRO_MISALIGN[g] + 3])[1] @ w0  # in the gyro's axes
         for ax in range(3):
@@ -212,6 +213,7 @@ def build_model(cfg: SavantConfig, vehicle: Vehicle, guidance: GuidanceTable) ->
     sched[E.S_MAX_RATE] = np.radians(cfg.sim.max_body_rate_deg_s)
     sched[E.S_DELAY_STEPS] = round(cfg.controller.delay_s / rt.dt)
     sched[E.S_PROFILE_SCHEDULE] = SCHEDULES.index(cfg.guidance.first_stage_schedule)
+    sched[E.S_DT] = rt.dt
     t_sep_predicted = predicted_separation_time(vehicle)
     guidance = first_stage_profile(guidance, cfg, t_sep_predicted)
     info = {"predicted_separation_time_s": t_sep_predicted}

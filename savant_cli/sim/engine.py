@@ -78,7 +78,8 @@ S_SMOOTH_WN = 7
 S_MAX_RATE = 8  # divergence threshold on |ω|, rad/s
 S_DELAY_STEPS = 9  # plant steps from the flight-control cycle to its commands (controller.delay_s)
 S_PROFILE_SCHEDULE = 10  # the stored profile's first-stage index (its position in command_schedule.SCHEDULES)
-N_SCHED = 11
+S_DT = 11  # plant step, s (the first-stage impulse's trapezoid)
+N_SCHED = 12
 
 
 class Rates(NamedTuple):
@@ -163,16 +164,23 @@ def handle_events(t: float, x: np.ndarray, u: np.ndarray, d: np.ndarray,
     Separation is decided on board: the sensed first-stage vacuum thrust at ``t``
     (``propulsion.first_stage_flow``, the motor flown so far) is compared with the
     largest value sensed so far (``d[D_FS_PEAK]``, updated here); the first step at which
-    it is below ``sched[S_SEP_FRACTION]`` of that peak separates. At separation and at LES jettison the state's reference point moves to the new
+    it is below ``sched[S_SEP_FRACTION]`` of that peak separates. Until then the sensed
+    thrust's trapezoidal integral accumulates in ``d[D_FS_IMPULSE]`` (the impulse the motor
+    delivered to the vehicle); the motor's propellant at separation is kept in
+    ``d[D_FS_PROP_SEP]``. At separation and at LES jettison the state's reference point moves to the new
     configuration's CG (position and velocity of every structural point unchanged)."""
     separate = False
     if np.isnan(events[EV_SEPARATION]):
         f_sensed = propulsion.first_stage_flow(x, tb, p, t)[0]
+        if t > 0.0:
+            d[propulsion.D_FS_IMPULSE] += 0.5 * (d[propulsion.D_FS_LAST] + f_sensed) * sched[S_DT]
+        d[propulsion.D_FS_LAST] = f_sensed
         if f_sensed > d[propulsion.D_FS_PEAK]:
             d[propulsion.D_FS_PEAK] = f_sensed
         separate = f_sensed < sched[S_SEP_FRACTION] * d[propulsion.D_FS_PEAK]
     if separate:
         events[EV_SEPARATION] = t
+        d[propulsion.D_FS_PROP_SEP] = x[MFS]
         if sched[S_STOP_AT_SEP] != 0.0:
             return STOP_SEPARATION
         cg_stack = reference_cg(x, p, tb, CONFIG_STACK)

@@ -49,7 +49,7 @@ def fly(cfg: SavantConfig, progress: bool | None = None, snapshot_steps: tuple[i
     sig = signals(result, prep.model)
     health = assess(result, sig, prep.model, cfg.sim.health)  # may turn "complete" into a verdict
     summary = summarize(result, sig, target=insertion_target(cfg.guidance),
-                        qalpha_limit=prep.vehicle.qalpha_limit_Pa_deg)
+                        qalpha_limit=prep.vehicle.qalpha_limit_Pa_deg, p=prep.model.p)
     return Flight(prep=prep, result=result, signals=sig, summary={**summary, **health})
 
 
