@@ -14,7 +14,12 @@ the load, Isp or burn rate (a burn-rate factor k compresses the table: ``k F_tab
 For a consistent table (``I_tab = g0 Isp M``; the shipped Ares-I table within 0.007 %) the
 nominal thrust is the table's. Upper stage (J-2X class): ``F_vac = F_rated f(t − t_ign)`` with the
 start-up thrust fraction ``f`` from a table; ``ṁ = F_vac / (g0 Isp)``, split LOX : LH2 by
-the mixture ratio. Delivered thrust ``F = max(F_vac − p_amb A_exit, 0)``.
+the mixture ratio. After the cutoff command at ``t_cut`` the thrust decays linearly to
+zero over ``T_sd = 2 I_sd / F_rated`` (the shutdown transient; ``I_sd`` the engine's
+shutdown impulse, ``upper_stage.shutdown_impulse_Ns``), so the impulse delivered after
+the command is ``I_sd`` (the transient starts at rated thrust, the start-up long over),
+burning propellant at the same Isp and mixture ratio. Delivered thrust
+``F = max(F_vac − p_amb A_exit, 0)``.
 
 The thrust acts at the active stage's gimbal along the nozzle axis, turned by the
 actuator angles plus the nozzle's null bias, minus the structure's flex rotation at the
@@ -60,6 +65,8 @@ P_US_ISP = _PARAMS.scalar("upper_stage.isp_vac", "s", "upper-stage vacuum specif
 P_US_MR = _PARAMS.scalar("upper_stage.mixture_ratio", "1", "LOX : LH2 mass ratio")
 P_US_EXIT_AREA = _PARAMS.scalar("upper_stage.exit_area", "m^2", "upper-stage nozzle exit area")
 P_US_PROP_FULL = _PARAMS.scalar("upper_stage.propellant_full", "kg", "upper-stage LOX + LH2 at ignition")
+P_US_SHUTDOWN_TIME = _PARAMS.scalar("upper_stage.shutdown_time", "s",
+                                    "duration of the linear thrust decay after the cutoff command, 2 I_sd / F_rated")
 P_FS_GIMBAL = _PARAMS.record("first_stage.gimbal", GIMBAL, "first-stage gimbal point")
 P_US_GIMBAL = _PARAMS.record("upper_stage.gimbal", GIMBAL, "upper-stage gimbal point")
 
@@ -77,6 +84,10 @@ D_FS_PEAK = _DISCRETE.scalar("first_stage_peak_thrust", "N",
 D_FS_LAST = _DISCRETE.scalar("first_stage_last_thrust", "N", "sensed first-stage vacuum thrust at the last step")
 D_FS_IMPULSE = _DISCRETE.scalar("first_stage_impulse", "N*s",
                                 "first-stage vacuum impulse delivered so far (trapezoid of the sensed thrust)")
+D_US_SD_LAST = _DISCRETE.scalar("upper_stage_last_thrust", "N", "sensed upper-stage vacuum thrust at the last "
+                                "step of the shutdown transient")
+D_US_SD_IMPULSE = _DISCRETE.scalar("shutdown_impulse", "N*s", "upper-stage vacuum impulse delivered after the cutoff "
+                                   "command (trapezoid of the sensed thrust)")
 D_FS_PROP_SEP = _DISCRETE.scalar("first_stage_propellant_at_separation", "kg",
                                  "first-stage propellant left in the motor at separation (NaN before)")
 A_MOMENT = _AUX.array("moment", 3, "N*m", "thrust moment about the CG, body")
@@ -95,6 +106,7 @@ def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarra
     p[P_US_MR] = us.mixture_ratio
     p[P_US_EXIT_AREA] = us.nozzle_exit_area_m2
     p[P_US_PROP_FULL] = us.lox_kg + us.lh2_kg
+    p[P_US_SHUTDOWN_TIME] = 2.0 * us.shutdown_impulse_Ns / us.thrust_vac_N
     p[P_FS_GIMBAL:P_FS_GIMBAL + GIMBAL.size] = fs.gimbal_m
     p[P_US_GIMBAL:P_US_GIMBAL + GIMBAL.size] = us.gimbal_m
     tables.update(fs_time=fs.thrust_time_s, fs_thrust=fs.thrust_vac_N, us_start_time=us.startup_time_s,
@@ -123,6 +135,23 @@ def first_stage_flow(x: np.ndarray, tb: np.ndarray, p: np.ndarray, t: float) -> 
 
 
 @njit(cache=True, error_model="numpy", inline="always")
+def upper_stage_thrust_vac(x: np.ndarray, tb: np.ndarray, p: np.ndarray, t: float, t_ign: float,
+                           t_cut: float) -> float:
+    """Vacuum thrust of the upper-stage engine (N) at mission time ``t`` (s): the start-up
+    fraction at ``t − t_ign`` × the rated thrust, × the shutdown decay
+    ``max(0, 1 − (t − t_cut)/T_sd)`` once the cutoff command at ``t_cut`` (s; negative:
+    none yet) is given; zero once either tank is empty."""
+    if not (x[MLOX] > 0.0 and x[MLH2] > 0.0):
+        return 0.0
+    o_st, n_st = tab(tb, T_US_START_TIME)
+    f_vac = interp1_at(tb, o_st, tab_offset(tb, T_US_START_FRAC), n_st, t - t_ign) * p[P_US_THRUST]
+    if t_cut >= 0.0 and t > t_cut:
+        t_sd = p[P_US_SHUTDOWN_TIME]
+        f_vac *= max(1.0 - (t - t_cut) / t_sd, 0.0) if t_sd > 0.0 else 0.0
+    return f_vac
+
+
+@njit(cache=True, error_model="numpy", inline="always")
 def propellant_remaining(x: np.ndarray, config: int) -> float:
     """Propellant of the burning configuration (kg): first stage on the stack, LOX + LH2
     after separation (the mass tables' argument)."""
@@ -131,12 +160,13 @@ def propellant_remaining(x: np.ndarray, config: int) -> float:
 
 @njit(cache=True, error_model="numpy", inline="always")
 def thrust_and_flow(x: np.ndarray, tb: np.ndarray, p: np.ndarray, engine: int, t: float, t_ign: float,
-                    pres: float) -> tuple[float, float, float, float]:
+                    t_cut: float, pres: float) -> tuple[float, float, float, float]:
     """Delivered thrust (N), the first- and upper-stage mass flows (kg/s) and the vacuum
     thrust of the burning engine (N).
 
     ``engine`` is the engine phase, ``t`` mission time (s), ``t_ign`` the upper-stage
-    ignition time (s), ``pres`` the ambient pressure (Pa).
+    ignition time (s), ``t_cut`` its cutoff command time (s; negative: none yet), ``pres``
+    the ambient pressure (Pa).
     """
     thrust = 0.0
     f_vac = 0.0
@@ -146,9 +176,8 @@ def thrust_and_flow(x: np.ndarray, tb: np.ndarray, p: np.ndarray, engine: int, t
         f_vac, mdot_fs = first_stage_flow(x, tb, p, t)
         if mdot_fs > 0.0:
             thrust = max(f_vac - pres * p[P_FS_EXIT_AREA], 0.0)
-    elif engine == ENGINE_UPPER and x[MLOX] > 0.0 and x[MLH2] > 0.0:
-        o_st, n_st = tab(tb, T_US_START_TIME)
-        f_vac = interp1_at(tb, o_st, tab_offset(tb, T_US_START_FRAC), n_st, t - t_ign) * p[P_US_THRUST]
+    elif engine == ENGINE_UPPER:
+        f_vac = upper_stage_thrust_vac(x, tb, p, t, t_ign, t_cut)
         mdot_us = f_vac / (G0 * p[P_US_ISP])
         thrust = max(f_vac - pres * p[P_US_EXIT_AREA], 0.0)
     if p[P_ON] == 0.0:

@@ -8,6 +8,7 @@ import numpy as np
 from savant_cli import constants as C
 from savant_cli.io.record import Signal
 from savant_cli.models import propulsion
+from savant_cli.sim.layout import U_T_CUT
 from savant_cli.sim import engine as E
 from savant_cli.sim.run import SimResult
 
@@ -139,7 +140,7 @@ def usable_propellant(lox_kg: float, lh2_kg: float, mixture_ratio: float) -> tup
 
 #: the keys of :func:`propulsion_keys`
 PROPULSION_KEYS = ("usable_propellant_remaining_kg", "unusable_propellant_kg", "limiting_propellant",
-                   "first_stage_propellant_at_separation_kg", "first_stage_total_impulse_Ns")
+                   "first_stage_propellant_at_separation_kg", "first_stage_total_impulse_Ns", "shutdown_impulse_Ns")
 
 
 def propulsion_keys(result: SimResult, p: np.ndarray) -> dict[str, float | str | None]:
@@ -150,14 +151,17 @@ def propulsion_keys(result: SimResult, p: np.ndarray) -> dict[str, float | str |
     run's engine mixture ratio ``p[P_US_MR]``; ``first_stage_propellant_at_separation_kg``
     (None without a separation) and ``first_stage_total_impulse_Ns``, the vacuum impulse
     the solid motor delivered to the vehicle up to separation (the sequencer's
-    trapezoid of the sensed thrust at the plant rate)."""
+    trapezoid of the sensed thrust at the plant rate); ``shutdown_impulse_Ns``, the
+    upper-stage vacuum impulse delivered after the cutoff command (the same trapezoid over
+    the shutdown transient; None without a cutoff command)."""
     x, d = result.x, result.d
     usable, unusable, limiting = usable_propellant(x[propulsion.MLOX], x[propulsion.MLH2], p[propulsion.P_US_MR])
     at_sep = d[propulsion.D_FS_PROP_SEP]
     return {"usable_propellant_remaining_kg": usable, "unusable_propellant_kg": unusable,
             "limiting_propellant": limiting,
             "first_stage_propellant_at_separation_kg": None if np.isnan(at_sep) else float(at_sep),
-            "first_stage_total_impulse_Ns": float(d[propulsion.D_FS_IMPULSE])}
+            "first_stage_total_impulse_Ns": float(d[propulsion.D_FS_IMPULSE]),
+            "shutdown_impulse_Ns": float(d[propulsion.D_US_SD_IMPULSE]) if result.u[U_T_CUT] >= 0.0 else None}
 
 
 def summarize(result: SimResult, sig: dict[str, Signal], study_wall_s: float | None = None,
