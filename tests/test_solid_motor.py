@@ -161,3 +161,23 @@ def test_faster_burning_motor_separates_earlier_by_the_burn_rate_scaling(base, n
         t_k = _separation(base, burn_rate=k)[2].events[E.EV_SEPARATION]
         assert t_k == pytest.approx(t0 / k, abs=2 * dt)
     assert t0 / 1.03 < t0 - 3.0  # the check is not trivial: ~3.8 s earlier
+
+
+def test_summary_impulse_and_propellant_at_separation(nominal_separation):
+    """The summary's first-stage figures against the flown history and the closed form."""
+    from savant_cli.sim.summary import propulsion_keys
+
+    applied, model, res = nominal_separation
+    keys = propulsion_keys(res, model.p)
+    fs = applied.vehicle.first_stage
+    t = res.log[:, 0]
+    f = res.log[:, 1 + model.layout.n + propulsion.A_THRUST_VAC]
+    t_sep = res.events[E.EV_SEPARATION]
+    before = t < t_sep - 0.5 * model.rates.dt
+    flown = _impulse(np.append(t[before], t_sep), np.append(f[before], _flown_thrust(applied.vehicle, t_sep)))
+    assert keys["first_stage_total_impulse_Ns"] == pytest.approx(flown, rel=1e-6)
+    left = keys["first_stage_propellant_at_separation_kg"]
+    assert 0.0 < left < 0.001 * fs.propellant_kg  # the 2 % cue leaves ~0.02 % of the load
+    # what the motor delivered is g0 Isp times what it burned
+    assert keys["first_stage_total_impulse_Ns"] == pytest.approx(C.G0 * fs.isp_vac_s * (fs.propellant_kg - left),
+                                                                 rel=1e-5)
