@@ -77,3 +77,35 @@ def test_bad_load_factor_names_the_target(base):
     with pytest.raises(ConfigError) as err:
         apply_samples(cfg, vehicle, [(Target("tables.upper_stage.lh2_load", "tables"), "scale", -1.0)], {})
     assert err.value.key == "tables.upper_stage.lh2_load" and "positive" in str(err.value)
+
+
+def test_dispersed_load_stays_inside_the_slosh_tables(base):
+    """A +3σ LOX load (× 1.003) builds with slosh on: the slosh tables reach 1 % above the
+    nominal fill."""
+    from savant_cli.sim.build import model_inputs
+
+    cfg, vehicle = base
+    cfg_slosh = validate(compose_config(["slosh=on", "sim.progress=false"]))
+    v = apply_samples(cfg, vehicle, [(Target("tables.upper_stage.lox_load", "tables"), "scale", 1.003)], {}).vehicle
+    assert model_inputs(cfg_slosh, v).slosh is not None
+
+
+def test_flown_mixture_ratio_sets_the_limiting_propellant():
+    """Fly the upper stage at MR 5.6 from tanks loaded at 5.5: the engine draws LOX : LH2 =
+    5.6 (from the flown states), LOX limits, and the LH2 left beyond L/5.6 is unusable."""
+    from savant_cli.sim import layout as L
+    from savant_cli.sim.run import simulate
+    from savant_cli.sim.summary import propulsion_keys
+
+    cfg = validate(compose_config(["phase=upper_stage", "sim.progress=false",
+                                   "vehicle.upper_stage.mixture_ratio=5.6"]))
+    prep = prepare(cfg, hydra_search_dirs())
+    res = simulate(prep.model, progress=False)
+    us = prep.vehicle.upper_stage
+    lox, lh2 = res.x[L.MLOX], res.x[L.MLH2]
+    assert (us.lox_kg - lox) / (us.lh2_kg - lh2) == pytest.approx(5.6, rel=1e-9)
+    keys = propulsion_keys(res, prep.model.p)
+    assert keys["limiting_propellant"] == "lox"
+    assert keys["usable_propellant_remaining_kg"] == pytest.approx(lox + lox / 5.6, rel=1e-12)
+    assert keys["unusable_propellant_kg"] == pytest.approx(lh2 - lox / 5.6, rel=1e-9)
+    assert keys["unusable_propellant_kg"] == pytest.approx(us.lh2_kg - us.lox_kg / 5.6, rel=1e-6)  # 372 kg stranded
