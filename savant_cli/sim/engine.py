@@ -170,8 +170,10 @@ def handle_events(t: float, x: np.ndarray, u: np.ndarray, d: np.ndarray,
     it is below ``sched[S_SEP_FRACTION]`` of that peak separates. Until then the sensed
     thrust's trapezoidal integral accumulates in ``d[D_FS_IMPULSE]`` (the impulse the motor
     delivered to the vehicle); the motor's propellant at separation is kept in
-    ``d[D_FS_PROP_SEP]``. At separation and at LES jettison the state's reference point moves to the new
-    configuration's CG (position and velocity of every structural point unchanged)."""
+    ``d[D_FS_PROP_SEP]``. After the cutoff command the upper stage's sensed thrust
+    accumulates the same way in ``d[D_US_SD_IMPULSE]``. At separation and at LES jettison
+    the state's reference point moves to the new configuration's CG (position and velocity
+    of every structural point unchanged)."""
     separate = False
     if np.isnan(events[EV_SEPARATION]):
         f_sensed = propulsion.first_stage_flow(x, tb, p, t)[0]
