@@ -139,13 +139,13 @@ def upper_stage_thrust_vac(x: np.ndarray, tb: np.ndarray, p: np.ndarray, t: floa
                            t_cut: float) -> float:
     """Vacuum thrust of the upper-stage engine (N) at mission time ``t`` (s): the start-up
     fraction at ``t − t_ign`` × the rated thrust, × the shutdown decay
-    ``max(0, 1 − (t − t_cut)/T_sd)`` once the cutoff command at ``t_cut`` (s; negative:
+    ``max(0, 1 − (t − t_cut)/T_sd)`` once the cutoff command at ``t_cut`` (s; 0 or less:
     none yet) is given; zero once either tank is empty."""
     if not (x[MLOX] > 0.0 and x[MLH2] > 0.0):
         return 0.0
     o_st, n_st = tab(tb, T_US_START_TIME)
     f_vac = interp1_at(tb, o_st, tab_offset(tb, T_US_START_FRAC), n_st, t - t_ign) * p[P_US_THRUST]
-    if t_cut >= 0.0 and t > t_cut:
+    if t_cut > 0.0 and t > t_cut:
         t_sd = p[P_US_SHUTDOWN_TIME]
         f_vac *= max(1.0 - (t - t_cut) / t_sd, 0.0) if t_sd > 0.0 else 0.0
     return f_vac
@@ -165,7 +165,7 @@ def thrust_and_flow(x: np.ndarray, tb: np.ndarray, p: np.ndarray, engine: int, t
     thrust of the burning engine (N).
 
     ``engine`` is the engine phase, ``t`` mission time (s), ``t_ign`` the upper-stage
-    ignition time (s), ``t_cut`` its cutoff command time (s; negative: none yet), ``pres``
+    ignition time (s), ``t_cut`` its cutoff command time (s; 0 or less: none yet), ``pres``
     the ambient pressure (Pa).
     """
     thrust = 0.0

@@ -199,7 +199,6 @@ def build_model(cfg: SavantConfig, vehicle: Vehicle, guidance: GuidanceTable) ->
     u0 = np.zeros(L.N_INPUT)
     u0[L.U_CONFIG] = L.CONFIG_STACK
     u0[L.U_ENGINE] = L.ENGINE_FIRST
-    u0[L.U_T_CUT] = -1.0  # no cutoff command yet
 
     ev = vehicle.events
     sched = np.zeros(E.N_SCHED)

@@ -215,7 +215,7 @@ def handle_events(t: float, x: np.ndarray, u: np.ndarray, d: np.ndarray,
         u[U_CONFIG] = CONFIG_UPPER
         move_reference(x, cg_les, reference_cg(x, p, tb, CONFIG_UPPER))
     if int(u[U_ENGINE]) == ENGINE_UPPER:
-        if u[U_T_CUT] >= 0.0:  # shutdown transient: the impulse after the command (trapezoid)
+        if u[U_T_CUT] > 0.0:  # shutdown transient: the impulse after the command (trapezoid)
             f_us = propulsion.upper_stage_thrust_vac(x, tb, p, t, u[U_T_IGN], u[U_T_CUT])
             if t > u[U_T_CUT]:
                 d[propulsion.D_US_SD_IMPULSE] += 0.5 * (d[propulsion.D_US_SD_LAST] + f_us) * sched[S_DT]
@@ -233,7 +233,7 @@ def cutoff_step(t: float, dt: float, x: np.ndarray, u: np.ndarray, d: np.ndarray
     """The upper-stage cutoff at a step boundary: the command (PEG's commanded cutoff time
     at the nearest plant step, or the stored profile's target energy), then the end of the
     shutdown transient ``T_sd`` after it, when the run stops. Returns a stop code."""
-    if u[U_T_CUT] < 0.0:
+    if u[U_T_CUT] <= 0.0:
         command = False
         if peg_on:  # PEG's cutoff: the plant step nearest its commanded time
             command = d[peg.D_ACTIVE] != 0.0 and t + 0.5 * dt >= d[peg.D_T_CUTOFF]
@@ -332,7 +332,7 @@ def _advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0
             return STOP_TIME, j, log_row, ""
         phase = fcs_phase(events)
 
-        if k % rates.n_guid == 0 and u[U_T_CUT] < 0.0:  # guidance frozen after the cutoff command
+        if k % rates.n_guid == 0 and u[U_T_CUT] <= 0.0:  # guidance frozen after the cutoff command
             steered = False
             if peg_on and not np.isnan(events[EV_IGNITION]):
                 code = peg.guidance_cycle(d, t, x[R:R + 3], x[V:V + 3], events[EV_IGNITION], rates.n_guid * dt,

@@ -161,7 +161,7 @@ def propulsion_keys(result: SimResult, p: np.ndarray) -> dict[str, float | str |
             "limiting_propellant": limiting,
             "first_stage_propellant_at_separation_kg": None if np.isnan(at_sep) else float(at_sep),
             "first_stage_total_impulse_Ns": float(d[propulsion.D_FS_IMPULSE]),
-            "shutdown_impulse_Ns": float(d[propulsion.D_US_SD_IMPULSE]) if result.u[U_T_CUT] >= 0.0 else None}
+            "shutdown_impulse_Ns": float(d[propulsion.D_US_SD_IMPULSE]) if result.u[U_T_CUT] > 0.0 else None}
 
 
 def summarize(result: SimResult, sig: dict[str, Signal], study_wall_s: float | None = None,
