@@ -506,11 +506,13 @@ def tank_comments(tank: Tank) -> list[str]:
          + (f"ring baffles [E]: width {b.width_ratio:g} R every {b.spacing_m:g} m from {b.lowest_m:g} to "
             f"{b.highest_m:.4g} m above the bottom, damping judged at a wave of {b.design_amplitude_ratio:g} R"
             if (b := tank.baffles) is not None else "smooth wall, no baffles")),
-        (f"liquid: load {tank.load_kg:g} kg [D] (135.1 t [P] at the J-2X mixture ratio 5.5), density rho = {tank.density_kg_m3:g} kg/m3 [E], "
+        (f"liquid: load {tank.load_kg:g} kg [D] (135.1 t [P] at the J-2X mixture ratio 5.5), "
+         f"density rho = {tank.density_kg_m3:g} kg/m3 [E], "
          f"kinematic viscosity nu = {tank.kinematic_viscosity_m2_s:g} m2/s [E]; "
          f"full fill height load/(rho pi R^2) = {tank.full_height_m:.6g} m [D]"),
         (f"level_m: liquid fill height above the flat tank bottom, m, {N_LEVELS} levels evenly spaced "
-         f"from 0 to {100 * TABLE_HEADROOM:g} % above full inclusive (dispersed loads); level 0 holds the limiting values (frequency 0, mass 0, height 0)"),
+         f"from 0 to {100 * TABLE_HEADROOM:g} % above full inclusive (dispersed loads); "
+         "level 0 holds the limiting values (frequency 0, mass 0, height 0)"),
         (f"frequency_hz and damping are given at the reference acceleration a_ref = {A_REF_MPS2:g} m/s2 (1 g); "
          "frequency scales as sqrt(a/a_ref), the smooth-wall damping formula as (a/a_ref)^-0.25 "
          "(the simulation uses the tabulated damping as it is)"),

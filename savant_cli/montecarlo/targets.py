@@ -271,7 +271,8 @@ def load_scaled(m: MassTable, k: float) -> MassTable:
     first_moment = m.mass_kg[:, None] * m.cg_m + extra[:, None] * (
         (m.mass_kg[:, None] * m.cg_m - m.mass_kg[0] * m.cg_m[0]) / np.where(p > 0.0, p, 1.0)[:, None])
     mass = m.mass_kg + extra
-    return dataclasses.replace(m, propellant_kg=k * p, mass_kg=mass, cg_m=np.ascontiguousarray(first_moment / mass[:, None]))
+    return dataclasses.replace(m, propellant_kg=k * p, mass_kg=mass,
+                               cg_m=np.ascontiguousarray(first_moment / mass[:, None]))
 
 
 def _upper_load(vehicle: Vehicle, name: str, k_tank: float) -> Vehicle:
