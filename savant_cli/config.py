@@ -855,6 +855,9 @@ class PegConfig:
     blend_s: float = 10.0  # the command turns from the stored profile to PEG's over this time
     max_unconverged_cycles: int = 5  # consecutive unconverged cycles that stop the run
     gravity_steps: int = 20  # RK4 steps of the gravity prediction over the time to go
+    # the nominal engine shutdown impulse in seconds of rated thrust, I_sd / F_vac (an I-load):
+    # the cutoff is commanded this much before t_go runs out, so the tail-off completes the burn
+    shutdown_impulse_time_s: float = 0.0
 
 
 @dataclass
@@ -1197,6 +1200,7 @@ def check_peg(peg: PegConfig, sim: SimConfig) -> None:
     if peg.isp_vac_s is None:
         raise ConfigError("guidance.peg.isp_vac_s", None, "is required: PEG's value of the engine's Isp (s)")
     _positive("guidance.peg.isp_vac_s", peg.isp_vac_s)
+    _non_negative("guidance.peg.shutdown_impulse_time_s", peg.shutdown_impulse_time_s)
     if not 0.0 < peg.convergence_tolerance < 0.5:
         raise ConfigError("guidance.peg.convergence_tolerance", peg.convergence_tolerance, "must be within (0, 0.5)")
     _non_negative("guidance.peg.terminal_time_to_go_s", peg.terminal_time_to_go_s)

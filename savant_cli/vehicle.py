@@ -178,7 +178,8 @@ class FirstStage:
 class UpperStage:
     """J-2X upper stage: rated vacuum thrust (N), Isp (s), LOX/LH2 mixture ratio and
     loads (kg), start transient (thrust fraction vs time since the ignition command, s),
-    gimbal (structure frame, m; limit rad) and the launch abort system mass (kg)."""
+    shutdown impulse (N·s: the vacuum impulse delivered after the cutoff command), gimbal
+    (structure frame, m; limit rad) and the launch abort system mass (kg)."""
 
     thrust_vac_N: float
     isp_vac_s: float
@@ -188,6 +189,7 @@ class UpperStage:
     lh2_kg: float
     startup_time_s: np.ndarray
     startup_fraction: np.ndarray
+    shutdown_impulse_Ns: float
     gimbal_m: np.ndarray
     gimbal_limit_rad: float
     les_mass_kg: float
@@ -264,6 +266,7 @@ SCHEMA: dict[str, Any] = {
                     "gimbal_limit_deg": float, "engine": ENGINE_KEYS},
     "upper_stage": {"thrust_vac_N": float, "isp_vac_s": float, "mixture_ratio": float,
                     "nozzle_exit_area_m2": float, "lox_kg": float, "lh2_kg": float, "startup_table": str,
+                    "shutdown_impulse_Ns": float,
                     "gimbal_m": _VEC3, "gimbal_limit_deg": float, "les_mass_kg": float, "engine": ENGINE_KEYS},
     "rcs": {"thrust_table": str, "exit_area_m2": float, "jets_per_direction": int, "moment_arm_m": float,
             "ramp_up_s": float, "ramp_down_s": float, "location_m": _VEC3},
@@ -613,6 +616,7 @@ def load_vehicle(vehicle_cfg: Mapping, data_dir: Path) -> Vehicle:
         lox_kg=_positive(f"{p}.lox_kg", us_node["lox_kg"]),
         lh2_kg=_positive(f"{p}.lh2_kg", us_node["lh2_kg"]),
         startup_time_s=st["time"], startup_fraction=frac,
+        shutdown_impulse_Ns=_positive(f"{p}.shutdown_impulse_Ns", us_node["shutdown_impulse_Ns"], True),
         gimbal_m=_vec3(us_node["gimbal_m"]),
         gimbal_limit_rad=_gimbal_limit(f"{p}.gimbal_limit_deg", us_node["gimbal_limit_deg"]),
         les_mass_kg=_positive(f"{p}.les_mass_kg", us_node["les_mass_kg"], True),

@@ -42,7 +42,7 @@ def parameters(gravity_order: int = 0, aero: bool = False, thrust: bool = False)
     p[earth.P_E2] = C.WGS84_E2
     p[propulsion.P_FS_ISP] = p[propulsion.P_US_ISP] = 300.0
     p[propulsion.P_US_MR] = 5.0
-    p[propulsion.P_FS_THRUST_SCALE] = 1.0
+    p[propulsion.P_FS_FLOW_PER_THRUST] = 1.0 / (C.G0 * p[propulsion.P_FS_ISP])  # F_vac = the table
     for g in (actuator.P_FS_GIMBAL, actuator.P_US_GIMBAL):
         p[g + actuator.G_LIMIT] = 0.1
     p[propulsion.P_FS_GIMBAL + propulsion.GIMBAL_X] = p[propulsion.P_US_GIMBAL + propulsion.GIMBAL_X] = 10.0

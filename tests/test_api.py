@@ -142,12 +142,12 @@ def test_montecarlo_tables_are_the_batch_file(tmp_path):
         g = f["montecarlo"]
         np.testing.assert_array_equal(mc.runs.index.to_numpy(), g["runs/run"][()])
         np.testing.assert_array_equal(mc.runs["max_qalpha_Pa_deg"].to_numpy(), g["summary/max_qalpha_Pa_deg"][()])
-        np.testing.assert_array_equal(mc.dispersions["fs_thrust"].to_numpy(), g["dispersions/fs_thrust"][()])
+        np.testing.assert_array_equal(mc.dispersions["fs_burn_rate"].to_numpy(), g["dispersions/fs_burn_rate"][()])
         choices = json.loads(g["dispersions/wind_profile"].attrs["choices"])
         codes = g["dispersions/wind_profile"][()]
     assert list(mc.runs["status"]) == ["complete"] * 3
     assert [mc.dispersions["wind_profile"][k] for k in (1, 2)] == [choices[int(c)] for c in codes[1:]]
-    assert mc.dispersions.attrs["items"]["fs_thrust"]["target"] == "tables.first_stage.thrust"
+    assert mc.dispersions.attrs["items"]["fs_burn_rate"]["target"] == "tables.first_stage.burn_rate"
     assert mc.statistics.loc["max_qalpha_Pa_deg", "max"] == pytest.approx(mc.runs["max_qalpha_Pa_deg"].max())
 
 

@@ -217,7 +217,7 @@ def test_engine_feeds_gyros_rigid_plus_flex_rate_and_nav_unit_flex_rotation(conf
                          rate=np.zeros((2, 3)), speed=np.zeros(0))
     ft = fcs_tables(validate(compose_config()).controller)
     sched = np.zeros(E.N_SCHED)
-    sched[E.S_T_SEP] = sched[E.S_T_MAX] = 1.0e9
+    sched[E.S_T_MAX] = 1.0e9  # S_SEP_FRACTION 0: never separates
     sched[E.S_ENERGY_TARGET] = 1.0e12
     sched[E.S_SMOOTH_ZETA], sched[E.S_SMOOTH_WN] = 0.8, 1.0
     sched[E.S_MAX_RATE] = 10.0

@@ -82,5 +82,7 @@ def test_plant_reads_aero_mass_and_thrust_tables_as_independent_lookups(model, a
     np.testing.assert_allclose(aux[aero.A_FORCE:aero.A_FORCE + 3], [-qs * ca + f_base, qs * cy, -qs * cn],
                                rtol=1e-10, atol=1e-6)
 
-    f_vac = np.interp(t, tb.fs_time, tb.fs_thrust) * p[propulsion.P_FS_THRUST_SCALE]
+    # the motor's mass flow is its load in the table's shape, its thrust that flow at its Isp
+    mdot = p[propulsion.P_FS_PROP_FULL] * np.interp(t, tb.fs_time, tb.fs_thrust) / np.trapezoid(tb.fs_thrust, tb.fs_time)
+    f_vac = 9.80665 * p[propulsion.P_FS_ISP] * mdot
     assert aux[propulsion.A_THRUST] == pytest.approx(f_vac - aux[atmosphere.A_PRES] * p[propulsion.P_FS_EXIT_AREA], rel=1e-12)

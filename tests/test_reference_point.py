@@ -45,9 +45,8 @@ def flown():
     prep = prepare(validate(compose_config(["sim.progress=false"])), hydra_search_dirs())
     model = prep.model
     dt = model.rates.dt
-    t_sep = model.sched[E.S_T_SEP]
-    k_sep = int(np.ceil(t_sep / dt - 1e-9))
     res = simulate(model, progress=False)
+    k_sep = int(round(res.events[E.EV_SEPARATION] / dt))  # the flown separation step
     k_les = int(round(res.events[E.EV_LES] / dt))
     snaps = simulate(model, progress=False, snapshot_steps=(k_sep, k_les)).snapshots
     return prep, snaps[k_sep], snaps[k_les]

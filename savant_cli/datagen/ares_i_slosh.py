@@ -82,7 +82,9 @@ except ImportError:  # pragma: no cover - only while constants.py is being writt
 XI_1 = 1.8412                      # first root of J1'(x) = 0 (1.841184...), as SP-106 quotes it
 A_REF_MPS2 = float(G0)             # reference acceleration of the tables, m/s^2 (1 g)
 DAMPING_MIN_DEPTH_RATIO = 0.1      # [E] h/R below which the damping's depth factor is frozen
-N_LEVELS = 41                      # table rows, level 0 .. full inclusive
+N_LEVELS = 41                      # table rows, level 0 .. the top level inclusive
+TABLE_HEADROOM = 0.01              # [E] the tables reach 1 % above the nominal fill: a dispersed load
+#                                    (±0.3 % at 3σ, conf/dispersions/ares_i.yaml) stays inside them
 
 RING_MIN_DEPTH_RATIO = 0.1         # [E] d/R below which a ring's depth is held (ring near the surface)
 
@@ -174,11 +176,11 @@ def _barrel_baffles(full_height_m: float) -> RingBaffles:
                        BAFFLE_DESIGN_AMPLITUDE_RATIO)
 
 
-LOX = Tank("lox", "upper-stage LOX tank", load_kg=M_LOX,        # [P] 112,900 kg
+LOX = Tank("lox", "upper-stage LOX tank", load_kg=M_LOX,        # [D] 114,315 kg: 135.1 t [P] at MR 5.5
            density_kg_m3=1141.0,                                 # [E] saturated LOX at ~90 K
            kinematic_viscosity_m2_s=1.7e-7,                      # [E] ~1.9e-4 Pa s / 1141 kg/m^3
            baffles=_barrel_baffles(M_LOX / (1141.0 * np.pi * TANK_RADIUS_M**2)))
-LH2 = Tank("lh2", "upper-stage LH2 tank", load_kg=M_LH2,        # [P] 22,200 kg
+LH2 = Tank("lh2", "upper-stage LH2 tank", load_kg=M_LH2,        # [D] 20,785 kg: 135.1 t [P] at MR 5.5
            density_kg_m3=70.85,                                  # [E] saturated LH2 at ~20 K
            kinematic_viscosity_m2_s=1.9e-7,                      # [E] ~1.35e-5 Pa s / 70.85 kg/m^3
            baffles=_barrel_baffles(M_LH2 / (70.85 * np.pi * TANK_RADIUS_M**2)))
@@ -489,8 +491,8 @@ def slosh_table(radius_m, density_kg_m3, kinematic_viscosity_m2_s, load_kg, n_le
 
 def tank_table(tank: Tank) -> np.ndarray:
     """:func:`slosh_table` of a :class:`Tank` at the reference acceleration."""
-    return slosh_table(tank.radius_m, tank.density_kg_m3, tank.kinematic_viscosity_m2_s, tank.load_kg,
-                       baffles=tank.baffles)
+    return slosh_table(tank.radius_m, tank.density_kg_m3, tank.kinematic_viscosity_m2_s,
+                       tank.load_kg * (1.0 + TABLE_HEADROOM), baffles=tank.baffles)
 
 
 # ========================================================================== writing
@@ -504,11 +506,13 @@ def tank_comments(tank: Tank) -> list[str]:
          + (f"ring baffles [E]: width {b.width_ratio:g} R every {b.spacing_m:g} m from {b.lowest_m:g} to "
             f"{b.highest_m:.4g} m above the bottom, damping judged at a wave of {b.design_amplitude_ratio:g} R"
             if (b := tank.baffles) is not None else "smooth wall, no baffles")),
-        (f"liquid: load {tank.load_kg:g} kg [P], density rho = {tank.density_kg_m3:g} kg/m3 [E], "
+        (f"liquid: load {tank.load_kg:g} kg [D] (135.1 t [P] at the J-2X mixture ratio 5.5), "
+         f"density rho = {tank.density_kg_m3:g} kg/m3 [E], "
          f"kinematic viscosity nu = {tank.kinematic_viscosity_m2_s:g} m2/s [E]; "
          f"full fill height load/(rho pi R^2) = {tank.full_height_m:.6g} m [D]"),
         (f"level_m: liquid fill height above the flat tank bottom, m, {N_LEVELS} levels evenly spaced "
-         "from 0 to full inclusive; level 0 holds the limiting values (frequency 0, mass 0, height 0)"),
+         f"from 0 to {100 * TABLE_HEADROOM:g} % above full inclusive (dispersed loads); "
+         "level 0 holds the limiting values (frequency 0, mass 0, height 0)"),
         (f"frequency_hz and damping are given at the reference acceleration a_ref = {A_REF_MPS2:g} m/s2 (1 g); "
          "frequency scales as sqrt(a/a_ref), the smooth-wall damping formula as (a/a_ref)^-0.25 "
          "(the simulation uses the tabulated damping as it is)"),

@@ -21,7 +21,9 @@ on an optimizer run. Within a configuration:
   CG stays put while its mass and radius of gyration change;
 * liquid propellant settles at the aft end of its tank as a solid cylinder whose height
   is proportional to the mass remaining; the J-2X burns LOX and LH2 at its mixture
-  ratio 5.5 [E] from the loaded 112.9 t / 22.2 t [P], so LOX runs out first;
+  ratio 5.5 [E], and the tanks are loaded at that ratio [D] with the public total
+  135.1 t [P] (the public 112.9 t / 22.2 t split is a ratio of 5.09: at 5.5 it would
+  leave 1.67 t of LH2 that cannot burn), so both run out together;
 * inertias are about the configuration's CG (parallel-axis theorem), in body axes; the
   model is axisymmetric, so Iyy = Izz and the products of inertia are zero.
 
@@ -80,9 +82,10 @@ M_HYDRAZINE = 500.0                # [E] roll-control hydrazine (not consumed in
 M_INTERSTAGE = 5900.0              # [E]
 M_FS_INERT = 85500.0               # [E] first-stage inert
 M_FS_PROP = 647600.0               # [E] first-stage propellant
-M_LOX = 112900.0                   # [P] upper-stage LOX load
-M_LH2 = 22200.0                    # [P] upper-stage LH2 load
 MIXTURE_RATIO = 5.5                # [E] J-2X LOX/LH2 mass ratio in flight
+M_US_PROP = 135100.0               # [P] upper-stage LOX + LH2 (112.9 t + 22.2 t)
+M_LOX = round(M_US_PROP * MIXTURE_RATIO / (1.0 + MIXTURE_RATIO), 3)  # [D] LOX load at the mixture ratio
+M_LH2 = M_US_PROP - M_LOX          # [D] LH2 load at the mixture ratio
 RHO_GRAIN = 1760.0                 # [E] PBAN propellant density, kg/m^3
 
 FS_ISP_VAC_S = 266.0               # [E]
@@ -284,10 +287,16 @@ def mass_properties(segs: list[Segment]) -> tuple[float, float, np.ndarray]:
 
 def upper_stage_loads(remaining_kg: float) -> tuple[float, float]:
     """LOX and LH2 left (kg) when ``remaining_kg`` of the total load is left, burning at
-    the mixture ratio from the loaded masses until LOX is exhausted, then LH2 only."""
+    the mixture ratio from the loaded masses until the limiting one is exhausted, then
+    the other alone (the tables' drain order)."""
     used = M_LOX + M_LH2 - remaining_kg
-    lox = max(M_LOX - used * MIXTURE_RATIO / (1.0 + MIXTURE_RATIO), 0.0)
-    return lox, max(remaining_kg - lox, 0.0)
+    lox = M_LOX - used * MIXTURE_RATIO / (1.0 + MIXTURE_RATIO)
+    lh2 = M_LH2 - used / (1.0 + MIXTURE_RATIO)
+    if lox < 0.0:
+        return 0.0, max(remaining_kg, 0.0)
+    if lh2 < 0.0:
+        return max(remaining_kg, 0.0), 0.0
+    return lox, lh2
 
 
 def configuration_segments(config: str, propellant_kg: float, lay: Layout = LAYOUT) -> list[Segment]:
@@ -348,8 +357,11 @@ def mass_table(config: str, lay: Layout = LAYOUT) -> np.ndarray:
     if config == "stack":
         props = np.linspace(0.0, M_FS_PROP, 33)
     else:
-        lox_out = M_LH2 - M_LOX / MIXTURE_RATIO        # LH2 left when the LOX runs out
-        props = np.union1d(np.linspace(0.0, M_LOX + M_LH2, 28), [lox_out])
+        # propellant left (all of the other tank) when the limiting one runs out
+        residual = max(M_LH2 - M_LOX / MIXTURE_RATIO, M_LOX - MIXTURE_RATIO * M_LH2)
+        props = np.linspace(0.0, M_LOX + M_LH2, 28)
+        if residual > 1.0:  # off-ratio loads: a row where the limiting propellant runs out
+            props = np.union1d(props, [residual])
     rows = []
     for p in props:
         m, cg, inertia = mass_properties(configuration_segments(config, float(p), lay))
@@ -394,7 +406,7 @@ def aero_table(config: str, lay: Layout = LAYOUT) -> np.ndarray:
 
 def separation_time() -> float:
     """First time after the peak when the thrust falls below the separation fraction (s);
-    the same rule as ``savant_cli.sim.build.separation_time``."""
+    the same rule as ``savant_cli.sim.build.predicted_separation_time``."""
     t = np.linspace(FS_THRUST_TIME_S[0], FS_THRUST_TIME_S[-1], 200001)
     f = np.interp(t, FS_THRUST_TIME_S, FS_THRUST_VAC_MN)
     ipk = int(np.argmax(f))

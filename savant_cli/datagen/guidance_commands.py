@@ -105,7 +105,7 @@ class Reference:
         lat, lon = np.radians(ls.latitude_deg), np.radians(ls.longitude_deg)
         self.c_e2n = earth.dcm_ecef_to_ned(lat, lon)  # = ECI→launch frame at t = 0
         self.pad_heading = np.radians(ls.pad_heading_deg)
-        self.t_sep = build.separation_time(vehicle)
+        self.t_sep = build.predicted_separation_time(vehicle)  # a prediction: no flight exists here (the flight separates on board)
         self.t_ign = self.t_sep + vehicle.events.ignition_delay_s
         self.t_les = self.t_ign + vehicle.events.les_jettison_delay_s
         self.energy_target = build.target_energy(cfg)

@@ -147,7 +147,7 @@ def fly(out_csv: Path) -> Path:
     ia, ib = int(np.argmin(np.abs(aero.alpha_rad))), int(np.argmin(np.abs(aero.beta_rad)))
     ca = aero.coeffs[0][:, ia, ib]
     lat, lon, alt = earth.ecef_to_geodetic(model.x0[L.R:L.R + 3], C.WGS84_A, C.WGS84_E2)  # ECI = ECEF at t = 0
-    t_stop = model.info["separation_time_s"]
+    t_stop = model.info["predicted_separation_time_s"]  # before any flight: the table rule
     with tempfile.TemporaryDirectory() as root:
         rd = Path(root)
         (rd / "aircraft" / "savant_vertical").mkdir(parents=True)

@@ -13,6 +13,7 @@ from rich.text import Text
 #: Key suffix → (unit label, format of a float value). Longest suffixes first.
 UNIT_SUFFIXES: tuple[tuple[str, str, str], ...] = (
     ("_Pa_deg", "Pa·deg", "{:,.0f}"),
+    ("_Ns", "N·s", "{:,.0f}"),
     ("_deg_s", "deg/s", "{:.3f}"),
     ("_mps", "m/s", "{:,.2f}"),
     ("_deg", "deg", "{:.3f}"),

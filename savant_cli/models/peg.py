@@ -62,6 +62,8 @@ P_MAX_UNCONVERGED = _PARAMS.scalar("max_unconverged_cycles", "1", "consecutive u
 P_GRAV_STEPS = _PARAMS.scalar("gravity_steps", "1", "RK4 steps of the gravity prediction over t_go")
 P_STEER_TOL = _PARAMS.scalar("steering_tolerance", "rad", "largest change of the thrust direction between passes "
                              "of a converged engagement")
+P_SHUTDOWN_LEAD = _PARAMS.scalar("shutdown_impulse_time", "s", "nominal shutdown impulse in seconds of rated "
+                                  "thrust (an I-load): the cutoff is commanded this much before t_go ends")
 P_BLEND = _PARAMS.scalar("blend_time", "s", "the command turns from the stored profile to PEG's over this time")
 
 _DISCRETE = blocks.DISCRETE.block("peg")
@@ -77,7 +79,8 @@ D_RBIAS = _DISCRETE.array("position_bias", 3, "m", "r_bias: position error of th
 D_RGRAV = _DISCRETE.array("position_gravity", 3, "m", "r_grav: gravity's share of the position to go, ECI")
 D_RD = _DISCRETE.array("cutoff_position", 3, "m", "predicted (target) cutoff position r_d, ECI")
 D_VD = _DISCRETE.array("cutoff_velocity", 3, "m/s", "target cutoff velocity v_d at r_d, ECI")
-D_T_CUTOFF = _DISCRETE.scalar("cutoff_time", "s", "predicted cutoff time t + t_go (0 before PEG engages)")
+D_T_CUTOFF = _DISCRETE.scalar("cutoff_time", "s", "commanded cutoff time t + t_go − the shutdown lead "
+                                                 "(0 before PEG engages)")
 D_ACCEL = _DISCRETE.scalar("thrust_acceleration", "m/s^2", "sensed thrust acceleration over the last cycle")
 D_UNCONVERGED = _DISCRETE.scalar("unconverged_cycles", "1", "consecutive unconverged cycles")
 D_ITERATIONS = _DISCRETE.scalar("iterations", "1", "passes made in the latest cycle")
@@ -126,6 +129,7 @@ def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarra
     p[P_GRAV_STEPS] = g.peg.gravity_steps
     p[P_STEER_TOL] = np.radians(g.peg.steering_tolerance_deg)
     p[P_BLEND] = g.peg.blend_s
+    p[P_SHUTDOWN_LEAD] = g.peg.shutdown_impulse_time_s
 
 
 class InsertionTarget:
@@ -504,7 +508,7 @@ def guidance_cycle(d: np.ndarray, t: float, r: np.ndarray, v: np.ndarray, t_igni
     d[D_CONVERGED] = 1.0 if converged else 0.0
     d[D_TGO] = tgo
     d[D_VGO:D_VGO + 3] = vgo
-    d[D_T_CUTOFF] = t + tgo
+    d[D_T_CUTOFF] = t + tgo - p[P_SHUTDOWN_LEAD]  # the tail-off delivers the rest
     if d[D_TERMINAL] == 0.0:
         d[D_RD:D_RD + 3] = rd
         d[D_VD:D_VD + 3] = vd

@@ -1,11 +1,25 @@
 """Propulsion: first-stage motor and upper-stage engine thrust, mass flow, propellant
 states, and the thrust force and moment of a gimbaled nozzle.
 
-First stage (solid motor): vacuum thrust ``F_vac(t)`` from a table against mission
-time, × ``thrust_scale`` (dispersions); mass flow ``ṁ = F_vac / (g0 Isp_vac)`` while
-propellant remains. Upper stage (J-2X class): ``F_vac = F_rated f(t − t_ign)`` with the
+First stage (solid motor): the mass flow is the load ``M`` spread over the burn in the
+shape of the vacuum-thrust table ``F_tab(t)`` (mission time), and the vacuum thrust is
+that flow at the motor's Isp::
+
+    ṁ(t) = M F_tab(t) / I_tab,     F_vac(t) = g0 Isp_vac ṁ(t),     I_tab = ∫ F_tab dt
+
+(zero outside the table's time span; trapezoidal ``I_tab`` is exact for the linear
+interpolation). So ``∫ ṁ dt = M`` and the delivered vacuum impulse is ``g0 Isp_vac M``
+by construction: the motor stops thrusting exactly when its propellant is gone, whatever
+the load, Isp or burn rate (a burn-rate factor k compresses the table: ``k F_tab(k t)``).
+For a consistent table (``I_tab = g0 Isp M``; the shipped Ares-I table within 0.007 %) the
+nominal thrust is the table's. Upper stage (J-2X class): ``F_vac = F_rated f(t − t_ign)`` with the
 start-up thrust fraction ``f`` from a table; ``ṁ = F_vac / (g0 Isp)``, split LOX : LH2 by
-the mixture ratio. Delivered thrust ``F = max(F_vac − p_amb A_exit, 0)``.
+the mixture ratio. After the cutoff command at ``t_cut`` the thrust decays linearly to
+zero over ``T_sd = 2 I_sd / F_rated`` (the shutdown transient; ``I_sd`` the engine's
+shutdown impulse, ``upper_stage.shutdown_impulse_Ns``), so the impulse delivered after
+the command is ``I_sd`` (the transient starts at rated thrust, the start-up long over),
+burning propellant at the same Isp and mixture ratio. Delivered thrust
+``F = max(F_vac − p_amb A_exit, 0)``.
 
 The thrust acts at the active stage's gimbal along the nozzle axis, turned by the
 actuator angles plus the nozzle's null bias, minus the structure's flex rotation at the
@@ -43,13 +57,16 @@ _PARAMS = blocks.PARAMETERS.block("propulsion")
 P_ON = _PARAMS.scalar("on", "1", "1: thrust applied (environment.thrust)")
 P_FS_ISP = _PARAMS.scalar("first_stage.isp_vac", "s", "first-stage vacuum specific impulse")
 P_FS_EXIT_AREA = _PARAMS.scalar("first_stage.exit_area", "m^2", "first-stage nozzle exit area")
-P_FS_THRUST_SCALE = _PARAMS.scalar("first_stage.thrust_scale", "1", "multiplier of the thrust table")
+P_FS_FLOW_PER_THRUST = _PARAMS.scalar("first_stage.flow_per_table_thrust", "kg/(N*s)",
+                                      "load / table impulse: mass flow per N of the thrust table")
 P_FS_PROP_FULL = _PARAMS.scalar("first_stage.propellant_full", "kg", "first-stage propellant at liftoff")
 P_US_THRUST = _PARAMS.scalar("upper_stage.thrust_vac", "N", "upper-stage rated vacuum thrust")
 P_US_ISP = _PARAMS.scalar("upper_stage.isp_vac", "s", "upper-stage vacuum specific impulse")
 P_US_MR = _PARAMS.scalar("upper_stage.mixture_ratio", "1", "LOX : LH2 mass ratio")
 P_US_EXIT_AREA = _PARAMS.scalar("upper_stage.exit_area", "m^2", "upper-stage nozzle exit area")
 P_US_PROP_FULL = _PARAMS.scalar("upper_stage.propellant_full", "kg", "upper-stage LOX + LH2 at ignition")
+P_US_SHUTDOWN_TIME = _PARAMS.scalar("upper_stage.shutdown_time", "s",
+                                    "duration of the linear thrust decay after the cutoff command, 2 I_sd / F_rated")
 P_FS_GIMBAL = _PARAMS.record("first_stage.gimbal", GIMBAL, "first-stage gimbal point")
 P_US_GIMBAL = _PARAMS.record("upper_stage.gimbal", GIMBAL, "upper-stage gimbal point")
 
@@ -60,6 +77,19 @@ T_US_START_TIME = _TABLES.table("us_start_time", "s", "upper-stage start transie
 T_US_START_FRAC = _TABLES.table("us_start_frac", "1", "fraction of rated thrust at T_US_START_TIME")
 _AUX = blocks.DIAGNOSTICS.block("propulsion")
 A_THRUST = _AUX.scalar("thrust", "N", "delivered thrust")
+A_THRUST_VAC = _AUX.scalar("thrust_vac", "N", "vacuum thrust of the burning engine (the sensed thrust)")
+_DISCRETE = blocks.DISCRETE.block("propulsion")
+D_FS_PEAK = _DISCRETE.scalar("first_stage_peak_thrust", "N",
+                             "largest sensed first-stage vacuum thrust so far (the separation cue's reference)")
+D_FS_LAST = _DISCRETE.scalar("first_stage_last_thrust", "N", "sensed first-stage vacuum thrust at the last step")
+D_FS_IMPULSE = _DISCRETE.scalar("first_stage_impulse", "N*s",
+                                "first-stage vacuum impulse delivered so far (trapezoid of the sensed thrust)")
+D_US_SD_LAST = _DISCRETE.scalar("upper_stage_last_thrust", "N", "sensed upper-stage vacuum thrust at the last "
+                                "step of the shutdown transient")
+D_US_SD_IMPULSE = _DISCRETE.scalar("shutdown_impulse", "N*s", "upper-stage vacuum impulse delivered after the cutoff "
+                                   "command (trapezoid of the sensed thrust)")
+D_FS_PROP_SEP = _DISCRETE.scalar("first_stage_propellant_at_separation", "kg",
+                                 "first-stage propellant left in the motor at separation (NaN before)")
 A_MOMENT = _AUX.array("moment", 3, "N*m", "thrust moment about the CG, body")
 
 
@@ -69,17 +99,56 @@ def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarra
     p[P_ON] = 1.0 if inputs.cfg.environment.thrust else 0.0
     p[P_FS_ISP] = fs.isp_vac_s
     p[P_FS_EXIT_AREA] = fs.nozzle_exit_area_m2
-    p[P_FS_THRUST_SCALE] = 1.0
+    p[P_FS_FLOW_PER_THRUST] = fs.propellant_kg / table_impulse(fs.thrust_time_s, fs.thrust_vac_N)
     p[P_FS_PROP_FULL] = fs.propellant_kg
     p[P_US_THRUST] = us.thrust_vac_N
     p[P_US_ISP] = us.isp_vac_s
     p[P_US_MR] = us.mixture_ratio
     p[P_US_EXIT_AREA] = us.nozzle_exit_area_m2
     p[P_US_PROP_FULL] = us.lox_kg + us.lh2_kg
+    p[P_US_SHUTDOWN_TIME] = 2.0 * us.shutdown_impulse_Ns / us.thrust_vac_N
     p[P_FS_GIMBAL:P_FS_GIMBAL + GIMBAL.size] = fs.gimbal_m
     p[P_US_GIMBAL:P_US_GIMBAL + GIMBAL.size] = us.gimbal_m
     tables.update(fs_time=fs.thrust_time_s, fs_thrust=fs.thrust_vac_N, us_start_time=us.startup_time_s,
                   us_start_frac=us.startup_fraction)
+
+
+def table_impulse(time_s: np.ndarray, thrust_N: np.ndarray) -> float:
+    """Impulse of a linearly interpolated thrust table (N·s): the trapezoidal integral,
+    exact for the interpolation the plant uses."""
+    return float(np.trapezoid(thrust_N, time_s))
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def first_stage_flow(x: np.ndarray, tb: np.ndarray, p: np.ndarray, t: float) -> tuple[float, float]:
+    """Vacuum thrust (N) and mass flow (kg/s) of the solid motor at mission time ``t``
+    (s): ``ṁ = M F_tab(t) / I_tab``, ``F_vac = g0 Isp ṁ``; zero outside the table's time
+    span and once the propellant state ``x[MFS]`` is empty. The sequencer's sensed
+    thrust (chamber pressure) is this ``F_vac``."""
+    o_ft, n_ft = tab(tb, T_FS_TIME)
+    if x[MFS] <= 0.0 or t < tb[o_ft] or t > tb[o_ft + n_ft - 1]:
+        return 0.0, 0.0
+    mdot = p[P_FS_FLOW_PER_THRUST] * interp1_at(tb, o_ft, tab_offset(tb, T_FS_THRUST), n_ft, t)
+    if not mdot > 0.0:
+        return 0.0, 0.0
+    return G0 * p[P_FS_ISP] * mdot, mdot
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def upper_stage_thrust_vac(x: np.ndarray, tb: np.ndarray, p: np.ndarray, t: float, t_ign: float,
+                           t_cut: float) -> float:
+    """Vacuum thrust of the upper-stage engine (N) at mission time ``t`` (s): the start-up
+    fraction at ``t − t_ign`` × the rated thrust, × the shutdown decay
+    ``max(0, 1 − (t − t_cut)/T_sd)`` once the cutoff command at ``t_cut`` (s; 0 or less:
+    none yet) is given; zero once either tank is empty."""
+    if not (x[MLOX] > 0.0 and x[MLH2] > 0.0):
+        return 0.0
+    o_st, n_st = tab(tb, T_US_START_TIME)
+    f_vac = interp1_at(tb, o_st, tab_offset(tb, T_US_START_FRAC), n_st, t - t_ign) * p[P_US_THRUST]
+    if t_cut > 0.0 and t > t_cut:
+        t_sd = p[P_US_SHUTDOWN_TIME]
+        f_vac *= max(1.0 - (t - t_cut) / t_sd, 0.0) if t_sd > 0.0 else 0.0
+    return f_vac
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -91,29 +160,29 @@ def propellant_remaining(x: np.ndarray, config: int) -> float:
 
 @njit(cache=True, error_model="numpy", inline="always")
 def thrust_and_flow(x: np.ndarray, tb: np.ndarray, p: np.ndarray, engine: int, t: float, t_ign: float,
-                    pres: float) -> tuple[float, float, float]:
-    """Delivered thrust (N) and the first- and upper-stage mass flows (kg/s).
+                    t_cut: float, pres: float) -> tuple[float, float, float, float]:
+    """Delivered thrust (N), the first- and upper-stage mass flows (kg/s) and the vacuum
+    thrust of the burning engine (N).
 
     ``engine`` is the engine phase, ``t`` mission time (s), ``t_ign`` the upper-stage
-    ignition time (s), ``pres`` the ambient pressure (Pa).
+    ignition time (s), ``t_cut`` its cutoff command time (s; 0 or less: none yet), ``pres``
+    the ambient pressure (Pa).
     """
     thrust = 0.0
+    f_vac = 0.0
     mdot_fs = 0.0
     mdot_us = 0.0
     if engine == ENGINE_FIRST:
-        o_ft, n_ft = tab(tb, T_FS_TIME)
-        f_vac = p[P_FS_THRUST_SCALE] * interp1_at(tb, o_ft, tab_offset(tb, T_FS_THRUST), n_ft, t)
-        if x[MFS] > 0.0 and f_vac > 0.0:
-            mdot_fs = f_vac / (G0 * p[P_FS_ISP])
+        f_vac, mdot_fs = first_stage_flow(x, tb, p, t)
+        if mdot_fs > 0.0:
             thrust = max(f_vac - pres * p[P_FS_EXIT_AREA], 0.0)
-    elif engine == ENGINE_UPPER and x[MLOX] > 0.0 and x[MLH2] > 0.0:
-        o_st, n_st = tab(tb, T_US_START_TIME)
-        f_vac = interp1_at(tb, o_st, tab_offset(tb, T_US_START_FRAC), n_st, t - t_ign) * p[P_US_THRUST]
+    elif engine == ENGINE_UPPER:
+        f_vac = upper_stage_thrust_vac(x, tb, p, t, t_ign, t_cut)
         mdot_us = f_vac / (G0 * p[P_US_ISP])
         thrust = max(f_vac - pres * p[P_US_EXIT_AREA], 0.0)
     if p[P_ON] == 0.0:
         thrust = 0.0
-    return thrust, mdot_fs, mdot_us
+    return thrust, mdot_fs, mdot_us, f_vac
 
 
 @njit(cache=True, error_model="numpy", inline="always")

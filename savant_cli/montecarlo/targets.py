@@ -40,15 +40,20 @@ from omegaconf import OmegaConf
 from savant_cli.config import GROUP_VARIANTS, ControllerConfig, SavantConfig, WindsConfig, has_key, check_physics
 from savant_cli.errors import ConfigError
 from savant_cli.sim.build import SimModel, build_model
-from savant_cli.vehicle import AERO_COEFFS, Vehicle
+from savant_cli.vehicle import AERO_COEFFS, MassTable, Vehicle
 
 KINDS = ("config", "vehicle", "tables", "group")
 UPPER_CONFIGS = ("upper_les", "upper")
 
 #: Vehicle-table targets: name → (units of the sample, allowed ``apply``, what it does).
 TABLE_TARGETS: dict[str, tuple[str, tuple[str, ...], str]] = {
-    "tables.first_stage.thrust": ("1", ("scale",), "vacuum thrust trace × k; mass flow follows at the same Isp"),
-    "tables.first_stage.burn_rate": ("1", ("scale",), "thrust × k on a time axis ÷ k: same impulse, burn time ÷ k"),
+    "tables.first_stage.burn_rate": ("1", ("scale",), "motor burn rate × k: thrust and mass flow × k on a time axis "
+                                                      "÷ k; load and total impulse conserved, burn time ÷ k"),
+    "tables.first_stage.propellant_load": ("1", ("scale",), "solid propellant load × k (density at a fixed grain): "
+                                                            "mass flow and thrust × k at the same burn time and Isp"),
+    "tables.upper_stage.lox_load": ("1", ("scale",), "LOX loaded × k (tank fill); the upper-stage mass tables "
+                                                     "rescaled to the new total, the stack carries the difference"),
+    "tables.upper_stage.lh2_load": ("1", ("scale",), "LH2 loaded × k (tank fill); as lox_load"),
     "tables.first_stage.dry_mass": ("kg", ("offset",), "mass added at the CG of the stack configuration"),
     "tables.upper_stage.dry_mass": ("kg", ("offset",), "mass added at the CG of every configuration"),
     **{f"tables.{c}.cg_{ax}": ("m", ("offset",), f"CG shift along structure {ax} ({c})")
@@ -58,6 +63,13 @@ TABLE_TARGETS: dict[str, tuple[str, tuple[str, ...], str]] = {
        for k in AERO_COEFFS},
 }
 GROUP_TARGETS = ("winds",)
+#: Targets that no longer exist, with why and what replaces them.
+RETIRED_TARGETS = {
+    "tables.first_stage.thrust": "retired: it scaled thrust and mass flow at a fixed burn time, so the motor ran out "
+                                 "of propellant while its trace still thrust (k > 1) or ended with propellant unburned "
+                                 "(k < 1); use tables.first_stage.burn_rate, tables.first_stage.propellant_load or "
+                                 "vehicle.first_stage.isp_vac_s (docs/montecarlo.md)",
+}
 
 _PATH_RE = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*)((?:\[\d+\])*)$")
 
@@ -141,6 +153,8 @@ def resolve(key: str, text: str, cfg: SavantConfig, vehicle: Vehicle, search_dir
     """The target named ``text`` (``key``: the spec key named in errors)."""
     if text in TABLE_TARGETS:
         return Target(text, "tables", units=TABLE_TARGETS[text][0])
+    if text in RETIRED_TARGETS:
+        raise ConfigError(key, text, RETIRED_TARGETS[text])
     if text.startswith("tables."):
         raise ConfigError(key, text, "unknown table target; known: " + ", ".join(TABLE_TARGETS))
     if text in GROUP_TARGETS:
@@ -245,16 +259,67 @@ def _mass(vehicle: Vehicle, configs: tuple[str, ...], change) -> Vehicle:
     return dataclasses.replace(vehicle, configurations=confs)
 
 
+def load_scaled(m: MassTable, k: float) -> MassTable:
+    """The mass table of a burning stage whose propellant is × ``k`` at every burned
+    fraction (the same grain or tank geometry, denser or fuller): the row at propellant
+    ``p`` moves to ``k p`` with ``(k − 1) p`` more mass, placed at the propellant's own CG
+    at that row, ``(m(p) cg(p) − m(0) cg(0)) / p`` (the dry part is the row at 0). The
+    inertia is the nominal's at the same burned fraction (a ±0.3 % load changes it by
+    less than 0.2 %, far inside the inertia dispersions)."""
+    p = m.propellant_kg
+    extra = (k - 1.0) * p
+    first_moment = m.mass_kg[:, None] * m.cg_m + extra[:, None] * (
+        (m.mass_kg[:, None] * m.cg_m - m.mass_kg[0] * m.cg_m[0]) / np.where(p > 0.0, p, 1.0)[:, None])
+    mass = m.mass_kg + extra
+    return dataclasses.replace(m, propellant_kg=k * p, mass_kg=mass,
+                               cg_m=np.ascontiguousarray(first_moment / mass[:, None]))
+
+
+def _upper_load(vehicle: Vehicle, name: str, k_tank: float) -> Vehicle:
+    """One upper-stage tank's load × ``k_tank``. The upper
+    configurations' tables (against LOX + LH2 remaining) are rescaled to the new total
+    (:func:`load_scaled`: the extra spread like the propellant at each level); the stack,
+    which carries the upper stage full, gains the extra at every row, at the upper-stage
+    propellant's CG when full (the stack shares the structure frame)."""
+    if not k_tank > 0.0:
+        raise ConfigError(name, k_tank, "load factor must be positive")
+    us = vehicle.upper_stage
+    lox, lh2 = us.lox_kg, us.lh2_kg
+    if name.endswith("lox_load"):
+        lox *= k_tank
+    else:
+        lh2 *= k_tank
+    delta_kg = lox + lh2 - us.lox_kg - us.lh2_kg
+    k = (lox + lh2) / (us.lox_kg + us.lh2_kg)
+    les = vehicle.configurations["upper_les"].mass
+    full = les.propellant_kg[-1]
+    cg_prop = (les.mass_kg[-1] * les.cg_m[-1] - les.mass_kg[0] * les.cg_m[0]) / full  # structure frame, m
+
+    def stack(m: MassTable) -> MassTable:
+        mass = m.mass_kg + delta_kg
+        cg = (m.mass_kg[:, None] * m.cg_m + delta_kg * cg_prop[None, :]) / mass[:, None]
+        return dataclasses.replace(m, mass_kg=mass, cg_m=np.ascontiguousarray(cg))
+
+    vehicle = _mass(vehicle, UPPER_CONFIGS, lambda m: load_scaled(m, k))
+    vehicle = _mass(vehicle, ("stack",), stack)
+    return dataclasses.replace(vehicle, upper_stage=dataclasses.replace(us, lox_kg=lox, lh2_kg=lh2))
+
+
 def _apply_table(vehicle: Vehicle, name: str, v: float) -> Vehicle:
     """Vehicle-table dispersions applied before the build (aero is applied after)."""
     fs = vehicle.first_stage
-    if name == "tables.first_stage.thrust":
-        return dataclasses.replace(vehicle, first_stage=dataclasses.replace(fs, thrust_vac_N=fs.thrust_vac_N * v))
     if name == "tables.first_stage.burn_rate":
         if not v > 0.0:
             raise ConfigError(name, v, "burn-rate factor must be positive")
         return dataclasses.replace(vehicle, first_stage=dataclasses.replace(
             fs, thrust_time_s=fs.thrust_time_s / v, thrust_vac_N=fs.thrust_vac_N * v))
+    if name == "tables.first_stage.propellant_load":
+        if not v > 0.0:
+            raise ConfigError(name, v, "propellant-load factor must be positive")
+        vehicle = _mass(vehicle, ("stack",), lambda m: load_scaled(m, v))
+        return dataclasses.replace(vehicle, first_stage=dataclasses.replace(fs, propellant_kg=fs.propellant_kg * v))
+    if name in ("tables.upper_stage.lox_load", "tables.upper_stage.lh2_load"):
+        return _upper_load(vehicle, name, v)
     if name.endswith("dry_mass"):
         configs = ("stack",) if ".first_stage." in name else ("stack", *UPPER_CONFIGS)
         return _mass(vehicle, configs, lambda m: dataclasses.replace(m, mass_kg=m.mass_kg + v))

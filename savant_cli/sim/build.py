@@ -12,7 +12,7 @@ import numpy as np
 from savant_cli import constants as C
 from savant_cli.config import SavantConfig
 from savant_cli.errors import ConfigError
-from savant_cli.models import PLANT_MODELS, blocks, earth, quaternion as qt, rigid_body
+from savant_cli.models import PLANT_MODELS, blocks, earth, propulsion, quaternion as qt, rigid_body
 from savant_cli.models.command_schedule import SCHEDULES
 from savant_cli.models.fcs import FcsTables, fcs_tables
 from savant_cli.models.sensors import GYRO_MISALIGN, gyro_discrete, gyro_steady_state, misalignment
@@ -95,9 +95,12 @@ def rates(cfg: SavantConfig) -> Rates:
                  n_guid=ratio(s.guidance_rate_hz), n_log=ratio(s.log_rate_hz))
 
 
-def separation_time(vehicle: Vehicle) -> float:
-    """First time after the thrust peak when first-stage thrust falls below the
-    configured fraction of its peak (s)."""
+def predicted_separation_time(vehicle: Vehicle) -> float:
+    """A prediction, from the thrust table alone, of the separation time (s): the first
+    time after the table's peak when the thrust falls below the configured fraction of
+    that peak. The flight itself separates on board at the step its flown motor meets
+    the rule (``sim/engine.py``); this is only for what is needed before any flight (the
+    command table's first-stage samples, reference trajectories)."""
     fs = vehicle.first_stage
     t = np.linspace(fs.thrust_time_s[0], fs.thrust_time_s[-1], 200001)
     f = np.interp(t, fs.thrust_time_s, fs.thrust_vac_N)
@@ -186,6 +189,7 @@ def build_model(cfg: SavantConfig, vehicle: Vehicle, guidance: GuidanceTable) ->
     rigid_body.move_reference(x0, rigid[1] - whole[1], rigid[2] - whole[2], rigid[3] - whole[3])
 
     d0 = np.zeros(L.N_DISC)
+    d0[propulsion.D_FS_PROP_SEP] = np.nan  # set at separation
     for g in range(3):
         w_sensed = misalignment(p[GYRO_MISALIGN[g]:GYRO_MISALIGN[g] + 3])[1] @ w0  # in the gyro's axes
         for ax in range(3):
@@ -198,7 +202,7 @@ def build_model(cfg: SavantConfig, vehicle: Vehicle, guidance: GuidanceTable) ->
 
     ev = vehicle.events
     sched = np.zeros(E.N_SCHED)
-    sched[E.S_T_SEP] = separation_time(vehicle)
+    sched[E.S_SEP_FRACTION] = ev.separation_thrust_fraction
     sched[E.S_T_IGN_DELAY] = ev.ignition_delay_s
     sched[E.S_T_LES_DELAY] = ev.les_jettison_delay_s
     sched[E.S_ENERGY_TARGET] = target_energy(cfg)
@@ -209,7 +213,9 @@ def build_model(cfg: SavantConfig, vehicle: Vehicle, guidance: GuidanceTable) ->
     sched[E.S_MAX_RATE] = np.radians(cfg.sim.max_body_rate_deg_s)
     sched[E.S_DELAY_STEPS] = round(cfg.controller.delay_s / rt.dt)
     sched[E.S_PROFILE_SCHEDULE] = SCHEDULES.index(cfg.guidance.first_stage_schedule)
-    guidance = first_stage_profile(guidance, cfg, sched[E.S_T_SEP])
-    info = {"separation_time_s": sched[E.S_T_SEP]}
+    sched[E.S_DT] = rt.dt
+    t_sep_predicted = predicted_separation_time(vehicle)
+    guidance = first_stage_profile(guidance, cfg, t_sep_predicted)
+    info = {"predicted_separation_time_s": t_sep_predicted}
     return SimModel(p=p, tables=tb, fcs=ft, gyro=gyro, guidance=guidance, rates=rt, sched=sched,
                     x0=x0, d0=d0, u0=u0, info=info, layout=layout)

@@ -10,10 +10,16 @@ on step boundaries, runs the discrete parts at their own rates with zero-order h
 * a new guidance command every ``n_guid`` steps (1 Hz): from the stored profile
   (``models/guidance.py``, read at mission time or, in the first stage, by relative
   speed: ``models/command_schedule.py``) or, once engaged in the upper stage, from
-  Powered Explicit Guidance (``models/peg.py``), whose time to go also commands the
-  cutoff at the plant step nearest its predicted time;
-* events (separation, J-2X ignition, LES jettison, cutoff) at the first step boundary at
-  or after their time or condition.
+  Powered Explicit Guidance (``models/peg.py``), whose time to go (less the nominal
+  shutdown impulse's lead) also commands the cutoff at the plant step nearest it;
+* events at the first step boundary at or after their time or condition: separation when
+  the sensed (vacuum) thrust of the flown first-stage motor falls below
+  ``vehicle.events.separation_thrust_fraction`` of its own flown peak (the peak is kept in
+  the discrete state), J-2X ignition and LES jettison at their delays after the flown
+  separation and ignition, the cutoff command; after the command the J-2X's thrust decays
+  over its shutdown transient (``models/propulsion.py``) with guidance frozen (the last
+  attitude command held), and the run stops when the decay ends: the insertion state
+  includes the shutdown impulse.
 
 Python calls :func:`advance` in chunks so that a progress bar can be drawn and an
 interrupted or diverged run still returns what it computed.
@@ -26,7 +32,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from savant_cli.models import actuator, earth, flex, peg, quaternion as qt, rcs, rigid_body, slosh
+from savant_cli.models import actuator, earth, flex, peg, propulsion, quaternion as qt, rcs, rigid_body, slosh
 from savant_cli.models.command_schedule import BY_TIME, D_PROFILE_OFFSET, D_PROFILE_RATE, profile_time
 from savant_cli.models.earth import A_ALT, P_E2, P_OMEGA_E, P_RE
 from savant_cli.models.fcs import FCS_COAST, FCS_STACK, FCS_UPPER, FcsTables, fcs_step, reset_phase
@@ -38,7 +44,7 @@ from savant_cli.models.sensors import (
 from savant_cli.sim.layout import (
     ACT_P, ACT_Y, CONFIG_STACK, CONFIG_UPPER, CONFIG_UPPER_LES, D_CMD_P, D_CMD_RCS, D_CMD_Y,
     D_FLEX_NAV, D_GYRO_X, D_GYRO_Y, ENGINE_OFF, ENGINE_UPPER, MFS, MLH2, MLOX, N_AUX, N_STATE,
-    Q, R, RCS_NEG, RCS_POS, U_CONFIG, U_DPC, U_DYC, U_ENGINE, U_RCS, U_T_IGN, V, W,
+    Q, R, RCS_NEG, RCS_POS, U_CONFIG, U_DPC, U_DYC, U_ENGINE, U_RCS, U_T_CUT, U_T_IGN, V, W,
 )
 from savant_cli.sim import loop_perturbation
 from savant_cli.sim.borrow import borrowed
@@ -64,7 +70,7 @@ EV_CUTOFF = 3
 EVENT_NAMES = ("separation", "upper_stage_ignition", "les_jettison", "cutoff")
 
 # scheduled event times and limits in `sched`
-S_T_SEP = 0
+S_SEP_FRACTION = 0  # separation when the sensed first-stage thrust < this × its flown peak (0: never)
 S_T_IGN_DELAY = 1
 S_T_LES_DELAY = 2
 S_ENERGY_TARGET = 3  # specific orbital energy at cutoff, J/kg (point-mass μ)
@@ -75,7 +81,8 @@ S_SMOOTH_WN = 7
 S_MAX_RATE = 8  # divergence threshold on |ω|, rad/s
 S_DELAY_STEPS = 9  # plant steps from the flight-control cycle to its commands (controller.delay_s)
 S_PROFILE_SCHEDULE = 10  # the stored profile's first-stage index (its position in command_schedule.SCHEDULES)
-N_SCHED = 11
+S_DT = 11  # plant step, s (the first-stage impulse's trapezoid)
+N_SCHED = 12
 
 
 class Rates(NamedTuple):
@@ -157,10 +164,28 @@ def handle_events(t: float, x: np.ndarray, u: np.ndarray, d: np.ndarray,
                   events: np.ndarray, sched: np.ndarray, p: np.ndarray, tb: np.ndarray) -> int:
     """Apply time- and condition-triggered events at a step boundary; return a stop code.
 
-    At separation and at LES jettison the state's reference point moves to the new
-    configuration's CG (position and velocity of every structural point unchanged)."""
-    if np.isnan(events[EV_SEPARATION]) and t >= sched[S_T_SEP]:
+    Separation is decided on board: the sensed first-stage vacuum thrust at ``t``
+    (``propulsion.first_stage_flow``, the motor flown so far) is compared with the
+    largest value sensed so far (``d[D_FS_PEAK]``, updated here); the first step at which
+    it is below ``sched[S_SEP_FRACTION]`` of that peak separates. Until then the sensed
+    thrust's trapezoidal integral accumulates in ``d[D_FS_IMPULSE]`` (the impulse the motor
+    delivered to the vehicle); the motor's propellant at separation is kept in
+    ``d[D_FS_PROP_SEP]``. After the cutoff command the upper stage's sensed thrust
+    accumulates the same way in ``d[D_US_SD_IMPULSE]``. At separation and at LES jettison
+    the state's reference point moves to the new configuration's CG (position and velocity
+    of every structural point unchanged)."""
+    separate = False
+    if np.isnan(events[EV_SEPARATION]):
+        f_sensed = propulsion.first_stage_flow(x, tb, p, t)[0]
+        if t > 0.0:
+            d[propulsion.D_FS_IMPULSE] += 0.5 * (d[propulsion.D_FS_LAST] + f_sensed) * sched[S_DT]
+        d[propulsion.D_FS_LAST] = f_sensed
+        if f_sensed > d[propulsion.D_FS_PEAK]:
+            d[propulsion.D_FS_PEAK] = f_sensed
+        separate = f_sensed < sched[S_SEP_FRACTION] * d[propulsion.D_FS_PEAK]
+    if separate:
         events[EV_SEPARATION] = t
+        d[propulsion.D_FS_PROP_SEP] = x[MFS]
         if sched[S_STOP_AT_SEP] != 0.0:
             return STOP_SEPARATION
         cg_stack = reference_cg(x, p, tb, CONFIG_STACK)
@@ -191,9 +216,37 @@ def handle_events(t: float, x: np.ndarray, u: np.ndarray, d: np.ndarray,
         u[U_CONFIG] = CONFIG_UPPER
         move_reference(x, cg_les, reference_cg(x, p, tb, CONFIG_UPPER))
     if int(u[U_ENGINE]) == ENGINE_UPPER:
+        if u[U_T_CUT] > 0.0:  # shutdown transient: the impulse after the command (trapezoid)
+            f_us = propulsion.upper_stage_thrust_vac(x, tb, p, t, u[U_T_IGN], u[U_T_CUT])
+            if t > u[U_T_CUT]:
+                d[propulsion.D_US_SD_IMPULSE] += 0.5 * (d[propulsion.D_US_SD_LAST] + f_us) * sched[S_DT]
+            d[propulsion.D_US_SD_LAST] = f_us
         if x[MLOX] <= 0.0 or x[MLH2] <= 0.0:
-            events[EV_CUTOFF] = t
+            if np.isnan(events[EV_CUTOFF]):
+                events[EV_CUTOFF] = t
             return STOP_DEPLETION
+    return RUNNING
+
+
+@njit(cache=True, error_model="numpy")
+def cutoff_step(t: float, dt: float, x: np.ndarray, u: np.ndarray, d: np.ndarray, events: np.ndarray,
+                sched: np.ndarray, p: np.ndarray, tb: np.ndarray, peg_on: bool) -> int:
+    """The upper-stage cutoff at a step boundary: the command (PEG's commanded cutoff time
+    at the nearest plant step, or the stored profile's target energy), then the end of the
+    shutdown transient ``T_sd`` after it, when the run stops. Returns a stop code."""
+    if u[U_T_CUT] <= 0.0:
+        command = False
+        if peg_on:  # PEG's cutoff: the plant step nearest its commanded time
+            command = d[peg.D_ACTIVE] != 0.0 and t + 0.5 * dt >= d[peg.D_T_CUTOFF]
+        else:
+            command = specific_energy(x, p[P_MU]) >= sched[S_ENERGY_TARGET]
+        if not command:
+            return RUNNING
+        events[EV_CUTOFF] = t
+        u[U_T_CUT] = t
+        d[propulsion.D_US_SD_LAST] = propulsion.upper_stage_thrust_vac(x, tb, p, t, u[U_T_IGN], t)
+    if t + 0.5 * dt >= u[U_T_CUT] + p[propulsion.P_US_SHUTDOWN_TIME]:
+        return STOP_GUIDANCE_CUTOFF if peg_on else STOP_CUTOFF
     return RUNNING
 
 
@@ -273,18 +326,14 @@ def _advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0
         if status != RUNNING:
             return status, j, log_row, ""
         if int(u[U_ENGINE]) == ENGINE_UPPER:
-            if peg_on:  # PEG's cutoff: the plant step nearest its predicted time
-                if d[peg.D_ACTIVE] != 0.0 and t + 0.5 * dt >= d[peg.D_T_CUTOFF]:
-                    events[EV_CUTOFF] = t
-                    return STOP_GUIDANCE_CUTOFF, j, log_row, ""
-            elif specific_energy(x, p[P_MU]) >= sched[S_ENERGY_TARGET]:
-                events[EV_CUTOFF] = t
-                return STOP_CUTOFF, j, log_row, ""
+            status = cutoff_step(t, dt, x, u, d, events, sched, p, tb, peg_on)
+            if status != RUNNING:
+                return status, j, log_row, ""
         if t > sched[S_T_MAX]:
             return STOP_TIME, j, log_row, ""
         phase = fcs_phase(events)
 
-        if k % rates.n_guid == 0:
+        if k % rates.n_guid == 0 and u[U_T_CUT] <= 0.0:  # guidance frozen after the cutoff command
             steered = False
             if peg_on and not np.isnan(events[EV_IGNITION]):
                 code = peg.guidance_cycle(d, t, x[R:R + 3], x[V:V + 3], events[EV_IGNITION], rates.n_guid * dt,

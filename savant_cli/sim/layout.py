@@ -101,5 +101,7 @@ U_RCS = _INPUTS.scalar("roll_jet_command", "1", "roll jet command +1, 0, −1")
 U_CONFIG = _INPUTS.scalar("configuration", "1", "aero/mass configuration (models/configurations.py)")
 U_ENGINE = _INPUTS.scalar("engine_phase", "1", "engine phase (models/configurations.py)")
 U_T_IGN = _INPUTS.scalar("ignition_time", "s", "upper-stage ignition time, mission time")
+U_T_CUT = _INPUTS.scalar("cutoff_command_time", "s",
+                         "upper-stage cutoff command time, mission time (0: none yet; never at liftoff)")
 U_GUST = _INPUTS.array("gust", 3, "m/s", "gust velocity, body axes: the air moves with it (linear-analysis input)")
 N_INPUT = blocks.INPUTS.size

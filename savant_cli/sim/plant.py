@@ -25,7 +25,7 @@ from savant_cli.models import (
 )
 from savant_cli.models.configurations import ENGINE_FIRST
 from savant_cli.sim.layout import (
-    MFS, MLH2, MLOX, Q, R, RCS_NEG, RCS_POS, U_CONFIG, U_DPC, U_DYC, U_ENGINE, U_GUST, U_RCS, U_T_IGN, V, W,
+    MFS, MLH2, MLOX, Q, R, RCS_NEG, RCS_POS, U_CONFIG, U_DPC, U_DYC, U_ENGINE, U_GUST, U_RCS, U_T_CUT, U_T_IGN, V, W,
 )
 
 #: Tabular data of the plant by name (SI, contiguous arrays); the fields are the tables
@@ -156,7 +156,7 @@ def compose(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarra
     xd[RCS_NEG] = rcs_neg_rate
     gimbal_pt = flex.PT_GIMBAL_FS if engine == ENGINE_FIRST else flex.PT_GIMBAL_US
     tgx, tgy, tgz = flex.rotation_at(x, config, p, tb, gimbal_pt, False)  # follower thrust
-    thrust, mdot_fs, mdot_us = propulsion.thrust_and_flow(x, tb, p, engine, t, u[U_T_IGN], pres)
+    thrust, mdot_fs, mdot_us, thrust_vac = propulsion.thrust_and_flow(x, tb, p, engine, t, u[U_T_IGN], u[U_T_CUT], pres)
     dp, dy, bias_p, bias_y = actuator.gimbal_angles(x, p, engine)
     rgx, rgy, rgz = propulsion.gimbal_arm(p, engine, cgx, cgy, cgz)
     dgx, dgy, dgz = flex.displacement_at(x, config, p, tb, gimbal_pt)  # the structure moves the gimbal
@@ -245,6 +245,7 @@ def compose(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarra
     aux[gravity.A_GRAV + 1] = gy
     aux[gravity.A_GRAV + 2] = gz
     aux[propulsion.A_THRUST] = thrust
+    aux[propulsion.A_THRUST_VAC] = thrust_vac
     aux[mass_model.A_MASS] = mass_total
     aux[mass_model.A_PROP] = prop
     aux[mass_model.A_CG] = cgx_t

@@ -45,7 +45,8 @@ def run_summary(result: SimResult, sig: dict, model: SimModel, cfg: SavantConfig
     config; ``qalpha_limit``: its vehicle's q·α allowable, Pa·deg, or None). Sets
     ``result.status``/``message`` for an unhealthy flight, as :func:`~savant_cli.sim.health.assess`."""
     health = assess(result, sig, model, cfg.sim.health)
-    summary = {**summarize(result, sig, target=insertion_target(cfg.guidance), qalpha_limit=qalpha_limit), **health}
+    summary = {**summarize(result, sig, target=insertion_target(cfg.guidance), qalpha_limit=qalpha_limit,
+                           p=model.p), **health}
     summary.update(judge_separation(summary, cfg.requirements.separation))
     summary["stop_reason"] = result.stop_reason
     outcome = mission.classify(summary, result.status, result.stop_reason, cfg.phase.stop_at == "cutoff",

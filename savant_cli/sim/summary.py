@@ -7,6 +7,8 @@ import numpy as np
 
 from savant_cli import constants as C
 from savant_cli.io.record import Signal
+from savant_cli.models import propulsion
+from savant_cli.sim.layout import U_T_CUT
 from savant_cli.sim import engine as E
 from savant_cli.sim.run import SimResult
 
@@ -140,12 +142,54 @@ def separation_state(t: np.ndarray, body_rate: np.ndarray, attitude_error: np.nd
             "separation_qalpha_Pa_deg": float(qalpha_total[i])}
 
 
+def usable_propellant(lox_kg: float, lh2_kg: float, mixture_ratio: float) -> tuple[float, float, str]:
+    """Usable and unusable upper-stage propellant (kg) and the limiting propellant.
+
+    The engine burns LOX : LH2 at ``mixture_ratio`` (MR) by mass, so of ``lox_kg`` (L)
+    and ``lh2_kg`` (H) it can still burn ``min(L, MR H) (1 + 1/MR)``; the rest of the other
+    tank is unusable. The limiting propellant is ``"lox"`` when ``L ≤ MR H`` (LOX runs out
+    first), else ``"lh2"``.
+    """
+    lox, lh2 = max(float(lox_kg), 0.0), max(float(lh2_kg), 0.0)
+    burnable_lox = min(lox, mixture_ratio * lh2)
+    usable = burnable_lox * (1.0 + 1.0 / mixture_ratio)
+    return usable, lox + lh2 - usable, "lox" if lox <= mixture_ratio * lh2 else "lh2"
+
+
+#: the keys of :func:`propulsion_keys`
+PROPULSION_KEYS = ("usable_propellant_remaining_kg", "unusable_propellant_kg", "limiting_propellant",
+                   "first_stage_propellant_at_separation_kg", "first_stage_total_impulse_Ns", "shutdown_impulse_Ns")
+
+
+def propulsion_keys(result: SimResult, p: np.ndarray) -> dict[str, float | str | None]:
+    """Propellant and impulse figures of a run from its final state and discrete state.
+
+    ``usable_propellant_remaining_kg``, ``unusable_propellant_kg`` and
+    ``limiting_propellant`` (:func:`usable_propellant`) of the final LOX and LH2 at the
+    run's engine mixture ratio ``p[P_US_MR]``; ``first_stage_propellant_at_separation_kg``
+    (None without a separation) and ``first_stage_total_impulse_Ns``, the vacuum impulse
+    the solid motor delivered to the vehicle up to separation (the sequencer's
+    trapezoid of the sensed thrust at the plant rate); ``shutdown_impulse_Ns``, the
+    upper-stage vacuum impulse delivered after the cutoff command (the same trapezoid over
+    the shutdown transient; None without a cutoff command)."""
+    x, d = result.x, result.d
+    usable, unusable, limiting = usable_propellant(x[propulsion.MLOX], x[propulsion.MLH2], p[propulsion.P_US_MR])
+    at_sep = d[propulsion.D_FS_PROP_SEP]
+    return {"usable_propellant_remaining_kg": usable, "unusable_propellant_kg": unusable,
+            "limiting_propellant": limiting,
+            "first_stage_propellant_at_separation_kg": None if np.isnan(at_sep) else float(at_sep),
+            "first_stage_total_impulse_Ns": float(d[propulsion.D_FS_IMPULSE]),
+            "shutdown_impulse_Ns": float(d[propulsion.D_US_SD_IMPULSE]) if result.u[U_T_CUT] > 0.0 else None}
+
+
 def summarize(result: SimResult, sig: dict[str, Signal], study_wall_s: float | None = None,
-              target=None, qalpha_limit: float | None = None) -> dict:
+              target=None, qalpha_limit: float | None = None, p: np.ndarray | None = None) -> dict:
     """Summary scalars of a run (SI units named in the keys); ``target`` (an
     :class:`~savant_cli.models.peg.InsertionTarget`) adds the insertion errors at cutoff
     (None when the run did not cut off); ``qalpha_limit`` (Pa·deg) the vehicle's q·α
-    allowable the load indicators are judged against (:func:`load_indicators`)."""
+    allowable the load indicators are judged against (:func:`load_indicators`); ``p``
+    (the run's plant parameters) adds the propellant and impulse keys
+    (:func:`propulsion_keys`)."""
     t = sig["time"].data
     out: dict[str, float | int | str | None] = {"status": result.status, "message": result.message}
     if t.size == 0:
@@ -193,6 +237,8 @@ def summarize(result: SimResult, sig: dict[str, Signal], study_wall_s: float | N
     out.update(load_indicators(t, qbar, sig["alpha"].data, sig["beta"].data, qalpha_total, qalpha_limit))
     out.update(separation_state(t, sig["body_rate"].data, sig["attitude_error"].data, qalpha_total,
                                 _event(result, E.EV_SEPARATION)))
+    if p is not None:
+        out.update(propulsion_keys(result, p))
     if target is not None:
         cut = not np.isnan(result.events[E.EV_CUTOFF])
         out.update(insertion_errors(r_f, v_f, target) if cut else dict.fromkeys(INSERTION_KEYS))
