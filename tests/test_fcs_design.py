@@ -230,6 +230,7 @@ def test_corner_requirements_scale_every_margin():
     assert (out["b"].rigid.phase_deg, out["b"].slosh.gain_dB, out["b"].flex.upper_stage.default.phase_deg) == \
         (7.5, 1.5, 7.5)
     assert out["c"].aero.gain_dB == 0.0 and r.rigid.phase_deg == 30.0  # the nominal set untouched
+    assert out["b"].separation == r.separation and out["b"].mission == r.mission  # bounds, not margins
     with pytest.raises(ConfigError, match="requirement_fraction"):
         corner_requirements(r, {"d": {"requirement_fraction": 1.5}})
 

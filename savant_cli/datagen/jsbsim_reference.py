@@ -8,7 +8,8 @@ from the pad to first-stage separation, without wind. savant flies it with its f
 flies a point-mass-like model generated here from the same vehicle data:
 
 * mass from the stack mass table at the propellant burned, ṁ = F_vac / (g₀ Isp_vac);
-* thrust F_vac(t) − p·A_exit with p JSBSim's own ambient pressure, plus the base force
+* thrust F_vac(t) − p·A_exit with p JSBSim's own ambient pressure and F_vac the motor's
+  (the table scaled so that it burns the load at Isp_vac, as the plant's motor), plus the base force
   table, applied along the body axis through the CG (an external reaction);
 * drag q̄ S C_A(Mach) from the stack's aero table at zero incidence (vertical flight
   without wind stays at zero incidence, where drag is the axial force);
@@ -35,6 +36,7 @@ from pathlib import Path
 import numpy as np
 
 from savant_cli import constants as C
+from savant_cli.models.propulsion import table_impulse
 
 SAVANT_OVERRIDES = ["phase=first_stage", "winds=none", "environment.gravity_order=2",
                     "guidance.command_file=vertical_hold_commands.csv"]
@@ -164,9 +166,12 @@ def fly(out_csv: Path) -> Path:
         fdm.set_dt(DT)
         prop = fs.propellant_kg
         rows = []
+        # the motor burns its load in the table's shape, as the plant's (models/propulsion.py
+        # first_stage_flow): F_vac = g0 Isp M F_tab / I_tab
+        thrust_scale = C.G0 * fs.isp_vac_s * fs.propellant_kg / table_impulse(fs.thrust_time_s, fs.thrust_vac_N)
 
         def set_inputs(t: float) -> float:
-            f_vac = float(np.interp(t, fs.thrust_time_s, fs.thrust_vac_N))
+            f_vac = thrust_scale * float(np.interp(t, fs.thrust_time_s, fs.thrust_vac_N))
             p = fdm["atmosphere/P-psf"] * PSF
             base = float(np.interp(t, aero.base_time_s, aero.base_force_N))
             thrust = max(f_vac - p * fs.nozzle_exit_area_m2, 0.0) if prop > 0 else 0.0
@@ -185,7 +190,7 @@ def fly(out_csv: Path) -> Path:
             if t >= t_stop:
                 break
             fdm.run()
-            f_next = float(np.interp(t + DT, fs.thrust_time_s, fs.thrust_vac_N))
+            f_next = thrust_scale * float(np.interp(t + DT, fs.thrust_time_s, fs.thrust_vac_N))
             prop -= 0.5 * (f_vac + f_next) / (C.G0 * fs.isp_vac_s) * DT  # trapezoid of ṁ
     header = [
         "# JSBSim reference flight for `savant compare` (savant_cli.datagen.jsbsim_reference)",

@@ -144,8 +144,13 @@ class PointVerdict:
         return min(pool, key=lambda c: c.severity) if pool else None
 
 
+#: Sections of a requirement set that are not stability margins: bounds of the flown
+#: state and the mission's counted classes, which the design corners leave as they are.
+NOT_MARGINS = ("separation", "mission")
+
+
 def scaled_requirements(req: RequirementSet, fraction: float) -> RequirementSet:
-    """``req`` with every margin and attenuation (dB, deg) times ``fraction`` and its name
+    """``req`` with every margin and attenuation (dB, deg; not :data:`NOT_MARGINS`) times ``fraction`` and its name
     marked (e.g. ``"ares_i × 0.5"``); 0 leaves closed-loop stability the only check that
     can fail. Used for the uncertainty corners of the flight-control design."""
 
@@ -156,7 +161,7 @@ def scaled_requirements(req: RequirementSet, fraction: float) -> RequirementSet:
             return node
         return replace(node, **{f.name: (getattr(node, f.name) * fraction if f.name.endswith(("_dB", "_deg"))
                                          else scale(getattr(node, f.name))) for f in fields(node)
-                                if f.name not in ("name", "source")})
+                                if f.name not in ("name", "source") + NOT_MARGINS})
 
     return replace(scale(req), name=f"{req.name} × {fraction:g}")
 

@@ -89,7 +89,7 @@ D_US_SD_LAST = _DISCRETE.scalar("upper_stage_last_thrust", "N", "sensed upper-st
 D_US_SD_IMPULSE = _DISCRETE.scalar("shutdown_impulse", "N*s", "upper-stage vacuum impulse delivered after the cutoff "
                                    "command (trapezoid of the sensed thrust)")
 D_FS_PROP_SEP = _DISCRETE.scalar("first_stage_propellant_at_separation", "kg",
-                                 "first-stage propellant left in the motor at separation (NaN before)")
+                                 "first-stage propellant left in the motor at separation (0 before)")
 A_MOMENT = _AUX.array("moment", 3, "N*m", "thrust moment about the CG, body")
 
 

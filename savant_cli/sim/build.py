@@ -189,7 +189,7 @@ def build_model(cfg: SavantConfig, vehicle: Vehicle, guidance: GuidanceTable) ->
     rigid_body.move_reference(x0, rigid[1] - whole[1], rigid[2] - whole[2], rigid[3] - whole[3])
 
     d0 = np.zeros(L.N_DISC)
-    d0[propulsion.D_FS_PROP_SEP] = np.nan  # set at separation
+    d0[propulsion.D_FS_PROP_SEP] = 0.0  # set at separation (read only once the event has happened)
     for g in range(3):
         w_sensed = misalignment(p[GYRO_MISALIGN[g]:GYRO_MISALIGN[g] + 3])[1] @ w0  # in the gyro's axes
         for ax in range(3):

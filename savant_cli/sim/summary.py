@@ -174,7 +174,8 @@ def propulsion_keys(result: SimResult, p: np.ndarray) -> dict[str, float | str |
     the shutdown transient; None without a cutoff command)."""
     x, d = result.x, result.d
     usable, unusable, limiting = usable_propellant(x[propulsion.MLOX], x[propulsion.MLH2], p[propulsion.P_US_MR])
-    at_sep = d[propulsion.D_FS_PROP_SEP]
+    separated = not np.isnan(result.events[E.EV_SEPARATION])
+    at_sep = d[propulsion.D_FS_PROP_SEP] if separated else np.nan
     return {"usable_propellant_remaining_kg": usable, "unusable_propellant_kg": unusable,
             "limiting_propellant": limiting,
             "first_stage_propellant_at_separation_kg": None if np.isnan(at_sep) else float(at_sep),
