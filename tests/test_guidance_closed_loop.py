@@ -193,6 +193,8 @@ def test_insertion_statistics_and_reserve():
     assert r["order_statistic"] == 4 and r["remaining_at_order_statistic_kg"] == lowest[3] == 4.0
     assert r["flight_performance_reserve_kg"] == pytest.approx(3996.0) and r["covered"]
     assert r["propellant"] == "usable" and r["unusable_nominal_kg"] == 900.0
+    import json
+    assert json.loads(json.dumps(ins))["reserve"] == r  # plain JSON types (the batch writes it)
     msgs[10:13] = [DEPLETED] * 3
     r = insertion_statistics(runs, msgs, keys, table, 0.99865, 0.9)["reserve"]
     assert r["runs_depleted"] == 3 and r["covered"]

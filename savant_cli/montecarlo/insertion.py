@@ -107,7 +107,7 @@ def flight_performance_reserve(runs: np.ndarray, guided: np.ndarray, depleted: n
     if k is not None:
         low = float(remaining[counted][order[k - 1]])
         low_run = int(runs[counted][order[k - 1]])
-    covered = low is not None and np.isfinite(low)
+    covered = bool(low is not None and np.isfinite(low))
     out: dict[str, Any] = {
         "runs": n, "propellant": "usable" if usable else "total (usable propellant not recorded by these runs)",
         "probability": probability, "confidence": confidence, "order_statistic": k, "order_statistic_run": low_run,
