@@ -221,7 +221,7 @@ def test_a_batch_with_a_short_upper_stage_load_counts_its_depletions(tmp_path):
     """Every dispersed run of a batch loaded with 10 % less LOX (11.4 t, more than the
     nominal's whole usable residual) runs out before the target; the nominal (run 0,
     nothing applied) inserts. The batch counts the depletions as failed missions."""
-    r = savant_cli.run(["study=montecarlo", "study.n_runs=3", "study.workers=1", "dispersions.items.us_lox_load.mean=0.9",
+    r = savant_cli.run(["study=montecarlo", "study.n_runs=3", "study.workers=1", "+dispersions.items.us_lox_load.mean=0.9",
                         "sim.progress=false", "output.plots=false"], out_dir=tmp_path / "mc")
     s = r.summary
     by = {c["class"]: c for c in s["mission"]["by_class"]}

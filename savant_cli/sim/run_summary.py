@@ -1,13 +1,13 @@
 """The whole summary of a flown run, one way for every study: the flight scalars
 (:mod:`savant_cli.sim.summary`), the flight health (:mod:`savant_cli.sim.health`, which
-may turn a ``complete`` status into an unhealthy one) and the mission outcome
-(:mod:`savant_cli.sim.mission`)."""
+may turn a ``complete`` status into an unhealthy one), the separation state against
+``requirements.separation`` and the mission outcome (:mod:`savant_cli.sim.mission`)."""
 
 from __future__ import annotations
 
 from typing import Any
 
-from savant_cli.config import SavantConfig
+from savant_cli.config import SavantConfig, SeparationRequirement
 from savant_cli.models.peg import insertion_target
 from savant_cli.sim import mission
 from savant_cli.sim.build import SimModel
@@ -22,7 +22,7 @@ def tolerance_of(cfg: SavantConfig) -> mission.Tolerance:
     return mission.Tolerance(float(t.perigee_km), float(t.apogee_km), float(t.inclination_deg))
 
 
-def judge_separation(summary: dict[str, Any], req) -> dict[str, Any]:
+def judge_separation(summary: dict[str, Any], req: SeparationRequirement) -> dict[str, Any]:
     """``separation_requirements_met`` (1, 0, or None: no separation or nothing required)
     and ``separation_violations`` (each quantity above its bound, with both numbers) of a
     summary with :data:`~savant_cli.sim.summary.SEPARATION_KEYS`, against
