@@ -240,3 +240,23 @@ def test_no_crossover_fails_the_period_criterion_and_no_criterion_no_window():
     assert failing_start(t, np.array([-1.0, -1.0, 1.0, 1.0, 1.0])) is None  # passes at the end: no window
     assert failing_start(t, np.array([-1.0, 1.0, 1.0, -1.0, -3.0])) == pytest.approx(102.5)  # the final stretch
     assert failing_start(t, -np.ones(5)) == 100.0
+
+
+def test_tailoff_verdict_fails_on_one_check_outside_the_separation_bounds():
+    """The window's clause passes only when every check reaches separation inside
+    requirements.separation: one check just over its body-rate bound, or one that never
+    separated, fails the clause and is named; no check at all is not a pass."""
+    from savant_cli.timedomain.tailoff import TailoffCheck, verdict_text
+
+    def chk(kind, met, separated=True, violations=""):
+        return TailoffCheck("pitch", kind, 6.0, "dB", "complete" if separated else "diverged", separated,
+                            {"separation_body_rate_deg_s": 2.01 if not met else 0.2}, met, violations)
+
+    ok = [chk("gain_high", True), chk("gain_low", True)]
+    line, passed = verdict_text("tail-off", ok)
+    assert passed and "PASS, 2 of 2 checks" in line
+    line, passed = verdict_text("tail-off", ok + [chk("delay", False, violations="body rate 2.01 deg/s > 2")])
+    assert not passed and "FAIL, 2 of 3 checks pass" in line and "body rate 2.01 deg/s > 2" in line
+    line, passed = verdict_text("tail-off", ok + [chk("gain_high", False, separated=False)])
+    assert not passed and "did not reach separation (diverged)" in line
+    assert verdict_text("tail-off", []) == ("tail-off judged in the time domain: no check could be flown", False)

@@ -53,6 +53,7 @@ from savant_cli.sim import layout as L
 from savant_cli.sim.build import SimModel
 from savant_cli.sim.oscillation import band_top_hz, find_limit_cycles, find_slow_divergence
 from savant_cli.sim.run import SimResult
+from savant_cli.sim.summary import total_alpha_deg
 
 STAGES = ("first_stage", "upper_stage")
 _ON_STOP = 1.0 - 1e-9  # a state within this fraction of its limit is on the stop
@@ -173,8 +174,7 @@ def loss_of_control(t: np.ndarray, sig: dict[str, Signal], cfg) -> LossOfControl
         found.append(LossOfControl(float(t[k]), f"attitude error {err[k]:.1f} deg > {cfg.max_attitude_error_deg:g} deg "
                                                 f"at {t[k]:.1f} s"))
     if cfg.max_alpha_deg is not None:
-        cos_total = np.clip(np.cos(sig["alpha"].data) * np.cos(sig["beta"].data), -1.0, 1.0)
-        alpha_total = np.degrees(np.arccos(cos_total))
+        alpha_total = total_alpha_deg(sig["alpha"].data, sig["beta"].data)
         q = sig["dynamic_pressure"].data
         over = np.flatnonzero((alpha_total > cfg.max_alpha_deg) & (q >= cfg.alpha_min_dynamic_pressure_Pa))
         if over.size:

@@ -124,6 +124,12 @@ def load_indicators(t: np.ndarray, qbar: np.ndarray, alpha: np.ndarray, beta: np
     return out
 
 
+def total_alpha_deg(alpha: np.ndarray, beta: np.ndarray) -> np.ndarray:
+    """Total angle of attack (deg) from the angle of attack and sideslip (rad):
+    ``cos α_total = cos α cos β``."""
+    return np.degrees(np.arccos(np.clip(np.cos(alpha) * np.cos(beta), -1.0, 1.0)))
+
+
 #: the keys of :func:`separation_state`
 SEPARATION_KEYS = ("separation_body_rate_deg_s", "separation_attitude_error_deg", "separation_qalpha_Pa_deg")
 
@@ -197,7 +203,7 @@ def summarize(result: SimResult, sig: dict[str, Signal], study_wall_s: float | N
         return out
     qbar = sig["dynamic_pressure"].data
     i_q = int(np.argmax(qbar))
-    alpha_total = np.degrees(np.arccos(np.clip(np.cos(sig["alpha"].data) * np.cos(sig["beta"].data), -1, 1)))
+    alpha_total = total_alpha_deg(sig["alpha"].data, sig["beta"].data)
     # aerodynamic angles mean little once the air is gone: report them where q > 1 kPa
     dense = qbar > 1000.0
     gimbal = np.degrees(np.abs(sig["gimbal_angle"].data))

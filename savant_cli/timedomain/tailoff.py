@@ -33,7 +33,7 @@ from savant_cli.sim import loop_perturbation as LP
 from savant_cli.sim.build import SimModel
 from savant_cli.sim.run import Snapshot, signals, simulate
 from savant_cli.sim.run_summary import judge_separation
-from savant_cli.sim.summary import separation_state
+from savant_cli.sim.summary import separation_state, total_alpha_deg
 
 KINDS = ("gain_high", "gain_low", "delay")
 #: Flown this long past the separation of the unperturbed flight (s): a perturbed run may
@@ -93,10 +93,9 @@ def check(model: SimModel, snap: Snapshot, separation_s: float, axis: str, kind:
     met, violations = False, ""
     if separated:
         sig = signals(result, model)
-        qbar = sig["dynamic_pressure"].data
-        alpha_total = np.degrees(np.arccos(np.clip(np.cos(sig["alpha"].data) * np.cos(sig["beta"].data), -1, 1)))
-        state = separation_state(sig["time"].data, sig["body_rate"].data, sig["attitude_error"].data,
-                                 qbar * alpha_total, float(t_sep))
+        qalpha = sig["dynamic_pressure"].data * total_alpha_deg(sig["alpha"].data, sig["beta"].data)
+        state = separation_state(sig["time"].data, sig["body_rate"].data, sig["attitude_error"].data, qalpha,
+                                 float(t_sep))
         verdict = judge_separation(state, req.separation)
         met = verdict["separation_requirements_met"] != 0
         violations = verdict["separation_violations"]
