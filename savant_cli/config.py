@@ -680,12 +680,87 @@ class TwdOnConfig:
     enabled: bool = True
 
 
+@dataclass
+class NavigationPerfectConfig:
+    """``navigation=perfect``: the flight software reads the true state (the source paper's
+    §III.H assumption), apart from the navigation unit's mounting misalignment
+    (``sensors.misalignment_deg.imu``)."""
+
+    name: str = "perfect"
+
+
+@dataclass
+class GyroErrorsConfig:
+    """The IMU gyro triad's errors (body x, y, z)."""
+
+    bias_deg_per_h: list[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])
+    scale_factor_ppm: list[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])
+    misalignment_arcsec: list[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])
+
+
+@dataclass
+class AccelerometerErrorsConfig:
+    """The IMU accelerometer triad's errors (body x, y, z)."""
+
+    bias_micro_g: list[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])
+    scale_factor_ppm: list[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])
+    misalignment_arcsec: list[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])
+
+
+@dataclass
+class NavigationInertialConfig:
+    """``navigation=inertial``: strapdown inertial navigation from an IMU with errors
+    (``models/navigation.py``); nominal errors zero, their spread in the dispersion set."""
+
+    name: str = "inertial"
+    gyro: GyroErrorsConfig = field(default_factory=GyroErrorsConfig)
+    accelerometer: AccelerometerErrorsConfig = field(default_factory=AccelerometerErrorsConfig)
+    alignment_arcsec: list[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])
+
+
+#: Bounds of the inertial-navigation errors, ``key: (limit, units)``. The error model is
+#: first order in the errors (small-angle attitude error, scale factors ≪ 1): a 1°
+#: (3600 arcsec) attitude error keeps the neglected second-order terms below 1 % of the
+#: first-order ones, and the bias bounds keep a 10-minute ascent's attitude drift (10 deg/h:
+#: 1.7°) and tilt-equivalent (10,000 µg = 0.57°) within that regime. The bounds span
+#: navigation to tactical grade; a worse IMU is outside what this model represents.
+NAVIGATION_BOUNDS: dict[str, tuple[float, str]] = {
+    "gyro.bias_deg_per_h": (10.0, "deg/h"),
+    "gyro.scale_factor_ppm": (10000.0, "ppm"),
+    "gyro.misalignment_arcsec": (3600.0, "arcsec"),
+    "accelerometer.bias_micro_g": (10000.0, "µg"),
+    "accelerometer.scale_factor_ppm": (10000.0, "ppm"),
+    "accelerometer.misalignment_arcsec": (3600.0, "arcsec"),
+    "alignment_arcsec": (3600.0, "arcsec"),
+}
+
+
+def check_navigation(n: NavigationPerfectConfig | NavigationInertialConfig) -> None:
+    """Physical checks of the ``navigation`` group: three finite values per error, each
+    within :data:`NAVIGATION_BOUNDS`."""
+    if n.name != "inertial":
+        return
+    for path, (limit, units) in NAVIGATION_BOUNDS.items():
+        node: Any = n
+        for part in path.split("."):
+            node = getattr(node, part)
+        vals = list(node)
+        key = f"navigation.{path}"
+        if len(vals) != 3:
+            raise ConfigError(key, vals, f"must list 3 values in {units} (body x, y, z)")
+        for i, v in enumerate(vals):
+            if not (isinstance(v, (int, float)) and np.isfinite(v) and abs(v) <= limit):
+                raise ConfigError(f"{key}[{i}]", v, f"must be a finite value within ±{limit:g} {units} (the first-order "
+                                                    "error model's range, config.NAVIGATION_BOUNDS)")
+
+
 #: The schema of each option of the groups whose options carry different keys.
 GROUP_VARIANTS: dict[str, dict[str, type]] = {
     "actuator": {"third_order": ThirdOrderActuatorConfig, "simplex": SimplexActuatorConfig},
     "flex": {"off": FlexOffConfig, "on": FlexOnConfig},
     "slosh": {"off": SloshOffConfig, "on": SloshOnConfig},
     "twd": {"off": TwdOffConfig, "on": TwdOnConfig},
+    "navigation": {"perfect": NavigationPerfectConfig, "inertial": NavigationInertialConfig},
 }
 
 
@@ -889,6 +964,7 @@ class SavantConfig:
     flex: Any = field(default_factory=lambda: {"name": "off"})
     slosh: Any = field(default_factory=lambda: {"name": "off"})
     twd: Any = field(default_factory=lambda: {"name": "off"})
+    navigation: Any = field(default_factory=lambda: {"name": "perfect"})
     winds: WindsConfig = field(default_factory=WindsConfig)
     controller: ControllerConfig = field(default_factory=ControllerConfig)
     guidance: GuidanceConfig = field(default_factory=GuidanceConfig)
@@ -1096,6 +1172,7 @@ def check_physics(cfg: SavantConfig) -> None:
     check_delay(cfg.controller.delay_s, cfg.sim)
     check_flex(cfg.flex)
     check_slosh(cfg.slosh)
+    check_navigation(cfg.navigation)
     check_requirements(cfg.requirements)
     _positive("sensors.rate_gyro.natural_frequency_hz", cfg.sensors.rate_gyro.natural_frequency_hz)
     _positive("sensors.rate_gyro.damping", cfg.sensors.rate_gyro.damping)

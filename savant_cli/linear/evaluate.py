@@ -22,7 +22,7 @@ from savant_cli.linear.response import FastResponse
 from savant_cli.models.fcs import FcsTables, flight_gains
 from savant_cli.sim.build import SimModel
 from savant_cli.sim.engine import schedule_variable
-from savant_cli.sim.layout import U_T_IGN
+from savant_cli.sim.layout import R, U_T_IGN, V
 from savant_cli.sim.run import Snapshot
 
 #: Closed-loop poles slower than this (rad/s) are the frozen-time trajectory's drift, not
@@ -102,7 +102,8 @@ def freeze(model: SimModel, snap: Snapshot, dt: float, jacobian: str = "auto", r
     """Linearize the plant at a snapshot once (``study.jacobian``, ``jacobian_step``)."""
     lin = linearize_plant(model, snap, mode=jacobian, rel_step=rel_step)
     phase = fcs_phase(snap.events)
-    return FrozenPoint(float(snap.t), phase, float(schedule_variable(snap.t, snap.x, phase, model.p)),
+    sched_var = schedule_variable(snap.t, snap.x[R:R + 3], snap.x[V:V + 3], phase, model.p)
+    return FrozenPoint(float(snap.t), phase, float(sched_var),
                        float(snap.t - snap.u[U_T_IGN]), lin, sensor_plant(lin, model, dt), aero_unstable(lin))
 
 

@@ -1,9 +1,10 @@
 """Rate gyros: a continuous second-order transfer function per axis, discretized
 with a zero-order hold at the sensor rate; sensor mounting misalignment.
 
-The navigation unit is perfect (attitude, position and velocity sampled exactly), as in
+By default navigation is perfect (attitude, position and velocity sampled exactly), as in
 the source paper (§III.H), apart from an optional mounting misalignment
-(:func:`misalignment`) that it shares with its own rate gyro.
+(:func:`misalignment`) that the navigation unit shares with its own rate gyro;
+``navigation=inertial`` adds the IMU's instrument errors (:mod:`savant_cli.models.navigation`).
 
 The zero-order-hold discretization is the matrix exponential of the augmented system
 ``exp([[A, B], [0, 0]] T)`` (:func:`scipy.linalg.expm`), which is what
@@ -23,6 +24,7 @@ from savant_cli.models.flex import PT_GYRO_FS, PT_GYRO_US, PT_IMU
 
 N_GYROS = 3  # in the flight software's order: upper-stage gyro, IMU, first-stage gyro
 GYRO_POINTS = (PT_GYRO_US, PT_IMU, PT_GYRO_FS)  # their flex points, same order
+IMU_GYRO = 1  # the IMU's rate output (navigation=inertial gives it the IMU's gyro errors)
 
 _DISCRETE = blocks.DISCRETE.block("sensors")
 D_GYRO_X = _DISCRETE.array("gyro_filters", 18, "rad/s", "rate-gyro filter states: [gyro][axis][2]")

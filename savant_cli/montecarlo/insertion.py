@@ -5,7 +5,12 @@ reserve.
 stored profile's energy target; not on depletion, not on the time limit), the 0.135, 50
 and 99.865 percentiles of the insertion errors against the target (perigee, apogee,
 inclination, node, radius, speed, flight-path angle, velocity), and the half-width of
-the 0.135–99.865 % band: the ±3σ-equivalent spread a performance analyst quotes.
+the 0.135–99.865 % band: the ±3σ-equivalent spread a performance analyst quotes. With
+``navigation=inertial`` the errors are the true orbit's (what the vehicle reached, not
+what its navigation believed), and the same statistics of the navigation errors at cutoff
+(navigated minus true position, velocity, attitude) follow in their own table: the
+spread with navigation errors against the same batch flown with ``navigation=perfect``
+is the navigation's share (docs/montecarlo.md).
 
 **Flight-performance reserve (FPR).** The propellant the vehicle must carry, beyond what
 the nominal flight burns, for a stated share ``P`` of dispersed flights (99.865 %, the
@@ -37,6 +42,9 @@ from savant_cli.montecarlo.reliability import lower_quantile_rank, runs_for_quan
 ACCURACY_KEYS = ("insertion_perigee_error_km", "insertion_apogee_error_km", "insertion_inclination_error_deg",
                  "insertion_node_error_deg", "insertion_radius_error_m", "insertion_speed_error_mps",
                  "insertion_flight_path_angle_error_deg", "insertion_velocity_error_mps")
+#: the navigation-error keys of a navigation=inertial batch (sim/summary.py NAVIGATION_KEYS)
+NAVIGATION_ERROR_KEYS = ("navigation_position_error_m", "navigation_velocity_error_mps",
+                         "navigation_attitude_error_deg")
 #: run messages of a cutoff on guidance
 GUIDED_CUTOFFS = ("cutoff: PEG time to go elapsed", "cutoff: target orbital energy reached")
 DEPLETED = "cutoff: upper-stage propellant depleted before the target"
@@ -66,11 +74,25 @@ def insertion_statistics(runs: np.ndarray, messages: list[str], keys: list[str],
     # a health verdict (limit cycle, saturated) keeps the stop message in its own
     guided = np.array([any(c in m for c in GUIDED_CUTOFFS) for m in messages], dtype=bool)
     depleted = np.array([DEPLETED in m for m in messages], dtype=bool)
+    navigated = NAVIGATION_ERROR_KEYS[0] in col
+    out: dict[str, Any] = {"runs_cut_off_on_guidance": int(guided.sum()), "runs_depleted": int(depleted.sum()),
+                           "navigation": "inertial" if navigated else "perfect",
+                           "accuracy": _percentile_rows(ACCURACY_KEYS, col, summary[guided])}
+    if navigated:
+        out["navigation_errors"] = _percentile_rows(NAVIGATION_ERROR_KEYS, col, summary[guided])
+    if guided.any() or depleted.any():
+        out["reserve"] = flight_performance_reserve(runs, guided, depleted, keys, summary, probability, confidence)
+    return out
+
+
+def _percentile_rows(keys: tuple[str, ...], col: dict[str, int], summary: np.ndarray) -> list[dict[str, Any]]:
+    """The 0.135, 50 and 99.865 percentiles, half spread and largest magnitude of each key
+    present (finite values of the given runs' summary rows)."""
     rows = []
-    for key in ACCURACY_KEYS:
+    for key in keys:
         if key not in col:
             continue
-        v = summary[guided, col[key]]
+        v = summary[:, col[key]]
         v = v[np.isfinite(v)]
         if not v.size:
             continue
@@ -78,11 +100,7 @@ def insertion_statistics(runs: np.ndarray, messages: list[str], keys: list[str],
         rows.append({"variable": key, "n": int(v.size), "p0.135": float(lo), "p50": float(mid),
                      "p99.865": float(hi), "half_spread": float(0.5 * (hi - lo)),
                      "max_abs": float(np.max(np.abs(v)))})
-    out: dict[str, Any] = {"runs_cut_off_on_guidance": int(guided.sum()), "runs_depleted": int(depleted.sum()),
-                           "accuracy": rows}
-    if guided.any() or depleted.any():
-        out["reserve"] = flight_performance_reserve(runs, guided, depleted, keys, summary, probability, confidence)
-    return out
+    return rows
 
 
 def flight_performance_reserve(runs: np.ndarray, guided: np.ndarray, depleted: np.ndarray, keys: list[str],
@@ -151,12 +169,18 @@ def reserve_line(ins: dict[str, Any]) -> str:
 
 def print_insertion(console: Console, ins: dict[str, Any]) -> None:
     """The accuracy table and the reserve line."""
-    if ins["accuracy"]:
-        tb = Table(title=f"insertion accuracy ({ins['runs_cut_off_on_guidance']} runs cut off on guidance)")
+    nav = ins.get("navigation", "perfect")
+    for rows, title, prefix in (
+            (ins["accuracy"], f"insertion accuracy ({ins['runs_cut_off_on_guidance']} runs cut off on guidance, "
+                              f"navigation={nav})", "insertion_"),
+            (ins.get("navigation_errors", []), "navigation error at cutoff (|navigated − true|)", "navigation_")):
+        if not rows:
+            continue
+        tb = Table(title=title)
         for c in ("error", "p0.135", "p50", "p99.865", "± half spread", "max |error|"):
             tb.add_column(c, justify="left" if c == "error" else "right")
-        for r in ins["accuracy"]:
-            tb.add_row(r["variable"].removeprefix("insertion_"), f"{r['p0.135']:.4g}", f"{r['p50']:.4g}",
+        for r in rows:
+            tb.add_row(r["variable"].removeprefix(prefix), f"{r['p0.135']:.4g}", f"{r['p50']:.4g}",
                        f"{r['p99.865']:.4g}", f"{r['half_spread']:.4g}", f"{r['max_abs']:.4g}")
         console.print(tb)
     covered = (ins.get("reserve") or {}).get("covered", False)

@@ -481,8 +481,8 @@ def write_outputs(out_dir: Path, inv: Inventory, expected: list[int], dispersion
     failures = [{"run": int(r), "status": s, "message": m, "t_final_s": t}
                 for r, s, m, t in zip(tb.runs, tb.status, tb.message, tb.t_final) if s != "complete"]
     counts = {s: tb.status.count(s) for s in sorted(set(tb.status))}
-    if insertion["accuracy"]:
-        _csv(out_dir / "insertion_accuracy.csv", insertion["accuracy"])
+    if insertion["accuracy"]:  # with navigation=inertial, the navigation errors' rows follow
+        _csv(out_dir / "insertion_accuracy.csv", insertion["accuracy"] + insertion.get("navigation_errors", []))
     summary = {"study": "montecarlo", "n_runs_expected": len(expected), "n_runs_present": len(runs),
                "missing_runs": ranges_text(missing), "status_counts": counts,
                "mission": {k: v for k, v in mission.items() if k != "success"}, "reliability": rel.as_dict(),

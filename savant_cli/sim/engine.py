@@ -32,14 +32,14 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from savant_cli.models import actuator, earth, flex, peg, propulsion, quaternion as qt, rcs, rigid_body, slosh
+from savant_cli.models import actuator, earth, flex, navigation, peg, propulsion, quaternion as qt, rcs, rigid_body, slosh
 from savant_cli.models.command_schedule import BY_TIME, D_PROFILE_OFFSET, D_PROFILE_RATE, profile_time
 from savant_cli.models.earth import A_ALT, P_E2, P_OMEGA_E, P_RE
 from savant_cli.models.fcs import FCS_COAST, FCS_STACK, FCS_UPPER, FcsTables, fcs_step, reset_phase
 from savant_cli.models.gravity import P_MU
 from savant_cli.models.guidance import D_TG, D_VG, guidance_sample, smoother_step
 from savant_cli.models.sensors import (
-    GYRO_MISALIGN, GYRO_POINTS, N_GYROS, P_IMU_MISALIGN, gyro_step, misalignment,
+    GYRO_MISALIGN, GYRO_POINTS, IMU_GYRO, N_GYROS, P_IMU_MISALIGN, gyro_step, misalignment,
 )
 from savant_cli.sim.layout import (
     ACT_P, ACT_Y, CONFIG_STACK, CONFIG_UPPER, CONFIG_UPPER_LES, D_CMD_P, D_CMD_RCS, D_CMD_Y,
@@ -229,17 +229,19 @@ def handle_events(t: float, x: np.ndarray, u: np.ndarray, d: np.ndarray,
 
 
 @njit(cache=True, error_model="numpy")
-def cutoff_step(t: float, dt: float, x: np.ndarray, u: np.ndarray, d: np.ndarray, events: np.ndarray,
-                sched: np.ndarray, p: np.ndarray, tb: np.ndarray, peg_on: bool) -> int:
+def cutoff_step(t: float, dt: float, x: np.ndarray, r_nav: np.ndarray, v_nav: np.ndarray, u: np.ndarray,
+                d: np.ndarray, events: np.ndarray, sched: np.ndarray, p: np.ndarray, tb: np.ndarray,
+                peg_on: bool) -> int:
     """The upper-stage cutoff at a step boundary: the command (PEG's commanded cutoff time
-    at the nearest plant step, or the stored profile's target energy), then the end of the
-    shutdown transient ``T_sd`` after it, when the run stops. Returns a stop code."""
+    at the nearest plant step, or the stored profile's target energy of the navigated
+    state ``r_nav``, ``v_nav``), then the end of the shutdown transient ``T_sd`` after it,
+    when the run stops. Returns a stop code."""
     if u[U_T_CUT] <= 0.0:
         command = False
         if peg_on:  # PEG's cutoff: the plant step nearest its commanded time
             command = d[peg.D_ACTIVE] != 0.0 and t + 0.5 * dt >= d[peg.D_T_CUTOFF]
         else:
-            command = specific_energy(x, p[P_MU]) >= sched[S_ENERGY_TARGET]
+            command = specific_energy(r_nav, v_nav, p[P_MU]) >= sched[S_ENERGY_TARGET]
         if not command:
             return RUNNING
         events[EV_CUTOFF] = t
@@ -251,7 +253,7 @@ def cutoff_step(t: float, dt: float, x: np.ndarray, u: np.ndarray, d: np.ndarray
 
 
 @njit(cache=True, error_model="numpy")
-def schedule_variable(t: float, x: np.ndarray, phase: int, p: np.ndarray) -> float:
+def schedule_variable(t: float, r: np.ndarray, v: np.ndarray, phase: int, p: np.ndarray) -> float:
     """What the flight control's gains are scheduled on (``models/fcs.py``): the
     geodetic height (m) in the stack phase, the Earth-relative speed (m/s) after it.
 
@@ -259,23 +261,24 @@ def schedule_variable(t: float, x: np.ndarray, phase: int, p: np.ndarray) -> flo
     ----------
     t : float
         Time from liftoff (s; sets the Earth's rotation angle).
-    x : numpy.ndarray
-        The plant state (ECI position and velocity at ``R``, ``V``).
+    r, v : numpy.ndarray
+        ECI position (m) and velocity (m/s), as the flight software knows them.
     phase : int
         Flight-control phase (``FCS_STACK``, coast or upper).
     p : numpy.ndarray
         Plant parameters (Earth rotation rate and ellipsoid).
     """
     if phase == FCS_STACK:
-        return earth.height_of_eci(t, x[R], x[R + 1], x[R + 2], p[P_OMEGA_E], p[P_RE], p[P_E2])
-    ex, ey, ez = earth.earth_relative_velocity_xyz(x[R], x[R + 1], x[V], x[V + 1], x[V + 2], p[P_OMEGA_E])
+        return earth.height_of_eci(t, r[0], r[1], r[2], p[P_OMEGA_E], p[P_RE], p[P_E2])
+    ex, ey, ez = earth.earth_relative_velocity_xyz(r[0], r[1], v[0], v[1], v[2], p[P_OMEGA_E])
     return np.sqrt(ex ** 2 + ey ** 2 + ez ** 2)
 
 
 @njit(cache=True, error_model="numpy")
-def specific_energy(x: np.ndarray, mu: float) -> float:
-    r = np.sqrt(x[R] ** 2 + x[R + 1] ** 2 + x[R + 2] ** 2)
-    v2 = x[V] ** 2 + x[V + 1] ** 2 + x[V + 2] ** 2
+def specific_energy(r_eci: np.ndarray, v_eci: np.ndarray, mu: float) -> float:
+    """Point-mass specific orbital energy (J/kg) of an ECI position (m) and velocity (m/s)."""
+    r = np.sqrt(r_eci[0] ** 2 + r_eci[1] ** 2 + r_eci[2] ** 2)
+    v2 = v_eci[0] ** 2 + v_eci[1] ** 2 + v_eci[2] ** 2
     return 0.5 * v2 - mu / r
 
 
@@ -316,6 +319,10 @@ def _advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0
         c_gyro[g] = misalignment(p[GYRO_MISALIGN[g]:GYRO_MISALIGN[g] + 3])[1]
     q_imu = misalignment(p[P_IMU_MISALIGN:P_IMU_MISALIGN + 3])[0]
     q_nav = np.empty(4)
+    q_true_nav = np.empty(4)  # the navigated body attitude before the mounting (inertial navigation)
+    r_nav = np.empty(3)  # the navigated position and velocity the flight software reads
+    v_nav = np.empty(3)
+    nav_on = p[navigation.P_ON] != 0.0
     has_flex = int(p[flex.P_OFFSET]) >= 0
     peg_on = p[peg.P_ON] != 0.0
     perturbed = pert[loop_perturbation.AXIS] >= 0.0
@@ -325,8 +332,16 @@ def _advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0
         status = handle_events(t, x, u, d, events, sched, p, tb)
         if status != RUNNING:
             return status, j, log_row, ""
+        if nav_on:  # the IMU sample, then the navigated state (true plus the navigation errors)
+            if k % rates.n_sensor == 0:
+                navigation.imu_sample(d, t, x[R:R + 3], x[V:V + 3], x[Q:Q + 4], p)
+            navigation.navigated_state(d, x[R:R + 3], x[V:V + 3], r_nav, v_nav)
+        else:
+            for i in range(3):
+                r_nav[i] = x[R + i]
+                v_nav[i] = x[V + i]
         if int(u[U_ENGINE]) == ENGINE_UPPER:
-            status = cutoff_step(t, dt, x, u, d, events, sched, p, tb, peg_on)
+            status = cutoff_step(t, dt, x, r_nav, v_nav, u, d, events, sched, p, tb, peg_on)
             if status != RUNNING:
                 return status, j, log_row, ""
         if t > sched[S_T_MAX]:
@@ -336,8 +351,7 @@ def _advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0
         if k % rates.n_guid == 0 and u[U_T_CUT] <= 0.0:  # guidance frozen after the cutoff command
             steered = False
             if peg_on and not np.isnan(events[EV_IGNITION]):
-                code = peg.guidance_cycle(d, t, x[R:R + 3], x[V:V + 3], events[EV_IGNITION], rates.n_guid * dt,
-                                          p, p[P_RE])
+                code = peg.guidance_cycle(d, t, r_nav, v_nav, events[EV_IGNITION], rates.n_guid * dt, p, p[P_RE])
                 if code != peg.PEG_OK:
                     return GUIDANCE_FAILED, j, log_row, peg.failure_message(code)
                 steered = d[peg.D_ACTIVE] != 0.0
@@ -346,7 +360,7 @@ def _advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0
                 if sched[S_PROFILE_SCHEDULE] == BY_TIME:
                     guidance_sample(d, t, gt.time, gt.quat, gt.rate, k == 0)
                 else:
-                    ex, ey, ez = earth.earth_relative_velocity_xyz(x[R], x[R + 1], x[V], x[V + 1], x[V + 2],
+                    ex, ey, ez = earth.earth_relative_velocity_xyz(r_nav[0], r_nav[1], v_nav[0], v_nav[1], v_nav[2],
                                                                   p[P_OMEGA_E])
                     tau = profile_time(d, t, np.sqrt(ex * ex + ey * ey + ez * ez), phase == FCS_STACK, gt.speed,
                                        gt.time[:gt.speed.size], k == 0)
@@ -360,6 +374,8 @@ def _advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0
                 if has_flex:
                     flex.flex_point(x, config, p, tb, GYRO_POINTS[g], True, flex3)
                 wbx, wby, wbz = x[W] + flex3[0], x[W + 1] + flex3[1], x[W + 2] + flex3[2]
+                if nav_on and g == IMU_GYRO:  # the IMU's rate output carries its gyro errors
+                    wbx, wby, wbz = navigation.imu_gyro_rate(p, wbx, wby, wbz)
                 for ax in range(3):
                     s = D_GYRO_X + 6 * g + 2 * ax
                     w_in = c_gyro[g, ax, 0] * wbx + c_gyro[g, ax, 1] * wby + c_gyro[g, ax, 2] * wbz
@@ -367,11 +383,15 @@ def _advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0
         if k % rates.n_fcs == 0:
             dt_fcs = rates.n_fcs * dt
             smoother_step(d, t, dt_fcs, sched[S_SMOOTH_ZETA], sched[S_SMOOTH_WN])
-            sched_var = schedule_variable(t, x, phase, p)
+            sched_var = schedule_variable(t, r_nav, v_nav, phase, p)
             if has_flex:
                 flex.flex_point(x, config, p, tb, flex.PT_IMU, False, flex3)  # flex rotation at the nav unit
                 d[D_FLEX_NAV:D_FLEX_NAV + 3] = flex3
-            qt.qmul_into(x[Q:Q + 4], q_imu, q_nav)  # sensed attitude q_b2i ⊗ q_s2b
+            if nav_on:  # navigated attitude exp(φ) ⊗ q_b2i ⊗ q_s2b
+                navigation.navigated_attitude(d, x[Q:Q + 4], q_true_nav)
+                qt.qmul_into(q_true_nav, q_imu, q_nav)
+            else:  # sensed attitude q_b2i ⊗ q_s2b
+                qt.qmul_into(x[Q:Q + 4], q_imu, q_nav)
             fcs_step(d, q_nav, phase, sched_var, t - u[U_T_IGN], dt_fcs, ft)
         command_update = (k - int(sched[S_DELAY_STEPS])) % rates.n_fcs == 0
         if command_update:  # the commands, after the loop delay

@@ -12,8 +12,8 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from savant_cli import constants as C
 from savant_cli.io.record import Signal
 from savant_cli.models import (
-    actuator, aero, atmosphere, earth, flex, gravity, mass, peg, propulsion, quaternion as qt, rcs, rigid_body, slosh,
-    twd, winds,
+    actuator, aero, atmosphere, earth, flex, gravity, mass, navigation, peg, propulsion, quaternion as qt, rcs,
+    rigid_body, slosh, twd, winds,
 )
 from savant_cli.sim import engine as E
 from savant_cli.sim import layout as L
@@ -188,6 +188,21 @@ def launch_frame(model: SimModel) -> np.ndarray:
     return earth.dcm_ecef_to_ned(lat, lon)  # ECI = ECEF at t = 0
 
 
+def navigation_signals(d: np.ndarray) -> dict[str, Signal]:
+    """The inertial navigation's errors (``navigation=inertial``, ``models/navigation.py``),
+    navigated minus true, from the logged discrete state (updated every IMU sample)."""
+    xyz = ("x", "y", "z")
+    return {
+        "navigation_position_error": Signal(d[:, navigation.D_POSITION:navigation.D_POSITION + 3], "m",
+                                            "navigated minus true position", xyz, "ECI"),
+        "navigation_velocity_error": Signal(d[:, navigation.D_VELOCITY:navigation.D_VELOCITY + 3], "m/s",
+                                            "navigated minus true velocity", xyz, "ECI"),
+        "navigation_attitude_error": Signal(d[:, navigation.D_ATTITUDE:navigation.D_ATTITUDE + 3], "rad",
+                                            "navigated attitude error: rotation vector from the true to the "
+                                            "navigated body attitude", xyz, "ECI"),
+    }
+
+
 def guidance_signals(t: np.ndarray, r: np.ndarray, d: np.ndarray, p: np.ndarray) -> dict[str, Signal]:
     """Powered Explicit Guidance's histories (``models/peg.py``), from the logged
     discrete state (each holds its latest cycle's value between cycles) and the position
@@ -304,6 +319,8 @@ def signals(result: SimResult, model: SimModel) -> dict[str, Signal]:
     }
     if model.p[peg.P_ON] != 0.0:
         s.update(guidance_signals(t, x[:, L.R:L.R + 3], d, model.p))
+    if model.p[navigation.P_ON] != 0.0:
+        s.update(navigation_signals(d))
     if lay.simplex:
         s["actuator_ram_position"] = Signal(x[:, [L.ACT_P + 2, L.ACT_Y + 2]], "rad",
                                             "simplex ram position as an equivalent gimbal angle", pq, "body")

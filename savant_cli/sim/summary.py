@@ -189,6 +189,28 @@ def propulsion_keys(result: SimResult, p: np.ndarray) -> dict[str, float | str |
             "shutdown_impulse_Ns": float(d[propulsion.D_US_SD_IMPULSE]) if result.u[U_T_CUT] > 0.0 else None}
 
 
+#: the keys of :func:`navigation_keys`
+NAVIGATION_KEYS = ("navigation_position_error_m", "navigation_velocity_error_mps", "navigation_attitude_error_deg",
+                   "navigated_perigee_altitude_km", "navigated_apogee_altitude_km", "navigated_inclination_deg")
+
+
+def navigation_keys(r_f: np.ndarray, v_f: np.ndarray, sig: dict[str, Signal]) -> dict[str, float]:
+    """The inertial navigation's errors at the end of the run (``navigation=inertial``):
+    the magnitudes of the position, velocity and attitude errors (navigated minus true),
+    and the orbit the flight software believed it reached, from the navigated state
+    ``r_f + δr``, ``v_f + δv`` (ECI)."""
+    dr = sig["navigation_position_error"].data[-1]
+    dv = sig["navigation_velocity_error"].data[-1]
+    phi = sig["navigation_attitude_error"].data[-1]
+    believed = orbit_elements(r_f + dr, v_f + dv)
+    return {"navigation_position_error_m": float(np.linalg.norm(dr)),
+            "navigation_velocity_error_mps": float(np.linalg.norm(dv)),
+            "navigation_attitude_error_deg": float(np.degrees(np.linalg.norm(phi))),
+            "navigated_perigee_altitude_km": believed["perigee_altitude_km"],
+            "navigated_apogee_altitude_km": believed["apogee_altitude_km"],
+            "navigated_inclination_deg": believed["inclination_deg"]}
+
+
 def summarize(result: SimResult, sig: dict[str, Signal], study_wall_s: float | None = None,
               target=None, qalpha_limit: float | None = None, p: np.ndarray | None = None) -> dict:
     """Summary scalars of a run (SI units named in the keys); ``target`` (an
@@ -249,6 +271,8 @@ def summarize(result: SimResult, sig: dict[str, Signal], study_wall_s: float | N
     if target is not None:
         cut = not np.isnan(result.events[E.EV_CUTOFF])
         out.update(insertion_errors(r_f, v_f, target) if cut else dict.fromkeys(INSERTION_KEYS))
+    if "navigation_position_error" in sig:
+        out.update(navigation_keys(r_f, v_f, sig))
     if "peg_time_to_go" in sig:
         active = sig["peg_active"].data > 0.0
         out["peg_engage_time_s"] = float(t[np.argmax(active)]) if active.any() else None
