@@ -110,9 +110,12 @@ def fly_batch(cfg: SavantConfig, config_yaml: str, out_dir: Path, console: Conso
     t0 = time.perf_counter()
     case, names = make_case(cfg)
     journal = Journal(out_dir / "runs", cfg, case.dispersions.names)
-    inactive = [f"{d.name} ({d.target.note})" for d in case.dispersions.items if d.target.kind == "inactive"]
-    if inactive:
-        console.print(f"inactive dispersions, drawn but applied to nothing: {'; '.join(inactive)}")
+    by_reason: dict[str, list[str]] = {}  # one line per reason: the navigation set alone has 21 items
+    for d in case.dispersions.items:
+        if d.target.kind == "inactive":
+            by_reason.setdefault(d.target.note, []).append(d.name)
+    for note, inactive in by_reason.items():
+        console.print(f"inactive dispersions, drawn but applied to nothing ({note}): {', '.join(inactive)}")
     mine = shard_runs(study.n_runs, study.shards, study.shard)
     done = journal.done()
     todo = [r for r in mine if r not in done]
