@@ -41,6 +41,7 @@ import h5py
 import numpy as np
 
 from savant_cli.io.atomic import atomic_path
+from savant_cli.io.integrity import read_h5
 from savant_cli.io.record import RunRecord, Signal
 
 FORMAT = "savant-run"
@@ -281,13 +282,14 @@ def read_run(path: Path | str) -> RunRecord:
         If ``path`` does not exist.
     RunFileError
         If the file is not a savant run or was written by a newer format version.
-    OSError
-        If the file is not HDF5 at all (from h5py).
+    savant_cli.errors.DamagedFileError
+        If the file cannot be read back (truncated, not HDF5, damaged inside); the
+        message names it, the problem and what writes it again.
     """
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"no such run file: {path}")
-    with h5py.File(path, "r") as f:
+    with read_h5(path) as f:
         fmt = as_str(f.attrs.get("format", ""))
         if fmt != FORMAT:
             raise RunFileError(f"{path} is not a savant run file (format attribute {fmt!r}, expected {FORMAT!r})")
