@@ -89,9 +89,12 @@ def atomic_path(final: Path | str) -> Iterator[Path]:
 
     Examples
     --------
-    >>> with atomic_path(out_dir / "savant.h5") as tmp:  # doctest: +SKIP
-    ...     with h5py.File(tmp, "w") as f:
-    ...         f["x"] = 1.0
+    >>> with atomic_path(out_dir / "flex_sweep.csv") as tmp:  # doctest: +SKIP
+    ...     with open(tmp, "w") as fh:
+    ...         fh.write(text)
+
+    HDF5 files go through :func:`savant_cli.io.h5write.atomic_h5`, which keeps a full
+    disk away from the HDF5 library.
     """
     final = Path(final)
     try:

@@ -23,7 +23,8 @@ from rich.console import Console
 from rich.table import Table
 
 from savant_cli.errors import ConfigError, DamagedFileError, OutputWriteError
-from savant_cli.io.atomic import atomic_path, write_json_atomic, write_text_atomic
+from savant_cli.io.atomic import write_json_atomic, write_text_atomic
+from savant_cli.io.h5write import atomic_h5
 from savant_cli.io.console import print_verdict, split_unit
 from savant_cli.io.record import FAILURE_CLASSES, FLOWN
 from savant_cli.config import ReliabilitySpec, RequirementSet
@@ -551,7 +552,7 @@ def write_outputs(out_dir: Path, inv: Inventory, expected: list[int], dispersion
             out_dir.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
             raise OutputWriteError(out_dir / "savant.h5", exc) from exc
-        with atomic_path(out_dir / "savant.h5") as tmp, h5py.File(tmp, "w") as f:
+        with atomic_h5(out_dir / "savant.h5") as f:
             g = f.create_group("montecarlo")
             tb = done["tb"] = _write_tables(g, inv, runs, history_names, history_time)
             an = done["an"] = analyse(tb, expected, missing, dispersions, requirements, spec)

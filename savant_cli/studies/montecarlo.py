@@ -132,7 +132,10 @@ def fly_batch(cfg: SavantConfig, config_yaml: str, out_dir: Path, console: Conso
                    TextColumn("failed {task.fields[failed]}"), TimeElapsedColumn(), TextColumn("eta"),
                    TimeRemainingColumn(), disable=not cfg.sim.progress)
 
+    flown: set[int] = set()
+
     def on_done(o: RunOutcome) -> None:
+        flown.add(o.run)
         if o.status != "complete":
             failures[0] += 1
         bar.update(task, advance=1, failed=failures[0])
@@ -140,8 +143,13 @@ def fly_batch(cfg: SavantConfig, config_yaml: str, out_dir: Path, console: Conso
     with bar:
         task = bar.add_task("runs", total=len(todo), failed=0)
         stop = execute(case, todo, journal, workers, on_done)
+    inv = inventory([journal.folder])
+    for run, exc in found.damaged.items():  # not flown again (the batch stopped first): missing, not read
+        if run not in flown:
+            inv.files.pop(run, None)
+            inv.damaged[run] = exc
     try:
-        summary = write_outputs(out_dir, inventory([journal.folder]), list(mine), dispersion_table(case.dispersions),
+        summary = write_outputs(out_dir, inv, list(mine), dispersion_table(case.dispersions),
                                 config_yaml, collect_provenance(), names, case.history_time, cfg.requirements,
                                 cfg.output.plots, console if print_tables else None, cfg.study.reliability)
     except OutputWriteError:
