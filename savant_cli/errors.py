@@ -1,9 +1,10 @@
 """Exceptions that the command line turns into clear messages and exit codes.
 
-Every error of savant's own is a :class:`SavantError`: its message is the whole story
-(what, where, what is allowed or what rebuilds it) and its ``exit_code`` is the status
-the command line exits with, 2 for bad input or a damaged file, 1 for an output that
-could not be written.
+The errors the command line reports in one line, without a traceback, are
+:class:`SavantError`: the message is the whole story (what, where, what is allowed or
+what rebuilds it) and ``exit_code`` is the status the command line exits with, 2 for bad
+input or a damaged file, 1 for an output that could not be written. A diverging flight
+(:class:`SimulationDiverged`) is a result, not an error of the command.
 """
 
 from __future__ import annotations

@@ -142,6 +142,52 @@ def test_an_error_of_the_block_itself_is_not_taken_for_a_write_error(tmp_path):
     assert list(tmp_path.iterdir()) == []
 
 
+class _SmallDisk:
+    """A raw file that takes ``room`` bytes, then refuses with ENOSPC (a write that
+    straddles the limit is taken in part, as the kernel does)."""
+
+    def __init__(self, fh, room: int) -> None:
+        self.fh, self.room = fh, room
+
+    def write(self, data) -> int:
+        left = self.room - self.fh.seek(0, os.SEEK_CUR)
+        if left <= 0:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        return self.fh.write(bytes(data)[:left])
+
+    def __getattr__(self, name):
+        return getattr(self.fh, name)
+
+
+def test_hdf5_written_through_the_guard_reports_a_refusal_once(tmp_path, monkeypatch):
+    import numpy as np
+
+    from savant_cli.io import h5write
+
+    real_init = h5write.GuardedFile.__init__
+
+    def small(self, path):
+        real_init(self, path)
+        self._fh = _SmallDisk(self._fh, 100_000)
+
+    monkeypatch.setattr(h5write.GuardedFile, "__init__", small)
+    target = tmp_path / "savant.h5"
+    target.write_bytes(b"previous")
+    with pytest.raises(OutputWriteError) as err:
+        with h5write.atomic_h5(target, track_order=True) as f:
+            for i in range(8):
+                f.create_dataset(f"s{i}", data=np.random.default_rng(i).random((200, 300)), chunks=(1, 300))
+    assert str(err.value) == f"could not write savant.h5 in {tmp_path}: No space left on device (errno 28)"
+    assert target.read_bytes() == b"previous" and sorted(p.name for p in tmp_path.iterdir()) == ["savant.h5"]
+    monkeypatch.setattr(h5write.GuardedFile, "__init__", real_init)
+    with h5write.atomic_h5(target) as f:  # with room, the same file reads back
+        f["x"] = np.arange(5.0)
+    import h5py
+
+    with h5py.File(target, "r") as f:
+        assert f["x"][()].tolist() == [0.0, 1.0, 2.0, 3.0, 4.0]
+
+
 @needs_namespace
 def test_hdf5_on_a_full_disk_is_one_write_error_and_no_crash(tmp_path):
     """Several chunked, compressed datasets open when the 2 MB disk fills: written

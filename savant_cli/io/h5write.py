@@ -141,6 +141,10 @@ def atomic_h5(final: Path | str, **file_kwargs: Any) -> Iterator[h5py.File]:
         try:
             with h5py.File(guarded, "w", **file_kwargs) as f:
                 yield f
+        except Exception:
+            if guarded.failure is None:
+                raise
+            # what went wrong after the disk refused a write follows from the refusal
         finally:
             try:
                 guarded.close()
