@@ -118,6 +118,12 @@ def run(overrides: Sequence[str] | None = None, config_dir: str | Path | None = 
     ConfigError
         An override Hydra refuses (unknown key or option, bad syntax) or a value the
         validation refuses, naming the key, the value and what is allowed.
+    savant_cli.errors.OutputWriteError
+        An output could not be written (disk full, folder not writable): it names the
+        file and its folder; the files written before it are whole.
+    savant_cli.errors.DamagedFileError
+        A file of an earlier run in ``out_dir`` cannot be read back (a batch journal's
+        manifest): it names the file and what writes it again.
     """
     from hydra.core.hydra_config import HydraConfig
     from omegaconf import OmegaConf, open_dict
@@ -155,7 +161,7 @@ def run(overrides: Sequence[str] | None = None, config_dir: str | Path | None = 
         handler.setFormatter(logging.Formatter(LOG_FORMAT))
         root.addHandler(handler)
         root.setLevel(logging.INFO if level in (logging.NOTSET, logging.WARNING) else min(level, logging.INFO))
-        code = run_study(typed, task_cfg, target)
+        code = run_study(typed, task_cfg, target, raise_errors=True)
     finally:
         hydra_config.cfg = previous
         if handler is not None:

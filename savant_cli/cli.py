@@ -13,7 +13,7 @@ from pathlib import Path
 from rich.console import Console
 
 from savant_cli import __version__
-from savant_cli.errors import ConfigError
+from savant_cli.errors import ConfigError, SavantError
 
 USAGE = """\
 usage: savant <command> [arguments]
@@ -137,8 +137,11 @@ def main(argv: list[str] | None = None) -> int:
 
         try:
             paths = report(Path(rest[0]))
-        except (FileNotFoundError, OSError) as exc:
-            Console(stderr=True).print(f"[bold red]error[/]: {exc}")
+        except SavantError as exc:  # a damaged savant.h5 (2), or an output not written (1)
+            Console(stderr=True).print(f"[bold red]error[/]: {exc}", highlight=False)
+            return exc.exit_code
+        except (FileNotFoundError, OSError) as exc:  # no such folder or file, not a savant file
+            Console(stderr=True).print(f"[bold red]error[/]: {exc}", highlight=False)
             return 2
         console.print(f"{len(paths)} plots written to {Path(rest[0]) / 'plots'}")
         return 0
@@ -206,7 +209,7 @@ def _batch_command(cmd: str, rest: list[str]) -> int:
         if cmd == "collect":
             code = montecarlo.collect(folder, allow_missing=allow_missing)
             if (code == 0 or allow_missing) and (folder / "savant.h5").is_file():  # written just now
-                write_report_or_say(folder, err)
+                code = max(code, write_report_or_say(folder, err))
             return code
         try:
             number = int(rest[1][4:])
@@ -214,11 +217,11 @@ def _batch_command(cmd: str, rest: list[str]) -> int:
             raise ConfigError("run", rest[1][4:], "must be an integer run number") from None
         code = montecarlo.rerun(folder, number)
         if (folder / f"rerun_{number:06d}" / "savant.h5").is_file():  # montecarlo.rerun's folder
-            write_report_or_say(folder / f"rerun_{number:06d}", err)
+            code = max(code, write_report_or_say(folder / f"rerun_{number:06d}", err))
         return code
-    except ConfigError as exc:
-        err.print(f"[bold red]error[/]: {exc}")
-        return ConfigError.exit_code
+    except SavantError as exc:  # bad input or a damaged file (2), an output not written (1)
+        err.print(f"[bold red]error[/]: {exc}", highlight=False)
+        return exc.exit_code
 
 
 if __name__ == "__main__":

@@ -1,11 +1,27 @@
-"""Exceptions that the command line turns into clear messages and exit codes."""
+"""Exceptions that the command line turns into clear messages and exit codes.
+
+The errors the command line reports in one line, without a traceback, are
+:class:`SavantError`: the message is the whole story (what, where, what is allowed or
+what rebuilds it) and ``exit_code`` is the status the command line exits with, 2 for bad
+input or a damaged file, 1 for an output that could not be written. A diverging flight
+(:class:`SimulationDiverged`) is a result, not an error of the command.
+"""
 
 from __future__ import annotations
 
+import os
+import re
+from pathlib import Path
 from typing import Any
 
 
-class ConfigError(ValueError):
+class SavantError(Exception):
+    """Base of the errors savant reports as one line, without a traceback."""
+
+    exit_code = 1
+
+
+class ConfigError(SavantError, ValueError):
     """A configuration or data-file problem found before any computation.
 
     Parameters
@@ -29,6 +45,62 @@ class ConfigError(ValueError):
         if len(text) > 120:
             text = text[:117] + "..."
         super().__init__(f"{key} = {text}: {allowed}")
+
+
+class DamagedFileError(SavantError, OSError):
+    """A file savant wrote earlier that cannot be read back (truncated, overwritten,
+    wrong checksum).
+
+    Parameters
+    ----------
+    path : pathlib.Path or str
+        The damaged file.
+    problem : str
+        What is wrong with it (``truncated: 1,024 of 88,310 bytes``, ``checksum mismatch``).
+    rebuild : str
+        What writes it again (``run the same command again: …``).
+    """
+
+    exit_code = 2
+
+    def __init__(self, path: Path | str, problem: str, rebuild: str) -> None:
+        self.path = Path(path)
+        self.problem = problem
+        self.rebuild = rebuild
+        super().__init__(f"{self.path} is damaged ({problem}); {rebuild}")
+
+
+def _reason(exc: BaseException) -> str:
+    """The operating system's words for why a write failed: ``strerror`` of the errno,
+    found on the exception or in h5py's message (``errno = 28``), else the message."""
+    errno = getattr(exc, "errno", None)
+    if not isinstance(errno, int):
+        found = re.search(r"errno = (\d+)", str(exc))
+        errno = int(found.group(1)) if found else None
+    if isinstance(errno, int) and errno > 0:
+        return f"{os.strerror(errno)} (errno {errno})"
+    text = str(exc).strip().splitlines()
+    return text[0] if text else type(exc).__name__
+
+
+class OutputWriteError(SavantError, OSError):
+    """An output file that could not be written (disk full, folder not writable); the
+    file keeps its previous content, or does not exist.
+
+    Parameters
+    ----------
+    path : pathlib.Path or str
+        The file that could not be written.
+    cause : BaseException
+        The operating system's (or h5py's) error.
+    """
+
+    exit_code = 1
+
+    def __init__(self, path: Path | str, cause: BaseException) -> None:
+        self.path = Path(path)
+        self.reason = _reason(cause)
+        super().__init__(f"could not write {self.path.name} in {self.path.parent}: {self.reason}")
 
 
 class SimulationDiverged(RuntimeError):

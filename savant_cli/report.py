@@ -27,6 +27,7 @@ from rich.console import Console
 
 from savant_cli.io.console import print_run_summary
 from savant_cli.io.hdf5 import FORMAT, STUDY_FORMAT, RunFileError, read_run
+from savant_cli.io.integrity import verify_h5
 
 RUN_FILE = "savant.h5"
 PLOTS_DIR = "plots"
@@ -59,9 +60,15 @@ def report(run_dir: Path | str, console: Console | None = None) -> list[Path]:
     ------
     FileNotFoundError
         If ``run_dir`` does not exist or holds no ``savant.h5``.
-    OSError
-        If ``savant.h5`` is not a readable savant file
-        (:class:`savant_cli.io.hdf5.RunFileError` or an h5py error).
+    savant_cli.io.hdf5.RunFileError
+        If ``savant.h5`` is an HDF5 file but not a savant one.
+    savant_cli.errors.DamagedFileError
+        If ``savant.h5`` cannot be read back whole (truncated, not HDF5, an object
+        damaged inside): the message names the file, the problem and the command that
+        writes it again (:func:`savant_cli.io.integrity.rebuild_hint`).
+    savant_cli.errors.OutputWriteError
+        If a figure or ``report.html`` cannot be written (disk full, folder not
+        writable); the summary has been printed and the files written before stay whole.
     """
     run_dir = Path(run_dir)
     if not run_dir.is_dir():
@@ -72,6 +79,7 @@ def report(run_dir: Path | str, console: Console | None = None) -> list[Path]:
             f"no {RUN_FILE} in {run_dir}: not a savant run folder, or the run was made "
             f"with output.hdf5=false")
     console = console or Console()
+    verify_h5(h5)  # damage anywhere is named before anything is drawn
     fmt, groups = _contents(h5)
     folder = run_dir / PLOTS_DIR
     paths: list[Path] = []
@@ -79,8 +87,8 @@ def report(run_dir: Path | str, console: Console | None = None) -> list[Path]:
         from savant_cli.plots.ascent import plot_ascent  # matplotlib only when drawing
 
         record = read_run(h5)
+        print_run_summary(record.summary, record.status, record.message, console)  # even if no plot can be written
         paths += plot_ascent(record, folder)
-        print_run_summary(record.summary, record.status, record.message, console)
     elif fmt != STUDY_FORMAT and "montecarlo" not in groups:
         raise RunFileError(f"{h5} is not a savant run file (format attribute {fmt!r})")
     if "linear" in groups:
@@ -119,5 +127,5 @@ def report(run_dir: Path | str, console: Console | None = None) -> list[Path]:
         console.print(f"redrawn from {RUN_FILE}: {', '.join(studies)}")
     from savant_cli.studies import write_report_or_say
 
-    write_report_or_say(run_dir, console)  # report.html, with the figures just drawn
+    write_report_or_say(run_dir, console, raise_write_errors=True)  # report.html, with the figures just drawn
     return paths

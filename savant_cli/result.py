@@ -27,6 +27,7 @@ import numpy as np
 from omegaconf import DictConfig, OmegaConf
 
 from savant_cli.io.hdf5 import as_str as _text
+from savant_cli.io.integrity import read_h5
 
 if TYPE_CHECKING:  # imported when used: pandas, xarray and python-control are slow to import
     import control
@@ -181,11 +182,11 @@ class Result:
         return self.run_dir / RUN_FILE
 
     def _format(self) -> str:
-        with h5py.File(self.h5, "r") as f:
+        with read_h5(self.h5) as f:
             return _text(f.attrs.get("format", ""))
 
     def _groups(self) -> set[str]:
-        with h5py.File(self.h5, "r") as f:
+        with read_h5(self.h5) as f:
             return set(f)
 
     @cached_property
@@ -221,7 +222,7 @@ class Result:
         if "linear" not in self._groups():
             return None
         out = LinearPoints()
-        with h5py.File(self.h5, "r") as f:
+        with read_h5(self.h5) as f:
             g = f["linear"]
             margins = _frame(g["margins"])
             checks = _frame(g["requirements/checks"]) if "requirements/checks" in g else None
@@ -245,7 +246,7 @@ class Result:
         """The margin table of every point of a linear study (None without one)."""
         if "linear" not in self._groups():
             return None
-        with h5py.File(self.h5, "r") as f:
+        with read_h5(self.h5) as f:
             return _frame(f["linear/margins"])
 
     @cached_property
@@ -255,7 +256,7 @@ class Result:
 
         if "montecarlo" not in self._groups():
             return None
-        with h5py.File(self.h5, "r") as f:
+        with read_h5(self.h5) as f:
             g = f["montecarlo"]
             runs = _frame(g["runs"], index="run")
             for name, ds in g["summary"].items():
@@ -355,6 +356,20 @@ def history_dataset(signals: dict, status: str = "", message: str = "") -> "xarr
     return xr.Dataset(data_vars, coords=coords, attrs={"status": status, "message": message})
 
 
+def _read_summary(path: Path) -> dict[str, Any]:
+    """``summary.json``, or a :class:`~savant_cli.errors.DamagedFileError` naming it."""
+    from savant_cli.errors import DamagedFileError
+    from savant_cli.io.integrity import rebuild_hint
+
+    try:
+        summary = json.loads(path.read_text(encoding="utf-8"))
+        if not isinstance(summary, dict):
+            raise ValueError(f"a JSON {type(summary).__name__}, not an object")
+    except (OSError, UnicodeDecodeError, ValueError) as exc:
+        raise DamagedFileError(path, f"unreadable: {type(exc).__name__}: {exc}", rebuild_hint(path.parent)) from None
+    return summary
+
+
 def load(run_dir: str | Path, exit_code: int | None = None) -> Result:
     """The :class:`Result` of a finished run folder.
 
@@ -371,8 +386,13 @@ def load(run_dir: str | Path, exit_code: int | None = None) -> Result:
     ------
     FileNotFoundError
         No such folder, or no ``savant.h5`` in it.
-    OSError
-        ``savant.h5`` is not a savant file.
+    savant_cli.io.hdf5.RunFileError
+        ``savant.h5`` is an HDF5 file but not a savant one.
+    savant_cli.errors.DamagedFileError
+        ``savant.h5`` (or ``summary.json``) cannot be read back (truncated, not HDF5,
+        damaged inside): the message names the file, what is wrong and the command that
+        writes it again. The lazily read parts (history, linear points, Monte Carlo
+        tables) raise it too when their part of the file is damaged.
     """
     from savant_cli.io.hdf5 import FORMAT, STUDY_FORMAT, RunFileError
 
@@ -384,7 +404,7 @@ def load(run_dir: str | Path, exit_code: int | None = None) -> Result:
         raise FileNotFoundError(f"no {RUN_FILE} in {run_dir}: not a savant run folder, or the run was made "
                                 f"with output.hdf5=false")
     provenance: dict[str, str] = {}
-    with h5py.File(h5, "r") as f:
+    with read_h5(h5) as f:
         fmt = _text(f.attrs.get("format", ""))
         if fmt in (FORMAT, STUDY_FORMAT):
             config_text = _text(f["config"][()])
@@ -405,7 +425,7 @@ def load(run_dir: str | Path, exit_code: int | None = None) -> Result:
         else:
             raise RunFileError(f"{h5} is not a savant run file (format attribute {fmt!r})")
     summary_path = run_dir / SUMMARY_FILE
-    summary = json.loads(summary_path.read_text()) if summary_path.is_file() else {}
+    summary = _read_summary(summary_path) if summary_path.is_file() else {}
     config = OmegaConf.create(config_text)
     study = str(OmegaConf.select(config, "study.name", default="") or "")
     code = exit_code if exit_code is not None else code

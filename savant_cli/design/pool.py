@@ -17,7 +17,7 @@ import numpy as np
 
 from savant_cli.design.search import DesignPoint, point_scores
 from savant_cli.models.fcs import FcsTables
-from savant_cli.processes import process_context
+from savant_cli.processes import process_context, worker_initializer
 
 _POINTS: list[DesignPoint] = []  # the pool's points, inherited by its forked workers
 
@@ -37,7 +37,7 @@ class ScorePool:
         _POINTS = list(points)
         self._index = {id(p): i for i, p in enumerate(_POINTS)}
         self.workers = max(1, min(workers, len(_POINTS)))
-        self._pool = (ProcessPoolExecutor(self.workers, mp_context=process_context())
+        self._pool = (ProcessPoolExecutor(self.workers, mp_context=process_context(), **worker_initializer())
                       if self.workers > 1 else None)
 
     def scores(self, points: list[DesignPoint], ft: FcsTables, dt: float, axes: tuple[str, ...]) -> np.ndarray:

@@ -4,7 +4,10 @@ Every output of a run (``savant.h5``, ``summary.json``, plots, generated data fi
 written to a hidden temporary file in the destination directory, flushed to disk, then
 renamed onto its final name with :func:`os.replace` (atomic on POSIX and Windows within
 one file system). An exception while writing removes the temporary file and leaves any
-previous file of that name untouched.
+previous file of that name untouched. A write the operating system refuses (disk full,
+folder not writable, read-only file system) is raised as
+:class:`~savant_cli.errors.OutputWriteError`, which names the file, its folder and the
+reason in one line.
 """
 
 from __future__ import annotations
@@ -19,6 +22,8 @@ from pathlib import Path, PurePath
 from typing import Any
 
 import numpy as np
+
+from savant_cli.errors import OutputWriteError, SavantError
 
 
 def _temp_name(final: Path) -> Path:
@@ -48,6 +53,10 @@ def _fsync_dir(directory: Path) -> None:
         os.close(fd)
 
 
+class _NothingWritten(FileNotFoundError):
+    """The block of :func:`atomic_path` created no file (a programming error, not I/O)."""
+
+
 @contextmanager
 def atomic_path(final: Path | str) -> Iterator[Path]:
     """Yield a temporary path to write; move it onto ``final`` when the block succeeds.
@@ -57,7 +66,9 @@ def atomic_path(final: Path | str) -> Iterator[Path]:
     the file at the yielded path (any writer: ``open``, ``h5py.File``, ``savefig`` with an
     explicit ``format``). On success the file is fsynced and renamed with
     :func:`os.replace`; on any exception (including ``KeyboardInterrupt``) the temporary
-    file is deleted, ``final`` is left as it was, and the exception propagates.
+    file is deleted, ``final`` is left as it was, and the exception propagates; an
+    :class:`OSError` of the write (h5py's included) propagates as
+    :class:`~savant_cli.errors.OutputWriteError` naming ``final``.
 
     Parameters
     ----------
@@ -73,27 +84,37 @@ def atomic_path(final: Path | str) -> Iterator[Path]:
     ------
     FileNotFoundError
         If the block finished without creating the temporary file.
+    savant_cli.errors.OutputWriteError
+        If the folder or the file could not be written (disk full, not writable).
 
     Examples
     --------
-    >>> with atomic_path(out_dir / "savant.h5") as tmp:  # doctest: +SKIP
-    ...     with h5py.File(tmp, "w") as f:
-    ...         f["x"] = 1.0
+    >>> with atomic_path(out_dir / "flex_sweep.csv") as tmp:  # doctest: +SKIP
+    ...     with open(tmp, "w") as fh:
+    ...         fh.write(text)
+
+    HDF5 files go through :func:`savant_cli.io.h5write.atomic_h5`, which keeps a full
+    disk away from the HDF5 library.
     """
     final = Path(final)
-    final.parent.mkdir(parents=True, exist_ok=True)
+    try:
+        final.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OutputWriteError(final, exc) from exc
     tmp = _temp_name(final)
     try:
         yield tmp
         if not tmp.exists():
-            raise FileNotFoundError(f"atomic write of {final}: nothing was written to {tmp}")
+            raise _NothingWritten(f"atomic write of {final}: nothing was written to {tmp}")
         _fsync_file(tmp)
         os.replace(tmp, final)
-    except BaseException:
+    except BaseException as exc:
         try:
             tmp.unlink()
-        except FileNotFoundError:
-            pass
+        except OSError:
+            pass  # never created, or the folder cannot be written: nothing to remove
+        if isinstance(exc, OSError) and not isinstance(exc, (SavantError, _NothingWritten)):
+            raise OutputWriteError(final, exc) from exc
         raise
     _fsync_dir(final.parent)
 

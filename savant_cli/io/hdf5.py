@@ -25,7 +25,8 @@ study's own group.
 Signal order and summary order are preserved (groups are created with creation-order
 tracking). Datasets that are 2-D or longer than 1,024 samples are chunked and compressed
 with the shuffle filter and gzip level 4. The file is written through
-:func:`savant_cli.io.atomic.atomic_path`: it appears complete or not at all.
+:func:`savant_cli.io.h5write.atomic_h5`: it appears complete or not at all, and a full disk
+is one :class:`~savant_cli.errors.OutputWriteError`.
 """
 
 from __future__ import annotations
@@ -40,7 +41,8 @@ from typing import Any
 import h5py
 import numpy as np
 
-from savant_cli.io.atomic import atomic_path
+from savant_cli.io.h5write import atomic_h5
+from savant_cli.io.integrity import read_h5
 from savant_cli.io.record import RunRecord, Signal
 
 FORMAT = "savant-run"
@@ -186,23 +188,22 @@ def write_run(path: Path | str, record: RunRecord, extra=None) -> None:
     for key in record.provenance:
         if key in RESERVED_ROOT_ATTRS:
             raise ValueError(f"provenance key {key!r} collides with a reserved root attribute")
-    with atomic_path(Path(path)) as tmp:
-        with h5py.File(tmp, "w", track_order=True) as f:
-            f.attrs["format"] = FORMAT
-            f.attrs["format_version"] = np.int64(FORMAT_VERSION)
-            f.attrs["complete"] = bool(record.complete)
-            f.attrs["status"] = str(record.status)
-            f.attrs["message"] = str(record.message)
-            for key, value in record.provenance.items():
-                f.attrs[key] = "" if value is None else str(value)
-            f.create_dataset("config", data=str(record.config_yaml), dtype=_STR)
-            _write_signals(f.create_group("time_history", track_order=True), record.signals)
-            ev = f.create_group("events", track_order=True)
-            ev.create_dataset("name", data=_str_array([e[0] for e in record.events]), dtype=_STR)
-            ev.create_dataset("time_s", data=np.array([float(e[1]) for e in record.events], dtype=np.float64))
-            _write_summary(f.create_group("summary", track_order=True), record.summary)
-            if extra is not None:
-                extra(f)
+    with atomic_h5(Path(path), track_order=True) as f:
+        f.attrs["format"] = FORMAT
+        f.attrs["format_version"] = np.int64(FORMAT_VERSION)
+        f.attrs["complete"] = bool(record.complete)
+        f.attrs["status"] = str(record.status)
+        f.attrs["message"] = str(record.message)
+        for key, value in record.provenance.items():
+            f.attrs[key] = "" if value is None else str(value)
+        f.create_dataset("config", data=str(record.config_yaml), dtype=_STR)
+        _write_signals(f.create_group("time_history", track_order=True), record.signals)
+        ev = f.create_group("events", track_order=True)
+        ev.create_dataset("name", data=_str_array([e[0] for e in record.events]), dtype=_STR)
+        ev.create_dataset("time_s", data=np.array([float(e[1]) for e in record.events], dtype=np.float64))
+        _write_summary(f.create_group("summary", track_order=True), record.summary)
+        if extra is not None:
+            extra(f)
 
 
 def write_study_file(path: Path | str, study: str, config_yaml: str, provenance: dict[str, Any], fill) -> None:
@@ -221,16 +222,15 @@ def write_study_file(path: Path | str, study: str, config_yaml: str, provenance:
     fill : callable
         ``fill(h5py.File)`` writes the study's own groups inside the same atomic write.
     """
-    with atomic_path(Path(path)) as tmp:
-        with h5py.File(tmp, "w", track_order=True) as f:
-            f.attrs["format"] = STUDY_FORMAT
-            f.attrs["format_version"] = np.int64(FORMAT_VERSION)
-            f.attrs["study"] = study
-            for key, value in provenance.items():
-                if key not in RESERVED_ROOT_ATTRS:
-                    f.attrs[key] = "" if value is None else str(value)
-            f.create_dataset("config", data=str(config_yaml), dtype=_STR)
-            fill(f)
+    with atomic_h5(Path(path), track_order=True) as f:
+        f.attrs["format"] = STUDY_FORMAT
+        f.attrs["format_version"] = np.int64(FORMAT_VERSION)
+        f.attrs["study"] = study
+        for key, value in provenance.items():
+            if key not in RESERVED_ROOT_ATTRS:
+                f.attrs[key] = "" if value is None else str(value)
+        f.create_dataset("config", data=str(config_yaml), dtype=_STR)
+        fill(f)
 
 
 def as_str(value: Any) -> str:
@@ -281,13 +281,14 @@ def read_run(path: Path | str) -> RunRecord:
         If ``path`` does not exist.
     RunFileError
         If the file is not a savant run or was written by a newer format version.
-    OSError
-        If the file is not HDF5 at all (from h5py).
+    savant_cli.errors.DamagedFileError
+        If the file cannot be read back (truncated, not HDF5, damaged inside); the
+        message names it, the problem and what writes it again.
     """
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"no such run file: {path}")
-    with h5py.File(path, "r") as f:
+    with read_h5(path) as f:
         fmt = as_str(f.attrs.get("format", ""))
         if fmt != FORMAT:
             raise RunFileError(f"{path} is not a savant run file (format attribute {fmt!r}, expected {FORMAT!r})")

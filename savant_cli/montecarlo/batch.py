@@ -2,10 +2,12 @@
 makes a batch resumable, and the process pool.
 
 Journal. Each finished run is one small ``.npz`` file in ``<out>/runs/``, written to a
-temporary name and renamed (atomic), by the main process only (the one writer). A
-killed batch loses at most the runs in flight; restarting into the same folder skips the
-runs already there, after checking that the folder's ``runs/manifest.json`` was written
-for the same configuration (:func:`fingerprint`).
+temporary name and renamed (atomic), by the main process only (the one writer), with the
+SHA-256 of its content inside (``montecarlo/journal.py``). A killed batch loses at most
+the runs in flight; restarting into the same folder skips the runs already there whose
+entry reads back whole and matches its checksum (a damaged entry is named and flown
+again), after checking that the folder's ``runs/manifest.json`` was written for the same
+configuration (:func:`fingerprint`).
 """
 
 from __future__ import annotations
@@ -14,7 +16,7 @@ import dataclasses
 import hashlib
 import json
 import os
-import secrets
+import re
 import time
 import traceback
 from collections.abc import Callable, Iterable
@@ -27,11 +29,13 @@ from typing import Any
 import numpy as np
 
 from savant_cli.config import LinearStudyConfig, SavantConfig
-from savant_cli.errors import ConfigError
+from savant_cli.errors import ConfigError, DamagedFileError, OutputWriteError
+from savant_cli.io.atomic import write_text_atomic
 from savant_cli.linear.requirements import AXIS_NAMES, CHECK_ARRAY_COLUMNS, checks_array, mode_code
+from savant_cli.montecarlo.journal import read_entry, write_entry
 from savant_cli.montecarlo.spec import DispersionSet
 from savant_cli.montecarlo.targets import apply_samples, build_dispersed
-from savant_cli.processes import process_context
+from savant_cli.processes import process_context, worker_initializer
 from savant_cli.sim.build import SimModel
 from savant_cli.sim.engine import EVENT_NAMES
 from savant_cli.sim.run import simulate, signals
@@ -209,46 +213,148 @@ def fingerprint(cfg: SavantConfig) -> str:
     return hashlib.sha256(json.dumps(d, sort_keys=True, default=str).encode()).hexdigest()
 
 
+#: A journal entry's file name; group 1 is the run number.
+ENTRY_NAME = re.compile(r"run_(\d{6,})\.npz")
+#: Temporary names of entries being written (``.run_NNNNNN.npz.<pid>.<random>.tmp``, and
+#: ``.run_NNNNNN.<pid>.tmp.npz`` of earlier versions); group 1 is the writer's PID.
+TEMP_NAME = re.compile(r"\.run_\d+(?:\.npz)?\.(\d+)\.(?:[0-9a-f]+\.tmp|tmp\.npz)")
+
+
+def rebuild_hint(path: Path, run: int) -> str:
+    """What flies run ``run`` of the journal entry ``path`` (``<batch>/runs/…``) again."""
+    return (f"running the batch's command again with hydra.run.dir={path.parent.parent} flies run {run} "
+            "again (the other runs are kept)")
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True  # someone else's process
+    return True
+
+
+@dataclass
+class JournalScan:
+    """The entries of a journal folder: the run numbers that read back whole, and the
+    damaged entries by run number."""
+
+    good: dict[int, Path] = field(default_factory=dict)
+    damaged: dict[int, DamagedFileError] = field(default_factory=dict)
+
+
+def scan_entries(folder: Path) -> JournalScan:
+    """Read and check every entry of a journal folder (:func:`read_outcome`)."""
+    out = JournalScan()
+    for p in sorted(folder.glob("run_*.npz")):
+        m = ENTRY_NAME.fullmatch(p.name)
+        if m is None:
+            continue
+        run = int(m.group(1))
+        try:
+            read_outcome(p)
+        except DamagedFileError as exc:
+            out.damaged[run] = exc
+        else:
+            out.good[run] = p
+    return out
+
+
+def read_manifest(path: Path) -> dict:
+    """A journal's ``manifest.json``, or a :class:`DamagedFileError` naming it."""
+    try:
+        manifest = json.loads(path.read_text(encoding="utf-8"))
+        if not isinstance(manifest, dict) or not isinstance(manifest.get("fingerprint"), str):
+            raise ValueError("no configuration fingerprint in it")
+    except (OSError, UnicodeDecodeError, ValueError) as exc:
+        raise DamagedFileError(path, f"unreadable: {type(exc).__name__}: {exc}",
+                               "it records which configuration the runs beside it were flown with; if they are "
+                               "this command's, delete it and run the command again to write it anew, else move "
+                               "the folder away") from None
+    return manifest
+
+
 class Journal:
-    """The ``runs/`` folder of a batch: one ``run_NNNNNN.npz`` per finished run."""
+    """The ``runs/`` folder of a batch: one checked ``run_NNNNNN.npz`` per finished run."""
 
     def __init__(self, folder: Path, cfg: SavantConfig, names: list[str]) -> None:
         self.folder = folder
-        folder.mkdir(parents=True, exist_ok=True)
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise OutputWriteError(folder / "manifest.json", exc) from exc
         manifest = {"fingerprint": fingerprint(cfg), "n_runs": cfg.study.n_runs, "seed": cfg.study.seed,
                     "dispersions": names}
         path = folder / "manifest.json"
         if path.is_file():
-            old = json.loads(path.read_text())
+            old = read_manifest(path)
             if old.get("fingerprint") != manifest["fingerprint"]:
                 raise ConfigError("hydra.run.dir", str(folder.parent),
                                   "holds runs of a different configuration: choose a new output folder "
                                   "(only study.workers, study.shard(s), sim.progress and output.* may change on resume)")
         else:
-            tmp = folder / f".manifest.{secrets.token_hex(4)}.tmp"
-            tmp.write_text(json.dumps(manifest, indent=1))
-            os.replace(tmp, path)
+            write_text_atomic(path, json.dumps(manifest, indent=1))
         self.manifest = manifest
+        self.removed_temps = self._remove_stale_temps()
+
+    def _remove_stale_temps(self) -> list[Path]:
+        """Delete the temporary entries a killed writer left (its PID is gone)."""
+        removed = []
+        for p in self.folder.iterdir():
+            m = TEMP_NAME.fullmatch(p.name)
+            if m is not None and int(m.group(1)) != os.getpid() and not _alive(int(m.group(1))):
+                try:
+                    p.unlink()
+                except FileNotFoundError:
+                    continue
+                removed.append(p)
+        return removed
+
+    def scan(self) -> JournalScan:
+        """The runs already in the journal (read back and checked) and the damaged entries."""
+        return scan_entries(self.folder)
 
     def done(self) -> set[int]:
-        return {int(p.stem[4:]) for p in self.folder.glob("run_*.npz")}
+        """The run numbers whose entries read back whole."""
+        return set(self.scan().good)
 
     def write(self, o: RunOutcome) -> None:
-        tmp = self.folder / f".run_{o.run:06d}.{os.getpid()}.tmp.npz"
-        np.savez(tmp, run=o.run, status=o.status, message=o.message, t_final=o.t_final, wall_s=o.wall_s,
-                 values=o.values, summary_keys=np.array(o.summary_keys, dtype=str), summary=o.summary,
-                 events=o.events, histories=o.histories, margins=o.margins, checks=o.checks,
-                 stage_wall_s=o.stage_wall_s)
-        os.replace(tmp, self.folder / f"run_{o.run:06d}.npz")
+        """Journal one run (atomically, with its checksum); an :class:`OutputWriteError`
+        when it cannot be written."""
+        write_entry(self.folder / f"run_{o.run:06d}.npz", {
+            "run": o.run, "status": o.status, "message": o.message, "t_final": o.t_final, "wall_s": o.wall_s,
+            "values": o.values, "summary_keys": np.array(o.summary_keys, dtype=str), "summary": o.summary,
+            "events": o.events, "histories": o.histories, "margins": o.margins, "checks": o.checks,
+            "stage_wall_s": o.stage_wall_s})
 
 
 def read_outcome(path: Path) -> RunOutcome:
-    """One journal file."""
-    with np.load(path, allow_pickle=False) as z:
-        return RunOutcome(int(z["run"]), str(z["status"]), str(z["message"]), float(z["t_final"]), float(z["wall_s"]),
-                          z["values"], [str(k) for k in z["summary_keys"]], z["summary"], z["events"],
-                          z["histories"], z["margins"], z["checks"],
-                          z["stage_wall_s"] if "stage_wall_s" in z else np.full(len(RUN_STAGES), np.nan))
+    """One journal entry, checked (:func:`savant_cli.montecarlo.journal.read_entry`).
+
+    Raises
+    ------
+    savant_cli.errors.DamagedFileError
+        The entry is unreadable, fails its checksum, lacks a member or holds another
+        run than its name says; the message names the file, the run and what flies it
+        again.
+    """
+    m = ENTRY_NAME.fullmatch(path.name)
+    run = int(m.group(1)) if m else -1
+    hint = rebuild_hint(path, run)
+    z = read_entry(path, hint)
+    try:
+        o = RunOutcome(int(z["run"]), str(z["status"]), str(z["message"]), float(z["t_final"]), float(z["wall_s"]),
+                       z["values"], [str(k) for k in z["summary_keys"]], z["summary"], z["events"],
+                       z["histories"], z["margins"], z["checks"],
+                       z["stage_wall_s"] if "stage_wall_s" in z else np.full(len(RUN_STAGES), np.nan))
+    except (KeyError, ValueError, TypeError) as exc:
+        raise DamagedFileError(path, f"run {run}: member missing or malformed ({type(exc).__name__}: {exc})",
+                               hint) from None
+    if m is not None and o.run != run:
+        raise DamagedFileError(path, f"holds run {o.run}, not run {run} as its name says", hint)
+    return o
 
 
 # ------------------------------------------------------------------------- execution
@@ -268,7 +374,9 @@ def _fly(run: int) -> RunOutcome:
 
 @dataclass
 class BatchStop:
-    """How the execution ended: ``"done"``, ``"interrupted"`` or ``"worker died"``."""
+    """How the execution ended: ``"done"``, ``"interrupted"``, ``"worker died"`` or
+    ``"write failed"`` (a journal entry could not be written: disk full, folder not
+    writable; ``detail`` names it)."""
 
     reason: str = "done"
     detail: str = ""
@@ -277,7 +385,10 @@ class BatchStop:
 def execute(case: Case, todo: Iterable[int], journal: Journal, workers: int,
             on_done: Callable[[RunOutcome], None]) -> BatchStop:
     """Fly ``todo`` on ``workers`` processes (1: in this process), journaling each run
-    as it finishes. At most ``2 × workers`` runs are in flight."""
+    as it finishes. At most ``2 × workers`` runs are in flight. The workers die with
+    this process (:func:`savant_cli.processes.worker_initializer`). A journal entry that
+    cannot be written stops the batch (``"write failed"``) with the runs journaled so
+    far kept."""
     todo = list(todo)
     if workers <= 1:
         try:
@@ -287,11 +398,14 @@ def execute(case: Case, todo: Iterable[int], journal: Journal, workers: int,
                 on_done(o)
         except KeyboardInterrupt:
             return BatchStop("interrupted", "interrupted by the user")
+        except OutputWriteError as exc:
+            return BatchStop("write failed", str(exc))
         return BatchStop()
     pending: dict[Future, int] = {}
     queue = iter(todo)
     stop = BatchStop()
-    pool = ProcessPoolExecutor(max_workers=workers, mp_context=process_context(), initializer=_init_worker, initargs=(case,))
+    pool = ProcessPoolExecutor(max_workers=workers, mp_context=process_context(),
+                               **worker_initializer(_init_worker, (case,)))
     try:
         for run in queue:
             pending[pool.submit(_fly, run)] = run
@@ -311,6 +425,8 @@ def execute(case: Case, todo: Iterable[int], journal: Journal, workers: int,
         stop = BatchStop("worker died", "a worker process died (killed or out of memory); the runs in flight were lost")
     except KeyboardInterrupt:
         stop = BatchStop("interrupted", "interrupted by the user")
+    except OutputWriteError as exc:  # the journal cannot take more runs: stop flying them
+        stop = BatchStop("write failed", str(exc))
     finally:
         pool.shutdown(wait=stop.reason == "done", cancel_futures=True)
     return stop

@@ -22,14 +22,16 @@ from omegaconf import OmegaConf
 from rich.console import Console
 from rich.table import Table
 
-from savant_cli.errors import ConfigError
-from savant_cli.io.atomic import atomic_path, write_json_atomic, write_text_atomic
+from savant_cli.errors import ConfigError, DamagedFileError, OutputWriteError
+from savant_cli.io.atomic import write_json_atomic, write_text_atomic
+from savant_cli.io.h5write import atomic_h5
 from savant_cli.io.console import print_verdict, split_unit
 from savant_cli.io.record import FAILURE_CLASSES, FLOWN
 from savant_cli.config import ReliabilitySpec, RequirementSet
 from savant_cli.linear.requirements import (CHECK_ARRAY_COLUMNS, CRITERIA, STAGES, mode_code, mode_name, verdict_line,
                                             verdicts_of_array)
-from savant_cli.montecarlo.batch import AXIS_CODES, BAND_CODES, KIND_CODES, MARGIN_ARRAY_COLUMNS, read_outcome
+from savant_cli.montecarlo.batch import (AXIS_CODES, BAND_CODES, KIND_CODES, MARGIN_ARRAY_COLUMNS, read_manifest,
+                                         read_outcome, scan_entries)
 from savant_cli.montecarlo.insertion import insertion_statistics, print_insertion
 from savant_cli.montecarlo.reliability import reliability
 from savant_cli.sim.engine import EVENT_NAMES
@@ -42,37 +44,48 @@ N_CHECK = 1 + len(CHECK_ARRAY_COLUMNS)  # run, then the check
 
 @dataclass
 class Inventory:
-    """The journal files of a batch, by run number."""
+    """The journal files of a batch, by run number; with :func:`inventory`'s ``verify``,
+    only the entries that read back whole and match their checksum, the damaged ones in
+    ``damaged`` (and so counted as missing)."""
 
     files: dict[int, Path]
     manifest: dict
     duplicates: dict[int, list[Path]] = field(default_factory=dict)
+    damaged: dict[int, DamagedFileError] = field(default_factory=dict)
 
     def missing(self, expected: range | list[int]) -> list[int]:
         return [r for r in expected if r not in self.files]
 
 
-def inventory(run_dirs: list[Path]) -> Inventory:
+def inventory(run_dirs: list[Path], verify: bool = False) -> Inventory:
     """Index the journal folders (``runs/``) of one batch; every folder must hold the
-    same configuration (manifest fingerprint)."""
+    same configuration (manifest fingerprint). ``verify``: read every entry back and
+    check it (``montecarlo/journal.py``); a damaged one goes to ``Inventory.damaged``."""
     files: dict[int, Path] = {}
     dups: dict[int, list[Path]] = {}
+    damaged: dict[int, DamagedFileError] = {}
     manifest: dict | None = None
     for d in run_dirs:
-        m = json.loads((d / "manifest.json").read_text())
+        m = read_manifest(d / "manifest.json")
         if manifest is None:
             manifest = m
         elif m["fingerprint"] != manifest["fingerprint"]:
             raise ConfigError("collect", str(d), f"holds runs of a different configuration than {run_dirs[0]}")
-        for p in sorted(d.glob("run_*.npz")):
-            run = int(p.stem[4:])
+        if verify:
+            found = scan_entries(d)
+            entries = found.good
+            for run, exc in found.damaged.items():
+                damaged.setdefault(run, exc)
+        else:
+            entries = {int(p.stem[4:]): p for p in sorted(d.glob("run_*.npz"))}
+        for run, p in sorted(entries.items()):
             if run in files:
                 dups.setdefault(run, [files[run]]).append(p)
             else:
                 files[run] = p
     if manifest is None:
         raise ConfigError("collect", [str(d) for d in run_dirs], "no batch journal (runs/manifest.json) found")
-    return Inventory(files, manifest, dups)
+    return Inventory(files, manifest, dups, damaged)
 
 
 def ranges_text(runs: list[int]) -> str:
@@ -112,8 +125,10 @@ class Tables:
         return np.array([s in (*FLOWN, "diverged", "guidance_failed") for s in self.status])
 
 
-def _write_tables(h5: h5py.Group, inv: Inventory, runs: list[int], history_names: list[str],
+def _write_tables(h5: h5py.Group | None, inv: Inventory, runs: list[int], history_names: list[str],
                   history_time: np.ndarray) -> Tables:
+    """Stream the journal entries of ``runs`` into the scalar tables, and their decimated
+    histories into ``h5`` (group ``histories``; none without ``h5``)."""
     n = len(runs)
     nd = len(inv.manifest["dispersions"])
     status, message, keys = [], [], []
@@ -123,7 +138,7 @@ def _write_tables(h5: h5py.Group, inv: Inventory, runs: list[int], history_names
     summary_cols: dict[str, np.ndarray] = {}
     margins, checks = [], []
     hist = None
-    if history_names:
+    if history_names and h5 is not None:
         hg = h5.create_group("histories", track_order=True)
         hg.create_dataset("time", data=history_time)
         hist = {name: hg.create_dataset(name, shape=(n, history_time.size), dtype="f4", fillvalue=np.nan,
@@ -404,86 +419,44 @@ def _csv(path: Path, rows: list[dict[str, Any]]) -> None:
     write_text_atomic(path, buf.getvalue())
 
 
-def write_outputs(out_dir: Path, inv: Inventory, expected: list[int], dispersions: list[dict[str, Any]],
-                  config_yaml: str, provenance: dict[str, str], history_names: list[str],
-                  history_time: np.ndarray, requirements: RequirementSet | None,
-                  plots: bool, console: Console | None = None,
-                  reliability_spec: ReliabilitySpec | None = None) -> dict[str, Any]:
-    """Write every batch output into ``out_dir``; returns the ``summary.json`` content.
-    ``requirements``: the set the runs' margins were judged against (its band values
-    mark the margin-spread plot); ``reliability_spec``: the demonstrated success's
-    confidence, target and success statuses (``study.reliability``; its defaults when
-    None)."""
-    spec = reliability_spec or ReliabilitySpec()
-    runs = sorted(r for r in expected if r in inv.files)
-    missing = inv.missing(expected)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    bands = requirements.by_band() if requirements is not None else {}
+@dataclass
+class Analysis:
+    """What a batch's tables say: everything :func:`write_outputs` writes and prints
+    beside the tables themselves."""
+
+    stats: list[dict[str, Any]]
+    disp_stats: list[dict[str, Any]]
+    spread: list[dict[str, Any]]
+    counts: dict[str, int]
+    missing: list[int]
+    mission: dict[str, Any]
+    rel: Any  # montecarlo.reliability.Reliability
+    insertion: dict[str, Any]
+    loads: dict[str, Any]
+    verdict: dict[str, Any]
+    summary: dict[str, Any]  # the summary.json content
+
+
+def analyse(tb: Tables, expected: list[int], missing: list[int], dispersions: list[dict[str, Any]],
+            requirements: RequirementSet | None, spec: ReliabilitySpec) -> Analysis:
+    """Statistics, margin spread, mission outcome, demonstrated success, insertion,
+    loads and requirement verdict of a batch's tables, and its ``summary.json`` content."""
     set_name = requirements.name if requirements is not None else "none"
-    with atomic_path(out_dir / "savant.h5") as tmp, h5py.File(tmp, "w") as f:
-        g = f.create_group("montecarlo")
-        g.attrs.update({"n_runs_expected": len(expected), "n_runs_present": len(runs), "seed": inv.manifest.get("seed", -1),
-                        "config_yaml": config_yaml, "percentiles": PERCENTILES,
-                        "missing_runs": ranges_text(missing),
-                        "requirements": json.dumps({b: list(r) for b, r in bands.items()})})
-        for k, v in provenance.items():
-            g.attrs[f"provenance_{k}"] = str(v)
-        tb = _write_tables(g, inv, runs, history_names, history_time)
-        counted = tuple(requirements.mission.failure_classes if requirements is not None else FAILURE_CLASSES)
-        mission = mission_outcomes(tb, counted)
-        g.attrs["mission"] = json.dumps({k: v for k, v in mission.items() if k != "success"})
-        rel = reliability(mission["success"], counted, spec.confidence, spec.target_probability)
-        g.attrs["reliability"] = json.dumps(rel.as_dict())
-        insertion = insertion_statistics(tb.runs, tb.message, tb.summary_keys, tb.summary, spec.reserve_probability,
-                                         spec.confidence)
-        g.attrs["insertion"] = json.dumps(insertion)
-        loads = load_extremes(tb, dispersions)
-        if loads:
-            g.attrs["loads"] = json.dumps(loads)
-        rg = g.create_group("runs")
-        rg.create_dataset("run", data=tb.runs)
-        rg.create_dataset("status", data=_strings(tb.status))
-        rg.create_dataset("message", data=_strings(tb.message))
-        rg.create_dataset("t_final_s", data=tb.t_final)
-        rg.create_dataset("wall_time_s", data=tb.wall_s)
-        eg = g.create_group("events")
-        for j, name in enumerate(EVENT_NAMES):
-            eg.create_dataset(f"{name}_s", data=tb.events[:, j])
-        dg = g.create_group("dispersions", track_order=True)
-        for j, d in enumerate(dispersions):
-            ds = dg.create_dataset(d["name"], data=tb.values[:, j])
-            ds.attrs.update({k: json.dumps(v) if isinstance(v, (list, tuple)) else v for k, v in d.items() if k != "name"})
-        sg = g.create_group("summary", track_order=True)
-        for j, k in enumerate(tb.summary_keys):
-            sg.create_dataset(k, data=tb.summary[:, j])
-        mg = g.create_group("margins")
-        for j, col in enumerate(("run",) + MARGIN_ARRAY_COLUMNS):
-            data = tb.margins[:, j]
-            if col in ("axis", "kind", "band"):
-                codes = {"axis": AXIS_CODES, "kind": KIND_CODES, "band": BAND_CODES}[col]
-                mg.create_dataset(col, data=_strings([codes[int(c)] for c in data]))
-            elif col == "mode":
-                mg.create_dataset(col, data=_strings([mode_name(int(c)) for c in data]))
-            else:
-                mg.create_dataset(col, data=data.astype(int) if col == "run" else data.astype(bool)
-                                  if col == "meets_requirement" else data)
-        verdict = requirement_verdicts(tb.checks, set_name)
-        _write_checks(g.create_group("requirements", track_order=True), tb.checks, verdict, requirements)
+    counted = tuple(requirements.mission.failure_classes if requirements is not None else FAILURE_CLASSES)
+    mission = mission_outcomes(tb, counted)
+    rel = reliability(mission["success"], counted, spec.confidence, spec.target_probability)
+    insertion = insertion_statistics(tb.runs, tb.message, tb.summary_keys, tb.summary, spec.reserve_probability,
+                                     spec.confidence)
+    loads = load_extremes(tb, dispersions)
+    verdict = requirement_verdicts(tb.checks, set_name)
     ok = tb.ok
     stats = percentile_rows(tb.summary_keys, tb.summary[ok], tb.runs[ok])
     disp_stats = percentile_rows([d["name"] for d in dispersions], tb.values[tb.runs > 0], tb.runs[tb.runs > 0])
     spread = margin_spread(tb.margins)
-    _csv(out_dir / "minmax.csv", [{k: r[k] for k in ("variable", "max", "max_run", "min", "min_run")} for r in stats])
-    _csv(out_dir / "percentiles.csv", stats)
-    _csv(out_dir / "dispersion_statistics.csv", disp_stats)
-    if spread:
-        _csv(out_dir / "margin_spread.csv", spread)
     failures = [{"run": int(r), "status": s, "message": m, "t_final_s": t}
                 for r, s, m, t in zip(tb.runs, tb.status, tb.message, tb.t_final) if s != "complete"]
     counts = {s: tb.status.count(s) for s in sorted(set(tb.status))}
-    if insertion["accuracy"]:  # with navigation=inertial, the navigation errors' rows follow
-        _csv(out_dir / "insertion_accuracy.csv", insertion["accuracy"] + insertion.get("navigation_errors", []))
-    summary = {"study": "montecarlo", "n_runs_expected": len(expected), "n_runs_present": len(runs),
+    summary = {"study": "montecarlo", "n_runs_expected": len(expected), "n_runs_present": int(tb.runs.size),
                "missing_runs": ranges_text(missing), "status_counts": counts,
                "mission": {k: v for k, v in mission.items() if k != "success"}, "reliability": rel.as_dict(),
                "failures": failures,
@@ -494,16 +467,117 @@ def write_outputs(out_dir: Path, inv: Inventory, expected: list[int], dispersion
     if tb.checks.size:
         summary.update({"requirements_met": verdict["passed"], "requirements_verdict": verdict["line"],
                         "requirements": verdict})
-    write_json_atomic(out_dir / "summary.json", summary)
-    if plots:
-        _plots(out_dir, tb, dispersions, bands or None)
+    return Analysis(stats, disp_stats, spread, counts, missing, mission, rel, insertion, loads, verdict, summary)
+
+
+def print_analysis(console: Console, tb: Tables, an: Analysis) -> None:
+    """The batch's console summary: the tables, insertion, loads, mission and the
+    demonstrated success."""
+    print_tables(console, an.stats, an.spread, an.counts, an.missing, an.verdict if tb.checks.size else None)
+    print_insertion(console, an.insertion)
+    print_loads(console, an.loads)
+    print_mission(console, an.mission)
+    print_verdict(an.rel.line(), an.rel.target_met, console)
+
+
+def _write_group(g: h5py.Group, tb: Tables, an: Analysis, inv: Inventory, expected: list[int],
+                 dispersions: list[dict[str, Any]], config_yaml: str, provenance: dict[str, str],
+                 requirements: RequirementSet | None) -> None:
+    """Group ``montecarlo``'s attributes and datasets beside the histories."""
+    bands = requirements.by_band() if requirements is not None else {}
+    g.attrs.update({"n_runs_expected": len(expected), "n_runs_present": int(tb.runs.size),
+                    "seed": inv.manifest.get("seed", -1), "config_yaml": config_yaml, "percentiles": PERCENTILES,
+                    "missing_runs": ranges_text(an.missing),
+                    "requirements": json.dumps({b: list(r) for b, r in bands.items()})})
+    for k, v in provenance.items():
+        g.attrs[f"provenance_{k}"] = str(v)
+    g.attrs["mission"] = json.dumps({k: v for k, v in an.mission.items() if k != "success"})
+    g.attrs["reliability"] = json.dumps(an.rel.as_dict())
+    g.attrs["insertion"] = json.dumps(an.insertion)
+    if an.loads:
+        g.attrs["loads"] = json.dumps(an.loads)
+    rg = g.create_group("runs")
+    rg.create_dataset("run", data=tb.runs)
+    rg.create_dataset("status", data=_strings(tb.status))
+    rg.create_dataset("message", data=_strings(tb.message))
+    rg.create_dataset("t_final_s", data=tb.t_final)
+    rg.create_dataset("wall_time_s", data=tb.wall_s)
+    eg = g.create_group("events")
+    for j, name in enumerate(EVENT_NAMES):
+        eg.create_dataset(f"{name}_s", data=tb.events[:, j])
+    dg = g.create_group("dispersions", track_order=True)
+    for j, d in enumerate(dispersions):
+        ds = dg.create_dataset(d["name"], data=tb.values[:, j])
+        ds.attrs.update({k: json.dumps(v) if isinstance(v, (list, tuple)) else v for k, v in d.items() if k != "name"})
+    sg = g.create_group("summary", track_order=True)
+    for j, k in enumerate(tb.summary_keys):
+        sg.create_dataset(k, data=tb.summary[:, j])
+    mg = g.create_group("margins")
+    for j, col in enumerate(("run",) + MARGIN_ARRAY_COLUMNS):
+        data = tb.margins[:, j]
+        if col in ("axis", "kind", "band"):
+            codes = {"axis": AXIS_CODES, "kind": KIND_CODES, "band": BAND_CODES}[col]
+            mg.create_dataset(col, data=_strings([codes[int(c)] for c in data]))
+        elif col == "mode":
+            mg.create_dataset(col, data=_strings([mode_name(int(c)) for c in data]))
+        else:
+            mg.create_dataset(col, data=data.astype(int) if col == "run" else data.astype(bool)
+                              if col == "meets_requirement" else data)
+    _write_checks(g.create_group("requirements", track_order=True), tb.checks, an.verdict, requirements)
+
+
+def write_outputs(out_dir: Path, inv: Inventory, expected: list[int], dispersions: list[dict[str, Any]],
+                  config_yaml: str, provenance: dict[str, str], history_names: list[str],
+                  history_time: np.ndarray, requirements: RequirementSet | None,
+                  plots: bool, console: Console | None = None,
+                  reliability_spec: ReliabilitySpec | None = None) -> dict[str, Any]:
+    """Write every batch output into ``out_dir``; returns the ``summary.json`` content.
+    ``requirements``: the set the runs' margins were judged against (its band values
+    mark the margin-spread plot); ``reliability_spec``: the demonstrated success's
+    confidence, target and success statuses (``study.reliability``; its defaults when
+    None).
+
+    An output that cannot be written (disk full, folder not writable) raises
+    :class:`~savant_cli.errors.OutputWriteError` after the console summary has been
+    printed (from the journal, when ``savant.h5`` itself failed); every file written
+    before it stays whole, and the failed one keeps its previous content or does not
+    exist (atomic writes)."""
+    spec = reliability_spec or ReliabilitySpec()
+    runs = sorted(r for r in expected if r in inv.files)
+    missing = inv.missing(expected)
+    bands = requirements.by_band() if requirements is not None else {}
+    done: dict[str, Any] = {}
+    try:
+        try:
+            out_dir.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise OutputWriteError(out_dir / "savant.h5", exc) from exc
+        with atomic_h5(out_dir / "savant.h5") as f:
+            g = f.create_group("montecarlo")
+            tb = done["tb"] = _write_tables(g, inv, runs, history_names, history_time)
+            an = done["an"] = analyse(tb, expected, missing, dispersions, requirements, spec)
+            _write_group(g, tb, an, inv, expected, dispersions, config_yaml, provenance, requirements)
+        _csv(out_dir / "minmax.csv", [{k: r[k] for k in ("variable", "max", "max_run", "min", "min_run")}
+                                      for r in an.stats])
+        _csv(out_dir / "percentiles.csv", an.stats)
+        _csv(out_dir / "dispersion_statistics.csv", an.disp_stats)
+        if an.spread:
+            _csv(out_dir / "margin_spread.csv", an.spread)
+        if an.insertion["accuracy"]:
+            # with navigation=inertial, the navigation errors' rows follow
+            _csv(out_dir / "insertion_accuracy.csv", an.insertion["accuracy"] + an.insertion.get("navigation_errors", []))
+        write_json_atomic(out_dir / "summary.json", an.summary)
+        if plots:
+            _plots(out_dir, tb, dispersions, bands or None)
+    except OutputWriteError:
+        if console is not None:  # the summary still reaches the console
+            tb = done.get("tb") or _write_tables(None, inv, runs, [], history_time)
+            an = done.get("an") or analyse(tb, expected, missing, dispersions, requirements, spec)
+            print_analysis(console, tb, an)
+        raise
     if console is not None:
-        print_tables(console, stats, spread, counts, missing, verdict if tb.checks.size else None)
-        print_insertion(console, insertion)
-        print_loads(console, loads)
-        print_mission(console, mission)
-        print_verdict(rel.line(), rel.target_met, console)
-    return summary
+        print_analysis(console, tb, an)
+    return an.summary
 
 
 def _write_checks(g: h5py.Group, checks: np.ndarray, verdict: dict[str, Any],

@@ -39,5 +39,4 @@ def plot_search(res: SearchResult, folder: Path) -> Path:
     ax2.set_ylabel(f"{s.axis} gimbal response (deg)", fontsize=8)
     ax2.legend(fontsize=7)
     fig.suptitle(f"t = {s.time_s:g} s, {s.axis}, {s.kind}: window {s.start_s:.1f}-{s.end_s:.1f} s", fontsize=9)
-    folder.mkdir(parents=True, exist_ok=True)
     return _save(fig, folder / f"t{s.time_s:g}_{s.axis}_{s.kind}.png")

@@ -22,32 +22,57 @@ def get_study(name: str) -> ModuleType:
     return importlib.import_module(f"savant_cli.studies.{name}")
 
 
-def run_study(cfg, raw_cfg, out_dir) -> int:
+def run_study(cfg, raw_cfg, out_dir, raise_errors: bool = False) -> int:
     """Run the configured study into ``out_dir``, then write its ``report.html``
     (:mod:`savant_cli.html_report`); the study's exit code. What ``savant run`` and
     :func:`savant_cli.run` both call.
 
     A report that cannot be written (no ``savant.h5`` with ``output.hdf5=false``, or an
     error while building it) is said on stderr and leaves the study's files and exit
-    code as they are."""
+    code as they are.
+
+    An output that cannot be written (:class:`~savant_cli.errors.OutputWriteError`:
+    disk full, folder not writable) or an earlier file of the folder that is damaged
+    (:class:`~savant_cli.errors.DamagedFileError`, e.g. a batch journal's manifest) is
+    said in one line on stderr and gives the error's exit code (1 and 2), after the
+    study has printed its console summary; with ``raise_errors`` (the Python API) it is
+    raised instead. A configuration error is always raised (the caller says it)."""
     from pathlib import Path
 
     from rich.console import Console
 
-    code = get_study(cfg.study.name).run(cfg, raw_cfg, out_dir)
-    write_report_or_say(Path(out_dir), Console(stderr=True))
-    return code
+    from savant_cli.errors import DamagedFileError, OutputWriteError
+
+    err = Console(stderr=True)
+    try:
+        code = get_study(cfg.study.name).run(cfg, raw_cfg, out_dir)
+    except (OutputWriteError, DamagedFileError) as exc:
+        if raise_errors:
+            raise
+        err.print(f"[bold red]error[/]: {exc}", highlight=False)
+        return exc.exit_code
+    return max(code, write_report_or_say(Path(out_dir), err))
 
 
-def write_report_or_say(folder, console) -> None:
-    """``report.html`` into ``folder``, or a line on ``console`` saying why not."""
+def write_report_or_say(folder, console, raise_write_errors: bool = False) -> int:
+    """``report.html`` into ``folder``, or a line on ``console`` saying why not; 1 when
+    the page could not be written (:class:`~savant_cli.errors.OutputWriteError`: disk
+    full, folder not writable; raised with ``raise_write_errors``), else 0 (a page that
+    cannot be built leaves the exit status alone)."""
+    from savant_cli.errors import OutputWriteError
     from savant_cli.html_report import write_report
 
     try:
         path = write_report(folder)
+    except OutputWriteError as exc:
+        if raise_write_errors:
+            raise
+        console.print(f"[red]report.html not written[/red]: {exc}", highlight=False)
+        return exc.exit_code
     except FileNotFoundError as exc:
         console.print(f"no report.html: {exc}", highlight=False)
     except Exception as exc:  # noqa: BLE001 - the study's own outputs stand without the page
         console.print(f"[red]report.html not written[/red]: {type(exc).__name__}: {exc}", highlight=False)
     else:
         console.print(f"report: {path}", highlight=False)
+    return 0

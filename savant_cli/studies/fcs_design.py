@@ -258,6 +258,10 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
                "verdict_before": before.line(cfg.requirements.name), "verdict_after": after.line(cfg.requirements.name),
                "requirements_met": after.passed, "points": table,
                "controller_files": [str(p) for p in written], "study_wall_time_s": wall}
+    console.print(_console_table(params, values, searches))  # before the files: shown even if they cannot be written
+    print_verdict("before: " + summary["verdict_before"], before.passed, console)
+    print_verdict("after:  " + summary["verdict_after"], after.passed, console)
+    console.print(f"controller: {written[0]} (savant run --config-dir {out_dir} controller={name})")
     rec = flight_mod.record(result, flight.signals, flight.summary, raw_cfg, wall)
     flight_mod.write(out_dir, rec, cfg0, json_summary=summary,
                      extra=lambda f: write_group(f, text1, summary, before, after, charts,
@@ -270,10 +274,6 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
     if cfg.output.plots:
         draw(before.rows, after.rows, charts, cfg.requirements.by_band(), (before.failed_times, after.failed_times),
              out_dir / "plots")
-    console.print(_console_table(params, values, searches))
-    print_verdict("before: " + summary["verdict_before"], before.passed, console)
-    print_verdict("after:  " + summary["verdict_after"], after.passed, console)
-    console.print(f"controller: {written[0]} (savant run --config-dir {out_dir} controller={name})")
     console.print(f"outputs: {out_dir} ({wall:.0f} s)")
     return 0 if result.status in FLOWN else 1
 

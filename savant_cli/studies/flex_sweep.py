@@ -117,14 +117,14 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
                "requirements_verdict": line,
                "cases": worst, "unstable_cases": [c for c in worst if not c["closed_loop_stable"]],
                "study_wall_time_s": wall}
+    console.print(_table(worst))  # before the files: shown even if they cannot be written
+    print_verdict(line, summary["requirements_met"], console)
     rec = flight_mod.record(result, flight.signals, flight.summary, raw_cfg, wall)
     flight_mod.write(out_dir, rec, cfg, json_summary=summary,
                      extra=lambda f: write_group(f, rows, charts, study.exclusion_zones))
     write_text_atomic(out_dir / "flex_sweep.csv", buf.getvalue())
     if cfg.output.plots:
         draw(charts, study.exclusion_zones, out_dir / "plots")
-    console.print(_table(worst))
-    print_verdict(line, summary["requirements_met"], console)
     console.print(f"{len(cases)} cases in {time.perf_counter() - t_start:.1f} s; outputs: {out_dir}")
     return 0 if result.status in FLOWN else 1  # flown to its end (its health is in its status)
 

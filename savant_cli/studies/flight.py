@@ -49,6 +49,20 @@ def fly(cfg: SavantConfig, progress: bool | None = None, snapshot_steps: tuple[i
     return Flight(prep=prep, result=result, signals=sig, summary=summary)
 
 
+def write_then_show(write: Callable[[], None], show: Callable[[], None]) -> None:
+    """``write()`` a study's files, then ``show()`` its console summary; the summary is
+    shown too when a file cannot be written (:class:`~savant_cli.errors.OutputWriteError`,
+    raised again after it)."""
+    from savant_cli.errors import OutputWriteError
+
+    try:
+        write()
+    except OutputWriteError:
+        show()
+        raise
+    show()
+
+
 def control_steps(cfg: SavantConfig, times: list[float]) -> tuple[int, ...]:
     """Plant steps of the flight-control cycles nearest to ``times`` (s): where a study
     takes its snapshots."""
@@ -75,9 +89,10 @@ def write(out_dir: Path, rec: RunRecord, cfg: SavantConfig, json_summary: dict[s
           extra: Callable | None = None) -> None:
     """Write a record into ``out_dir``: ``savant.h5`` (``extra(h5file)`` adds a study's
     groups) unless ``output.hdf5`` is off, ``summary.json`` (``json_summary``, default the
-    record's) and the ascent plots unless ``output.plots`` is off."""
-    out_dir.mkdir(parents=True, exist_ok=True)
-    if cfg.output.hdf5:
+    record's) and the ascent plots unless ``output.plots`` is off. A file that cannot be
+    written raises :class:`~savant_cli.errors.OutputWriteError` (the ones before it stay
+    whole)."""
+    if cfg.output.hdf5:  # atomic_path makes out_dir (an OutputWriteError when it cannot)
         write_run(out_dir / "savant.h5", rec, extra=extra)
     write_json_atomic(out_dir / "summary.json", rec.summary if json_summary is None else json_summary)
     if cfg.output.plots:

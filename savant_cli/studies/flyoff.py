@@ -194,17 +194,17 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
             missions[name] = {"reliability": json.loads(g.attrs["reliability"]),
                               "mission": json.loads(g.attrs["mission"])}
     rows = compare(tables)
-    _write(out_dir, rows, tables, study, verdicts, missions)
-    time_s, histories = _nominal_histories(out_dir, list(cfgs))
-    write_study_file(out_dir / "savant.h5", "flyoff", OmegaConf.to_yaml(raw_cfg, resolve=True), collect_provenance(),
-                     lambda f: write_group(f, rows, tables, time_s, histories))
-    console.print(_table(rows, list(cfgs)))
+    console.print(_table(rows, list(cfgs)))  # before the files: shown even if they cannot be written
     for name, line in verdicts.items():
         print_verdict(f"{name}: {line}", passed[name], console)
     for name, m in missions.items():
         console.print(f"{name}:", style="bold", highlight=False)
         print_mission(console, m["mission"])
         print_verdict(f"{name}: {m['reliability']['line']}", m["reliability"]["target_met"], console)
+    _write(out_dir, rows, tables, study, verdicts, missions)
+    time_s, histories = _nominal_histories(out_dir, list(cfgs))
+    write_study_file(out_dir / "savant.h5", "flyoff", OmegaConf.to_yaml(raw_cfg, resolve=True), collect_provenance(),
+                     lambda f: write_group(f, rows, tables, time_s, histories))
     if cfg.output.plots:
         draw(rows, tables, time_s, histories, out_dir / "plots")
     console.print(f"outputs: {out_dir}")

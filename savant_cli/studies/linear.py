@@ -230,21 +230,27 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
     summary["study_wall_time_s"] = time.perf_counter() - t_start
     hdf_summary = {k: v for k, v in summary.items() if not isinstance(v, (list, dict))}
     record = flight_mod.record(result, sig, hdf_summary, raw_cfg, summary["study_wall_time_s"])
-    flight_mod.write(out_dir, record, cfg, json_summary=summary,
-                     extra=lambda f: write_linear_group(f, points, rows, charts, req, study.exclusion_zones, verdicts,
-                                                             [not w for w in in_window], verdict["line"]))
-    if cfg.output.hdf5:
-        write_mat(out_dir / "linear.mat", points)
-    write_margins_csv(out_dir / "margins.csv", rows)
-    write_checks_csv(out_dir / "requirements.csv", verdicts)
-    if cfg.output.plots:
-        draw_linear(list(charts.values()), rows, req.by_band(), study.exclusion_zones, out_dir / "plots",
-                    [v.time_s for v in judged if not v.passed])
-    print_run_summary({k: v for k, v in hdf_summary.items() if k not in ("linear_note", "requirements_verdict")},
-                      record.status, record.message, console)
-    console.print(_table(rows))
-    console.print("roll (on/off jets) is left out of the linear analysis")
-    print_verdict(verdict["line"], verdict["passed"], console)
+
+    def write() -> None:
+        flight_mod.write(out_dir, record, cfg, json_summary=summary,
+                         extra=lambda f: write_linear_group(f, points, rows, charts, req, study.exclusion_zones,
+                                                            verdicts, [not w for w in in_window], verdict["line"]))
+        if cfg.output.hdf5:
+            write_mat(out_dir / "linear.mat", points)
+        write_margins_csv(out_dir / "margins.csv", rows)
+        write_checks_csv(out_dir / "requirements.csv", verdicts)
+        if cfg.output.plots:
+            draw_linear(list(charts.values()), rows, req.by_band(), study.exclusion_zones, out_dir / "plots",
+                        [v.time_s for v in judged if not v.passed])
+
+    def show() -> None:
+        print_run_summary({k: v for k, v in hdf_summary.items() if k not in ("linear_note", "requirements_verdict")},
+                          record.status, record.message, console)
+        console.print(_table(rows))
+        console.print("roll (on/off jets) is left out of the linear analysis")
+        print_verdict(verdict["line"], verdict["passed"], console)
+
+    flight_mod.write_then_show(write, show)
     console.print(f"outputs: {out_dir}")
     return 0 if record.complete else 1
 

@@ -189,17 +189,18 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
                      "all_stable": all(cur.stable.values()),
                      **{f"response_change_{k}": v for k, v in resp.items()}})
     recommended, converged = recommend(rows, counts)
-    out_dir.mkdir(parents=True, exist_ok=True)
     buf = io.StringIO()
     if rows:
         w = csv.DictWriter(buf, fieldnames=list(rows[0]), lineterminator="\n")
         w.writeheader()
         w.writerows(rows)
-    write_text_atomic(out_dir / "mode_retention.csv", buf.getvalue())
-    margins = {str(r.n_modes): {f"t{k[0]:g}_{k[1]}_{k[2]}_{k[3]}": v for k, v in r.margins.items()} for r in results}
     note = ("the changes settle within the tolerances" if converged else
             f"the changes had not settled at {counts[-1]} modes, the most the modal data and sim.plant_rate_hz "
             "allow: raise sim.plant_rate_hz (or supply more modes) and run again")
+    console.print(_table(rows, study))  # before the files: shown even if they cannot be written
+    console.print(f"recommended: [bold]{recommended} modes[/] ({note})")
+    write_text_atomic(out_dir / "mode_retention.csv", buf.getvalue())
+    margins = {str(r.n_modes): {f"t{k[0]:g}_{k[1]}_{k[2]}_{k[3]}": v for k, v in r.margins.items()} for r in results}
     write_json_atomic(out_dir / "summary.json", {
         "study": "mode_retention", "counts": counts, "recommended_n_modes": recommended, "converged": converged,
         "note": note, "steps": rows, "critical_margins": margins,
@@ -212,8 +213,6 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
                          lambda f: write_group(f, results, recommended, converged))
     if cfg.output.plots:
         draw(results, out_dir / "plots")
-    console.print(_table(rows, study))
-    console.print(f"recommended: [bold]{recommended} modes[/] ({note})")
     console.print(f"outputs: {out_dir}")
     return 0
 

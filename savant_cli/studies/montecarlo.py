@@ -18,12 +18,13 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import yaml
 from omegaconf import DictConfig, OmegaConf
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
 from savant_cli.config import MonteCarloStudyConfig, SavantConfig, validate
-from savant_cli.errors import ConfigError
+from savant_cli.errors import ConfigError, DamagedFileError, OutputWriteError
 from savant_cli.io.guidance_file import read_guidance
 from savant_cli.io.provenance import collect_provenance
 from savant_cli.io.record import FLOWN
@@ -117,7 +118,14 @@ def fly_batch(cfg: SavantConfig, config_yaml: str, out_dir: Path, console: Conso
     for note, inactive in by_reason.items():
         console.print(f"inactive dispersions, drawn but applied to nothing ({note}): {', '.join(inactive)}")
     mine = shard_runs(study.n_runs, study.shards, study.shard)
-    done = journal.done()
+    found = journal.scan()
+    done = set(found.good)
+    for path in journal.removed_temps:
+        console.print(f"removed {path.name}, a journal entry a killed batch left half written", highlight=False)
+    for run, exc in sorted(found.damaged.items()):
+        if run in mine:
+            console.print(f"[bold red]damaged journal entry[/] {exc.path} (run {run}): {exc.problem}; "
+                          f"flying run {run} again", highlight=False)
     todo = [r for r in mine if r not in done]
     workers = min(study.workers or default_workers(), max(len(todo), 1))
     if done & set(mine):
@@ -127,7 +135,10 @@ def fly_batch(cfg: SavantConfig, config_yaml: str, out_dir: Path, console: Conso
                    TextColumn("failed {task.fields[failed]}"), TimeElapsedColumn(), TextColumn("eta"),
                    TimeRemainingColumn(), disable=not cfg.sim.progress)
 
+    flown: set[int] = set()
+
     def on_done(o: RunOutcome) -> None:
+        flown.add(o.run)
         if o.status != "complete":
             failures[0] += 1
         bar.update(task, advance=1, failed=failures[0])
@@ -135,9 +146,19 @@ def fly_batch(cfg: SavantConfig, config_yaml: str, out_dir: Path, console: Conso
     with bar:
         task = bar.add_task("runs", total=len(todo), failed=0)
         stop = execute(case, todo, journal, workers, on_done)
-    summary = write_outputs(out_dir, inventory([journal.folder]), list(mine), dispersion_table(case.dispersions),
-                            config_yaml, collect_provenance(), names, case.history_time, cfg.requirements,
-                            cfg.output.plots, console if print_tables else None, cfg.study.reliability)
+    inv = inventory([journal.folder])
+    for run, exc in found.damaged.items():  # not flown again (the batch stopped first): missing, not read
+        if run not in flown:
+            inv.files.pop(run, None)
+            inv.damaged[run] = exc
+    try:
+        summary = write_outputs(out_dir, inv, list(mine), dispersion_table(case.dispersions),
+                                config_yaml, collect_provenance(), names, case.history_time, cfg.requirements,
+                                cfg.output.plots, console if print_tables else None, cfg.study.reliability)
+    except OutputWriteError:
+        if stop.reason == "write failed":  # said before the outputs' own failure
+            console.print(f"[bold red]batch stopped[/]: {stop.detail}", highlight=False)
+        raise
     console.print(f"{title}: {len(todo)} runs flown on {workers} worker(s) in {time.perf_counter() - t0:.1f} s; "
                   f"outputs: {out_dir}")
     return summary, stop
@@ -164,7 +185,14 @@ def _load_config(run_dir: Path) -> tuple[SavantConfig, DictConfig]:
         path = next(iter(sorted(run_dir.glob("*/.hydra/config.yaml"))), path)
     if not path.is_file():
         raise ConfigError("RUN_DIR", str(run_dir), "is not a savant run folder (no .hydra/config.yaml)")
-    raw = OmegaConf.load(path)
+    try:
+        raw = OmegaConf.load(path)
+        if not isinstance(raw, DictConfig):
+            raise ValueError(f"a YAML {type(raw).__name__}, not a mapping of config groups")
+    except (OSError, UnicodeDecodeError, ValueError, yaml.YAMLError) as exc:
+        raise DamagedFileError(path, f"unreadable: {type(exc).__name__}: {str(exc).strip().splitlines()[0]}",
+                               "savant run writes it when the batch starts: run the batch's command again into a "
+                               "new folder") from None
     cfg = validate(raw)
     if cfg.study.name != "montecarlo":
         raise ConfigError("RUN_DIR", str(run_dir), f"holds a study={cfg.study.name} run, not a Monte Carlo batch")
@@ -184,7 +212,10 @@ def rerun(run_dir: Path, run_number: int, console: Console | None = None) -> int
     case, _ = make_case(cfg)
     outcome, extra = fly_run(case, run_number, keep=True)
     out = run_dir / f"rerun_{run_number:06d}"
-    out.mkdir(parents=True, exist_ok=True)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OutputWriteError(out / "savant.h5", exc) from exc
     if extra is None:
         console.print(f"[bold red]run {run_number} {outcome.status}[/]: {outcome.message}")
         return 1
@@ -194,7 +225,12 @@ def rerun(run_dir: Path, run_number: int, console: Console | None = None) -> int
     flight_mod.write(out, record, cfg, json_summary=summ)
     stored = next(iter(sorted(run_dir.rglob(f"runs/run_{run_number:06d}.npz"))), None)
     if stored is not None:
-        ref = read_outcome(stored)
+        try:
+            ref = read_outcome(stored)
+        except DamagedFileError as exc:  # the flight is written; only the comparison is lost
+            console.print(f"run {run_number} ({outcome.status}) written to {out}", highlight=False)
+            console.print(f"[bold red]cannot compare with the batch record[/]: {exc}", highlight=False)
+            return DamagedFileError.exit_code
         same = ref.summary_keys == outcome.summary_keys and np.array_equal(ref.summary, outcome.summary) \
             and np.array_equal(ref.values, outcome.values, equal_nan=True)
         console.print(f"run {run_number}: {'identical to' if same else '[bold red]DIFFERENT from[/]'} the batch record")
@@ -216,7 +252,10 @@ def _shard_gaps(run_dirs: list[Path], n_runs: int, missing: list[int]) -> list[s
         path = d / ".hydra" / "config.yaml"
         if not path.is_file():
             return []
-        study = OmegaConf.load(path).get("study", {})
+        try:
+            study = OmegaConf.load(path).get("study", {})
+        except (OSError, UnicodeDecodeError, ValueError, AttributeError, yaml.YAMLError):
+            return []  # an unreadable shard config: only the run numbers tell
         counts.add(int(study.get("shards", 1)))
         found[int(study.get("shard", 0))] = d
     if len(counts) != 1:
@@ -258,13 +297,16 @@ def collect(folder: Path, console: Console | None = None, allow_missing: bool = 
     run_dirs = sorted(p.parent for p in folder.rglob("runs/manifest.json"))
     if not run_dirs:
         raise ConfigError("collect", str(folder), "has no Monte Carlo shard folders (*/runs/manifest.json)")
-    inv = inventory(run_dirs)
+    inv = inventory(run_dirs, verify=True)
     if inv.duplicates:
         dup = ", ".join(f"run {r} in {', '.join(str(p.parent.parent) for p in ps)}" for r, ps in inv.duplicates.items())
         raise ConfigError("collect", str(folder), f"holds runs more than once ({dup}): shards overlap")
     cfg, raw = _load_config(run_dirs[0].parent)
     expected = list(range(cfg.study.n_runs))
     missing = inv.missing(expected)
+    for run, exc in sorted(inv.damaged.items()):
+        console.print(f"[bold red]damaged journal entry[/] {exc.path} (run {run}): {exc.problem}"
+                      + ("" if run in inv.files else "; counted as missing"), highlight=False)
     if missing:
         console.print(f"[bold red]missing runs[/] ({len(missing)} of {len(expected)}): {ranges_text(missing)}")
         for line in _shard_gaps([d.parent for d in run_dirs], cfg.study.n_runs, missing):

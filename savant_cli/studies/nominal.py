@@ -32,13 +32,14 @@ def fly(cfg: SavantConfig, raw_cfg: DictConfig, progress: bool | None = None) ->
 
 
 def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
-    """Fly, write ``savant.h5``, ``summary.json`` and plots into ``out_dir``; 0 on success."""
+    """Fly, print the summary, write ``savant.h5``, ``summary.json`` and plots into
+    ``out_dir``; 0 on success. The summary is printed before the files are written, so
+    it reaches the console when they cannot be (disk full: ``OutputWriteError``)."""
     console = Console()
     record, staging = fly(cfg, raw_cfg)
-    out_dir.mkdir(parents=True, exist_ok=True)
+    print_run_summary(record.summary, record.status, record.message, console)  # whether or not the disk takes it
     if staging is not None:
         write_staging_state(out_dir / "staging_state.json", staging)
     flight_mod.write(out_dir, record, cfg)
-    print_run_summary(record.summary, record.status, record.message, console)
     console.print(f"outputs: {out_dir}")
     return 0 if record.complete else 1

@@ -216,16 +216,22 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
     summary["study_wall_time_s"] = time.perf_counter() - t_start
     hdf_summary = {k: v for k, v in summary.items() if not isinstance(v, (list, dict))}
     record = flight_mod.record(result, sig, hdf_summary, raw_cfg, summary["study_wall_time_s"])
-    flight_mod.write(out_dir, record, cfg, json_summary=summary, extra=lambda f: write_group(f, results))
-    write_csv(out_dir / "time_margins.csv", out_rows)
-    write_trials_csv(out_dir / "time_margin_trials.csv", results)
-    if cfg.output.plots:
-        draw(results, out_dir / "plots")
-    print_run_summary({k: v for k, v in hdf_summary.items() if k != "time_margins_verdict"}, record.status,
-                      record.message, console)
-    console.print(_table(out_rows))
-    console.print("notes with their numbers: time_margins.csv")
-    print_verdict(line, not grows and not differ, console)
+
+    def write() -> None:
+        flight_mod.write(out_dir, record, cfg, json_summary=summary, extra=lambda f: write_group(f, results))
+        write_csv(out_dir / "time_margins.csv", out_rows)
+        write_trials_csv(out_dir / "time_margin_trials.csv", results)
+        if cfg.output.plots:
+            draw(results, out_dir / "plots")
+
+    def show() -> None:
+        print_run_summary({k: v for k, v in hdf_summary.items() if k != "time_margins_verdict"}, record.status,
+                          record.message, console)
+        console.print(_table(out_rows))
+        console.print("notes with their numbers: time_margins.csv")
+        print_verdict(line, not grows and not differ, console)
+
+    flight_mod.write_then_show(write, show)
     console.print(f"outputs: {out_dir}")
     return 0 if record.complete else 1
 

@@ -25,7 +25,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from savant_cli.models import actuator
-from savant_cli.processes import process_context
+from savant_cli.processes import process_context, worker_initializer
 from savant_cli.sim import layout as L
 from savant_cli.sim import loop_perturbation as LP
 from savant_cli.sim.build import SimModel
@@ -232,7 +232,7 @@ def run_searches(model: SimModel, snaps: list[Snapshot], searches: list[Search],
             if progress:
                 progress()
         return results
-    with ProcessPoolExecutor(workers, mp_context=process_context()) as pool:
+    with ProcessPoolExecutor(workers, mp_context=process_context(), **worker_initializer()) as pool:
         futures = [pool.submit(_one, s) for s in searches]
         results = []
         for fut in futures:
