@@ -12,6 +12,7 @@ with its whole time history.
 from __future__ import annotations
 
 import copy
+import json
 import time
 from functools import partial
 from pathlib import Path
@@ -22,12 +23,13 @@ from omegaconf import DictConfig, OmegaConf
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
+from savant_cli import lifecycle
 from savant_cli.config import MonteCarloStudyConfig, SavantConfig, validate
-from savant_cli.errors import ConfigError
+from savant_cli.errors import ConfigError, RunInterrupted
 from savant_cli.io.guidance_file import read_guidance
 from savant_cli.io.provenance import collect_provenance
 from savant_cli.io.record import FLOWN
-from savant_cli.montecarlo.batch import (BatchStop, Case, Journal, RunOutcome, execute, fly_run,
+from savant_cli.montecarlo.batch import (BatchStop, Case, Journal, RunOutcome, execute, fingerprint, fly_run,
                                          history_columns, read_outcome, shard_runs)
 from savant_cli.montecarlo.results import inventory, ranges_text, write_outputs
 from savant_cli.montecarlo.spec import DispersionSet, parse
@@ -120,24 +122,57 @@ def fly_batch(cfg: SavantConfig, config_yaml: str, out_dir: Path, console: Conso
     if done & set(mine):
         console.print(f"resuming: {len(done & set(mine))} of {len(mine)} runs already in {journal.folder}")
     failures = [0]
+    flown = [0]
     bar = Progress(TextColumn(f"[bold]{title}"), BarColumn(), MofNCompleteColumn(),
                    TextColumn("failed {task.fields[failed]}"), TimeElapsedColumn(), TextColumn("eta"),
                    TimeRemainingColumn(), disable=not cfg.sim.progress)
 
     def on_done(o: RunOutcome) -> None:
+        flown[0] += 1
         if o.status != "complete":
             failures[0] += 1
         bar.update(task, advance=1, failed=failures[0])
 
+    lifecycle.stage("runs")
     with bar:
         task = bar.add_task("runs", total=len(todo), failed=0)
         stop = execute(case, todo, journal, workers, on_done)
+    if stop.reason == "interrupted":
+        # the journal holds every run that finished; the batch's tables wait for its end
+        in_journal = len(journal.done() & set(mine))
+        raise RunInterrupted("runs", f"{flown[0]} run(s) flown this time, {in_journal} of {len(mine)} in "
+                             f"{journal.folder}; run the same command (hydra.run.dir={out_dir}) to resume")
+    lifecycle.stage("outputs")
     summary = write_outputs(out_dir, inventory([journal.folder]), list(mine), dispersion_table(case.dispersions),
                             config_yaml, collect_provenance(), names, case.history_time, cfg.requirements,
                             cfg.output.plots, console if print_tables else None, cfg.study.reliability)
-    console.print(f"{title}: {len(todo)} runs flown on {workers} worker(s) in {time.perf_counter() - t0:.1f} s; "
-                  f"outputs: {out_dir}")
+    console.print(f"{title}: {flown[0]} of {len(todo)} runs flown on {workers} worker(s) in "
+                  f"{time.perf_counter() - t0:.1f} s; outputs: {out_dir}")
     return summary, stop
+
+
+def check_folder(cfg: SavantConfig, out_dir: Path) -> None:
+    """Refuse a folder whose journal holds runs of another configuration, before
+    anything is written into it (what :class:`~savant_cli.montecarlo.batch.Journal`
+    refuses again when it opens the journal).
+
+    Raises
+    ------
+    ConfigError
+        Naming ``hydra.run.dir`` and the folder.
+    """
+    path = Path(out_dir) / "runs" / "manifest.json"
+    if not path.is_file():
+        return
+    try:
+        old = json.loads(path.read_text())
+    except (OSError, ValueError) as exc:
+        raise ConfigError("hydra.run.dir", str(out_dir), f"holds an unreadable journal manifest {path} ({exc}): "
+                          "choose a new output folder") from None
+    if not isinstance(old, dict) or old.get("fingerprint") != fingerprint(cfg):
+        raise ConfigError("hydra.run.dir", str(out_dir), "holds runs of a different configuration: choose a new "
+                          "output folder (only study.workers, study.shard(s), sim.progress and output.* may change "
+                          "on resume)")
 
 
 def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
