@@ -132,8 +132,8 @@ def fly_batch(cfg: SavantConfig, config_yaml: str, out_dir: Path, console: Conso
         if o.status != "complete":
             failures[0] += 1
         bar.update(task, advance=1, failed=failures[0])
+        lifecycle.stage("runs")  # after each journaled run (where a test may interrupt it)
 
-    lifecycle.stage("runs")
     with bar:
         task = bar.add_task("runs", total=len(todo), failed=0)
         stop = execute(case, todo, journal, workers, on_done)
