@@ -20,8 +20,9 @@ time reached). After the first Ctrl-C a second one is ignored while the folder i
 settled, so the one line is the last word.
 
 ``SAVANT_TEST_PAUSE_AT=<stage>`` makes the process stop at that stage (the first time it
-is entered), say ``savant: paused at <stage>`` on stderr and sleep, so that tests can
-interrupt it there deterministically. Nothing else reads it.
+is entered), say ``savant: paused at <stage>`` on stderr and sleep until SIGUSR1 (or
+two minutes), so that tests can interrupt, kill or hold it there deterministically.
+Nothing else reads it.
 """
 
 from __future__ import annotations
@@ -65,9 +66,26 @@ def stage(name: str) -> None:
     _current = name
     if os.environ.get(PAUSE_ENV) == name and name not in _paused:
         _paused.add(name)
-        sys.stderr.write(f"savant: paused at {name} ({PAUSE_ENV})\n")
-        sys.stderr.flush()
-        time.sleep(PAUSE_S)
+        _pause(name)
+
+
+def _pause(name: str) -> None:
+    """The test pause: say so, then sleep until SIGUSR1 (go on), an interrupt or
+    :data:`PAUSE_S`."""
+    resumed: list[int] = []
+    try:
+        previous = signal.signal(signal.SIGUSR1, lambda *_: resumed.append(1))
+    except ValueError:  # not the main thread
+        previous = None
+    sys.stderr.write(f"savant: paused at {name} ({PAUSE_ENV})\n")
+    sys.stderr.flush()
+    deadline = time.monotonic() + PAUSE_S
+    try:
+        while not resumed and time.monotonic() < deadline:
+            time.sleep(0.05)
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGUSR1, previous)
 
 
 def current() -> str:
