@@ -1207,7 +1207,8 @@ def check_study_times(cfg: SavantConfig) -> None:
             raise ConfigError("study.histories.rate_hz", h.rate_hz,
                               f"{s.n_runs:,} runs × {sim.max_time_s:g} s would keep {samples:.3g} samples per signal; "
                               f"at most {MAX_HISTORY_SAMPLES:.3g} (1 GB, read at once by the envelope plots): allowed "
-                              f"up to {MAX_HISTORY_SAMPLES / (s.n_runs * sim.max_time_s):.3g} Hz, or fewer runs")
+                              f"up to {MAX_HISTORY_SAMPLES / (s.n_runs * sim.max_time_s):.3g} Hz, fewer runs, or no "
+                              "histories (study.histories.signals=[])")
 
 
 def _finite(key: str, value: float) -> None:
