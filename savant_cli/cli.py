@@ -244,10 +244,11 @@ def _batch_command(cmd: str, rest: list[str]) -> int:
 
     try:
         if cmd == "collect":
-            with run_lock.acquire(folder, key="DIR"):
-                code = montecarlo.collect(folder, allow_missing=allow_missing)
-                if (code == 0 or allow_missing) and (folder / "savant.h5").is_file():  # written just now
-                    write_report_or_say(folder, err)
+            run_lock.refuse_if_busy(folder, key="DIR")  # a sweep still writing its shards
+            code = montecarlo.collect(folder, allow_missing=allow_missing,
+                                      before_write=lambda: run_lock.acquire(folder, key="DIR"))
+            if (code == 0 or allow_missing) and (folder / "savant.h5").is_file():  # written just now
+                write_report_or_say(folder, err)
             return code
         try:
             number = int(rest[1][4:])

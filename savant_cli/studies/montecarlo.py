@@ -16,7 +16,7 @@ import json
 import time
 from functools import partial
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 from omegaconf import DictConfig, OmegaConf
@@ -264,7 +264,8 @@ def _shard_gaps(run_dirs: list[Path], n_runs: int, missing: list[int]) -> list[s
     return lines
 
 
-def collect(folder: Path, console: Console | None = None, allow_missing: bool = False) -> int:
+def collect(folder: Path, console: Console | None = None, allow_missing: bool = False,
+            before_write: Callable[[], Any] | None = None) -> int:
     """Merge the shard folders under ``folder`` (a Hydra multirun folder) into one
     ``savant.h5``, tables and ``summary.json`` there.
 
@@ -278,6 +279,9 @@ def collect(folder: Path, console: Console | None = None, allow_missing: bool = 
         With runs missing, write the partial result anyway (its ``summary.json``
         ``missing_runs`` and the ``savant.h5`` attribute name them). Without it a partial
         set writes nothing into ``folder``.
+    before_write : callable, optional
+        Called once it is decided that ``folder`` will be written, before the first
+        write (the command line locks the folder there: a refused collect writes nothing).
 
     Returns
     -------
@@ -306,6 +310,8 @@ def collect(folder: Path, console: Console | None = None, allow_missing: bool = 
                           "\"Resume a batch with missing shards\"), or collect the partial set with --allow-missing")
             return 1
     case, names = make_case(cfg)
+    if before_write is not None:
+        before_write()
     write_outputs(folder, inv, expected, dispersion_table(case.dispersions), OmegaConf.to_yaml(raw, resolve=True),
                   collect_provenance(), names, case.history_time, cfg.requirements, cfg.output.plots, console,
                   cfg.study.reliability)
