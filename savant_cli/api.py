@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import copy
 import logging
+import sys
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -117,19 +118,25 @@ def run(overrides: Sequence[str] | None = None, config_dir: str | Path | None = 
     ------
     ConfigError
         An override Hydra refuses (unknown key or option, bad syntax) or a value the
-        validation refuses, naming the key, the value and what is allowed.
+        validation refuses, naming the key, the value and what is allowed; or
+        ``out_dir`` held by another writer (:class:`savant_cli.run_lock.FolderBusy`,
+        naming the holder's PID and host). Nothing is written then.
     savant_cli.errors.OutputWriteError
         An output could not be written (disk full, folder not writable): it names the
         file and its folder; the files written before it are whole.
     savant_cli.errors.DamagedFileError
         A file of an earlier run in ``out_dir`` cannot be read back (a batch journal's
         manifest): it names the file and what writes it again.
+    KeyboardInterrupt
+        After the run folder is settled as ``savant run`` settles it (removed when
+        nothing was written, else marked ``interrupted.json``; one line on stderr).
     """
     from hydra.core.hydra_config import HydraConfig
     from omegaconf import OmegaConf, open_dict
 
+    from savant_cli import lifecycle, run_lock
     from savant_cli.config import validate
-    from savant_cli.studies import run_study
+    from savant_cli.studies import check_folder, run_study
 
     if isinstance(overrides, (str, bytes)):
         raise ConfigError("overrides", overrides, "must be a list of override strings, e.g. ['study=linear']")
@@ -153,19 +160,40 @@ def run(overrides: Sequence[str] | None = None, config_dir: str | Path | None = 
     handler = None
     root = logging.getLogger()
     level = root.level
+    lock = None
     try:
         typed = validate(task_cfg)  # before anything is written: a bad value leaves no folder
-        target.mkdir(parents=True, exist_ok=True)
+        run_lock.refuse_if_busy(target, key="out_dir")  # one writer per folder (docs/outputs.md)
+        check_folder(typed, target)
+        lock = run_lock.acquire(target, key="out_dir")
         _write_hydra_files(target, cfg, task_cfg, overrides)
         handler = logging.FileHandler(target / "savant.log")
         handler.setFormatter(logging.Formatter(LOG_FORMAT))
         root.addHandler(handler)
         root.setLevel(logging.INFO if level in (logging.NOTSET, logging.WARNING) else min(level, logging.INFO))
         code = run_study(typed, task_cfg, target, raise_errors=True)
+        lifecycle.clear_marker(target)
+    except ConfigError:
+        if lock is not None:
+            _detach(handler, root, level)  # the log file goes with a discarded folder
+            handler = None
+            lifecycle.discard_if_untouched(lock)
+        raise
+    except KeyboardInterrupt as exc:  # the folder settled as on the command line, then the interrupt goes on
+        sys.stderr.write(lifecycle.settle_interrupt(exc) + "\n")
+        raise
     finally:
+        if lock is not None:
+            lock.release()
         hydra_config.cfg = previous
-        if handler is not None:
-            root.removeHandler(handler)
-            root.setLevel(level)
-            handler.close()
+        _detach(handler, root, level)
     return load(target, exit_code=code)
+
+
+def _detach(handler: logging.Handler | None, root: logging.Logger, level: int) -> None:
+    """Remove and close the run's log handler (``None``: nothing to do); give the root
+    logger its level back."""
+    if handler is not None:
+        root.removeHandler(handler)
+        root.setLevel(level)
+        handler.close()

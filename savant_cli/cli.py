@@ -7,6 +7,7 @@ plots from its ``savant.h5``; ``savant --version``; ``savant --help``.
 
 from __future__ import annotations
 
+import logging
 import sys
 from pathlib import Path
 
@@ -58,6 +59,7 @@ def _hydra_task(cfg) -> int:
     from hydra.core.hydra_config import HydraConfig
     from hydra.types import RunMode
 
+    from savant_cli import lifecycle, run_lock
     from savant_cli.config import validate
     from savant_cli.studies import run_study
 
@@ -67,10 +69,22 @@ def _hydra_task(cfg) -> int:
     multirun = hc.mode == RunMode.MULTIRUN
     try:
         typed = validate(cfg)
+        # held since the callback's on_run_start in a single run; a multirun job, or a
+        # config tree without the callback, locks its folder here
+        run_lock.acquire(out_dir)
+        lifecycle.stage("startup")
         code = run_study(typed, cfg, out_dir)
+        lifecycle.clear_marker(out_dir)
     except ConfigError as exc:
         console.print(f"[bold red]configuration error[/]: {exc}")
         code = ConfigError.exit_code
+        # refused before the study wrote anything: a folder this command made goes again
+        # (a multirun job's folder stays, its log saying why)
+        if multirun or not any(lifecycle.discard_if_untouched(lock) for lock in run_lock.held(out_dir)):
+            logging.getLogger("savant").error("configuration error: %s", exc)
+    if multirun:  # the next job of the sweep may run in this process
+        for lock in run_lock.held(out_dir):
+            lock.release()
     if code and not multirun:
         raise SystemExit(code)
     return code
@@ -116,7 +130,23 @@ def variant_hint(argv: list[str]) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Entry point of the ``savant`` console script."""
+    """Entry point of the ``savant`` console script.
+
+    A Ctrl-C at any moment ends the command with one line on stderr and exit status 130,
+    after the run folders it holds are settled: removed when nothing was written into a
+    folder it created, else marked ``interrupted.json`` (:mod:`savant_cli.lifecycle`).
+    """
+    try:
+        return _main(argv)
+    except KeyboardInterrupt as exc:
+        from savant_cli.lifecycle import settle_interrupt
+
+        sys.stderr.write(settle_interrupt(exc, restore=False) + "\n")
+        sys.stderr.flush()
+        return 130
+
+
+def _main(argv: list[str] | None) -> int:
     args = list(sys.argv[1:] if argv is None else argv)
     console = Console()
     if not args or args[0] in ("-h", "--help", "help"):
@@ -133,11 +163,17 @@ def main(argv: list[str] | None = None) -> int:
         if len(rest) != 1:
             Console(stderr=True).print("usage: savant report RUN_DIR")
             return 2
+        from savant_cli import lifecycle, run_lock
         from savant_cli.report import report
 
         try:
-            paths = report(Path(rest[0]))
-        except SavantError as exc:  # a damaged savant.h5 (2), or an output not written (1)
+            if not Path(rest[0]).is_dir():
+                raise FileNotFoundError(f"{rest[0]} is not a folder")
+            with run_lock.acquire(Path(rest[0]), key="RUN_DIR"):
+                lifecycle.stage("plots")
+                paths = report(Path(rest[0]))
+                lifecycle.clear_marker(Path(rest[0]))
+        except SavantError as exc:  # a damaged savant.h5 or a busy folder (2), or an output not written (1)
             Console(stderr=True).print(f"[bold red]error[/]: {exc}", highlight=False)
             return exc.exit_code
         except (FileNotFoundError, OSError) as exc:  # no such folder or file, not a savant file
@@ -203,11 +239,14 @@ def _batch_command(cmd: str, rest: list[str]) -> int:
     if not folder.is_dir():
         err.print(f"[bold red]error[/]: {folder} is not a folder\n{usage}")
         return 2
+    from savant_cli import run_lock
     from savant_cli.studies import montecarlo, write_report_or_say
 
     try:
         if cmd == "collect":
-            code = montecarlo.collect(folder, allow_missing=allow_missing)
+            run_lock.refuse_if_busy(folder, key="DIR")  # a sweep still writing its shards
+            code = montecarlo.collect(folder, allow_missing=allow_missing,
+                                      before_write=lambda: run_lock.acquire(folder, key="DIR"))
             if (code == 0 or allow_missing) and (folder / "savant.h5").is_file():  # written just now
                 code = max(code, write_report_or_say(folder, err))
             return code
@@ -215,9 +254,16 @@ def _batch_command(cmd: str, rest: list[str]) -> int:
             number = int(rest[1][4:])
         except ValueError:
             raise ConfigError("run", rest[1][4:], "must be an integer run number") from None
-        code = montecarlo.rerun(folder, number)
-        if (folder / f"rerun_{number:06d}" / "savant.h5").is_file():  # montecarlo.rerun's folder
-            code = max(code, write_report_or_say(folder / f"rerun_{number:06d}", err))
+        target = folder / f"rerun_{number:06d}"  # montecarlo.rerun's folder
+        run_lock.refuse_if_busy(target, key="DIR")
+        with run_lock.acquire(target, key="DIR") as lock:
+            try:
+                code = montecarlo.rerun(folder, number)
+            except SavantError:
+                lock.discard()  # refused before writing: leave no folder behind (discard keeps anything written)
+                raise
+            if (target / "savant.h5").is_file():
+                code = max(code, write_report_or_say(target, err))
         return code
     except SavantError as exc:  # bad input or a damaged file (2), an output not written (1)
         err.print(f"[bold red]error[/]: {exc}", highlight=False)

@@ -1043,6 +1043,40 @@ def _increasing(key: str, values: list[float]) -> None:
 SIM_BOUNDS = {"plant_rate_hz": (20.0, 10000.0), "sensor_rate_hz": (1.0, 10000.0), "fcs_rate_hz": (1.0, 1000.0),
               "guidance_rate_hz": (0.01, 100.0), "log_rate_hz": (0.1, 1000.0), "max_time_s": (1.0, 3600.0)}
 
+#: Most rows of a run's time history, ``sim.max_time_s × sim.log_rate_hz``: the history is
+#: allocated whole before the flight, about 280 columns of 8 bytes at full fidelity, so
+#: 500,000 rows are about 1.1 GB in memory and again in ``savant.h5`` (ten times the
+#: default log rate over the default flight; docs/outputs.md, "Bounds").
+MAX_LOG_ROWS = 500_000
+
+#: Largest ``winds.scale``: the shipped strong-jet profile peaks at 53 m/s, five times it
+#: at 266 m/s, more than twice the fastest jet-stream winds measured (about 110 m/s);
+#: beyond that the profile is no longer a wind but a modelling error (docs/outputs.md).
+MAX_WINDS_SCALE = 5.0
+
+#: Most runs of a Monte Carlo batch. A batch without a failure demonstrates a success
+#: probability of 1 − 2.3/n at 90 % confidence: a million runs show 0.9999977, beyond any
+#: crew-vehicle requirement; they take about 50 h at the measured 328 runs/min on the
+#: 2-core machine (docs/montecarlo.md), and the batch's tables hold about 1.2 kB per run
+#: in memory (1.2 GB). ``study.n_runs=1000000000000`` is refused before anything is built.
+MAX_N_RUNS = 1_000_000
+
+#: Most shards of a batch: each is one scheduler job and one folder ``savant collect``
+#: reads; 10,000 shards of the largest batch are 100 runs each (SLURM's default job-array
+#: limit, MaxArraySize, is 1,001).
+MAX_SHARDS = 10_000
+
+#: Most history samples of one signal over a batch, ``study.n_runs × sim.max_time_s ×
+#: study.histories.rate_hz``: the envelope plots read one signal of every run at once,
+#: 4 bytes a sample, so 2.5e8 samples are 1 GB in memory (the default batch: 4e6).
+MAX_HISTORY_SAMPLES = 250_000_000
+
+#: Most worker processes of a study: each holds a copy of the built model and its
+#: compiled plant, about 170 MB measured, so 256 are about 43 GB; a machine with more cores
+#: is better used by shards.
+MAX_WORKERS = 256
+WORKERS_ALLOWED = f"must be 0 (all cores) or a process count up to {MAX_WORKERS} (about 170 MB each)"
+
 
 def _check_rates(sim: SimConfig) -> None:
     for name, (low, high) in SIM_BOUNDS.items():
@@ -1050,6 +1084,12 @@ def _check_rates(sim: SimConfig) -> None:
         _positive(f"sim.{name}", value)
         if not low <= value <= high:
             raise ConfigError(f"sim.{name}", value, f"must lie between {low:g} and {high:g}")
+    rows = sim.max_time_s * sim.log_rate_hz
+    if rows > MAX_LOG_ROWS:
+        raise ConfigError("sim.log_rate_hz", sim.log_rate_hz,
+                          f"with sim.max_time_s = {sim.max_time_s:g} s the history would hold {rows:,.0f} rows; at most "
+                          f"{MAX_LOG_ROWS:,} (about 1.1 GB): allowed up to {MAX_LOG_ROWS / sim.max_time_s:g} Hz, or a "
+                          "shorter sim.max_time_s")
     for name in ("sensor_rate_hz", "fcs_rate_hz", "guidance_rate_hz", "log_rate_hz"):
         ratio = sim.plant_rate_hz / getattr(sim, name)
         if abs(ratio - round(ratio)) > 1e-9 or round(ratio) < 1:
@@ -1184,7 +1224,10 @@ def check_physics(cfg: SavantConfig) -> None:
         raise ConfigError("sensors.rate_gyro.natural_frequency_hz", cfg.sensors.rate_gyro.natural_frequency_hz,
                           f"must be below the sensor Nyquist frequency {nyquist} Hz")
     w = cfg.winds
-    _non_negative("winds.scale", w.scale)
+    if not (np.isfinite(w.scale) and 0.0 <= w.scale <= MAX_WINDS_SCALE):
+        raise ConfigError("winds.scale", w.scale, f"must lie between 0 and {MAX_WINDS_SCALE:g} (five times the "
+                          "strongest shipped profile is already twice the fastest jet stream measured)")
+    check_study_times(cfg)
     if w.enabled:
         _increasing("winds.profile.altitude_m", list(w.profile.altitude_m))
         n = len(w.profile.altitude_m)
@@ -1207,6 +1250,42 @@ def check_physics(cfg: SavantConfig) -> None:
     check_peg(g.peg, cfg.sim)
     _positive("guidance.smoother.damping", g.smoother.damping)
     _positive("guidance.smoother.natural_frequency_rad_s", g.smoother.natural_frequency_rad_s)
+
+
+def check_study_times(cfg: SavantConfig) -> None:
+    """Flight times a study asks for must lie inside ``sim.max_time_s`` (the flight can
+    reach no later), and ``study.every`` must not be finer than the flight-control cycle
+    the study's snapshots land on; refused before anything flies. Times beyond the end
+    of the flight itself are refused as soon as the flight has flown (``study=linear``
+    says the flight's end)."""
+    s, sim = cfg.study, cfg.sim
+    lists = [("study.times", getattr(s, "times", None))] if not getattr(s, "every", 0.0) else []
+    lists.append(("study.linear_times", getattr(s, "linear_times", None)))
+    for key, times in lists:
+        for i, t in enumerate(times or []):
+            if not t < sim.max_time_s:
+                raise ConfigError(f"{key}[{i}]", t, f"must be earlier than sim.max_time_s = {sim.max_time_s:g} s "
+                                  "(the flight stops there)")
+    every = getattr(s, "every", 0.0)
+    if every > 0.0:
+        cycle = 1.0 / sim.fcs_rate_hz
+        if every < cycle - 1e-12:
+            raise ConfigError("study.every", every, f"must be at least one flight-control cycle (1 / "
+                              f"sim.fcs_rate_hz = {cycle:g} s): the points land on control cycles")
+        if every >= sim.max_time_s:
+            raise ConfigError("study.every", every, f"must be shorter than sim.max_time_s = {sim.max_time_s:g} s")
+    if isinstance(s, MonteCarloStudyConfig):
+        h = s.histories
+        if h.signals and h.rate_hz > sim.log_rate_hz:
+            raise ConfigError("study.histories.rate_hz", h.rate_hz,
+                              f"must be at most sim.log_rate_hz = {sim.log_rate_hz:g} Hz (a decimation of the log)")
+        samples = s.n_runs * sim.max_time_s * h.rate_hz
+        if h.signals and samples > MAX_HISTORY_SAMPLES:
+            raise ConfigError("study.histories.rate_hz", h.rate_hz,
+                              f"{s.n_runs:,} runs × {sim.max_time_s:g} s would keep {samples:.3g} samples per signal; "
+                              f"at most {MAX_HISTORY_SAMPLES:.3g} (1 GB, read at once by the envelope plots): allowed "
+                              f"up to {MAX_HISTORY_SAMPLES / (s.n_runs * sim.max_time_s):.3g} Hz, fewer runs, or no "
+                              "histories (study.histories.signals=[])")
 
 
 def _finite(key: str, value: float) -> None:
@@ -1440,8 +1519,8 @@ def _check_fcs_design(s: FcsDesignStudyConfig) -> None:
             raise ConfigError("study.every_s", dict(s.every_s), f"must give the design-point spacing of {name}")
     _positive("study.verify_every_s", s.verify_every_s)
     _non_negative("study.event_window_s", s.event_window_s)
-    if s.workers < 0:
-        raise ConfigError("study.workers", s.workers, "must be 0 (all cores) or a positive process count")
+    if not 0 <= s.workers <= MAX_WORKERS:
+        raise ConfigError("study.workers", s.workers, WORKERS_ALLOWED)
     for i, axis in enumerate(s.axes):
         _one_of(f"study.axes[{i}]", axis, ("pitch", "yaw"))
     if not s.axes:
@@ -1510,8 +1589,8 @@ def _check_time_margins(s: TimeMarginsStudyConfig) -> None:
         raise ConfigError("study.min_damping_ratio", s.min_damping_ratio,
                           "must lie in (0, 1): the damping ratio whose decay per period a stable response must "
                           "reach (0 would leave the verdict on a neutral oscillation to round-off)")
-    if s.workers < 0:
-        raise ConfigError("study.workers", s.workers, "must be 0 (all cores) or a positive process count")
+    if not 0 <= s.workers <= MAX_WORKERS:
+        raise ConfigError("study.workers", s.workers, WORKERS_ALLOWED)
     _one_of("study.jacobian", s.jacobian, ("auto", "fixed"))
     _positive("study.jacobian_step", s.jacobian_step)
 
@@ -1550,12 +1629,14 @@ def _check_flex_sweep(s: FlexSweepStudyConfig) -> None:
 def _check_montecarlo(s: MonteCarloStudyConfig) -> None:
     """Counts and sharding; the dispersion spec is checked against the model by
     :func:`savant_cli.montecarlo.spec.parse` before anything runs."""
-    if s.n_runs < 1:
-        raise ConfigError("study.n_runs", s.n_runs, "must be at least 1 (run 0 is the nominal)")
-    if s.workers < 0:
-        raise ConfigError("study.workers", s.workers, "must be 0 (all cores) or a positive process count")
-    if s.shards < 1 or s.shards > s.n_runs:
-        raise ConfigError("study.shards", s.shards, f"must be between 1 and study.n_runs ({s.n_runs})")
+    if not 1 <= s.n_runs <= MAX_N_RUNS:
+        raise ConfigError("study.n_runs", s.n_runs, f"must be between 1 (run 0 is the nominal) and {MAX_N_RUNS:,} "
+                          "(a million runs without a failure demonstrate 0.9999977 at 90 % confidence)")
+    if not 0 <= s.workers <= MAX_WORKERS:
+        raise ConfigError("study.workers", s.workers, WORKERS_ALLOWED)
+    if s.shards < 1 or s.shards > min(s.n_runs, MAX_SHARDS):
+        raise ConfigError("study.shards", s.shards, f"must be between 1 and {min(s.n_runs, MAX_SHARDS):,} "
+                          f"(study.n_runs = {s.n_runs}, and at most {MAX_SHARDS:,} scheduler jobs)")
     if not 0 <= s.shard < s.shards:
         raise ConfigError("study.shard", s.shard, f"must be between 0 and study.shards - 1 ({s.shards - 1})")
     if s.seed < 0:

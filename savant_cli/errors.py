@@ -111,3 +111,24 @@ class SimulationDiverged(RuntimeError):
         self.signal = signal
         self.detail = detail
         super().__init__(f"run diverged at t = {time_s:.3f} s: {signal} {detail}")
+
+
+class RunInterrupted(KeyboardInterrupt):
+    """A Ctrl-C that a study has already answered: it wrote what it had computed and
+    says so in ``detail`` (the flight time reached, the runs flown), which the interrupt
+    line and the folder's ``interrupted.json`` repeat (:mod:`savant_cli.lifecycle`).
+
+    A ``KeyboardInterrupt`` so that every ``except Exception`` lets it through.
+
+    Parameters
+    ----------
+    stage : str
+        The stage it stopped in (``flight``, ``runs`` …).
+    detail : str
+        What was written and how to finish, one sentence.
+    """
+
+    def __init__(self, stage: str, detail: str) -> None:
+        self.stage = stage
+        self.detail = detail
+        super().__init__(detail)

@@ -17,6 +17,7 @@ import hashlib
 import json
 import os
 import re
+import signal
 import time
 import traceback
 from collections.abc import Callable, Iterable
@@ -365,6 +366,9 @@ _CASE: Case | None = None
 def _init_worker(case: Case) -> None:
     global _CASE
     _CASE = case
+    # Ctrl-C reaches the whole process group: the main process answers it (and ends
+    # the workers), a worker interrupted on its own would print a traceback
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 def _fly(run: int) -> RunOutcome:
@@ -425,6 +429,8 @@ def execute(case: Case, todo: Iterable[int], journal: Journal, workers: int,
         stop = BatchStop("worker died", "a worker process died (killed or out of memory); the runs in flight were lost")
     except KeyboardInterrupt:
         stop = BatchStop("interrupted", "interrupted by the user")
+        for proc in list(getattr(pool, "_processes", {}).values()):  # runs in flight are abandoned, not waited for
+            proc.terminate()
     except OutputWriteError as exc:  # the journal cannot take more runs: stop flying them
         stop = BatchStop("write failed", str(exc))
     finally:

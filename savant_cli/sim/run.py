@@ -10,6 +10,7 @@ import numpy as np
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
 from savant_cli import constants as C
+from savant_cli import lifecycle
 from savant_cli.io.record import Signal
 from savant_cli.models import (
     actuator, aero, atmosphere, earth, flex, gravity, mass, navigation, peg, propulsion, quaternion as qt, rcs,
@@ -85,12 +86,14 @@ def log_columns(n_state: int) -> int:
 
 def simulate(model: SimModel, progress: bool = True, chunk_s: float = 10.0,
              snapshot_steps: tuple[int, ...] = (), start: Snapshot | None = None, t_stop: float | None = None,
-             perturbation: np.ndarray | None = None) -> SimResult:
+             perturbation: np.ndarray | None = None, keep_partial: bool = False) -> SimResult:
     """Fly one run from the model's initial state until a stop condition.
 
     A diverging run returns normally with ``status = "diverged"`` (``"guidance_failed"``
-    when closed-loop guidance stopped it) and the history up to the failure;
-    ``KeyboardInterrupt`` returns ``status = "interrupted"``. The complete state at each
+    when closed-loop guidance stopped it) and the history up to the failure. A
+    ``KeyboardInterrupt`` propagates (the caller's work stops there), unless
+    ``keep_partial``: then it returns ``status = "interrupted"`` with the history flown
+    so far (the nominal flight writes it). The complete state at each
     of ``snapshot_steps`` (plant step indices) reached is kept in ``result.snapshots``.
 
     ``start``: fly on from this snapshot instead of liftoff; ``t_stop``: stop at this
@@ -140,7 +143,10 @@ def simulate(model: SimModel, progress: bool = True, chunk_s: float = 10.0,
                 wall += time.perf_counter() - t0
                 k += done
                 bar.update(task, completed=k * rt.dt, t=k * rt.dt)
+                lifecycle.stage("flight")
         except KeyboardInterrupt:
+            if not keep_partial:
+                raise
             status = "interrupted"
             detail = "interrupted by the user"
     t_final = k * rt.dt

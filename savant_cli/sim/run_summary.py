@@ -7,6 +7,8 @@ from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
+
 from savant_cli.config import SavantConfig, SeparationRequirement
 from savant_cli.models.peg import insertion_target
 from savant_cli.sim import mission
@@ -52,4 +54,29 @@ def run_summary(result: SimResult, sig: dict, model: SimModel, cfg: SavantConfig
     outcome = mission.classify(summary, result.status, result.stop_reason, cfg.phase.stop_at == "cutoff",
                                tolerance_of(cfg))
     summary.update(mission.mission_keys(outcome, cfg.requirements.mission.failure_classes))
+    note = nonfinite_note(summary, result.status)
+    if note:
+        result.message = f"{result.message}; {note}"
     return summary
+
+
+#: Why a summary key can be infinite in a run that flew: said in the run's message.
+NONFINITE_REASONS = {"apogee_altitude_km": "the orbit at the last sample is open (escape energy): it has no apogee",
+                     "semi_major_axis_m": "the orbit at the last sample is open (escape energy)"}
+
+
+def nonfinite_note(summary: dict[str, Any], status: str) -> str:
+    """The sentence a run's message gets when its summary holds an infinite or NaN
+    number (``summary.json`` writes them as ``null``): which keys, and why; empty when
+    every number is finite."""
+    bad = [k for k, v in summary.items()
+           if isinstance(v, (float, np.floating)) and not np.isfinite(v)]
+    if not bad:
+        return ""
+    why = "the run diverged, so its last state is not physical" if status == "diverged" else ""
+    parts = []
+    for key in bad[:4]:
+        reason = why or NONFINITE_REASONS.get(key, "not defined for this flight")
+        parts.append(f"{key} = {summary[key]} ({reason})")
+    more = f" and {len(bad) - 4} more" if len(bad) > 4 else ""
+    return "not finite in the summary (null in summary.json): " + "; ".join(parts) + more

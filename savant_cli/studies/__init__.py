@@ -22,6 +22,21 @@ def get_study(name: str) -> ModuleType:
     return importlib.import_module(f"savant_cli.studies.{name}")
 
 
+def check_folder(cfg, out_dir) -> None:
+    """A study's own refusals of an existing run folder (its module's optional
+    ``check_folder(cfg, out_dir)``: a Monte Carlo folder holding runs of another
+    configuration), run before anything is written into the folder.
+
+    Raises
+    ------
+    ConfigError
+        The folder cannot take this run.
+    """
+    check = getattr(get_study(cfg.study.name), "check_folder", None)
+    if check is not None:
+        check(cfg, out_dir)
+
+
 def run_study(cfg, raw_cfg, out_dir, raise_errors: bool = False) -> int:
     """Run the configured study into ``out_dir``, then write its ``report.html``
     (:mod:`savant_cli.html_report`); the study's exit code. What ``savant run`` and
@@ -41,9 +56,11 @@ def run_study(cfg, raw_cfg, out_dir, raise_errors: bool = False) -> int:
 
     from rich.console import Console
 
+    from savant_cli import lifecycle
     from savant_cli.errors import DamagedFileError, OutputWriteError
 
     err = Console(stderr=True)
+    lifecycle.stage("study")
     try:
         code = get_study(cfg.study.name).run(cfg, raw_cfg, out_dir)
     except (OutputWriteError, DamagedFileError) as exc:
@@ -51,6 +68,7 @@ def run_study(cfg, raw_cfg, out_dir, raise_errors: bool = False) -> int:
             raise
         err.print(f"[bold red]error[/]: {exc}", highlight=False)
         return exc.exit_code
+    lifecycle.stage("report")
     return max(code, write_report_or_say(Path(out_dir), err))
 
 

@@ -16,6 +16,7 @@ from typing import Any, Callable
 
 from omegaconf import DictConfig, OmegaConf
 
+from savant_cli import lifecycle
 from savant_cli.config import SavantConfig
 from savant_cli.io.atomic import write_json_atomic
 from savant_cli.io.hdf5 import write_run
@@ -38,12 +39,16 @@ class Flight:
     summary: dict[str, Any]
 
 
-def fly(cfg: SavantConfig, progress: bool | None = None, snapshot_steps: tuple[int, ...] = ()) -> Flight:
+def fly(cfg: SavantConfig, progress: bool | None = None, snapshot_steps: tuple[int, ...] = (),
+        keep_partial: bool = False) -> Flight:
     """Prepare and fly ``cfg`` (``progress``: the bar, default ``sim.progress``), keeping the
-    state at ``snapshot_steps`` (plant steps)."""
+    state at ``snapshot_steps`` (plant steps). A Ctrl-C in flight propagates, unless
+    ``keep_partial``: then the flight so far comes back with status ``interrupted``."""
+    lifecycle.stage("prepare")
     prep = prepare(cfg)
     result = simulate(prep.model, progress=cfg.sim.progress if progress is None else progress,
-                      chunk_s=cfg.sim.chunk_s, snapshot_steps=snapshot_steps)
+                      chunk_s=cfg.sim.chunk_s, snapshot_steps=snapshot_steps, keep_partial=keep_partial)
+    lifecycle.stage("analysis")
     sig = signals(result, prep.model)
     summary = run_summary(result, sig, prep.model, cfg, prep.vehicle.qalpha_limit_Pa_deg)
     return Flight(prep=prep, result=result, signals=sig, summary=summary)
@@ -86,16 +91,18 @@ def record(result: SimResult, sig: dict[str, Signal], summary: dict[str, Any], r
 
 
 def write(out_dir: Path, rec: RunRecord, cfg: SavantConfig, json_summary: dict[str, Any] | None = None,
-          extra: Callable | None = None) -> None:
+          extra: Callable | None = None, plots: bool = True) -> None:
     """Write a record into ``out_dir``: ``savant.h5`` (``extra(h5file)`` adds a study's
     groups) unless ``output.hdf5`` is off, ``summary.json`` (``json_summary``, default the
-    record's) and the ascent plots unless ``output.plots`` is off. A file that cannot be
-    written raises :class:`~savant_cli.errors.OutputWriteError` (the ones before it stay
-    whole)."""
+    record's) and the ascent plots unless ``output.plots`` is off or ``plots`` is False. A
+    file that cannot be written raises :class:`~savant_cli.errors.OutputWriteError` (the
+    ones before it stay whole)."""
+    lifecycle.stage("writing")
     if cfg.output.hdf5:  # atomic_path makes out_dir (an OutputWriteError when it cannot)
         write_run(out_dir / "savant.h5", rec, extra=extra)
     write_json_atomic(out_dir / "summary.json", rec.summary if json_summary is None else json_summary)
-    if cfg.output.plots:
+    if cfg.output.plots and plots:
+        lifecycle.stage("plots")
         from savant_cli.plots.ascent import plot_ascent
 
         plot_ascent(rec, out_dir / "plots")

@@ -12,10 +12,11 @@ with its whole time history.
 from __future__ import annotations
 
 import copy
+import json
 import time
 from functools import partial
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 import yaml
@@ -23,12 +24,13 @@ from omegaconf import DictConfig, OmegaConf
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
+from savant_cli import lifecycle
 from savant_cli.config import MonteCarloStudyConfig, SavantConfig, validate
-from savant_cli.errors import ConfigError, DamagedFileError, OutputWriteError
+from savant_cli.errors import ConfigError, DamagedFileError, OutputWriteError, RunInterrupted
 from savant_cli.io.guidance_file import read_guidance
 from savant_cli.io.provenance import collect_provenance
 from savant_cli.io.record import FLOWN
-from savant_cli.montecarlo.batch import (BatchStop, Case, Journal, RunOutcome, execute, fly_run,
+from savant_cli.montecarlo.batch import (BatchStop, Case, Journal, RunOutcome, execute, fingerprint, fly_run,
                                          history_columns, read_outcome, shard_runs)
 from savant_cli.montecarlo.results import inventory, ranges_text, write_outputs
 from savant_cli.montecarlo.spec import DispersionSet, parse
@@ -142,10 +144,17 @@ def fly_batch(cfg: SavantConfig, config_yaml: str, out_dir: Path, console: Conso
         if o.status != "complete":
             failures[0] += 1
         bar.update(task, advance=1, failed=failures[0])
+        lifecycle.stage("runs")  # after each journaled run (where a test may interrupt it)
 
     with bar:
         task = bar.add_task("runs", total=len(todo), failed=0)
         stop = execute(case, todo, journal, workers, on_done)
+    if stop.reason == "interrupted":
+        # the journal holds every run that finished; the batch's tables wait for its end
+        in_journal = len(journal.done() & set(mine))
+        raise RunInterrupted("runs", f"{len(flown)} run(s) flown this time, {in_journal} of {len(mine)} in "
+                             f"{journal.folder}; run the same command (hydra.run.dir={out_dir}) to resume")
+    lifecycle.stage("outputs")
     inv = inventory([journal.folder])
     for run, exc in found.damaged.items():  # not flown again (the batch stopped first): missing, not read
         if run not in flown:
@@ -159,9 +168,33 @@ def fly_batch(cfg: SavantConfig, config_yaml: str, out_dir: Path, console: Conso
         if stop.reason == "write failed":  # said before the outputs' own failure
             console.print(f"[bold red]batch stopped[/]: {stop.detail}", highlight=False)
         raise
-    console.print(f"{title}: {len(todo)} runs flown on {workers} worker(s) in {time.perf_counter() - t0:.1f} s; "
-                  f"outputs: {out_dir}")
+    console.print(f"{title}: {len(flown)} of {len(todo)} runs flown on {workers} worker(s) in "
+                  f"{time.perf_counter() - t0:.1f} s; outputs: {out_dir}")
     return summary, stop
+
+
+def check_folder(cfg: SavantConfig, out_dir: Path) -> None:
+    """Refuse a folder whose journal holds runs of another configuration, before
+    anything is written into it (what :class:`~savant_cli.montecarlo.batch.Journal`
+    refuses again when it opens the journal).
+
+    Raises
+    ------
+    ConfigError
+        Naming ``hydra.run.dir`` and the folder.
+    """
+    path = Path(out_dir) / "runs" / "manifest.json"
+    if not path.is_file():
+        return
+    try:
+        old = json.loads(path.read_text())
+    except (OSError, ValueError) as exc:
+        raise ConfigError("hydra.run.dir", str(out_dir), f"holds an unreadable journal manifest {path} ({exc}): "
+                          "choose a new output folder") from None
+    if not isinstance(old, dict) or old.get("fingerprint") != fingerprint(cfg):
+        raise ConfigError("hydra.run.dir", str(out_dir), "holds runs of a different configuration: choose a new "
+                          "output folder (only study.workers, study.shard(s), sim.progress and output.* may change "
+                          "on resume)")
 
 
 def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
@@ -271,7 +304,8 @@ def _shard_gaps(run_dirs: list[Path], n_runs: int, missing: list[int]) -> list[s
     return lines
 
 
-def collect(folder: Path, console: Console | None = None, allow_missing: bool = False) -> int:
+def collect(folder: Path, console: Console | None = None, allow_missing: bool = False,
+            before_write: Callable[[], Any] | None = None) -> int:
     """Merge the shard folders under ``folder`` (a Hydra multirun folder) into one
     ``savant.h5``, tables and ``summary.json`` there.
 
@@ -285,6 +319,9 @@ def collect(folder: Path, console: Console | None = None, allow_missing: bool = 
         With runs missing, write the partial result anyway (its ``summary.json``
         ``missing_runs`` and the ``savant.h5`` attribute name them). Without it a partial
         set writes nothing into ``folder``.
+    before_write : callable, optional
+        Called once it is decided that ``folder`` will be written, before the first
+        write (the command line locks the folder there: a refused collect writes nothing).
 
     Returns
     -------
@@ -316,6 +353,8 @@ def collect(folder: Path, console: Console | None = None, allow_missing: bool = 
                           "\"Resume a batch with missing shards\"), or collect the partial set with --allow-missing")
             return 1
     case, names = make_case(cfg)
+    if before_write is not None:
+        before_write()
     write_outputs(folder, inv, expected, dispersion_table(case.dispersions), OmegaConf.to_yaml(raw, resolve=True),
                   collect_provenance(), names, case.history_time, cfg.requirements, cfg.output.plots, console,
                   cfg.study.reliability)
