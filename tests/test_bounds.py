@@ -12,7 +12,7 @@ import pytest
 from savant_cli import config as C
 from savant_cli.config import validate
 from savant_cli.errors import ConfigError
-from tests.conftest import compose_config
+from conftest import compose_config
 
 
 def _refused(overrides: list[str]) -> ConfigError:

@@ -14,7 +14,7 @@ import pytest
 
 from savant_cli.lifecycle import MARKER
 from savant_cli.run_lock import LOCK_NAME
-from tests.lifecycle_helpers import Paused, after_pause
+from lifecycle_helpers import Paused, after_pause
 
 SHORT = ["winds=none", "sim.max_time_s=40", "sim.chunk_s=5", "sim.progress=false"]
 
@@ -110,7 +110,7 @@ def test_interrupt_while_plotting_marks_the_folder_and_report_finishes_it(tmp_pa
     marker = json.loads((folder / MARKER).read_text())
     assert marker["stage"] == "plots" and {"savant.h5", "summary.json"} <= set(marker["complete_files"])
     assert not (folder / "report.html").exists()
-    from tests.lifecycle_helpers import savant
+    from lifecycle_helpers import savant
 
     done = savant("report", str(folder))
     assert done.code == 0, done.stderr
@@ -133,7 +133,7 @@ def test_interrupted_batch_counts_the_runs_it_flew(tmp_path, workers):
     assert len(list((folder / "runs").glob("run_*.npz"))) == 1
     assert not (folder / "savant.h5").exists()
     assert json.loads((folder / MARKER).read_text())["stage"] == "runs"
-    from tests.lifecycle_helpers import savant
+    from lifecycle_helpers import savant
 
     done = savant("run", *args, cwd=tmp_path)
     assert done.code == 0, done.stderr

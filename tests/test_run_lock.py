@@ -15,7 +15,7 @@ import pytest
 
 from savant_cli import run_lock
 from savant_cli.errors import ConfigError
-from tests.lifecycle_helpers import Paused, env, savant, tree
+from lifecycle_helpers import Paused, env, savant, tree
 
 SHORT = ["winds=none", "sim.max_time_s=20", "output.plots=false", "sim.progress=false"]
 
