@@ -957,9 +957,18 @@ def _small_angles(key: str, values: list[float], n: int, limit_deg: float, axes:
 
 
 def _increasing(key: str, values: list[float]) -> None:
+    """A table axis given as a YAML list: at least 2 finite numbers, strictly increasing as
+    written; the first element out of order is named ``key[i]`` (refused, never sorted)."""
     arr = np.asarray(values, dtype=float)
-    if arr.size < 2 or not np.all(np.diff(arr) > 0.0):
+    if arr.size < 2:
         raise ConfigError(key, list(values), "must be a strictly increasing list of at least 2 numbers")
+    for i in range(arr.size):
+        if not np.isfinite(arr[i]):
+            raise ConfigError(f"{key}[{i}]", float(arr[i]), "must be a finite number")
+        if i and arr[i] <= arr[i - 1]:
+            raise ConfigError(f"{key}[{i}]", float(arr[i]), f"the list must be strictly increasing, and it follows "
+                                                            f"{arr[i - 1]:g} at [{i - 1}]; put it in order (savant "
+                                                            f"never sorts a table)")
 
 
 #: Documented bounds of the ``sim`` rates (Hz) and times (s): beyond them a run would not
