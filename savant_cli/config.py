@@ -68,6 +68,7 @@ class EnvironmentConfig:
 class OutputConfig:
     hdf5: bool = True
     plots: bool = True
+    console: str = "full"  # full | summary | quiet (savant_cli.io.console.CONSOLE_MODES)
 
 
 @dataclass
@@ -1097,6 +1098,7 @@ def check_physics(cfg: SavantConfig) -> None:
     _one_of("environment.gravity_order", cfg.environment.gravity_order, (0, 2, 3, 4))
     _one_of("phase.stop_at", cfg.phase.stop_at, ("cutoff", "separation"))
     _one_of("phase.start", cfg.phase.start, ("liftoff", "staging"))
+    _one_of("output.console", cfg.output.console, ("full", "summary", "quiet"))
     if cfg.phase.start == "staging" and cfg.phase.stop_at == "separation":
         raise ConfigError("phase.stop_at", cfg.phase.stop_at, "a phase starting at staging must stop at cutoff")
     if cfg.phase.start == "staging" and not cfg.phase.staging_state_file:

@@ -34,13 +34,53 @@ def run_study(cfg, raw_cfg, out_dir) -> int:
 
     from rich.console import Console
 
+    from savant_cli.io.console import print_quiet_lines
+
+    quiet = cfg.output.console == "quiet"
+    if cfg.sim.progress and (quiet or not _progress_drawable()):
+        cfg.sim.progress = False  # quiet: no bar; a notebook without ipywidgets: rich would warn per refresh
     code = get_study(cfg.study.name).run(cfg, raw_cfg, out_dir)
-    write_report_or_say(Path(out_dir), Console(stderr=True))
+    write_report_or_say(Path(out_dir), Console(stderr=True), say_written=not quiet)
+    if quiet:
+        summary = _read_summary(Path(out_dir))
+        summary.setdefault("status", "complete" if code == 0 else f"exit code {code}")
+        print_quiet_lines(summary, out_dir)
     return code
 
 
-def write_report_or_say(folder, console) -> None:
-    """``report.html`` into ``folder``, or a line on ``console`` saying why not."""
+_NOTEBOOK_NOTE = {"said": False}
+
+
+def _progress_drawable() -> bool:
+    """Whether progress bars can be drawn here; in a Jupyter kernel without ipywidgets
+    they cannot (rich warns 'install "ipywidgets"' on every refresh): say so once per
+    process and draw none."""
+    from savant_cli.io.console import live_display_ok
+
+    if live_display_ok():
+        return True
+    if not _NOTEBOOK_NOTE["said"]:
+        _NOTEBOOK_NOTE["said"] = True
+        import logging
+
+        logging.getLogger("savant_cli").info("no progress bars in this notebook: install ipywidgets to see them")
+    return False
+
+
+def _read_summary(folder) -> dict:
+    """The study's ``summary.json`` (empty when it wrote none or it cannot be read)."""
+    import json
+
+    try:
+        data = json.loads((folder / "summary.json").read_text())
+    except (OSError, ValueError):
+        return {}
+    return data if isinstance(data, dict) else {}
+
+
+def write_report_or_say(folder, console, say_written: bool = True) -> None:
+    """``report.html`` into ``folder``, or a line on ``console`` saying why not (and,
+    with ``say_written``, where it was written)."""
     from savant_cli.html_report import write_report
 
     try:
@@ -50,4 +90,5 @@ def write_report_or_say(folder, console) -> None:
     except Exception as exc:  # noqa: BLE001 - the study's own outputs stand without the page
         console.print(f"[red]report.html not written[/red]: {type(exc).__name__}: {exc}", highlight=False)
     else:
-        console.print(f"report: {path}", highlight=False)
+        if say_written:
+            console.print(f"report: {path}", highlight=False)

@@ -22,6 +22,7 @@ from omegaconf import DictConfig, OmegaConf
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
+from savant_cli.io.console import study_console
 from savant_cli.config import MonteCarloStudyConfig, SavantConfig, validate
 from savant_cli.errors import ConfigError
 from savant_cli.io.guidance_file import read_guidance
@@ -142,7 +143,7 @@ def fly_batch(cfg: SavantConfig, config_yaml: str, out_dir: Path, console: Conso
 
 def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
     """Fly this job's runs (resuming), then write the batch outputs into ``out_dir``."""
-    console = Console()
+    console = study_console(cfg.output.console)
     summary, stop = fly_batch(cfg, OmegaConf.to_yaml(raw_cfg, resolve=True), out_dir, console)
     if stop.reason != "done":
         console.print(f"[bold red]batch stopped[/]: {stop.detail}; run the same command with "

@@ -6,10 +6,9 @@ import time
 from pathlib import Path
 
 from omegaconf import DictConfig
-from rich.console import Console
 
 from savant_cli.config import SavantConfig
-from savant_cli.io.console import print_run_summary
+from savant_cli.io.console import print_run_summary, study_console
 from savant_cli.io.record import RunRecord
 from savant_cli.io.staging_state import StagingState, write_staging_state
 from savant_cli.sim.engine import STOP_SEPARATION
@@ -33,12 +32,12 @@ def fly(cfg: SavantConfig, raw_cfg: DictConfig, progress: bool | None = None) ->
 
 def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
     """Fly, write ``savant.h5``, ``summary.json`` and plots into ``out_dir``; 0 on success."""
-    console = Console()
+    console = study_console(cfg.output.console)
     record, staging = fly(cfg, raw_cfg)
     out_dir.mkdir(parents=True, exist_ok=True)
     if staging is not None:
         write_staging_state(out_dir / "staging_state.json", staging)
     flight_mod.write(out_dir, record, cfg)
-    print_run_summary(record.summary, record.status, record.message, console)
+    print_run_summary(record.summary, record.status, record.message, console, cfg.output.console)
     console.print(f"outputs: {out_dir}")
     return 0 if record.complete else 1
