@@ -56,14 +56,14 @@ h1 { font-size: 1.5em; margin: 0.3em 0; } h2 { font-size: 1.2em; margin-top: 1.6
            font-size: 0.88em; white-space: pre-wrap; word-break: break-word; }
 .ok { background: #e6f4ea; border-left: 4px solid #1e7b34; } .bad { background: #fbe9e7; border-left: 4px solid #b3261e; }
 .neutral { background: #eef1f6; border-left: 4px solid #6b7a90; }
-.verdict.worst { font-weight: 600; border-left-width: 8px; }
+.verdict.worst { font-weight: 600; background: #ffe08a; border-left: 8px solid #b07d00; }
 tr.fail td { background: #fbe9e7; } tr.worst td { background: #ffe08a; font-weight: 600; }
 td.mark { color: #b3261e; white-space: nowrap; } .unit { color: #5a6272; font-weight: normal; }
 .scroll { overflow-x: auto; max-height: 520px; overflow-y: auto; border: 1px solid #e2e5ea; }
-table { border-collapse: collapse; font-size: 0.84em; width: 100%; }
+table { border-collapse: collapse; font-size: 0.84em; width: auto; min-width: 40%; }
 th, td { padding: 3px 8px; border-bottom: 1px solid #eceef2; text-align: left; vertical-align: top; }
-th { background: #f0f2f5; position: sticky; top: 0; } td.num { text-align: right; font-variant-numeric: tabular-nums; }
-tr.changed td { background: #fff8e1; }
+th { background: #f0f2f5; position: sticky; top: 0; } td.num { text-align: right; font-variant-numeric: tabular-nums; white-space: nowrap; }
+tr.changed td { background: #fff8e1; } tbody td:first-child { white-space: nowrap; }
 figure { margin: 10px 0 18px; } figure img { max-width: 100%; height: auto; border: 1px solid #e2e5ea; }
 figcaption { font-size: 0.82em; color: #5a6272; }
 nav a { margin-right: 12px; font-size: 0.9em; }
@@ -103,6 +103,15 @@ def verdicts(result: Result) -> list[tuple[str, bool | None]]:
                     f"missing runs {s['missing_runs']}", False))
     if isinstance(s.get("requirements_verdict"), str):
         out.append((s["requirements_verdict"], bool(s.get("requirements_met"))))
+    elif isinstance(s.get("requirements_verdict"), Mapping):  # a fly-off: per controller, "n of m" runs passing
+        for ctrl, line in s["requirements_verdict"].items():
+            meeting = str((s.get("runs_meeting_requirements") or {}).get(ctrl, ""))
+            n, _, m = meeting.partition(" of ")
+            out.append((f"{ctrl}: {line}", n == m and n != "" if meeting else ": PASS" in str(line)))
+    if isinstance(s.get("verdict_after"), str):  # an FCS design: the tuned controller's verdict, then the start's
+        out.append((f"after: {s['verdict_after']}", bool(s.get("requirements_met"))))
+        if isinstance(s.get("verdict_before"), str):
+            out.append((f"before: {s['verdict_before']}", None))
     if isinstance(s.get("time_margins_verdict"), str):
         rows = s.get("time_margins") or []
         bad = any(r.get("unstable_at_zero") or "differs by" in str(r.get("note", "")) for r in rows)
@@ -120,7 +129,8 @@ def verdicts(result: Result) -> list[tuple[str, bool | None]]:
                 out.append((f"{ctrl}: {r['line']}", bool(r.get("target_met"))))
     worst = worst_offender(s)
     if worst is not None:
-        out.append((f"{WORST_PREFIX}{worst.table.replace('_', ' ')}): {worst.line}", False if worst.failing else None))
+        # highlighted, but not a verdict of its own: the requirement line above is the judgement
+        out.append((f"{WORST_PREFIX}{worst.table.replace('_', ' ')}): {worst.line}", None))
     out.append((status, result.status == "complete"))
     batch = loads_verdict(s["loads"]) if isinstance(s.get("loads"), Mapping) else None
     if batch is not None:
@@ -231,12 +241,15 @@ def _timeline(events: Mapping[str, float], t_final: float | None) -> str:
                      f'<text x="{x(k):.1f}" y="{axis_y + 20}" font-size="11" text-anchor="middle" fill="#5a6272">'
                      f"{k:g}</text>")
         k += step
-    marks = []
+    lines, labels = [], []  # every connector under every label; a white halo keeps a crossed label legible
     for text, xm, xl, lane, anchor in layout:
         y = axis_y - 12 - lane * LANE_H
-        marks.append(f'<line x1="{xm:.1f}" y1="{y + 3}" x2="{xm:.1f}" y2="{axis_y}" stroke="#b3261e" '
-                     f'stroke-width="{2 if lane == 0 else 1}"/><text class="event-label" x="{xl:.1f}" y="{y}" '
-                     f'font-size="{LABEL_FONT}" text-anchor="{anchor}" fill="#1d2330">{_esc(text)}</text>')
+        lines.append(f'<line x1="{xm:.1f}" y1="{y + 3}" x2="{xm:.1f}" y2="{axis_y}" stroke="#b3261e" '
+                     f'stroke-width="{2 if lane == 0 else 1}"/>')
+        labels.append(f'<text class="event-label" x="{xl:.1f}" y="{y}" font-size="{LABEL_FONT}" '
+                      f'text-anchor="{anchor}" fill="#1d2330" stroke="#fff" stroke-width="3" '
+                      f'paint-order="stroke">{_esc(text)}</text>')
+    marks = lines + labels
     svg = (f'<svg viewBox="0 0 {width} {height}" width="100%" role="img" aria-label="events timeline">'
            f'<line x1="{left}" y1="{axis_y}" x2="{x(t_end):.1f}" y2="{axis_y}" stroke="#1d2330" stroke-width="1.5"/>'
            f'{"".join(ticks)}{"".join(marks)}<text x="{width - right}" y="{axis_y + 36}" font-size="11" '

@@ -19,7 +19,8 @@ times, keys ending ``_s``), integers in full (:func:`savant_cli.io.console.forma
 is positive; its row is red. The worst offender is the record with the smallest
 requirement ratio (:func:`requirement_ratio`: ``ratio_after``, ``ratio``, or
 ``|value| / required`` of the record or of its ``worst`` sub-record) over every table of
-the summary; where no record carries a ratio, the first failing record. Its row is
+the summary (tables of points the requirement does not judge, ``not_judged``, left
+out); where no record carries a ratio, the first failing record. Its row is
 highlighted and marked, and :func:`worst_offender` gives the line the page shows
 directly below the requirement verdict.
 """
@@ -167,6 +168,8 @@ def worst_offender(summary: Mapping[str, Any]) -> Offender | None:
     best: tuple[float, str, int, Mapping[str, Any]] | None = None
     first_failing: tuple[str, int, Mapping[str, Any]] | None = None
     for title, records in record_tables(summary):
+        if "not_judged" in title:
+            continue  # points the requirement does not judge (docs/requirements.md) are no offenders
         for i, rec in enumerate(records[:MAX_ROWS]):
             ratio = requirement_ratio(rec)
             if ratio is not None and (best is None or ratio < best[0]):
