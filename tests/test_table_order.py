@@ -253,6 +253,23 @@ def test_guidance_command_times_out_of_order_are_refused(tmp_path):
     _assert_refused(info.value, "guidance/ares_i_iss_commands.csv:time_s", value, path, 41)
 
 
+def test_reference_speed_out_of_order_in_the_first_stage_is_refused():
+    """``guidance.first_stage_schedule=relative_velocity`` indexes the first stage by the
+    command file's ``v_rel_m_s``: two first-stage samples swapped are refused, naming the
+    column, the sample and its time (the schedule is never re-sorted)."""
+    from savant_cli.sim.build import first_stage_profile
+
+    table = read_guidance(CONF / "guidance" / "ares_i_iss_commands.csv")
+    speed = table.speed.copy()
+    speed[30], speed[31] = speed[31], speed[30]
+    cfg = validate(compose_config(["guidance.first_stage_schedule=relative_velocity"]))
+    with pytest.raises(ConfigError) as info:
+        first_stage_profile(table._replace(speed=speed), cfg, 130.0)
+    assert info.value.key == "guidance/ares_i_iss_commands.csv:v_rel_m_s"
+    assert info.value.value == float(table.speed[30])
+    assert f"sample 32 (t = {table.time[31]:g} s)" in info.value.allowed
+
+
 # ----------------------------------------------------------------- tables in YAML
 def _swapped(values: list, i: int) -> str:
     v = list(values)
@@ -274,6 +291,20 @@ def test_controller_gain_breakpoints_out_of_order_are_refused(schedule):
     with pytest.raises(ConfigError) as info:
         validate(compose_config([f"controller.gains.{schedule}.breakpoints={_swapped(bp, 1)}"]))
     assert info.value.key == f"controller.gains.{schedule}.breakpoints[2]" and info.value.value == float(bp[1])
+
+
+def test_modal_nodes_listed_twice_are_refused(flex):
+    path = flex / "first_stage_burnout_nodes.csv"
+    lines, rows = _data_lines(path)
+    node = lines[rows[3]].split(",")[0]
+    cells = lines[rows[4]].split(",")
+    cells[0] = node
+    lines[rows[4]] = ",".join(cells)
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(ConfigError) as info:
+        _read_set(flex, "first_stage_burnout")
+    assert info.value.key == "flex/first_stage_burnout_nodes.csv:node" and info.value.value == int(node)
+    assert f"row 5 (line {_line(path, 4)}): node listed twice" in info.value.allowed
 
 
 # --------------------------------------------------------------------- the helpers
