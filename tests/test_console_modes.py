@@ -100,6 +100,9 @@ def test_quiet_lines_are_the_status_and_the_verdict():
                                                    "target_met": False}}
     assert _render(lambda c: print_quiet_lines(batch, "/b", c), width=200).splitlines()[1].startswith("success 8 of 8")
     assert len(_render(lambda c: print_quiet_lines({"status": "complete"}, "/c", c)).splitlines()) == 1
+    linear = {**SUMMARY, "requirements_verdict": "requirements ares_i: PASS, 4 of 4 points pass",
+              "requirements_met": True}  # the study's judgement before its flight's mission line
+    assert _render(lambda c: print_quiet_lines(linear, "/l", c), width=200).splitlines()[1].startswith("requirements")
 
 
 def test_study_console_is_silent_only_when_quiet():

@@ -171,19 +171,25 @@ def live_display_ok(console: Console | None = None) -> bool:
 
 
 def verdict_line(summary: Mapping[str, Any]) -> tuple[str, bool] | None:
-    """The one verdict line of a study's summary and whether it is met: the mission of a
-    flight, the demonstrated reliability of a Monte Carlo, the requirements of a linear
-    study or flex sweep, the time margins; None when the study has none."""
-    if isinstance(summary.get("mission_verdict"), str) and summary["mission_verdict"]:
-        return summary["mission_verdict"], summary.get("mission_success") == 1
+    """The one verdict line of a study's summary and whether it is met, the study's own
+    judgement before a flight's: the demonstrated reliability of a Monte Carlo, the
+    requirements of a linear study or flex sweep, the time margins, an FCS design's
+    verdict after tuning, else the mission of a flight; None when there is none."""
     rel = summary.get("reliability")
     if isinstance(rel, Mapping) and rel.get("line"):
         return str(rel["line"]), bool(rel.get("target_met"))
     if isinstance(summary.get("requirements_verdict"), str):
         return summary["requirements_verdict"], bool(summary.get("requirements_met"))
-    for key in ("time_margins_verdict", "verdict_after"):
-        if isinstance(summary.get(key), str):
-            return summary[key], "not met" not in summary[key] and "FAIL" not in summary[key]
+    if isinstance(summary.get("time_margins_verdict"), str):
+        line = summary["time_margins_verdict"]
+        rows = summary.get("time_margins") or []
+        bad = any(isinstance(r, Mapping) and (r.get("unstable_at_zero") or "differs by" in str(r.get("note", "")))
+                  for r in rows)
+        return line, not bad
+    if isinstance(summary.get("verdict_after"), str):
+        return summary["verdict_after"], bool(summary.get("requirements_met"))
+    if isinstance(summary.get("mission_verdict"), str) and summary["mission_verdict"]:
+        return summary["mission_verdict"], summary.get("mission_success") == 1
     return None
 
 
