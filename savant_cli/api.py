@@ -92,7 +92,7 @@ def _write_hydra_files(out_dir: Path, cfg, task_cfg, overrides: list[str]) -> No
 
 
 def run(overrides: Sequence[str] | None = None, config_dir: str | Path | None = None,
-        out_dir: str | Path | None = None) -> Result:
+        out_dir: str | Path | None = None, quiet: bool = False) -> Result:
     """Run the configured study, as ``savant run OVERRIDES`` does, and return its result.
 
     Parameters
@@ -107,6 +107,11 @@ def run(overrides: Sequence[str] | None = None, config_dir: str | Path | None = 
     out_dir : str or pathlib.Path, optional
         The run folder; default ``hydra.run.dir`` of the config
         (``outputs/<date>/<time>_<study>`` below the working directory).
+    quiet : bool
+        Print only the status line and the study's verdict line (no table, no progress
+        bar): the override ``output.console=quiet``, recorded in the run folder like
+        any other. Errors are raised (and a report that cannot be written is said on
+        stderr) all the same.
 
     Returns
     -------
@@ -144,6 +149,12 @@ def run(overrides: Sequence[str] | None = None, config_dir: str | Path | None = 
     for o in overrides:
         if o.startswith("-"):
             raise ConfigError("overrides", o, "must be Hydra overrides; savant_cli.run runs one job (no flags)")
+    if quiet:
+        given = [o for o in overrides if o.lstrip("+~").split("=", 1)[0] == "output.console"]
+        if any(o.split("=", 1)[-1] != "quiet" for o in given):
+            raise ConfigError("quiet", True, f"conflicts with the override {given[0]!r}: pass one or the other")
+        if not given:
+            overrides.append("output.console=quiet")
     cdir = None if config_dir is None else Path(config_dir).expanduser().resolve()
     if cdir is not None and not cdir.is_dir():
         raise ConfigError("config_dir", str(config_dir), "must be an existing config folder")

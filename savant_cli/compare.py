@@ -45,6 +45,7 @@ from rich.table import Table
 from savant_cli.errors import ConfigError
 from savant_cli.io.atomic import write_json_atomic, write_text_atomic
 from savant_cli.io.hdf5 import read_run
+from savant_cli.io.table_order import require_increasing
 
 TOLERANCES = ("max_abs", "rms", "max_rel")
 _SIGNAL_RE = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*)(?:\[(\w+)\])?$")
@@ -164,8 +165,7 @@ def compare(run_dir: Path, reference: Path, mapping: Path, out_dir: Path | None 
     run = read_run(run_dir / "savant.h5")
     t_run = np.asarray(run.signals["time"].data, dtype=float)
     t_ref = ref[spec["time"]] * spec["time_scale"] + spec["time_offset"]
-    if np.any(np.diff(t_ref) <= 0):
-        raise ConfigError("reference.time.column", spec["time"], "must be strictly increasing")
+    require_increasing(f"{reference.name}:{spec['time']}", ref[spec["time"]], what="the reference's time axis")
     lo, hi = max(t_run[0], t_ref[0], spec["window"][0]), min(t_run[-1], t_ref[-1], spec["window"][1])
     if not hi > lo:
         raise ConfigError("REFERENCE", str(reference), f"its time axis [{t_ref[0]:g}, {t_ref[-1]:g}] s does not overlap "

@@ -68,6 +68,7 @@ class EnvironmentConfig:
 class OutputConfig:
     hdf5: bool = True
     plots: bool = True
+    console: str = "full"  # full | summary | quiet (savant_cli.io.console.CONSOLE_MODES)
 
 
 @dataclass
@@ -1033,9 +1034,18 @@ def _small_angles(key: str, values: list[float], n: int, limit_deg: float, axes:
 
 
 def _increasing(key: str, values: list[float]) -> None:
+    """A table axis given as a YAML list: at least 2 finite numbers, strictly increasing as
+    written; the first element out of order is named ``key[i]`` (refused, never sorted)."""
     arr = np.asarray(values, dtype=float)
-    if arr.size < 2 or not np.all(np.diff(arr) > 0.0):
+    if arr.size < 2:
         raise ConfigError(key, list(values), "must be a strictly increasing list of at least 2 numbers")
+    for i in range(arr.size):
+        if not np.isfinite(arr[i]):
+            raise ConfigError(f"{key}[{i}]", float(arr[i]), "must be a finite number")
+        if i and arr[i] <= arr[i - 1]:
+            raise ConfigError(f"{key}[{i}]", float(arr[i]), f"the list must be strictly increasing, and it follows "
+                                                            f"{arr[i - 1]:g} at [{i - 1}]; put it in order (savant "
+                                                            f"never sorts a table)")
 
 
 #: Documented bounds of the ``sim`` rates (Hz) and times (s): beyond them a run would not
@@ -1204,6 +1214,7 @@ def check_physics(cfg: SavantConfig) -> None:
     _one_of("environment.gravity_order", cfg.environment.gravity_order, (0, 2, 3, 4))
     _one_of("phase.stop_at", cfg.phase.stop_at, ("cutoff", "separation"))
     _one_of("phase.start", cfg.phase.start, ("liftoff", "staging"))
+    _one_of("output.console", cfg.output.console, ("full", "summary", "quiet"))
     if cfg.phase.start == "staging" and cfg.phase.stop_at == "separation":
         raise ConfigError("phase.stop_at", cfg.phase.stop_at, "a phase starting at staging must stop at cutoff")
     if cfg.phase.start == "staging" and not cfg.phase.staging_state_file:

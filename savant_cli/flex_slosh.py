@@ -16,6 +16,7 @@ import numpy as np
 from savant_cli.config import FlexOnConfig, SloshOnConfig
 from savant_cli.errors import ConfigError
 from savant_cli.io.modal_data import ModalSet, read_modal_set, read_numeric_csv
+from savant_cli.io.table_order import require_increasing, table_key
 from savant_cli.sim import layout as L
 from savant_cli.vehicle import Vehicle
 
@@ -125,13 +126,14 @@ def _tank(name: str, node: dict, vdir: Path, load_kg: float) -> SloshTank:
         if not float(node[k]) > 0.0:
             raise ConfigError(f"{key}.{k}", node[k], "must be positive")
     path = vdir / str(node["table"])
-    header, data = read_numeric_csv(path, f"{key}.table")
+    header, data, lines = read_numeric_csv(path, f"{key}.table")
     if header != list(SLOSH_COLUMNS):
         raise ConfigError(f"{key}.table", str(path), f"header must be {','.join(SLOSH_COLUMNS)}")
     level = data[:, 0]
-    tkey = f"{path.parent.name}/{path.name}"
-    if level.size < 2 or np.any(np.diff(level) <= 0.0):
-        raise ConfigError(f"{tkey}:level_m", level.tolist()[:5], "must be strictly increasing (at least 2 rows)")
+    tkey = table_key(path)
+    if level.size < 2:
+        raise ConfigError(f"{tkey}:level_m", level.tolist(), "needs at least 2 rows")
+    require_increasing(f"{tkey}:level_m", level, lines, what="the liquid level")
     radius, density = float(node["radius_m"]), float(node["density_kgm3"])
     full = load_kg / (density * np.pi * radius**2)
     if level[0] > 0.0 or level[-1] < full * (1.0 - 1e-9):

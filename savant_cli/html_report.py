@@ -5,13 +5,19 @@ Every study writes it into its run folder (:func:`savant_cli.studies.run_study`)
 folder's files alone (:func:`savant_cli.result.load`): ``summary.json``, ``savant.h5``
 and ``plots/``. Sections, in order:
 
-1. the verdicts: the run's status and every verdict line of the study (requirements,
-   time margins, the Monte Carlo's demonstrated success and loads, the q·α allowable),
-   green when met and red when not;
+1. the verdicts, the requirement verdict first: the study's verdict lines
+   (requirements, time margins, the mission, the Monte Carlo's demonstrated success),
+   then the worst offender of the summary's tables
+   (:func:`savant_cli.html_tables.worst_offender`), then the run's status, the loads and
+   any other verdict line; green when met, red when not;
 2. the summary: every scalar of ``summary.json`` with its unit, then every table the
-   summary holds (margins, statistics, margin spread, time margins …), up to
-   :data:`MAX_ROWS` rows each (the CSV files have them all);
-3. the events timeline: an SVG time axis with the flight's events, and their table;
+   summary holds (margins, statistics, margin spread, time margins …) as real tables
+   with units and 4 significant digits (:mod:`savant_cli.html_tables`), failing rows
+   red and the worst offender's row highlighted, up to
+   :data:`savant_cli.html_tables.MAX_ROWS` rows each (the CSV files have them all);
+3. the events timeline: an SVG time axis with the flight's events, each label in the
+   lowest lane where it overlaps no other label and inside the drawing
+   (:func:`timeline_layout`), and their table;
 4. the figures: every PNG of ``plots/``, embedded, by folder;
 5. the configuration as a diff from the shipped defaults (``savant run`` with no
    overrides), key by key;
@@ -31,14 +37,13 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
+from savant_cli.html_tables import format_cell, summary_tables, worst_offender
 from savant_cli.io.atomic import write_text_atomic
-from savant_cli.io.console import format_value, loads_line, split_unit
+from savant_cli.io.console import loads_line, split_unit
 from savant_cli.montecarlo.results import loads_by_choice_lines, loads_verdict
 from savant_cli.result import Result, load
 
 REPORT_FILE = "report.html"
-#: Rows shown of a table of the summary (the rest are in the study's CSV files).
-MAX_ROWS = 200
 
 _CSS = """
 body { font-family: system-ui, -apple-system, "Segoe UI", Roboto, Helvetica, Arial, sans-serif;
@@ -51,11 +56,14 @@ h1 { font-size: 1.5em; margin: 0.3em 0; } h2 { font-size: 1.2em; margin-top: 1.6
            font-size: 0.88em; white-space: pre-wrap; word-break: break-word; }
 .ok { background: #e6f4ea; border-left: 4px solid #1e7b34; } .bad { background: #fbe9e7; border-left: 4px solid #b3261e; }
 .neutral { background: #eef1f6; border-left: 4px solid #6b7a90; }
+.verdict.worst { font-weight: 600; background: #ffe08a; border-left: 8px solid #b07d00; }
+tr.fail td { background: #fbe9e7; } tr.worst td { background: #ffe08a; font-weight: 600; }
+td.mark { color: #b3261e; white-space: nowrap; } .unit { color: #5a6272; font-weight: normal; }
 .scroll { overflow-x: auto; max-height: 520px; overflow-y: auto; border: 1px solid #e2e5ea; }
-table { border-collapse: collapse; font-size: 0.84em; width: 100%; }
+table { border-collapse: collapse; font-size: 0.84em; width: auto; min-width: 40%; }
 th, td { padding: 3px 8px; border-bottom: 1px solid #eceef2; text-align: left; vertical-align: top; }
-th { background: #f0f2f5; position: sticky; top: 0; } td.num { text-align: right; font-variant-numeric: tabular-nums; }
-tr.changed td { background: #fff8e1; }
+th { background: #f0f2f5; position: sticky; top: 0; } td.num { text-align: right; font-variant-numeric: tabular-nums; white-space: nowrap; }
+tr.changed td { background: #fff8e1; } tbody td:first-child { white-space: nowrap; }
 figure { margin: 10px 0 18px; } figure img { max-width: 100%; height: auto; border: 1px solid #e2e5ea; }
 figcaption { font-size: 0.82em; color: #5a6272; }
 nav a { margin-right: 12px; font-size: 0.9em; }
@@ -67,8 +75,10 @@ def _esc(value: Any) -> str:
     return html.escape(str(value), quote=True)
 
 
-def _cell(value: Any, fmt: str | None = None) -> str:
-    text = format_value(value, fmt) if not isinstance(value, (list, dict)) else str(value)
+def _cell(value: Any, key: str = "") -> str:
+    """One cell: the value as :func:`savant_cli.html_tables.format_cell` gives it under
+    ``key`` (significant digits by its unit), numbers right-aligned."""
+    text = format_cell(key, value)
     numeric = isinstance(value, (int, float)) and not isinstance(value, bool)
     return f'<td class="num">{_esc(text)}</td>' if numeric else f"<td>{_esc(text)}</td>"
 
@@ -88,12 +98,20 @@ def verdicts(result: Result) -> list[tuple[str, bool | None]]:
     s = result.summary
     out: list[tuple[str, bool | None]] = []
     status = f"status: {result.status}" + (f" — {result.message}" if result.message else "")
-    out.append((status, result.status == "complete"))
     if s.get("missing_runs"):  # a Monte Carlo collected with --allow-missing: never looks complete
         out.append((f"PARTIAL batch: {s.get('n_runs_present')} of {s.get('n_runs_expected')} runs present, "
                     f"missing runs {s['missing_runs']}", False))
     if isinstance(s.get("requirements_verdict"), str):
         out.append((s["requirements_verdict"], bool(s.get("requirements_met"))))
+    elif isinstance(s.get("requirements_verdict"), Mapping):  # a fly-off: per controller, "n of m" runs passing
+        for ctrl, line in s["requirements_verdict"].items():
+            meeting = str((s.get("runs_meeting_requirements") or {}).get(ctrl, ""))
+            n, _, m = meeting.partition(" of ")
+            out.append((f"{ctrl}: {line}", n == m and n != "" if meeting else ": PASS" in str(line)))
+    if isinstance(s.get("verdict_after"), str):  # an FCS design: the tuned controller's verdict, then the start's
+        out.append((f"after: {s['verdict_after']}", bool(s.get("requirements_met"))))
+        if isinstance(s.get("verdict_before"), str):
+            out.append((f"before: {s['verdict_before']}", None))
     if isinstance(s.get("time_margins_verdict"), str):
         rows = s.get("time_margins") or []
         bad = any(r.get("unstable_at_zero") or "differs by" in str(r.get("note", "")) for r in rows)
@@ -109,6 +127,11 @@ def verdicts(result: Result) -> list[tuple[str, bool | None]]:
             if isinstance(r, Mapping) and r.get("line"):
                 out += _mission_lines((s.get("mission") or {}).get(ctrl), f"{ctrl}: ")
                 out.append((f"{ctrl}: {r['line']}", bool(r.get("target_met"))))
+    worst = worst_offender(s)
+    if worst is not None:
+        # highlighted, but not a verdict of its own: the requirement line above is the judgement
+        out.append((f"{WORST_PREFIX}{worst.table.replace('_', ' ')}): {worst.line}", None))
+    out.append((status, result.status == "complete"))
     batch = loads_verdict(s["loads"]) if isinstance(s.get("loads"), Mapping) else None
     if batch is not None:
         out.append((f"loads: {batch[0]}", batch[1]))
@@ -135,9 +158,14 @@ def _mission_lines(mission: Any, prefix: str) -> list[tuple[str, bool | None]]:
              + ("" if c["counted"] else "; not counted as a failure"), False if c["counted"] else None) for c in rows]
 
 
+#: How the worst-offender line of :func:`verdicts` starts.
+WORST_PREFIX = "worst offender ("
+
+
 def _verdict_html(lines: list[tuple[str, bool | None]]) -> str:
     cls = {True: "ok", False: "bad", None: "neutral"}
-    return "".join(f'<div class="verdict {cls[ok]}">{_esc(text)}</div>' for text, ok in lines)
+    return "".join(f'<div class="verdict {cls[ok]}{" worst" if text.startswith(WORST_PREFIX) else ""}">'
+                   f"{_esc(text)}</div>" for text, ok in lines)
 
 
 # ------------------------------------------------------------------------------- summary
@@ -147,52 +175,57 @@ def _scalars(summary: Mapping[str, Any]) -> str:
     for key, value in summary.items():
         if isinstance(value, (list, dict)) or key in ("status", "message"):
             continue
-        name, unit, fmt = split_unit(key)
-        rows.append([f"<td>{_esc(name)}</td>", _cell(value, fmt), f"<td>{_esc(unit)}</td>"])
+        name, unit, _ = split_unit(key)
+        rows.append([f"<td>{_esc(name)}</td>", _cell(value, key), f"<td>{_esc(unit)}</td>"])
     return _table(("quantity", "value", "unit"), rows) if rows else "<p>No scalar results.</p>"
 
 
-def _records_table(records: list[Mapping[str, Any]]) -> str:
-    cols: list[str] = []
-    for r in records:
-        cols += [k for k in r if k not in cols]
-    shown = records[:MAX_ROWS]
-    rows = [[_cell(r.get(c)) for c in cols] for r in shown]
-    more = (f'<p class="sub">{len(records) - MAX_ROWS} more rows in the study\'s CSV files.</p>'
-            if len(records) > MAX_ROWS else "")
-    return _table(cols, rows) + more
-
-
-def _mapping_table(mapping: Mapping[str, Any]) -> str:
-    rows = []
-    for k, v in mapping.items():
-        if isinstance(v, list) and v and all(isinstance(x, Mapping) for x in v):
-            continue  # drawn as its own table
-        rows.append([f"<td>{_esc(k)}</td>", _cell(v if not isinstance(v, Mapping) else dict(v))])
-    return _table(("key", "value"), rows) if rows else ""
-
-
-def _structured(summary: Mapping[str, Any]) -> str:
-    parts = []
-    for key, value in summary.items():
-        title = key.replace("_", " ")
-        if isinstance(value, list) and value and all(isinstance(x, Mapping) for x in value):
-            parts.append(f"<h3>{_esc(title)}</h3>{_records_table(value)}")
-        elif isinstance(value, Mapping) and value:
-            parts.append(f"<h3>{_esc(title)}</h3>{_mapping_table(value)}")
-            for sub, inner in value.items():
-                if isinstance(inner, list) and inner and all(isinstance(x, Mapping) for x in inner):
-                    parts.append(f"<h3>{_esc(title)}: {_esc(sub.replace('_', ' '))}</h3>{_records_table(inner)}")
-    return "".join(parts)
-
-
 # -------------------------------------------------------------------------------- events
+
+#: Timeline geometry (SVG user units): width, margins, label font size, the width of one
+#: label character (an upper bound for the page's sans-serif at that size), lane height.
+TIMELINE_WIDTH, TIMELINE_LEFT, TIMELINE_RIGHT = 1000, 30, 30
+LABEL_FONT, LABEL_CHAR_W, LANE_H, LABEL_GAP = 11, 7.0, 16, 8
+
+
+def timeline_layout(events: Mapping[str, float], t_end: float) -> list[tuple[str, float, float, int, str]]:
+    """Where each event label goes: ``(text, x of the mark, x of the label, lane,
+    anchor)``, lane 0 next to the axis.
+
+    Labels are horizontal. Each, in time order, takes the lowest lane in which its
+    estimated extent (:data:`LABEL_CHAR_W` per character) keeps :data:`LABEL_GAP` from
+    every label already there; it starts at its mark, or ends at it (``anchor`` ``end``)
+    when it would run past the right edge, so no label overlaps another or leaves the
+    drawing."""
+    scale = (TIMELINE_WIDTH - TIMELINE_LEFT - TIMELINE_RIGHT) / t_end
+    lanes: list[list[tuple[float, float]]] = []
+    out = []
+    for name, t in sorted(events.items(), key=lambda kv: (kv[1], kv[0])):
+        text = f"{name} {t:.2f} s"
+        x = TIMELINE_LEFT + t * scale
+        w = len(text) * LABEL_CHAR_W
+        start, anchor = x + 3, "start"
+        if start + w > TIMELINE_WIDTH - 2:
+            start, anchor = x - 3 - w, "end"
+        span = (start, start + w)
+        lane = next((i for i, used in enumerate(lanes)
+                     if all(span[1] + LABEL_GAP <= a or span[0] >= b + LABEL_GAP for a, b in used)), len(lanes))
+        if lane == len(lanes):
+            lanes.append([])
+        lanes[lane].append(span)
+        out.append((text, x, x + 3 if anchor == "start" else x - 3, lane, anchor))
+    return out
+
 
 def _timeline(events: Mapping[str, float], t_final: float | None) -> str:
     if not events:
         return "<p>No events (a study without a single flight, or a run that stopped before any).</p>"
     t_end = max([*events.values(), t_final or 0.0]) or 1.0
-    width, left, right, axis_y = 1000, 30, 30, 150
+    width, left, right = TIMELINE_WIDTH, TIMELINE_LEFT, TIMELINE_RIGHT
+    layout = timeline_layout(events, t_end)
+    n_lanes = max(lane for *_, lane, _ in layout) + 1
+    axis_y = 20 + n_lanes * LANE_H
+    height = axis_y + 44
     scale = (width - left - right) / t_end
 
     def x(t: float) -> float:
@@ -208,16 +241,20 @@ def _timeline(events: Mapping[str, float], t_final: float | None) -> str:
                      f'<text x="{x(k):.1f}" y="{axis_y + 20}" font-size="11" text-anchor="middle" fill="#5a6272">'
                      f"{k:g}</text>")
         k += step
-    marks = []
-    for name, t in events.items():
-        marks.append(f'<line x1="{x(t):.1f}" y1="{axis_y - 8}" x2="{x(t):.1f}" y2="{axis_y}" stroke="#b3261e" '
-                     f'stroke-width="2"/><text transform="translate({x(t) + 3:.1f},{axis_y - 12}) rotate(-35)" '
-                     f'font-size="11" fill="#1d2330">{_esc(name)} {t:.2f} s</text>')
-    svg = (f'<svg viewBox="0 0 {width} 185" width="100%" role="img" aria-label="events timeline">'
+    lines, labels = [], []  # every connector under every label; a white halo keeps a crossed label legible
+    for text, xm, xl, lane, anchor in layout:
+        y = axis_y - 12 - lane * LANE_H
+        lines.append(f'<line x1="{xm:.1f}" y1="{y + 3}" x2="{xm:.1f}" y2="{axis_y}" stroke="#b3261e" '
+                     f'stroke-width="{2 if lane == 0 else 1}"/>')
+        labels.append(f'<text class="event-label" x="{xl:.1f}" y="{y}" font-size="{LABEL_FONT}" '
+                      f'text-anchor="{anchor}" fill="#1d2330" stroke="#fff" stroke-width="3" '
+                      f'paint-order="stroke">{_esc(text)}</text>')
+    marks = lines + labels
+    svg = (f'<svg viewBox="0 0 {width} {height}" width="100%" role="img" aria-label="events timeline">'
            f'<line x1="{left}" y1="{axis_y}" x2="{x(t_end):.1f}" y2="{axis_y}" stroke="#1d2330" stroke-width="1.5"/>'
            f'{"".join(ticks)}{"".join(marks)}<text x="{width - right}" y="{axis_y + 36}" font-size="11" '
            f'text-anchor="end" fill="#5a6272">mission time (s)</text></svg>')
-    rows = [[f"<td>{_esc(n)}</td>", _cell(float(t), "{:.3f}")] for n, t in events.items()]
+    rows = [[f"<td>{_esc(n)}</td>", f'<td class="num">{float(t):.3f}</td>'] for n, t in events.items()]
     return svg + _table(("event", "time (s)"), rows)
 
 
@@ -336,7 +373,7 @@ def render(result: Result) -> str:
     ok = all(v is not False for _, v in lines)
     sections = [
         ("verdicts", "Verdicts", _verdict_html(lines)),
-        ("summary", "Summary", _scalars(result.summary) + _structured(result.summary)),
+        ("summary", "Summary", _scalars(result.summary) + summary_tables(result.summary, worst_offender(result.summary))),
         ("events", "Events", _timeline(result.events, t_final)),
         ("figures", f"Figures ({n_figures})", figures),
         ("config", "Configuration (difference from the shipped defaults)", _config_html(result)),

@@ -33,6 +33,7 @@ from typing import Any
 import numpy as np
 
 from savant_cli.errors import ConfigError
+from savant_cli.io.table_order import data_line_numbers, require_grid_order, require_increasing, table_key
 from savant_cli.models.aero import COEFFICIENTS
 from savant_cli.models.configurations import CONFIG_NAMES
 
@@ -67,6 +68,13 @@ TABLE_COLUMNS: dict[str, tuple[tuple[str, str | None], ...]] = {
     "first_stage_thrust": (("time", "time"), ("thrust_vac", "force")),
     "startup": (("time", "time"), ("thrust_fraction", None)),
     "rcs_thrust": (("altitude", "length"), ("thrust_vac", "force")),
+}
+
+#: table kind -> its axis columns (base names), slowest first: checked in the order written,
+#: strictly increasing (a grid's rows with the first column slowest); refused, never sorted
+TABLE_AXES: dict[str, tuple[str, ...]] = {
+    "mass": ("propellant_remaining",), "aero": ("mach", "alpha", "beta"), "base_force": ("time",),
+    "first_stage_thrust": ("time",), "startup": ("time",), "rcs_thrust": ("altitude",),
 }
 
 MASS_TOLERANCE_KG = 1.0   # staging consistency of the mass tables
@@ -328,8 +336,7 @@ def _vec3(value: Any) -> np.ndarray:
 
 
 # ----------------------------------------------------------------------------- tables
-def _table_key(path: Path) -> str:
-    return f"{path.parent.name}/{path.name}"
+_table_key = table_key
 
 
 def _split_unit(name: str) -> tuple[str, str | None]:
@@ -360,7 +367,9 @@ def read_table(path: Path, kind: str) -> tuple[dict[str, np.ndarray], dict[str, 
     ------
     ConfigError
         Missing or unreadable file, missing/duplicate/unknown columns, wrong units,
-        ragged rows, non-numeric or non-finite cells, fewer than 2 rows.
+        ragged rows, non-numeric or non-finite cells, fewer than 2 rows, an axis
+        (:data:`TABLE_AXES`) out of order: ``<folder>/<file>.csv:<column>``, the row
+        (and its line) and the value; the table is never re-sorted.
     """
     key = _table_key(path)
     if not path.is_file():
@@ -421,15 +430,14 @@ def read_table(path: Path, kind: str) -> tuple[dict[str, np.ndarray], dict[str, 
             bad = int(np.nonzero(~np.isfinite(col))[0][0])
             raise ConfigError(f"{key}:{header[j]}", float(col[bad]), "all values must be finite")
         out[base] = np.ascontiguousarray(col * UNITS[unit][1] if unit else col)
-    return out, {base: header[j] for base, (j, _) in columns.items()}
-
-
-def _increasing(key: str, x: np.ndarray) -> None:
-    d = np.diff(x)
-    if np.any(d <= 0.0):
-        i = int(np.argmax(d <= 0.0))
-        raise ConfigError(key, float(x[i + 1]), f"table axis must be strictly increasing (row {i + 2} "
-                                                f"follows {x[i]:.9g})")
+    names = {base: header[j] for base, (j, _) in columns.items()}
+    axes = TABLE_AXES[kind]  # checked as written (in the file's units), before anything uses the order
+    rows = data_line_numbers(lines, header_at + 1)
+    if len(axes) == 1:
+        require_increasing(f"{key}:{names[axes[0]]}", data[:, columns[axes[0]][0]], rows)
+    else:
+        require_grid_order([f"{key}:{names[a]}" for a in axes], [data[:, columns[a][0]] for a in axes], rows)
+    return out, names
 
 
 def _non_negative(key: str, x: np.ndarray, what: str) -> None:
@@ -440,35 +448,35 @@ def _non_negative(key: str, x: np.ndarray, what: str) -> None:
 def _aero(cfg: Mapping, vdir: Path, cname: str) -> AeroTable:
     path = vdir / cfg["aero_table"]
     key = _table_key(path)
-    t, tn = read_table(path, "aero")
-    n_rows = t["mach"].size
-    axes, inverse = [], []
-    for c in ("mach", "alpha", "beta"):
-        u, inv = np.unique(t[c], return_inverse=True)
-        if u.size < 2:
-            raise ConfigError(f"{key}:{tn[c]}", u.tolist(), "needs at least 2 distinct values")
-        axes.append(u)
-        inverse.append(inv.ravel())
+    t, tn = read_table(path, "aero")  # rows in grid order, refused otherwise (TABLE_AXES)
+    names = ("mach", "alpha", "beta")
+    # the distinct breakpoints of each axis; the rows must be exactly their product, in order
+    axes = [np.unique(t[c]) for c in names]
+    for c, a in zip(names, axes):
+        if a.size < 2:
+            raise ConfigError(f"{key}:{tn[c]}", a.tolist(), "needs at least 2 distinct values")
     shape = tuple(a.size for a in axes)
-    flat = np.ravel_multi_index(tuple(inverse), shape)
-    counts = np.bincount(flat, minlength=int(np.prod(shape)))
-    if n_rows != counts.size or np.any(counts != 1):
-        missing = int(np.sum(counts == 0))
-        dup = int(np.sum(counts > 1))
-        raise ConfigError(key, f"{n_rows} rows", f"must be a full rectangular grid: every (mach, alpha, beta) "
-                                                 f"combination of {shape[0]}x{shape[1]}x{shape[2]} = {counts.size} "
-                                                 f"exactly once ({missing} missing, {dup} repeated)")
+    grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+    rows = np.column_stack([t[c] for c in names])
+    if rows.shape != grid.shape or not np.array_equal(rows, grid):
+        # the rows are a strictly ordered subset of the grid (read_table): the first that differs marks a gap
+        mismatch = np.any(rows != grid[:rows.shape[0]], axis=1)
+        first = int(np.argmax(mismatch)) if mismatch.any() else rows.shape[0]
+        factor = [UNITS[_split_unit(tn[c])[1]][1] if _split_unit(tn[c])[1] else 1.0 for c in names]
+        at = ", ".join(f"{tn[c]} = {grid[first, j] / factor[j]:.9g}" for j, c in enumerate(names))
+        raise ConfigError(key, f"{rows.shape[0]} rows", f"must be a full rectangular grid: every (mach, alpha, beta) "
+                                                         f"combination of {shape[0]}x{shape[1]}x{shape[2]} = "
+                                                         f"{grid.shape[0]} exactly once, in order; "
+                                                         f"{grid.shape[0] - rows.shape[0]} missing, the first at "
+                                                         f"row {first + 1} ({at})")
     if axes[0][0] < 0.0:
         raise ConfigError(f"{key}:{tn['mach']}", float(axes[0][0]), "Mach must not be negative")
     for c, a in zip(("alpha", "beta"), axes[1:]):
         if a[0] < -np.pi / 2 or a[-1] > np.pi / 2:
             raise ConfigError(f"{key}:{tn[c]}", [float(a[0]), float(a[-1])], "angles must be within ±90 deg")
-    coeffs = np.empty((6, counts.size))
-    for k, c in enumerate(AERO_COEFFS):
-        coeffs[k, flat] = t[c]
+    coeffs = np.stack([t[c] for c in AERO_COEFFS])  # row i of the file is grid point i (C order)
     bpath = vdir / cfg["base_force_table"]
-    b, bn = read_table(bpath, "base_force")
-    _increasing(f"{_table_key(bpath)}:{bn['time']}", b["time"])
+    b, _ = read_table(bpath, "base_force")
     p = f"vehicle.configurations.{cname}"
     return AeroTable(
         mach=axes[0], alpha_rad=axes[1], beta_rad=axes[2],
@@ -486,7 +494,6 @@ def _mass(cfg: Mapping, vdir: Path, length_m: float) -> MassTable:
     t, tn = read_table(path, "mass")
     prop = t["propellant_remaining"]
     _non_negative(f"{key}:{tn['propellant_remaining']}", prop, "propellant remaining")
-    _increasing(f"{key}:{tn['propellant_remaining']}", prop)
     for c in ("mass", "ixx", "iyy", "izz"):
         bad = np.nonzero(t[c] <= 0.0)[0]
         if bad.size:
@@ -581,7 +588,6 @@ def load_vehicle(vehicle_cfg: Mapping, data_dir: Path) -> Vehicle:
     fs_node = node["first_stage"]
     fpath = vdir / fs_node["thrust_table"]
     ft, ftn = read_table(fpath, "first_stage_thrust")
-    _increasing(f"{_table_key(fpath)}:{ftn['time']}", ft["time"])
     _non_negative(f"{_table_key(fpath)}:{ftn['thrust_vac']}", ft["thrust_vac"], "thrust")
     if ft["thrust_vac"].max() <= 0.0:
         raise ConfigError(f"{_table_key(fpath)}:{ftn['thrust_vac']}", 0.0, "thrust must be positive somewhere")
@@ -602,8 +608,7 @@ def load_vehicle(vehicle_cfg: Mapping, data_dir: Path) -> Vehicle:
     p = "vehicle.upper_stage"
     us_node = node["upper_stage"]
     spath = vdir / us_node["startup_table"]
-    st, stn = read_table(spath, "startup")
-    _increasing(f"{_table_key(spath)}:{stn['time']}", st["time"])
+    st, _ = read_table(spath, "startup")
     frac = st["thrust_fraction"]
     if np.any((frac < 0.0) | (frac > 1.0)):
         raise ConfigError(f"{_table_key(spath)}:thrust_fraction", float(frac[np.argmax((frac < 0) | (frac > 1))]),
@@ -627,7 +632,6 @@ def load_vehicle(vehicle_cfg: Mapping, data_dir: Path) -> Vehicle:
     rn = node["rcs"]
     rpath = vdir / rn["thrust_table"]
     rt, rtn = read_table(rpath, "rcs_thrust")
-    _increasing(f"{_table_key(rpath)}:{rtn['altitude']}", rt["altitude"])
     _non_negative(f"{_table_key(rpath)}:{rtn['thrust_vac']}", rt["thrust_vac"], "thrust")
     rcs = Rcs(altitude_m=rt["altitude"], thrust_vac_N=rt["thrust_vac"],
               exit_area_m2=_positive(f"{p}.exit_area_m2", rn["exit_area_m2"], True),

@@ -40,6 +40,12 @@ class PageCheck:
     console_errors: list[str] = field(default_factory=list)
     screenshot_png: bytes = b""
     sections: int = 0
+    #: the page's visible text (``document.body.innerText``)
+    text: str = ""
+    #: page-coordinate boxes (``x, y, width, height``) of the timeline's event labels
+    #: and of its drawing (None: no timeline)
+    label_boxes: list[dict] = field(default_factory=list)
+    timeline_box: dict | None = None
 
 
 def _free_port() -> int:
@@ -95,9 +101,10 @@ def _errors(events: list[dict]) -> list[str]:
 
 
 def check_page(path: Path, width: int = 1366, height: int = 900, timeout: float = 60.0,
-               anchor: str = "") -> PageCheck:
+               anchor: str = "", scale: float = 1.0) -> PageCheck:
     """Load ``path`` (a local HTML file) in headless Chromium at a laptop's viewport and
-    report what it saw; ``anchor`` scrolls the screenshot to ``#anchor``.
+    report what it saw; ``anchor`` scrolls the screenshot to ``#anchor``; ``scale``
+    shrinks the screenshot (0.5: half the pixels each way).
 
     Raises
     ------
@@ -140,9 +147,22 @@ def check_page(path: Path, width: int = 1366, height: int = 900, timeout: float 
                      "document.querySelectorAll('section').length, broken: Array.from(document.images)"
                      ".filter(i => !(i.complete && i.naturalWidth > 0)).map(i => i.alt || i.src.slice(0, 40))})")
             seen = json.loads(s.call("Runtime.evaluate", expression=probe, returnByValue=True)["result"]["value"])
+            boxes = ("JSON.stringify({text: document.body.innerText, labels: Array.from(document.querySelectorAll("
+                     "'svg[aria-label=\"events timeline\"] text.event-label')).map(e => {const r = "
+                     "e.getBoundingClientRect(); return {text: e.textContent, x: r.x + scrollX, y: r.y + scrollY, "
+                     "width: r.width, height: r.height};}), svg: (() => {const e = document.querySelector("
+                     "'svg[aria-label=\"events timeline\"]'); if (!e) return null; const r = "
+                     "e.getBoundingClientRect(); return {x: r.x + scrollX, y: r.y + scrollY, width: r.width, "
+                     "height: r.height};})()})")
+            dom = json.loads(s.call("Runtime.evaluate", expression=boxes, returnByValue=True)["result"]["value"])
             import base64
 
-            shot = base64.b64decode(s.call("Page.captureScreenshot", format="png")["data"])
+            shot_args: dict = {"format": "png"}
+            if scale != 1.0:
+                metrics = s.call("Page.getLayoutMetrics")["cssVisualViewport"]
+                shot_args["clip"] = {"x": metrics["pageX"], "y": metrics["pageY"], "width": width, "height": height,
+                                     "scale": scale}
+            shot = base64.b64decode(s.call("Page.captureScreenshot", **shot_args)["data"])
             time.sleep(0.2)  # late console messages
             s.ws.settimeout(0.3)
             try:
@@ -152,7 +172,8 @@ def check_page(path: Path, width: int = 1366, height: int = 900, timeout: float 
                 pass
             s.ws.close()
             return PageCheck(title=seen["title"], images=seen["n"], broken_images=seen["broken"],
-                             console_errors=_errors(s.events), screenshot_png=shot, sections=seen["sections"])
+                             console_errors=_errors(s.events), screenshot_png=shot, sections=seen["sections"],
+                             text=dom["text"], label_boxes=dom["labels"], timeline_box=dom["svg"])
         finally:
             proc.terminate()
             try:
@@ -171,9 +192,29 @@ def is_blank(png: bytes) -> bool:
     return len(np.unique(grey)) < 16 or float(grey.std()) < 2.0
 
 
-if __name__ == "__main__":  # python tests/browser.py REPORT.html SHOT.png [ANCHOR]: the docs' screenshots
+def overlapping_labels(boxes: list[dict], gap: float = 0.0) -> list[tuple[str, str]]:
+    """Pairs of label boxes that overlap (closer than ``gap`` px), by their text."""
+    out = []
+    for i, a in enumerate(boxes):
+        for b in boxes[i + 1:]:
+            if (a["x"] < b["x"] + b["width"] + gap and b["x"] < a["x"] + a["width"] + gap
+                    and a["y"] < b["y"] + b["height"] and b["y"] < a["y"] + a["height"]):
+                out.append((a["text"], b["text"]))
+    return out
+
+
+def clipped_labels(boxes: list[dict], frame: dict) -> list[str]:
+    """Labels whose box leaves ``frame`` (the timeline's drawing), by their text."""
+    return [b["text"] for b in boxes
+            if b["x"] < frame["x"] - 0.5 or b["y"] < frame["y"] - 0.5
+            or b["x"] + b["width"] > frame["x"] + frame["width"] + 0.5
+            or b["y"] + b["height"] > frame["y"] + frame["height"] + 0.5]
+
+
+if __name__ == "__main__":  # python tests/browser.py REPORT.html SHOT.png [ANCHOR [SCALE]]: the docs' screenshots
     import sys
 
-    seen = check_page(Path(sys.argv[1]), anchor=sys.argv[3] if len(sys.argv) > 3 else "")
+    seen = check_page(Path(sys.argv[1]), anchor=sys.argv[3] if len(sys.argv) > 3 else "",
+                      scale=float(sys.argv[4]) if len(sys.argv) > 4 else 1.0)
     Path(sys.argv[2]).write_bytes(seen.screenshot_png)
     print(f"{sys.argv[2]}: {seen.images} images, broken {seen.broken_images}, console errors {seen.console_errors}")

@@ -241,7 +241,8 @@ def test_nodes_file_with_an_unknown_node_is_refused(tmp_path, bad_id):
     f.write_text(f.read_text().replace("\n102,", f"\n{bad_id},"))
     with pytest.raises(ConfigError) as exc:
         read_modal_set(tmp_path, "a", ("m", "N"), "vehicle.flex set a")
-    assert exc.value.key.startswith("vehicle.flex set a")
+    assert exc.value.key.endswith("/a_nodes.csv:node") and exc.value.value == bad_id
+    assert "row 3 (line 4)" in exc.value.allowed
 
 
 def test_shapes_file_needs_each_mode_node_pair_once(tmp_path):

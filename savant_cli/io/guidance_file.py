@@ -20,6 +20,7 @@ import numpy as np
 
 from savant_cli.errors import ConfigError
 from savant_cli.io.atomic import atomic_path
+from savant_cli.io.table_order import data_line_numbers, require_increasing, row_text, table_key
 from savant_cli.sim.engine import GuidanceTable
 
 CSV_COLUMNS = ("time_s", "q_w", "q_x", "q_y", "q_z", "rate_x_rad_s", "rate_y_rad_s", "rate_z_rad_s")
@@ -27,18 +28,21 @@ SPEED_COLUMN = "v_rel_m_s"
 
 
 def _check(key: str, time: np.ndarray, quat: np.ndarray, rate: np.ndarray,
-           speed: np.ndarray | None = None) -> GuidanceTable:
+           speed: np.ndarray | None = None, lines: list[int] | None = None) -> GuidanceTable:
+    """Refuse a malformed command table; ``key`` is ``<folder>/<file>`` and ``lines`` the
+    file line of each row (CSV)."""
     if time.ndim != 1 or time.size < 2:
         raise ConfigError(f"{key}:time_s", time.shape, "needs at least 2 command samples")
-    if not np.all(np.diff(time) > 0):
-        bad = int(np.argmin(np.diff(time) > 0))
-        raise ConfigError(f"{key}:time_s", float(time[bad + 1]), "time must be strictly increasing")
+    if not np.all(np.isfinite(time)):
+        i = int(np.argmax(~np.isfinite(time)))
+        raise ConfigError(f"{key}:time_s", float(time[i]), f"{row_text(i, lines)}: times must be finite")
+    require_increasing(f"{key}:time_s", time, lines, what="the command time")
     if not (np.all(np.isfinite(quat)) and np.all(np.isfinite(rate))):
         raise ConfigError(key, "non-finite value", "all commands must be finite numbers")
     norms = np.linalg.norm(quat, axis=1)
     if np.any(np.abs(norms - 1.0) > 1e-3):
         i = int(np.argmax(np.abs(norms - 1.0)))
-        raise ConfigError(f"{key}:q", float(norms[i]), f"quaternions must have unit norm (row {i})")
+        raise ConfigError(f"{key}:q", float(norms[i]), f"{row_text(i, lines)}: quaternions must have unit norm")
     quat = quat / norms[:, None]
     if speed is not None and (speed.shape != time.shape or not np.all(np.isfinite(speed)) or np.any(speed < 0.0)):
         raise ConfigError(f"{key}:v_rel_m_s", "bad value", "one finite, non-negative speed per sample")
@@ -48,20 +52,28 @@ def _check(key: str, time: np.ndarray, quat: np.ndarray, rate: np.ndarray,
 
 
 def read_guidance(path: Path, key: str = "guidance.command_file") -> GuidanceTable:
-    """Load a command file, refusing malformed content with a ConfigError."""
+    """Load a command file, refusing malformed content with a ConfigError.
+
+    ``key`` names the config key in the errors about the file as a whole; errors about
+    its content name ``<folder>/<file>:<column>`` and the row (and, in a CSV, its line).
+    A time axis out of order is refused, never sorted."""
     path = Path(path)
+    tkey = table_key(path)
     if path.suffix.lower() in (".h5", ".hdf5"):
         try:
             with h5py.File(path, "r") as f:
-                return _check(key, f["time_s"][()], f["quaternion"][()], f["rate_rad_s"][()],
+                return _check(tkey, f["time_s"][()], f["quaternion"][()], f["rate_rad_s"][()],
                               f["v_rel_m_s"][()] if "v_rel_m_s" in f else None)
         except (OSError, KeyError) as exc:
             raise ConfigError(key, str(path), f"unreadable HDF5 command file ({exc}); needs time_s, quaternion, rate_rad_s") from None
     try:
         with open(path) as f:
-            lines = [ln for ln in f if ln.strip() and not ln.lstrip().startswith("#")]
-        names = tuple(h.strip() for h in lines[0].split(",")) if lines else ()
-        table = np.loadtxt(lines[1:], delimiter=",", ndmin=2) if len(lines) > 1 else np.zeros((0, len(names)))
+            text = f.read().splitlines()
+        header_at = next((i for i, ln in enumerate(text) if ln.split("#", 1)[0].strip()), len(text))
+        rows = data_line_numbers(text, header_at + 1)
+        names = tuple(h.strip() for h in text[header_at].split(",")) if header_at < len(text) else ()
+        table = (np.loadtxt([text[n - 1] for n in rows], delimiter=",", comments="#", ndmin=2) if rows
+                 else np.zeros((0, len(names))))
     except (OSError, ValueError) as exc:
         raise ConfigError(key, str(path), f"unreadable CSV command file ({exc})") from None
     deg = all(f"rate_{a}_deg_s" in names for a in "xyz")
@@ -74,7 +86,7 @@ def read_guidance(path: Path, key: str = "guidance.command_file") -> GuidanceTab
     rate = np.column_stack([col[c] for c in need[5:8]])
     if deg:
         rate = np.radians(rate)
-    return _check(key, col["time_s"], quat, rate, col.get(SPEED_COLUMN))
+    return _check(tkey, col["time_s"], quat, rate, col.get(SPEED_COLUMN), rows)
 
 
 def write_guidance_csv(path: Path, time: np.ndarray, quat: np.ndarray, rate: np.ndarray, header: str = "",

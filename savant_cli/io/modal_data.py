@@ -22,11 +22,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
 from savant_cli import constants as C
 from savant_cli.errors import ConfigError
+from savant_cli.io.table_order import data_line_numbers, require_increasing, row_text, table_key
 
 LENGTH_TO_M = {"in": C.IN, "ft": C.FT, "m": 1.0}
 FORCE_TO_N = {"lbf": C.LBF, "N": 1.0}
@@ -89,22 +91,38 @@ def convert_shapes(shapes: np.ndarray, from_units: tuple[str, str], to_units: tu
     return out
 
 
-def read_numeric_csv(path: Path, key: str) -> tuple[list[str], np.ndarray]:
-    """Header names and the numeric rows of a CSV with `#` comment lines."""
+class NumericCsv(NamedTuple):
+    """A CSV's header, its numeric rows and the file line of each row."""
+
+    header: list[str]
+    data: np.ndarray
+    lines: list[int]
+
+
+def read_numeric_csv(path: Path, key: str) -> NumericCsv:
+    """Header names, the numeric rows and their line numbers of a CSV with `#` comment lines."""
     if not path.is_file():
         raise ConfigError(key, str(path), "modal data file not found")
     with open(path) as f:
-        lines = [ln for ln in f if ln.strip() and not ln.lstrip().startswith("#")]
-    if len(lines) < 2:
+        text = f.read().splitlines()
+    header_at = next((i for i, ln in enumerate(text) if ln.split("#", 1)[0].strip()), None)
+    lines = data_line_numbers(text, header_at + 1) if header_at is not None else []
+    if header_at is None or not lines:
         raise ConfigError(key, str(path), "needs a header row and at least one data row")
-    header = [h.strip() for h in lines[0].split(",")]
+    header = [h.strip() for h in text[header_at].split(",")]
     try:
-        data = np.array([[float(v) for v in ln.split(",")] for ln in lines[1:]])
+        data = np.array([[float(v) for v in text[n - 1].split("#", 1)[0].split(",")] for n in lines])
     except ValueError as exc:
         raise ConfigError(key, str(path), f"non-numeric entry ({exc})") from None
-    if data.shape[1] != len(header) or not np.all(np.isfinite(data)):
+    if data.ndim != 2 or data.shape[1] != len(header) or not np.all(np.isfinite(data)):
         raise ConfigError(key, str(path), "every row needs one finite number per header column")
-    return header, data
+    return NumericCsv(header, data, lines)
+
+
+def _ckey(path: Path, header: list[str], prefix: str) -> str:
+    """``<folder>/<file>.csv:<column>`` of the column named ``prefix`` or ``prefix_<unit>``."""
+    name = next((h for h in header if h == prefix or h.startswith(prefix + "_")), prefix)
+    return f"{table_key(path)}:{name}"
 
 
 def _column(header: list[str], data: np.ndarray, prefix: str, path: Path, key: str) -> tuple[np.ndarray, str]:
@@ -135,54 +153,76 @@ def read_modal_set(folder: Path, name: str, units: tuple[str, str], key: str) ->
     if force_unit not in FORCE_TO_N:
         raise ConfigError(f"{key}.units.force", force_unit, f"must be one of {', '.join(FORCE_TO_N)}")
     mpath = folder / f"{name}_modes.csv"
-    mh, md = read_numeric_csv(mpath, key)
-    modes = _column(mh, md, "mode", mpath, key)[0].astype(int)
+    mh, md, mlines = read_numeric_csv(mpath, key)
+    modes = _column(mh, md, "mode", mpath, key)[0]
     freq_hz = _column(mh, md, "frequency", mpath, key)[0]
     gmass = _column(mh, md, "generalized_mass", mpath, key)[0]
     if np.any(freq_hz <= 0.0):
-        bad = float(freq_hz[freq_hz <= 0.0][0])
-        raise ConfigError(f"{key}: {mpath.name}:frequency_hz", bad, "modal frequencies must be positive")
+        i = int(np.argmax(freq_hz <= 0.0))
+        raise ConfigError(_ckey(mpath, mh, "frequency"), float(freq_hz[i]),
+                          f"{row_text(i, mlines)}: modal frequencies must be positive")
     if np.any(gmass <= 0.0):
-        raise ConfigError(f"{key}: {mpath.name}:generalized_mass", float(gmass.min()), "must be positive")
-    if not np.array_equal(modes, np.arange(1, modes.size + 1)):
-        raise ConfigError(f"{key}: {mpath.name}:mode", modes.tolist(), "modes must be numbered 1, 2, … in order")
-    if np.any(np.diff(freq_hz) < 0.0):
-        raise ConfigError(f"{key}: {mpath.name}:frequency_hz", freq_hz.tolist(),
-                          "modes must be listed lowest frequency first")
+        i = int(np.argmax(gmass <= 0.0))
+        raise ConfigError(_ckey(mpath, mh, "generalized_mass"), float(gmass[i]), f"{row_text(i, mlines)}: must be positive")
+    require_increasing(_ckey(mpath, mh, "mode"), modes, mlines, what="the mode number")
+    numbered = modes == np.arange(1, modes.size + 1)
+    if not np.all(numbered):
+        i = int(np.argmax(~numbered))
+        raise ConfigError(_ckey(mpath, mh, "mode"), float(modes[i]),
+                          f"{row_text(i, mlines)}: modes must be numbered 1, 2, … in order (row {i + 1} must be mode {i + 1})")
+    modes = modes.astype(int)
+    require_increasing(_ckey(mpath, mh, "frequency"), freq_hz, mlines, strict=False,
+                       what="the modal frequency (modes listed lowest first; equal frequencies allowed)")
 
     spath = folder / f"{name}_shapes.csv"
-    sh, sd = read_numeric_csv(spath, key)
-    smode = _column(sh, sd, "mode", spath, key)[0].astype(int)
-    snode = _column(sh, sd, "node", spath, key)[0].astype(int)
+    sh, sd, slines = read_numeric_csv(spath, key)
+    smode = _column(sh, sd, "mode", spath, key)[0]
+    snode = _column(sh, sd, "node", spath, key)[0]
+    # rows grouped by mode, modes in order (the table's axis): refused otherwise, never sorted
+    require_increasing(_ckey(spath, sh, "mode"), smode, slines, strict=False,
+                       what="the mode number (rows grouped by mode, modes in order)")
+    smode, snode = smode.astype(int), snode.astype(int)
     station, st_unit = _column(sh, sd, "station", spath, key)
     cols = []
     for comp in ("dx", "dy", "dz"):
         vals, unit = _column(sh, sd, comp, spath, key)
         if unit != length_unit:
-            raise ConfigError(f"{key}: {spath.name}:{comp}_{unit}", unit, f"must be in the declared length unit {length_unit!r}")
+            raise ConfigError(_ckey(spath, sh, comp), unit, f"must be in the declared length unit {length_unit!r}")
         cols.append(vals)
     for comp in ("rx", "ry", "rz"):
         vals, unit = _column(sh, sd, comp, spath, key)
         if unit != "rad":
-            raise ConfigError(f"{key}: {spath.name}:{comp}_{unit}", unit, "rotations must be in rad")
+            raise ConfigError(_ckey(spath, sh, comp), unit, "rotations must be in rad")
         cols.append(vals)
-    nodes = np.unique(snode)
+    outside = (smode < 1) | (smode > modes.size)
+    if np.any(outside):
+        i = int(np.argmax(outside))
+        raise ConfigError(_ckey(spath, sh, "mode"), int(smode[i]),
+                          f"{row_text(i, slines)}: mode numbers must be within 1..{modes.size} ({mpath.name})")
+    nodes = snode[smode == 1]  # node ids are names, not an axis: mode 1's order, kept
     n_m, n_n = modes.size, nodes.size
-    if sd.shape[0] != n_m * n_n:
-        raise ConfigError(key, str(spath), f"needs one row per (mode, node): {n_m} x {n_n} = {n_m * n_n}, has {sd.shape[0]}")
-    shapes = np.zeros((n_m, n_n, 6))
-    col = np.column_stack(cols)
-    mi = smode - 1
-    ni = np.searchsorted(nodes, snode)
-    if mi.min() < 0 or mi.max() >= n_m:
-        raise ConfigError(key, str(spath), f"mode numbers must be within 1..{n_m}")
-    if np.unique(mi * n_n + ni).size != n_m * n_n:
-        raise ConfigError(key, str(spath), "needs every (mode, node) pair exactly once")
-    shapes[mi, ni, :] = col
-    stations = np.zeros(n_n)
-    stations[ni] = station * LENGTH_TO_M.get(st_unit, np.nan)
+    if n_n == 0:
+        raise ConfigError(_ckey(spath, sh, "mode"), int(smode[0]), f"{row_text(0, slines)}: the rows must start with mode 1")
+    _, first_seen = np.unique(nodes, return_index=True)
+    if first_seen.size != n_n:
+        i = int(np.setdiff1d(np.arange(n_n), first_seen)[0])
+        raise ConfigError(_ckey(spath, sh, "node"), int(nodes[i]),
+                          f"{row_text(i, slines)}: mode 1 lists this node twice; one row per (mode, node)")
+    expected = np.tile(nodes, n_m)
+    if snode.size != expected.size or not np.array_equal(snode, expected) or \
+            not np.array_equal(smode, np.repeat(modes, n_n)):
+        k = min(snode.size, expected.size)
+        differs = (snode[:k] != expected[:k]) | (smode[:k] != np.repeat(modes, n_n)[:k])
+        i = int(np.argmax(differs)) if differs.any() else k
+        want = f"mode {i // n_n + 1}, node {expected[i]}" if i < expected.size else "no further row"
+        raise ConfigError(_ckey(spath, sh, "node"), int(snode[i]) if i < snode.size else f"{snode.size} rows",
+                          f"{row_text(i, slines)}: needs every (mode, node) pair exactly once, each mode listing "
+                          f"mode 1's {n_n} nodes in mode 1's order ({n_m} x {n_n} = {n_m * n_n} rows); this row "
+                          f"should be {want}")
+    shapes = np.column_stack(cols).reshape(n_m, n_n, 6)  # row i is (mode i // n_n, node i % n_n)
+    stations = station[:n_n] * LENGTH_TO_M.get(st_unit, np.nan)  # mode 1's rows: one per node
     if not np.all(np.isfinite(stations)):
-        raise ConfigError(key, str(spath), f"station unit {st_unit!r} unknown")
+        raise ConfigError(_ckey(spath, sh, "station"), st_unit, f"unknown length unit; one of {', '.join(LENGTH_TO_M)}")
     shapes /= np.sqrt(gmass)[:, None, None]  # to unit generalized mass
     shapes = convert_shapes(shapes, (length_unit, force_unit), ("m", "N"))
     shapes[..., :3] *= STRUCTURE_TO_BODY
@@ -191,17 +231,24 @@ def read_modal_set(folder: Path, name: str, units: tuple[str, str], key: str) ->
     node_mass = node_inertia = None
     npath = folder / f"{name}_nodes.csv"
     if npath.is_file():
-        nh, nd = read_numeric_csv(npath, key)
-        nn = _column(nh, nd, "node", npath, key)[0].astype(int)
+        nh, nd, nlines = read_numeric_csv(npath, key)
+        nn = _column(nh, nd, "node", npath, key)[0]
+        nn = nn.astype(int)
+        _, once = np.unique(nn, return_index=True)
+        if once.size != nn.size:
+            i = int(np.setdiff1d(np.arange(nn.size), once)[0])
+            raise ConfigError(_ckey(npath, nh, "node"), int(nn[i]), f"{row_text(i, nlines)}: node listed twice")
         m, _ = _column(nh, nd, "mass", npath, key)
         j, _ = _column(nh, nd, "rotary_inertia", npath, key)
         c_l, c_f = LENGTH_TO_M[length_unit], FORCE_TO_N[force_unit]
         node_mass = np.zeros(n_n)
         node_inertia = np.zeros(n_n)
-        unknown = nn[~np.isin(nn, nodes)]
-        if unknown.size:
-            raise ConfigError(f"{key}: {npath.name}:node", int(unknown[0]), "node is not in the shapes file")
-        idx = np.searchsorted(nodes, nn)
+        unknown = ~np.isin(nn, nodes)
+        if np.any(unknown):
+            i = int(np.argmax(unknown))
+            raise ConfigError(_ckey(npath, nh, "node"), int(nn[i]),
+                              f"{row_text(i, nlines)}: node is not in the shapes file ({spath.name})")
+        idx = np.array([int(np.nonzero(nodes == n)[0][0]) for n in nn], dtype=int)
         node_mass[idx] = m * c_f / c_l  # force·s²/length → kg
         node_inertia[idx] = j * c_f * c_l  # force·length·s² → kg m²
     return ModalSet(name=name, frequency_rad_s=2.0 * np.pi * freq_hz, nodes=nodes, station_m=stations,

@@ -20,12 +20,13 @@ import h5py
 import numpy as np
 from omegaconf import OmegaConf
 from rich.console import Console
+from rich.markup import escape
 from rich.table import Table
 
 from savant_cli.errors import ConfigError, DamagedFileError, OutputWriteError
 from savant_cli.io.atomic import write_json_atomic, write_text_atomic
 from savant_cli.io.h5write import atomic_h5
-from savant_cli.io.console import print_verdict, split_unit
+from savant_cli.io.console import format_sig, print_verdict, readable_name, split_unit
 from savant_cli.io.record import FAILURE_CLASSES, FLOWN
 from savant_cli.config import ReliabilitySpec, RequirementSet
 from savant_cli.linear.requirements import (CHECK_ARRAY_COLUMNS, CRITERIA, STAGES, mode_code, mode_name, verdict_line,
@@ -674,12 +675,16 @@ def _plots(out_dir: Path, tb: Tables, dispersions: list[dict[str, Any]],
 def print_tables(console: Console, stats: list[dict], spread: list[dict], counts: dict[str, int],
                  missing: list[int], verdict: dict[str, Any] | None = None) -> None:
     """The min/max table (and the margin spread and requirement verdict) on the console."""
+    # names as words with their unit (they wrap at spaces in a narrow terminal instead of
+    # being cut to a common prefix), numbers to 4 significant digits, never wrapped
     tb = Table(title="Monte Carlo: extremes over the runs (run number in brackets)")
-    for col in ("variable", "max", "min", "p0.135", "p50", "p99.865"):
-        tb.add_column(col, justify="left" if col == "variable" else "right")
+    tb.add_column("variable", justify="left", overflow="fold", min_width=12, ratio=1)
+    for col in ("max [run]", "min [run]", "p0.135", "p50", "p99.865"):
+        tb.add_column(escape(col), justify="right", no_wrap=True)
     for r in stats:
-        tb.add_row(r["variable"], f"{r['max']:.6g} [{r['max_run']}]", f"{r['min']:.6g} [{r['min_run']}]",
-                   f"{r['p0.135']:.6g}", f"{r['p50']:.6g}", f"{r['p99.865']:.6g}")
+        tb.add_row(readable_name(r["variable"]), f"{format_sig(r['max'])} [{r['max_run']}]",
+                   f"{format_sig(r['min'])} [{r['min_run']}]", format_sig(r["p0.135"]), format_sig(r["p50"]),
+                   format_sig(r["p99.865"]))
     console.print(tb)
     if spread:
         ms = Table(title="margin spread (critical crossing per run and mode; gain dB, phase deg)")

@@ -6,6 +6,7 @@ schedule and the initial state on the pad.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
@@ -20,6 +21,8 @@ from savant_cli.sim import engine as E
 from savant_cli.sim import layout as L
 from savant_cli.sim.engine import GuidanceTable, GyroModel, Rates
 from savant_cli.flex_slosh import SloshData, load_slosh
+from savant_cli.io.guidance_file import SPEED_COLUMN
+from savant_cli.io.table_order import table_key
 from savant_cli.sim.plant import PlantTables, mass_state, pack_tables
 from savant_cli.vehicle import Vehicle
 
@@ -156,10 +159,12 @@ def first_stage_profile(table: GuidanceTable, cfg: SavantConfig, t_sep: float) -
     m = int(np.argmax(table.speed[:n_first])) + 1 if n_first else 0
     speed = table.speed[:m]
     if m < 2 or not np.all(np.diff(speed) > 0.0):
-        bad = float(table.time[int(np.argmin(np.diff(speed) > 0.0)) + 1]) if m >= 2 else float(table.time[0])
-        raise ConfigError(key, cfg.guidance.first_stage_schedule,
-                          f"needs the reference speed strictly increasing from liftoff to its first-stage peak; "
-                          f"{cfg.guidance.command_file} is not at t = {bad:g} s")
+        i = int(np.argmin(np.diff(speed) > 0.0)) + 1 if m >= 2 else 0
+        key = table_key(Path("guidance") / cfg.guidance.command_file)  # looked up in <config dir>/guidance/
+        raise ConfigError(f"{key}:{SPEED_COLUMN}", float(table.speed[i]),
+                          f"guidance.first_stage_schedule=relative_velocity needs the reference speed strictly "
+                          f"increasing from liftoff to its first-stage peak; it is not at sample {i + 1} "
+                          f"(t = {table.time[i]:g} s); put the rows in order or use first_stage_schedule=time")
     return table._replace(speed=np.ascontiguousarray(speed))
 
 

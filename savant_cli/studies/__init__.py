@@ -58,7 +58,11 @@ def run_study(cfg, raw_cfg, out_dir, raise_errors: bool = False) -> int:
 
     from savant_cli import lifecycle
     from savant_cli.errors import DamagedFileError, OutputWriteError
+    from savant_cli.io.console import print_quiet_lines
 
+    quiet = cfg.output.console == "quiet"
+    if cfg.sim.progress and (quiet or not _progress_drawable()):
+        cfg.sim.progress = False  # quiet: no bar; a notebook without ipywidgets: rich would warn per refresh
     err = Console(stderr=True)
     lifecycle.stage("study")
     try:
@@ -69,14 +73,50 @@ def run_study(cfg, raw_cfg, out_dir, raise_errors: bool = False) -> int:
         err.print(f"[bold red]error[/]: {exc}", highlight=False)
         return exc.exit_code
     lifecycle.stage("report")
-    return max(code, write_report_or_say(Path(out_dir), err))
+    code = max(code, write_report_or_say(Path(out_dir), err, say_written=not quiet))
+    if quiet:
+        summary = _read_summary(Path(out_dir))
+        summary.setdefault("status", "complete" if code == 0 else f"exit code {code}")
+        print_quiet_lines(summary, out_dir)
+    return code
 
 
-def write_report_or_say(folder, console, raise_write_errors: bool = False) -> int:
-    """``report.html`` into ``folder``, or a line on ``console`` saying why not; 1 when
-    the page could not be written (:class:`~savant_cli.errors.OutputWriteError`: disk
-    full, folder not writable; raised with ``raise_write_errors``), else 0 (a page that
-    cannot be built leaves the exit status alone)."""
+_NOTEBOOK_NOTE = {"said": False}
+
+
+def _progress_drawable() -> bool:
+    """Whether progress bars can be drawn here; in a Jupyter kernel without ipywidgets
+    they cannot (rich warns 'install "ipywidgets"' on every refresh): say so once per
+    process and draw none."""
+    from savant_cli.io.console import live_display_ok
+
+    if live_display_ok():
+        return True
+    if not _NOTEBOOK_NOTE["said"]:
+        _NOTEBOOK_NOTE["said"] = True
+        import logging
+
+        logging.getLogger("savant_cli").info("no progress bars in this notebook: install ipywidgets to see them")
+    return False
+
+
+def _read_summary(folder) -> dict:
+    """The study's ``summary.json`` (empty when it wrote none or it cannot be read)."""
+    import json
+
+    try:
+        data = json.loads((folder / "summary.json").read_text())
+    except (OSError, ValueError):
+        return {}
+    return data if isinstance(data, dict) else {}
+
+
+def write_report_or_say(folder, console, raise_write_errors: bool = False, say_written: bool = True) -> int:
+    """``report.html`` into ``folder``, or a line on ``console`` saying why not (and,
+    with ``say_written``, where it was written); 1 when the page could not be written
+    (:class:`~savant_cli.errors.OutputWriteError`: disk full, folder not writable; raised
+    with ``raise_write_errors``), else 0 (a page that cannot be built leaves the exit
+    status alone)."""
     from savant_cli.errors import OutputWriteError
     from savant_cli.html_report import write_report
 
@@ -92,5 +132,6 @@ def write_report_or_say(folder, console, raise_write_errors: bool = False) -> in
     except Exception as exc:  # noqa: BLE001 - the study's own outputs stand without the page
         console.print(f"[red]report.html not written[/red]: {type(exc).__name__}: {exc}", highlight=False)
     else:
-        console.print(f"report: {path}", highlight=False)
+        if say_written:
+            console.print(f"report: {path}", highlight=False)
     return 0

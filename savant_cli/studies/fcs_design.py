@@ -40,7 +40,6 @@ from pathlib import Path
 import h5py
 import numpy as np
 from omegaconf import DictConfig, OmegaConf
-from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
@@ -51,7 +50,7 @@ from savant_cli.design.pool import ScorePool
 from savant_cli.design.search import DesignPoint, point_score, search
 from savant_cli.errors import ConfigError
 from savant_cli.io.atomic import write_text_atomic
-from savant_cli.io.console import print_verdict
+from savant_cli.io.console import print_verdict, study_console
 from savant_cli.io.record import FLOWN
 from savant_cli.linear.charts import LoopResponse, loop_response
 from savant_cli.linear.evaluate import candidate_loops, freeze, judge_controller
@@ -161,7 +160,7 @@ def corner_requirements(requirements, corners: dict[str, dict]) -> dict[str, obj
 def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
     """Tune, verify and write the controller (module notes)."""
     study: FcsDesignStudyConfig = cfg.study
-    console = Console()
+    console = study_console(cfg.output.console)
     t_start = time.perf_counter()
     if study.design not in fcs_gains.CONTROLLERS:
         raise ConfigError("study.design", study.design, f"must be one of {', '.join(fcs_gains.CONTROLLERS)}")

@@ -28,14 +28,13 @@ from pathlib import Path
 import h5py
 import numpy as np
 from omegaconf import DictConfig
-from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
 from savant_cli.config import FlexSweepStudyConfig, LinearStudyConfig, SavantConfig
 from savant_cli.errors import ConfigError
 from savant_cli.io.atomic import write_text_atomic
-from savant_cli.io.console import print_verdict
+from savant_cli.io.console import print_verdict, study_console
 from savant_cli.io.record import FLOWN
 from savant_cli.linear.charts import LoopResponse, loop_response
 from savant_cli.linear.requirements import verdict_line
@@ -69,7 +68,7 @@ def variant(model: SimModel, parameter: str, level: float, modes: list[int]) -> 
 def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
     """Fly, sweep, write ``flex_sweep.csv``, ``summary.json`` and the Nichols charts."""
     study: FlexSweepStudyConfig = cfg.study
-    console = Console()
+    console = study_console(cfg.output.console)
     t_start = time.perf_counter()
     if not cfg.flex.enabled:
         raise ConfigError("flex", cfg.flex.name, "study=flex_sweep needs the flexible body: add flex=on")

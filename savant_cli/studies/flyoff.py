@@ -23,13 +23,12 @@ from pathlib import Path
 import h5py
 import numpy as np
 from omegaconf import DictConfig, OmegaConf
-from rich.console import Console
 from rich.table import Table
 
 from savant_cli.config import FlyoffStudyConfig, SavantConfig, check_physics
 from savant_cli.errors import ConfigError
 from savant_cli.io.atomic import write_json_atomic, write_text_atomic
-from savant_cli.io.console import print_verdict
+from savant_cli.io.console import print_verdict, study_console
 from savant_cli.io.record import FLOWN
 from savant_cli.io.hdf5 import write_study_file
 from savant_cli.io.provenance import collect_provenance
@@ -164,7 +163,7 @@ def compare(tables: dict[str, dict[str, np.ndarray]]) -> list[dict]:
 def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
     """Fly every controller's batch, then compare."""
     study: FlyoffStudyConfig = cfg.study
-    console = Console()
+    console = study_console(cfg.output.console)
     dirs = hydra_search_dirs()
     controllers = _controllers(study, dirs)  # every name checked before anything flies
     cfgs = {}

@@ -27,13 +27,12 @@ from pathlib import Path
 
 import numpy as np
 from omegaconf import DictConfig
-from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
 from savant_cli.config import LinearStudyConfig, RequirementSet, SavantConfig
 from savant_cli.errors import ConfigError
-from savant_cli.io.console import print_run_summary, print_verdict
+from savant_cli.io.console import print_run_summary, print_verdict, study_console
 from savant_cli.linear.charts import PointCharts, point_charts
 from savant_cli.linear.loops import AXES, LinearPoint, assemble
 from savant_cli.linear.evaluate import closed_loop_stability, judge_loops, verdict as judge_verdict
@@ -158,7 +157,7 @@ def _table(rows: list[MarginRow]) -> Table:
 def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
     """Fly, linearize at the study's times, write everything into ``out_dir``."""
     study: LinearStudyConfig = cfg.study
-    console = Console()
+    console = study_console(cfg.output.console)
     t_start = time.perf_counter()
     t_end = cfg.sim.max_time_s
     for i, t in enumerate(study.times if study.every == 0 else []):
@@ -245,7 +244,7 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
 
     def show() -> None:
         print_run_summary({k: v for k, v in hdf_summary.items() if k not in ("linear_note", "requirements_verdict")},
-                          record.status, record.message, console)
+                          record.status, record.message, console, cfg.output.console)
         console.print(_table(rows))
         console.print("roll (on/off jets) is left out of the linear analysis")
         print_verdict(verdict["line"], verdict["passed"], console)

@@ -39,9 +39,9 @@ import control as ct
 import h5py
 import numpy as np
 from omegaconf import DictConfig, OmegaConf
-from rich.console import Console
 from rich.table import Table
 
+from savant_cli.io.console import study_console
 from savant_cli.config import (
     FlexOffConfig, FlexOnConfig, LinearStudyConfig, ModeRetentionStudyConfig, SavantConfig, check_physics,
 )
@@ -168,7 +168,7 @@ def _max_modes(cfg: SavantConfig, study: ModeRetentionStudyConfig) -> int:
 def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
     """Sweep the retained-mode count and recommend one."""
     study: ModeRetentionStudyConfig = cfg.study
-    console = Console()
+    console = study_console(cfg.output.console)
     t0 = time.perf_counter()
     n_max = _max_modes(cfg, study)
     counts = list(range(0, n_max + 1, study.step))

@@ -25,6 +25,7 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
 from savant_cli import lifecycle
+from savant_cli.io.console import study_console
 from savant_cli.config import MonteCarloStudyConfig, SavantConfig, validate
 from savant_cli.errors import ConfigError, DamagedFileError, OutputWriteError, RunInterrupted
 from savant_cli.io.guidance_file import read_guidance
@@ -199,7 +200,7 @@ def check_folder(cfg: SavantConfig, out_dir: Path) -> None:
 
 def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
     """Fly this job's runs (resuming), then write the batch outputs into ``out_dir``."""
-    console = Console()
+    console = study_console(cfg.output.console)
     summary, stop = fly_batch(cfg, OmegaConf.to_yaml(raw_cfg, resolve=True), out_dir, console)
     if stop.reason != "done":
         console.print(f"[bold red]batch stopped[/]: {stop.detail}; run the same command with "

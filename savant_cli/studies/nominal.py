@@ -6,11 +6,10 @@ import time
 from pathlib import Path
 
 from omegaconf import DictConfig
-from rich.console import Console
 
 from savant_cli.config import SavantConfig
 from savant_cli.errors import RunInterrupted
-from savant_cli.io.console import print_run_summary
+from savant_cli.io.console import print_run_summary, study_console
 from savant_cli.io.record import RunRecord
 from savant_cli.io.staging_state import StagingState, write_staging_state
 from savant_cli.sim.engine import STOP_SEPARATION
@@ -38,7 +37,7 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
     """Fly, print the summary, write ``savant.h5``, ``summary.json`` and plots into
     ``out_dir``; 0 on success. The summary is printed before the files are written, so
     it reaches the console when they cannot be (disk full: ``OutputWriteError``)."""
-    console = Console()
+    console = study_console(cfg.output.console)
     record, staging = fly(cfg, raw_cfg, keep_partial=True)
     if record.status == "interrupted":
         # what was computed is written (the data, not the figures), then the interrupt
@@ -47,7 +46,8 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
         raise RunInterrupted("flight", f"the flight to t = {record.summary.get('final_time_s', float('nan')):.2f} s "
                              f"is in savant.h5 and summary.json (status interrupted); `savant report {out_dir}` "
                              "draws its plots")
-    print_run_summary(record.summary, record.status, record.message, console)  # whether or not the disk takes it
+    # whether or not the disk takes the files
+    print_run_summary(record.summary, record.status, record.message, console, cfg.output.console)
     if staging is not None:
         write_staging_state(out_dir / "staging_state.json", staging)
     flight_mod.write(out_dir, record, cfg)

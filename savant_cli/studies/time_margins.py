@@ -23,14 +23,13 @@ from pathlib import Path
 import h5py
 import numpy as np
 from omegaconf import DictConfig
-from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
 from savant_cli.config import SavantConfig, TimeMarginsStudyConfig
 from savant_cli.errors import ConfigError
 from savant_cli.io.atomic import write_text_atomic
-from savant_cli.io.console import print_run_summary, print_verdict
+from savant_cli.io.console import print_run_summary, print_verdict, study_console
 from savant_cli.linear.margins import MarginRow
 from savant_cli.processes import default_workers
 from savant_cli.studies import flight as flight_mod
@@ -147,7 +146,7 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
     """Fly, analyse the points in the frequency domain, search every time-domain margin,
     write everything into ``out_dir``."""
     study: TimeMarginsStudyConfig = cfg.study
-    console = Console()
+    console = study_console(cfg.output.console)
     t_start = time.perf_counter()
     for i, t in enumerate(study.times):
         if t >= cfg.sim.max_time_s:
@@ -226,7 +225,7 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
 
     def show() -> None:
         print_run_summary({k: v for k, v in hdf_summary.items() if k != "time_margins_verdict"}, record.status,
-                          record.message, console)
+                          record.message, console, cfg.output.console)
         console.print(_table(out_rows))
         console.print("notes with their numbers: time_margins.csv")
         print_verdict(line, not grows and not differ, console)
