@@ -139,3 +139,33 @@ def test_interrupted_batch_counts_the_runs_it_flew(tmp_path, workers):
     assert done.code == 0, done.stderr
     assert "3 of 3 runs flown" in " ".join(done.stdout.split())
     assert not (folder / MARKER).exists()
+
+
+def test_api_interrupt_settles_the_folder_and_raises(tmp_path, monkeypatch, capfd):
+    """``savant_cli.run`` interrupted while loading: the folder it made goes again, one
+    line on stderr, ``KeyboardInterrupt`` raised, the Ctrl-C handler given back."""
+    import threading
+
+    import savant_cli
+    from savant_cli import lifecycle
+
+    monkeypatch.setenv("SAVANT_TEST_PAUSE_AT", "prepare")
+    monkeypatch.setattr(lifecycle, "_paused", set())
+    monkeypatch.setattr(lifecycle, "_current", "startup")
+    handler = signal.getsignal(signal.SIGINT)
+
+    def interrupt_when_paused() -> None:
+        deadline = time.monotonic() + 300
+        while lifecycle.current() != "prepare" and time.monotonic() < deadline:
+            time.sleep(0.02)
+        time.sleep(0.3)
+        os.kill(os.getpid(), signal.SIGINT)
+
+    threading.Thread(target=interrupt_when_paused, daemon=True).start()
+    with pytest.raises(KeyboardInterrupt):
+        savant_cli.run(SHORT, out_dir=tmp_path / "run")
+    assert not (tmp_path / "run").exists()
+    said = after_pause(capfd.readouterr().err).strip()
+    assert said == f"interrupted while loading the vehicle and building the model: nothing was written " \
+                   f"({tmp_path / 'run'} removed)"
+    assert signal.getsignal(signal.SIGINT) is handler
