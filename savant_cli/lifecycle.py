@@ -51,7 +51,8 @@ PAUSE_S = 120.0
 STAGES = {"startup": "starting up", "prepare": "loading the vehicle and building the model",
           "flight": "flying", "analysis": "analysing the flight", "writing": "writing the run files",
           "plots": "drawing the plots", "report": "writing report.html", "runs": "flying the batch's runs",
-          "outputs": "writing the batch's tables and plots", "study": "running the study"}
+          "outputs": "writing the batch's tables and plots", "study": "running the study",
+          "searches": "running the time-margin searches"}
 
 #: What Hydra writes into a run folder before a study runs (besides the lock file).
 HYDRA_RECORD = {".hydra", run_lock.LOCK_NAME}

@@ -28,6 +28,7 @@ import sys
 import threading
 import time
 from collections.abc import Callable
+from concurrent.futures import ProcessPoolExecutor
 from typing import Any
 
 #: ``PR_SET_PDEATHSIG`` from ``<linux/prctl.h>``.
@@ -91,8 +92,29 @@ def die_with_parent(parent: int) -> str:
     return "watchdog"
 
 
+def ignore_interrupts() -> None:
+    """Ignore SIGINT in a pool worker. A terminal's Ctrl-C reaches the whole process
+    group; the main process answers it (one line, exit 130, docs/outputs.md) and ends
+    the workers with :func:`terminate_workers`, where each worker interrupted on its own
+    would print a traceback."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def terminate_workers(pool: ProcessPoolExecutor) -> None:
+    """End a pool's worker processes now (SIGTERM), abandoning the work in flight: what
+    the main process does on a Ctrl-C before it shuts the pool down. The standard library
+    has no public call for it before Python 3.14 (``terminate_workers``)."""
+    if hasattr(pool, "terminate_workers"):
+        pool.terminate_workers()
+        return
+    for proc in list((getattr(pool, "_processes", None) or {}).values()):
+        if proc.is_alive():
+            proc.terminate()
+
+
 def _init(parent: int, initializer: Callable[..., Any] | None, initargs: tuple) -> None:
     die_with_parent(parent)
+    ignore_interrupts()
     if initializer is not None:
         initializer(*initargs)
 
@@ -100,8 +122,8 @@ def _init(parent: int, initializer: Callable[..., Any] | None, initargs: tuple) 
 def worker_initializer(initializer: Callable[..., Any] | None = None,
                        initargs: tuple = ()) -> dict[str, Any]:
     """``initializer`` and ``initargs`` for a :class:`~concurrent.futures.ProcessPoolExecutor`
-    whose workers die with this process (:func:`die_with_parent`), then run
-    ``initializer(*initargs)``.
+    whose workers die with this process (:func:`die_with_parent`) and leave a Ctrl-C to
+    it (:func:`ignore_interrupts`), then run ``initializer(*initargs)``.
 
     Parameters
     ----------

@@ -169,3 +169,14 @@ def test_api_interrupt_settles_the_folder_and_raises(tmp_path, monkeypatch, capf
     assert said == f"interrupted while loading the vehicle and building the model: nothing was written " \
                    f"({tmp_path / 'run'} removed)"
     assert signal.getsignal(signal.SIGINT) is handler
+
+
+@pytest.mark.slow
+def test_interrupt_between_parallel_searches_leaves_no_worker(tmp_path):
+    """``study=time_margins`` on two workers interrupted after its first search: one
+    line, 130, the other worker's search abandoned and the worker gone."""
+    folder = tmp_path / "TM"
+    said, code = _interrupt("searches", "study=time_margins", "study.times=[55]", "study.axes=[pitch]",
+                            "study.kinds=[gain_high,gain_low]", "study.workers=2", "study.scan_points=2",
+                            "winds=none", "sim.progress=false", f"hydra.run.dir={folder}", cwd=tmp_path)
+    assert code == 130 and said.startswith("interrupted while running the time-margin searches")

@@ -17,7 +17,7 @@ import numpy as np
 
 from savant_cli.design.search import DesignPoint, point_scores
 from savant_cli.models.fcs import FcsTables
-from savant_cli.processes import process_context, worker_initializer
+from savant_cli.processes import process_context, terminate_workers, worker_initializer
 
 _POINTS: list[DesignPoint] = []  # the pool's points, inherited by its forked workers
 
@@ -56,6 +56,8 @@ class ScorePool:
     def __enter__(self) -> ScorePool:
         return self
 
-    def __exit__(self, *exc: object) -> None:
+    def __exit__(self, exc_type: type | None, *exc: object) -> None:
         if self._pool is not None:
+            if exc_type is not None and issubclass(exc_type, KeyboardInterrupt):
+                terminate_workers(self._pool)  # a Ctrl-C: the judgements in flight are abandoned
             self._pool.shutdown(wait=True, cancel_futures=True)

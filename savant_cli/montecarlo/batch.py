@@ -17,7 +17,6 @@ import hashlib
 import json
 import os
 import re
-import signal
 import time
 import traceback
 from collections.abc import Callable, Iterable
@@ -36,7 +35,7 @@ from savant_cli.linear.requirements import AXIS_NAMES, CHECK_ARRAY_COLUMNS, chec
 from savant_cli.montecarlo.journal import read_entry, write_entry
 from savant_cli.montecarlo.spec import DispersionSet
 from savant_cli.montecarlo.targets import apply_samples, build_dispersed
-from savant_cli.processes import process_context, worker_initializer
+from savant_cli.processes import process_context, terminate_workers, worker_initializer
 from savant_cli.sim.build import SimModel
 from savant_cli.sim.engine import EVENT_NAMES
 from savant_cli.sim.run import simulate, signals
@@ -365,10 +364,7 @@ _CASE: Case | None = None
 
 def _init_worker(case: Case) -> None:
     global _CASE
-    _CASE = case
-    # Ctrl-C reaches the whole process group: the main process answers it (and ends
-    # the workers), a worker interrupted on its own would print a traceback
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    _CASE = case  # SIGINT is ignored by every pool worker (processes.ignore_interrupts)
 
 
 def _fly(run: int) -> RunOutcome:
@@ -429,8 +425,7 @@ def execute(case: Case, todo: Iterable[int], journal: Journal, workers: int,
         stop = BatchStop("worker died", "a worker process died (killed or out of memory); the runs in flight were lost")
     except KeyboardInterrupt:
         stop = BatchStop("interrupted", "interrupted by the user")
-        for proc in list(getattr(pool, "_processes", {}).values()):  # runs in flight are abandoned, not waited for
-            proc.terminate()
+        terminate_workers(pool)  # the runs in flight are abandoned, not waited for
     except OutputWriteError as exc:  # the journal cannot take more runs: stop flying them
         stop = BatchStop("write failed", str(exc))
     finally:

@@ -25,7 +25,8 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from savant_cli.models import actuator
-from savant_cli.processes import process_context, worker_initializer
+from savant_cli import lifecycle
+from savant_cli.processes import process_context, terminate_workers, worker_initializer
 from savant_cli.sim import layout as L
 from savant_cli.sim import loop_perturbation as LP
 from savant_cli.sim.build import SimModel
@@ -233,10 +234,15 @@ def run_searches(model: SimModel, snaps: list[Snapshot], searches: list[Search],
                 progress()
         return results
     with ProcessPoolExecutor(workers, mp_context=process_context(), **worker_initializer()) as pool:
-        futures = [pool.submit(_one, s) for s in searches]
-        results = []
-        for fut in futures:
-            results.append(fut.result())
-            if progress:
-                progress()
+        try:
+            futures = [pool.submit(_one, s) for s in searches]
+            results = []
+            for fut in futures:
+                results.append(fut.result())
+                if progress:
+                    progress()
+                lifecycle.stage("searches")  # after each search (where a test may interrupt it)
+        except KeyboardInterrupt:
+            terminate_workers(pool)  # a Ctrl-C: the searches in flight are abandoned
+            raise
     return results
