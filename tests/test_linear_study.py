@@ -102,7 +102,11 @@ def test_reloaded_point_reproduces_the_margin_table(linear_run):
     assert np.allclose(a, loop.A)
 
 
-@pytest.mark.parametrize("times,message", [("[900]", "inside the flight"), ("[130.45]", "event separation")])
+@pytest.mark.parametrize("times,message", [
+    ("[900]", "must be earlier than sim.max_time_s = 800 s"),  # refused before flying (config.py)
+    ("[700]", "inside the flight"),  # within sim.max_time_s but after the flown cutoff: known once flown
+    ("[130.45]", "event separation"),
+])
 def test_bad_times_are_config_errors(tmp_path, times, message):
     proc = run(["run", "study=linear", f"study.times={times}", f"hydra.run.dir={tmp_path}/run", "sim.progress=false",
                 "output.plots=false"], cwd=tmp_path)
