@@ -6,7 +6,6 @@ design studies from Hydra configs.
 """
 
 import os
-from importlib.metadata import PackageNotFoundError, version
 
 # One BLAS thread per process unless the user says otherwise: savant's linear algebra is
 # on matrices of at most a few hundred rows, where OpenBLAS threads cost more than they
@@ -15,12 +14,8 @@ from importlib.metadata import PackageNotFoundError, version
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
-try:
-    __version__ = version("savant")
-except PackageNotFoundError:  # running from a source tree without installation
-    __version__ = "0.0.0+unknown"
-
 from savant_cli import jit_cache as _jit_cache
+from savant_cli.version import __version__  # noqa: F401  (savant_cli.__version__)
 
 _jit_cache.configure()
 

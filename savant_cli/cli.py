@@ -13,7 +13,7 @@ from pathlib import Path
 
 from rich.console import Console
 
-from savant_cli import __version__
+from savant_cli.version import __version__
 from savant_cli.errors import ConfigError, SavantError
 
 USAGE = """\

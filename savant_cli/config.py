@@ -450,6 +450,10 @@ class FcsDesignStudyConfig:
     optimizer: DesignOptimizer = field(default_factory=DesignOptimizer)
 
 
+#: The time-domain margins a study measures: gain raised, gain lowered (dB) and delay added (ms).
+MARGIN_KINDS = ("gain_high", "gain_low", "delay")
+
+
 @dataclass
 class TimeMarginsStudyConfig:
     """``study=time_margins``: gain and delay margins measured in the nonlinear time
@@ -458,7 +462,7 @@ class TimeMarginsStudyConfig:
     name: str = "time_margins"
     times: list[float] = field(default_factory=lambda: [55.0, 130.0, 180.0, 230.0])
     axes: list[str] = field(default_factory=lambda: ["pitch", "yaw"])
-    kinds: list[str] = field(default_factory=lambda: ["gain_high", "gain_low", "delay"])
+    kinds: list[str] = field(default_factory=lambda: list(MARGIN_KINDS))
     lead_s: float = 10.0  # the perturbation starts this long before the point
     window_s: float = 20.0  # and is held this long
     min_periods: float = 3.0  # the window stretched to hold this many periods of the frequency-domain crossing
@@ -1572,17 +1576,15 @@ def _flight_times(times: list[float]) -> None:
 
 
 def _check_time_margins(s: TimeMarginsStudyConfig) -> None:
-    from savant_cli.timedomain.search import KINDS
-
     _flight_times(s.times)
     if not s.axes:
         raise ConfigError("study.axes", [], "must name at least one loop (pitch, yaw)")
     for i, axis in enumerate(s.axes):
         _one_of(f"study.axes[{i}]", axis, ("pitch", "yaw"))
     if not s.kinds:
-        raise ConfigError("study.kinds", [], f"must name at least one of {', '.join(KINDS)}")
+        raise ConfigError("study.kinds", [], f"must name at least one of {', '.join(MARGIN_KINDS)}")
     for i, kind in enumerate(s.kinds):
-        _one_of(f"study.kinds[{i}]", kind, KINDS)
+        _one_of(f"study.kinds[{i}]", kind, MARGIN_KINDS)
     for key in ("window_s", "max_window_s", "gain_bound_dB", "delay_bound_ms", "gain_tolerance_dB",
                 "delay_tolerance_ms", "excitation_deg", "excitation_s"):
         _positive(f"study.{key}", getattr(s, key))

@@ -304,7 +304,7 @@ def shipped_defaults() -> dict[str, Any]:
 
     from omegaconf import OmegaConf
 
-    from savant_cli import __version__
+    from savant_cli.version import __version__
     from savant_cli.api import compose_config, task_config
     from savant_cli.paths import shipped_config_dir
 

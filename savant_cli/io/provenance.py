@@ -14,7 +14,7 @@ from datetime import datetime, timezone
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
-import savant_cli
+from savant_cli.version import __version__
 
 _GIT_TIMEOUT_S = 5.0
 
@@ -91,9 +91,9 @@ def collect_provenance(wall_time_s: float | None = None) -> dict[str, str]:
         exception.
     """
     commit, dirty = git_state(Path.cwd())
-    src_commit, src_dirty = git_state(Path(savant_cli.__file__).resolve().parent)
+    src_commit, src_dirty = git_state(Path(__file__).resolve().parents[1])  # the savant_cli source folder
     prov = {
-        "savant_version": str(savant_cli.__version__),
+        "savant_version": str(__version__),
         "git_commit": commit,
         "git_dirty": dirty,
         "source_git_commit": src_commit,

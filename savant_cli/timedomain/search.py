@@ -33,7 +33,6 @@ from savant_cli.sim.build import SimModel
 from savant_cli.sim.run import Snapshot, simulate
 from savant_cli.timedomain.growth import Growth, assess
 
-KINDS = ("gain_high", "gain_low", "delay")
 UNITS = {"gain_high": "dB", "gain_low": "dB", "delay": "ms"}
 
 
@@ -46,7 +45,7 @@ class Search:
     time_s : float
         The point (s).
     axis, kind : str
-        ``pitch`` | ``yaw``; one of :data:`KINDS`.
+        ``pitch`` | ``yaw``; one of :data:`savant_cli.config.MARGIN_KINDS`.
     snapshot : int
         Index of the stored state the trials start from (at ``start_s``).
     start_s, end_s : float

@@ -35,7 +35,6 @@ from savant_cli.sim.run import Snapshot, signals, simulate
 from savant_cli.sim.run_summary import judge_separation
 from savant_cli.sim.summary import separation_state, total_alpha_deg
 
-KINDS = ("gain_high", "gain_low", "delay")
 #: Flown this long past the separation of the unperturbed flight (s): a perturbed run may
 #: separate a step later.
 _PAST_SEPARATION_S = 1.0
