@@ -32,38 +32,36 @@ from typing import Any
 
 import numpy as np
 
+from savant_cli.constants import FT, IN, LBF, LBM, SLUG
 from savant_cli.errors import ConfigError
 from savant_cli.io.table_order import data_line_numbers, require_grid_order, require_increasing, table_key
-from savant_cli.models.aero import COEFFICIENTS
-from savant_cli.models.configurations import CONFIG_NAMES
 
-try:
-    from savant_cli import constants as _C
-
-    _FT, _IN, _LBF, _LBM, _SLUG = _C.FT, _C.IN, _C.LBF, _C.LBM, _C.SLUG
-except (ImportError, AttributeError):  # pragma: no cover - only while constants.py is written
-    _FT, _IN, _LBF, _LBM, _SLUG = 0.3048, 0.0254, 4.4482216152605, 0.45359237, 14.593902937
+#: The vehicle's configurations, in the order the aero and mass tables are stacked
+#: (models/configurations.py numbers them).
+CONFIG_NAMES = ("stack", "upper_les", "upper")
+#: The coefficient columns of an aero table (body axes, dimensionless), in the order of
+#: the packed table's coefficient axis (models/aero.py).
+AERO_COEFFICIENTS = ("CA", "CY", "CN", "Cl", "Cm", "Cn")
 
 #: unit suffix -> (dimension, factor to SI)
 UNITS: dict[str, tuple[str, float]] = {
-    "m": ("length", 1.0), "km": ("length", 1000.0), "ft": ("length", _FT), "in": ("length", _IN),
-    "kg": ("mass", 1.0), "lbm": ("mass", _LBM), "slug": ("mass", _SLUG),
-    "N": ("force", 1.0), "kN": ("force", 1e3), "MN": ("force", 1e6), "lbf": ("force", _LBF),
+    "m": ("length", 1.0), "km": ("length", 1000.0), "ft": ("length", FT), "in": ("length", IN),
+    "kg": ("mass", 1.0), "lbm": ("mass", LBM), "slug": ("mass", SLUG),
+    "N": ("force", 1.0), "kN": ("force", 1e3), "MN": ("force", 1e6), "lbf": ("force", LBF),
     "s": ("time", 1.0),
     "deg": ("angle", np.pi / 180.0), "rad": ("angle", 1.0),
-    "kgm2": ("inertia", 1.0), "slugft2": ("inertia", _SLUG * _FT**2),
-    "m2": ("area", 1.0), "ft2": ("area", _FT**2),
-    "Pa": ("pressure", 1.0), "psf": ("pressure", _LBF / _FT**2),
-    "mps": ("speed", 1.0), "fps": ("speed", _FT),
+    "kgm2": ("inertia", 1.0), "slugft2": ("inertia", SLUG * FT**2),
+    "m2": ("area", 1.0), "ft2": ("area", FT**2),
+    "Pa": ("pressure", 1.0), "psf": ("pressure", LBF / FT**2),
+    "mps": ("speed", 1.0), "fps": ("speed", FT),
 }
-AERO_COEFFS = COEFFICIENTS
 _INERTIA = ("ixx", "iyy", "izz", "ixy", "ixz", "iyz")
 
 #: table kind -> required columns (base name, dimension); ``None`` = dimensionless
 TABLE_COLUMNS: dict[str, tuple[tuple[str, str | None], ...]] = {
     "mass": (("propellant_remaining", "mass"), ("mass", "mass"), ("cg_x", "length"), ("cg_y", "length"),
              ("cg_z", "length")) + tuple((c, "inertia") for c in _INERTIA),
-    "aero": (("mach", None), ("alpha", "angle"), ("beta", "angle")) + tuple((c, None) for c in AERO_COEFFS),
+    "aero": (("mach", None), ("alpha", "angle"), ("beta", "angle")) + tuple((c, None) for c in AERO_COEFFICIENTS),
     "base_force": (("time", "time"), ("base_force", "force")),
     "first_stage_thrust": (("time", "time"), ("thrust_vac", "force")),
     "startup": (("time", "time"), ("thrust_fraction", None)),
@@ -474,7 +472,7 @@ def _aero(cfg: Mapping, vdir: Path, cname: str) -> AeroTable:
     for c, a in zip(("alpha", "beta"), axes[1:]):
         if a[0] < -np.pi / 2 or a[-1] > np.pi / 2:
             raise ConfigError(f"{key}:{tn[c]}", [float(a[0]), float(a[-1])], "angles must be within ±90 deg")
-    coeffs = np.stack([t[c] for c in AERO_COEFFS])  # row i of the file is grid point i (C order)
+    coeffs = np.stack([t[c] for c in AERO_COEFFICIENTS])  # row i of the file is grid point i (C order)
     bpath = vdir / cfg["base_force_table"]
     b, _ = read_table(bpath, "base_force")
     p = f"vehicle.configurations.{cname}"

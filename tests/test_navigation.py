@@ -259,12 +259,12 @@ def test_a_batch_with_and_without_navigation_errors(tmp_path):
     from savant_cli import api
 
     common = ["study=montecarlo", "study.n_runs=6", "study.workers=1", "output.plots=false", "sim.progress=false"]
-    both = {nav: api.run([*common, f"navigation={nav}"], out_dir=tmp_path / nav) for nav in ("perfect", "inertial")}
+    both = {mode: api.run([*common, f"navigation={mode}"], out_dir=tmp_path / mode) for mode in ("perfect", "inertial")}
     tables = {}
-    for nav, res in both.items():
+    for mode, res in both.items():
         doc = res.summary
-        tables[nav] = doc["insertion"]
-        assert doc["insertion"]["navigation"] == nav
+        tables[mode] = doc["insertion"]
+        assert doc["insertion"]["navigation"] == mode
     assert "navigation_errors" in tables["inertial"] and "navigation_errors" not in tables["perfect"]
     pos = {r["variable"]: r for r in tables["inertial"]["navigation_errors"]}["navigation_position_error_m"]
     assert pos["max_abs"] > 10.0  # metres: 0.005 deg/h, 30 µg and an 80-arcsec azimuth over 9 minutes

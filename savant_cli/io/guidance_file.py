@@ -14,6 +14,7 @@ relative_velocity`` indexes the first stage by. HDF5: datasets ``time_s`` (n),
 from __future__ import annotations
 
 from pathlib import Path
+from typing import NamedTuple
 
 import h5py
 import numpy as np
@@ -21,10 +22,31 @@ import numpy as np
 from savant_cli.errors import ConfigError
 from savant_cli.io.atomic import atomic_path
 from savant_cli.io.table_order import data_line_numbers, require_increasing, row_text, table_key
-from savant_cli.sim.engine import GuidanceTable
 
 CSV_COLUMNS = ("time_s", "q_w", "q_x", "q_y", "q_z", "rate_x_rad_s", "rate_y_rad_s", "rate_z_rad_s")
 SPEED_COLUMN = "v_rel_m_s"
+
+
+class GuidanceTable(NamedTuple):
+    """A command file's content as the engine flies it (SI).
+
+    Attributes
+    ----------
+    time : ndarray, shape (n,)
+        Sample times, s from liftoff, strictly increasing.
+    quat : ndarray, shape (n, 4)
+        Commanded attitude ``q_c2i`` (commanded body → ECI, Hamilton, scalar first), unit norm.
+    rate : ndarray, shape (n, 3)
+        Commanded body rate, rad/s, commanded-body axes.
+    speed : ndarray, shape (m,)
+        The reference ascent's Earth-relative speed at ``time[:m]``, m/s (the first-stage
+        samples; empty when the file has none).
+    """
+
+    time: np.ndarray
+    quat: np.ndarray
+    rate: np.ndarray
+    speed: np.ndarray
 
 
 def _check(key: str, time: np.ndarray, quat: np.ndarray, rate: np.ndarray,

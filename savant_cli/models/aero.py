@@ -24,12 +24,12 @@ import numpy as np
 from numba import njit
 
 from savant_cli.models import blocks
-from savant_cli.models.configurations import CONFIG_NAMES, N_CONFIG
+from savant_cli.models.configurations import N_CONFIG
+from savant_cli.vehicle import AERO_COEFFICIENTS, CONFIG_NAMES
 from savant_cli.models.interp import locate_at, tab, tab_offset, trilinear_at
 
-COEFFICIENTS = ("CA", "CY", "CN", "Cl", "Cm", "Cn")  # order of the coefficient axis
-C_CA, C_CY, C_CN, C_ROLL, C_PITCH, C_YAW = range(len(COEFFICIENTS))
-N_COEF = len(COEFFICIENTS)
+C_CA, C_CY, C_CN, C_ROLL, C_PITCH, C_YAW = range(len(AERO_COEFFICIENTS))  # the coefficient axis
+N_COEF = len(AERO_COEFFICIENTS)
 REFERENCE = blocks.Record(
     "aerodynamic reference",
     ("area", "m^2", "reference area S"),

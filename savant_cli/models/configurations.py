@@ -7,11 +7,12 @@ model reads the engine phase. Both arrive as held plant inputs set by the event 
 
 from __future__ import annotations
 
+from savant_cli.vehicle import CONFIG_NAMES
+
 CONFIG_STACK = 0  # first stage + upper stage + LES (liftoff to separation)
 CONFIG_UPPER_LES = 1  # upper stage with the launch-escape system (separation to jettison)
 CONFIG_UPPER = 2  # upper stage alone
-N_CONFIG = 3
-CONFIG_NAMES = ("stack", "upper_les", "upper")
+N_CONFIG = len(CONFIG_NAMES)
 
 ENGINE_FIRST = 0  # first-stage motor burning
 ENGINE_OFF = 1  # coast between separation and ignition

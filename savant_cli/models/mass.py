@@ -14,7 +14,8 @@ import numpy as np
 from numba import njit
 
 from savant_cli.models import blocks
-from savant_cli.models.configurations import CONFIG_NAMES, N_CONFIG
+from savant_cli.models.configurations import N_CONFIG
+from savant_cli.vehicle import CONFIG_NAMES
 from savant_cli.models.interp import locate_at, tab, tab_offset
 
 COLUMNS = blocks.Record(

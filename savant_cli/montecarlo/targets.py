@@ -40,7 +40,7 @@ from omegaconf import OmegaConf
 from savant_cli.config import GROUP_VARIANTS, ControllerConfig, SavantConfig, WindsConfig, has_key, check_physics
 from savant_cli.errors import ConfigError
 from savant_cli.sim.build import SimModel, build_model
-from savant_cli.vehicle import AERO_COEFFS, MassTable, Vehicle
+from savant_cli.vehicle import AERO_COEFFICIENTS, MassTable, Vehicle
 
 KINDS = ("config", "vehicle", "tables", "group")
 UPPER_CONFIGS = ("upper_les", "upper")
@@ -60,7 +60,7 @@ TABLE_TARGETS: dict[str, tuple[str, tuple[str, ...], str]] = {
        for c in ("stack", "upper") for ax in "xyz"},
     **{f"tables.{c}.inertia": ("1", ("scale",), f"all inertia components × k ({c})") for c in ("stack", "upper")},
     **{f"tables.aero.{k}": ("1", ("scale",), f"aerodynamic coefficient {k} × k, every configuration")
-       for k in AERO_COEFFS},
+       for k in AERO_COEFFICIENTS},
 }
 GROUP_TARGETS = ("winds",)
 #: Targets that no longer exist, with why and what replaces them.
@@ -354,7 +354,7 @@ def apply_samples(cfg: SavantConfig, vehicle: Vehicle, items: list[tuple[Target,
 
     ``groups`` maps a group target's option name to its loaded typed section."""
     cfg = copy.deepcopy(cfg)
-    aero = np.ones(len(AERO_COEFFS))
+    aero = np.ones(len(AERO_COEFFICIENTS))
     for target, apply, sample in items:
         if target.kind == "group":
             setattr(cfg, target.key, copy.deepcopy(groups[sample]))
@@ -367,7 +367,7 @@ def apply_samples(cfg: SavantConfig, vehicle: Vehicle, items: list[tuple[Target,
             vehicle = _replace(vehicle, target.path, int(round(value)) if target.integer else value)
         elif target.kind == "tables":
             if target.key.startswith("tables.aero."):
-                aero[AERO_COEFFS.index(target.key.rsplit(".", 1)[1])] *= float(sample)
+                aero[AERO_COEFFICIENTS.index(target.key.rsplit(".", 1)[1])] *= float(sample)
             else:
                 vehicle = _apply_table(vehicle, target.key, float(sample))
     check_physics(cfg)

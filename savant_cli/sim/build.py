@@ -19,9 +19,9 @@ from savant_cli.models.fcs import FcsTables, fcs_tables
 from savant_cli.models.sensors import GYRO_MISALIGN, gyro_discrete, gyro_steady_state, misalignment
 from savant_cli.sim import engine as E
 from savant_cli.sim import layout as L
-from savant_cli.sim.engine import GuidanceTable, GyroModel, Rates
+from savant_cli.sim.engine import GyroModel, Rates
 from savant_cli.flex_slosh import SloshData, load_slosh
-from savant_cli.io.guidance_file import SPEED_COLUMN
+from savant_cli.io.guidance_file import SPEED_COLUMN, GuidanceTable
 from savant_cli.io.table_order import table_key
 from savant_cli.sim.plant import PlantTables, mass_state, pack_tables
 from savant_cli.vehicle import Vehicle

@@ -32,6 +32,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from savant_cli.io.guidance_file import GuidanceTable
 from savant_cli.models import actuator, earth, flex, navigation, peg, propulsion, quaternion as qt, rcs, rigid_body, slosh
 from savant_cli.models.command_schedule import BY_TIME, D_PROFILE_OFFSET, D_PROFILE_RATE, profile_time
 from savant_cli.models.earth import A_ALT, P_E2, P_OMEGA_E, P_RE
@@ -100,14 +101,6 @@ class GyroModel(NamedTuple):
     bd: np.ndarray  # (2,)
     cd: np.ndarray  # (2,)
     dd: float
-
-
-class GuidanceTable(NamedTuple):
-    time: np.ndarray  # (n,) s
-    quat: np.ndarray  # (n, 4) q_c2i
-    rate: np.ndarray  # (n, 3) rad/s, commanded-body axes
-    speed: np.ndarray  # (m,) m/s: the reference ascent's Earth-relative speed at time[:m]
-    #                    (the first-stage samples; empty when the file has none)
 
 
 @njit(cache=True, error_model="numpy")
