@@ -30,6 +30,28 @@ FORMAT_VERSION = 1
 
 @dataclass(frozen=True)
 class StagingState:
+    """The simulation state at the plant step where separation triggers.
+
+    Attributes
+    ----------
+    vehicle, guidance : str
+        The vehicle and guidance config names the state was flown with (a resumed run
+        must match them).
+    dt_s : float
+        Plant step, s.
+    step : int
+        Plant step index; the mission time is ``step * dt_s`` s.
+    x : ndarray
+        Continuous state (SI, ECI position and velocity, attitude quaternion body → ECI),
+        in the order of ``names``.
+    d : ndarray
+        Discrete flight-software state (``layout.N_DISC`` values).
+    u : ndarray
+        Held plant inputs (``layout.N_INPUT`` values).
+    names : tuple of str
+        One name per element of ``x`` (:meth:`savant_cli.sim.layout.StateLayout.names`).
+    """
+
     vehicle: str
     guidance: str
     dt_s: float
