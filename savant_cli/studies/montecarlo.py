@@ -33,7 +33,8 @@ from savant_cli.io.provenance import collect_provenance
 from savant_cli.io.record import FLOWN
 from savant_cli.montecarlo.batch import (BatchStop, Case, Journal, RunOutcome, execute, fingerprint, fly_run,
                                          history_columns, read_outcome, shard_runs)
-from savant_cli.montecarlo.results import inventory, ranges_text, write_outputs
+from savant_cli.montecarlo.inventory import inventory, ranges_text
+from savant_cli.montecarlo.outputs import write_outputs
 from savant_cli.montecarlo.spec import DispersionSet, parse
 from savant_cli.montecarlo.targets import TABLE_TARGETS
 from savant_cli.processes import default_workers
