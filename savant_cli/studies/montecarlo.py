@@ -83,7 +83,7 @@ def _tailoff_lead(model, cfg: SavantConfig) -> float | None:
     window). A dispersed motor's tail-off scales with its burn rate (a few per cent), so
     each run's window is its own separation less this lead."""
     from savant_cli.config import LinearStudyConfig
-    from savant_cli.studies.linear import scan_tailoff
+    from savant_cli.linear.point_analysis import scan_tailoff
 
     nominal = simulate(model, progress=False)
     t_sep = float(nominal.events[E.EV_SEPARATION])
