@@ -75,18 +75,8 @@ def judge_all(points: list[DesignPoint], ft: FcsTables, dt: float,
 
 
 def point_scores(points: list[DesignPoint], ft: FcsTables, dt: float, axes: tuple[str, ...]) -> np.ndarray:
-    """:func:`point_score` of ``ft`` at every point.
-
-    Parameters
-    ----------
-    points : list of DesignPoint
-        Where the candidate is judged.
-    ft : FcsTables
-        The candidate's flight-control tables.
-    dt : float
-        The flight-control period (s).
-    axes : tuple of str
-        The loops judged.
+    """:func:`point_score` of ``ft`` at every point (the parameters as :func:`judge_all`'s:
+    ``dt`` in s).
 
     Returns
     -------
