@@ -32,7 +32,7 @@ def main() -> None:
     from savant_cli.plots.linear import plot_linear_point
     from savant_cli.sim.run import simulate
     from savant_cli.sim.setup import prepare
-    from savant_cli.studies.linear import analyse
+    from savant_cli.linear.point_analysis import analyse
 
     overrides = ["study=linear", "flex=on", "flex.n_modes=4", "slosh=on", "twd=on"]
     with initialize_config_dir(config_dir=str(shipped_config_dir()), version_base="1.3"):

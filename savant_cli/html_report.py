@@ -40,7 +40,7 @@ from typing import Any
 from savant_cli.html_tables import format_cell, summary_tables, worst_offender
 from savant_cli.io.atomic import write_text_atomic
 from savant_cli.io.console import loads_line, split_unit
-from savant_cli.montecarlo.results import loads_by_choice_lines, loads_verdict
+from savant_cli.montecarlo.console_summary import loads_by_choice_lines, loads_verdict
 from savant_cli.result import Result, load
 
 REPORT_FILE = "report.html"
@@ -147,7 +147,7 @@ def verdicts(result: Result) -> list[tuple[str, bool | None]]:
 
 
 def _mission_lines(mission: Any, prefix: str) -> list[tuple[str, bool | None]]:
-    """A batch's mission outcome by class (``montecarlo.results.mission_outcomes``): a
+    """A batch's mission outcome by class (``montecarlo.analysis.mission_outcomes``): a
     line per class with runs in it (failing when the class counts), or one passing line."""
     if not isinstance(mission, Mapping) or not isinstance(mission.get("by_class"), list):
         return []

@@ -102,7 +102,7 @@ def report(run_dir: Path | str, console: Console | None = None) -> list[Path]:
 
         paths += flex_sweep.draw(*flex_sweep.read_group(h5), folder)
     if "montecarlo" in groups:
-        from savant_cli.montecarlo.results import redraw
+        from savant_cli.montecarlo.figures import redraw
 
         paths += redraw(run_dir)
     if "flyoff" in groups:

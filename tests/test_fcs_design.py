@@ -13,6 +13,7 @@ import pytest
 from savant_cli.config import DesignOptimizer, DesignParameter, DesignParameters, validate
 from savant_cli.datagen import fcs_gains
 from savant_cli.design import parameters as dp
+from savant_cli.design import points as dpts
 from savant_cli.design import search as ds
 from savant_cli.errors import ConfigError
 from savant_cli.linear.requirements import Check, PointVerdict
@@ -112,7 +113,7 @@ def test_search_climbs_to_the_known_max_min(monkeypatch, method):
         x, y = values[("stack", "x")], values[("stack", "y")]
         return [_verdict(2.0 - (x - 0.3) ** 2 - y ** 2), _verdict(2.0 - (x - 0.7) ** 2 - y ** 2)]
 
-    monkeypatch.setattr(ds, "judge_all", fake_judge)
+    monkeypatch.setattr(dpts, "judge_all", fake_judge)
     res = ds.search(params, lambda v: v, [None, None], 0.02,
                     DesignOptimizer(method=method, max_evaluations=400, tolerance=1e-6, initial_step=0.2), ("pitch",))
     assert res.values[("stack", "x")] == pytest.approx(0.5, abs=0.01)
@@ -131,7 +132,7 @@ def test_an_unfixable_point_does_not_stop_the_search_fixing_the_others(monkeypat
         x = values[("stack", "x")]
         return [_verdict(2.0 - (x - 0.3) ** 2), _verdict(0.5), _verdict(1.5 - 4.0 * (x - 0.8) ** 2)]
 
-    monkeypatch.setattr(ds, "judge_all", fake_judge)
+    monkeypatch.setattr(dpts, "judge_all", fake_judge)
     res = ds.search(params, lambda v: v, [None] * 3, 0.02,
                     DesignOptimizer(max_evaluations=200, tolerance=1e-6, initial_step=0.1), ("pitch",))
     x = res.values[("stack", "x")]
@@ -142,12 +143,12 @@ def test_an_unfixable_point_does_not_stop_the_search_fixing_the_others(monkeypat
 def test_a_lost_closed_loop_scores_below_any_kept_one():
     lost = PointVerdict(0.0, "first_stage", (Check(0.0, "", "closed_loop", "stability", 0.02, 0.0, "1/s",
                                                    float("nan"), False),), ())
-    assert ds.point_score(lost) == pytest.approx(-1.2) and ds.point_score(_verdict(0.01)) > ds.point_score(lost)
+    assert dpts.point_score(lost) == pytest.approx(-1.2) and dpts.point_score(_verdict(0.01)) > dpts.point_score(lost)
     # a bending peak 4 dB above 0 dB with no crossing of its own (a zero requirement): graded, above a lost loop
     above = PointVerdict(0.0, "first_stage", (Check(0.0, "pitch", "flex_1", "attenuation", -4.0, 0.0, "dB", 1.0, False),
                                               Check(0.0, "", "closed_loop", "stability", -0.1, 0.0, "1/s",
                                                     float("nan"), True)), ())
-    assert ds.point_score(above) == pytest.approx(-0.8) and ds.point_score(lost) < ds.point_score(above) < 0
+    assert dpts.point_score(above) == pytest.approx(-0.8) and dpts.point_score(lost) < dpts.point_score(above) < 0
 
 
 @pytest.mark.parametrize("override, key", [

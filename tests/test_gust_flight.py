@@ -169,7 +169,8 @@ def test_loads_by_choice_takes_the_worst_run_of_each_value():
     the ratio and margin to the 160,000 Pa deg limit and the runs above it; the nominal
     run 0 (NaN draw), failed runs without results and a group choice (option indices)
     stay out."""
-    from savant_cli.montecarlo.results import loads_by_choice, loads_by_choice_lines
+    from savant_cli.montecarlo.analysis import loads_by_choice
+    from savant_cli.montecarlo.console_summary import loads_by_choice_lines
 
     disp = [{"name": "gust_length", "dist": "choice", "units": "m"},
             {"name": "wind_profile", "dist": "choice", "units": "", "choices": ["a", "b"]},
@@ -201,7 +202,7 @@ def test_swept_gust_lengths_are_tuned_to_the_vehicles_modes_at_the_reference_alt
 
     from savant_cli.paths import shipped_config_dir
     from savant_cli.studies import flight as flight_mod
-    from savant_cli.studies.linear import analyse
+    from savant_cli.linear.point_analysis import analyse
 
     cfg = validate(compose_config(FIRST + ["study=linear", "winds=design_gust", "study.times=[56.8]"]))
     lengths = validate(compose_config(["study=montecarlo", "dispersions=ares_i_gust"])).dispersions.items[

@@ -55,7 +55,7 @@ def test_band_of_each_label():
 def full_fidelity_margins():
     from savant_cli.config import LinearStudyConfig
     from test_linear import _point
-    from savant_cli.studies.linear import analyse
+    from savant_cli.linear.point_analysis import analyse
 
     out = {}
     for t in (55.0, 180.0):

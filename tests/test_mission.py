@@ -15,7 +15,8 @@ import savant_cli
 from savant_cli.config import validate
 from savant_cli.errors import ConfigError
 from savant_cli.io.record import FAILURE_CLASSES
-from savant_cli.montecarlo.results import Tables, mission_outcomes
+from savant_cli.montecarlo.analysis import mission_outcomes
+from savant_cli.montecarlo.results import Tables
 from savant_cli.sim.mission import Tolerance, class_mask, classes_of, classify, mission_keys
 
 from conftest import compose_config

@@ -22,7 +22,7 @@ from conftest import compose_config
 from savant_cli.config import CorrelationGroup, DispersionSetConfig, DispersionSpec, validate
 from savant_cli.errors import ConfigError
 from savant_cli.montecarlo.batch import RUN_STAGES, Journal, execute, read_outcome, shard_runs
-from savant_cli.montecarlo.results import inventory, ranges_text
+from savant_cli.montecarlo.inventory import inventory, ranges_text
 from savant_cli.montecarlo.spec import parse
 from savant_cli.montecarlo.targets import apply_samples
 from savant_cli.paths import shipped_config_dir
@@ -273,7 +273,7 @@ def test_margins_of_every_run_and_their_spread(tmp_path):
     critical crossing per mode and counts the runs whose crossing misses its requirement."""
     from savant_cli.linear.requirements import CHECK_ARRAY_COLUMNS, mode_code
     from savant_cli.montecarlo.batch import MARGIN_ARRAY_COLUMNS
-    from savant_cli.montecarlo.results import margin_spread
+    from savant_cli.montecarlo.analysis import margin_spread
 
     cfg = validate(compose_config(SHORT + ["study.n_runs=3", "study.histories.signals=[]", "study.linear_times=[55]"]))
     case = make_case(cfg)[0]

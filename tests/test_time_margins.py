@@ -20,10 +20,10 @@ from conftest import assert_report_redraws, compose_config
 from savant_cli.config import TimeMarginsStudyConfig, validate
 from savant_cli.errors import ConfigError
 from savant_cli.linear.margins import MarginRow
+from savant_cli.linear.point_analysis import analyse
 from savant_cli.sim import layout as L
 from savant_cli.sim import loop_perturbation as LP
 from savant_cli.studies import flight as flight_mod
-from savant_cli.studies.linear import analyse
 from savant_cli.studies.time_margins import COLUMNS, frequency_margin, read_group, window
 from savant_cli.timedomain.growth import assess, decay_threshold
 from savant_cli.timedomain.search import Search, find_margin

@@ -5,7 +5,7 @@ start; the workers are forked (:func:`savant_cli.processes.process_context`), so
 inherit them and a candidate sends only its flight-control tables (a few kB) and the
 indices of the points to judge. Each worker judges an interleaved share of the points
 (neighbouring points cost alike) and returns their scores, which are the same numbers as
-:func:`savant_cli.design.search.point_scores` computes in one process: every judgement
+:func:`savant_cli.design.points.point_scores` computes in one process: every judgement
 is a pure function of the point and the tables.
 """
 
@@ -15,7 +15,7 @@ from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 
-from savant_cli.design.search import DesignPoint, point_scores
+from savant_cli.design.points import DesignPoint, point_scores
 from savant_cli.models.fcs import FcsTables
 from savant_cli.processes import process_context, terminate_workers, worker_initializer
 
@@ -41,7 +41,7 @@ class ScorePool:
                       if self.workers > 1 else None)
 
     def scores(self, points: list[DesignPoint], ft: FcsTables, dt: float, axes: tuple[str, ...]) -> np.ndarray:
-        """:func:`~savant_cli.design.search.point_scores` of ``ft`` at ``points`` (each one
+        """:func:`~savant_cli.design.points.point_scores` of ``ft`` at ``points`` (each one
         of the pool's)."""
         if self._pool is None:
             return point_scores(points, ft, dt, axes)

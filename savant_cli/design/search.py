@@ -2,10 +2,7 @@
 points of the nominal flight and the uncertainty corners, the smallest margin-to-requirement
 ratio maximized with ``scipy.optimize.minimize``.
 
-The score of a point is its worst check's ratio (:attr:`Check.ratio`: |margin| / required,
-attenuation / required; ≥ 1 meets the requirement); a lost closed loop scores
-``−1 − 10 σ_max`` (σ_max its largest real part, 1/s), below any kept loop and graded so the
-search can climb out of it. A candidate's objective (:func:`objective`) is its smallest
+The score of a point is its worst check's ratio (``design/points.py``). A candidate's objective (:func:`objective`) is its smallest
 point score when every point meets the requirement, and otherwise minus the sum of the
 points' shortfalls ``Σ max(0, 1 − score)`` (goal attainment): a point no candidate can
 fix does not stop the search from fixing the others, as a bare max-min would.
@@ -28,66 +25,23 @@ evaluate.freeze`); a candidate costs its controller, the loop assembly and the m
 from __future__ import annotations
 
 import time
-import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.optimize import NonlinearConstraint, minimize
 
-from savant_cli.config import DesignOptimizer, RequirementSet
+from savant_cli.config import DesignOptimizer
 from savant_cli.design.parameters import FreeParameter
-from savant_cli.linear.evaluate import FrozenPoint, judge_controller
-from savant_cli.linear.requirements import PointVerdict
+from savant_cli.design.points import DesignPoint, point_scores
+from savant_cli.design.pool import ScorePool
 from savant_cli.models.fcs import FcsTables
-
-if TYPE_CHECKING:
-    from savant_cli.design.pool import ScorePool
-
-
-@dataclass
-class DesignPoint:
-    """A frozen operating point of one uncertainty corner (``""``: the nominal plant) and
-    the requirement set it is judged against there (a corner's may be a fraction of the
-    nominal's, :func:`savant_cli.linear.requirements.scaled_requirements`)."""
-
-    corner: str
-    point: FrozenPoint
-    requirements: RequirementSet
-
-
-def point_score(v: PointVerdict) -> float:
-    """The worst check's ratio to its requirement (module notes); a failing check of a
-    zero requirement (e.g. a bending peak above 0 dB with no crossing of its own) scores
-    v/(1 + |v|) of its value v (dB or deg, negative), in (−1, 0], not the ratio's −∞: graded
-    for the search, above any lost closed loop."""
-    stability = v.checks[-1]
-    if not stability.passed:
-        return -1.0 - 10.0 * stability.value
-    ratios = [c.ratio if np.isfinite(c.ratio) or c.ratio > 0 else min(c.value, 0.0) / (1.0 + abs(c.value))
-              for c in v.checks if c.criterion != "stability"]
-    return float(min(ratios)) if ratios else float("inf")
 
 
 def objective(scores: np.ndarray) -> float:
     """The smallest score if all are ≥ 1, else minus the total shortfall below 1."""
     shortfall = np.maximum(0.0, 1.0 - scores).sum()
     return float(scores.min()) if shortfall == 0.0 else -float(shortfall)
-
-
-def judge_all(points: list[DesignPoint], ft: FcsTables, dt: float,
-              axes: tuple[str, ...] = ("pitch", "yaw")) -> list[PointVerdict]:
-    """The verdict of ``ft`` at every point against its own requirement set (loops of
-    ``axes`` only)."""
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # python-control notes on unconnected signals
-        return [judge_controller(p.point, ft, dt, p.requirements, axes=axes)[2] for p in points]
-
-
-def point_scores(points: list[DesignPoint], ft: FcsTables, dt: float, axes: tuple[str, ...]) -> np.ndarray:
-    """:func:`point_score` of ``ft`` at every point."""
-    return np.array([point_score(v) for v in judge_all(points, ft, dt, axes)])
 
 
 @dataclass

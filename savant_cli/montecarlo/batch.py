@@ -124,7 +124,7 @@ def _margins(case: Case, model: SimModel, result, sig: dict) -> tuple[np.ndarray
     the run's own first-stage tail-off window: its separation less the nominal's window
     lead (``Case.tailoff_lead_s``; docs/requirements.md): the window's margins are kept,
     its points not judged."""
-    from savant_cli.studies.linear import analyse
+    from savant_cli.linear.point_analysis import analyse
 
     rows, verdicts = [], []
     dt_fcs = model.rates.dt * model.rates.n_fcs

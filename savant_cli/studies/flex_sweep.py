@@ -37,11 +37,12 @@ from savant_cli.io.atomic import write_text_atomic
 from savant_cli.io.console import print_verdict, study_console
 from savant_cli.io.record import FLOWN
 from savant_cli.linear.charts import LoopResponse, loop_response
+from savant_cli.linear.point_analysis import analyse
 from savant_cli.linear.requirements import verdict_line
 from savant_cli.linear.store import read_loop_response, write_loop_response
 from savant_cli.sim.build import SimModel
 from savant_cli.studies import flight as flight_mod
-from savant_cli.studies.linear import analyse, check_times
+from savant_cli.studies.linear import check_times
 
 COLUMNS = ("time_s", "parameter", "level", "axis", "kind", "band", "mode", "value", "frequency_hz",
            "meets_requirement", "closed_loop_stable")

@@ -32,7 +32,8 @@ from savant_cli.io.console import print_verdict, study_console
 from savant_cli.io.record import FLOWN
 from savant_cli.io.hdf5 import write_study_file
 from savant_cli.io.provenance import collect_provenance
-from savant_cli.montecarlo.results import PERCENTILES, print_mission
+from savant_cli.montecarlo.analysis import PERCENTILES
+from savant_cli.montecarlo.console_summary import print_mission
 from savant_cli.montecarlo.targets import load_group_option
 from savant_cli.paths import hydra_search_dirs
 from savant_cli.studies.montecarlo import fly_batch

@@ -5,7 +5,7 @@ points; at each, the plant is linearized (``linear/plant.py``), assembled with t
 discrete flight control (``linear/loops.py``) and analysed (``linear/margins.py``).
 Every margin and point is judged against the requirement set (``requirements`` group,
 ``linear/requirements.py``), except the points of the first stage's tail-off window
-(:func:`scan_tailoff`, ``study.frozen_time``: where frozen time fails on physical
+(``linear/point_analysis.py::scan_tailoff``, ``study.frozen_time``: where frozen time fails on physical
 criteria): analysed and reported with what they would score; the time domain judges the
 window instead (``timedomain/tailoff.py``; docs/requirements.md). Outputs: ``savant.h5`` (time history + ``linear`` group:
 systems, margins, requirement checks, and the chart data of every charted point),
@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import time
 import warnings
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -30,19 +29,15 @@ from omegaconf import DictConfig
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from savant_cli.config import LinearStudyConfig, RequirementSet, SavantConfig
+from savant_cli.config import LinearStudyConfig, SavantConfig
 from savant_cli.errors import ConfigError
 from savant_cli.io.console import print_run_summary, print_verdict, study_console
 from savant_cli.linear.charts import PointCharts, point_charts
-from savant_cli.linear.loops import AXES, LinearPoint, assemble
-from savant_cli.linear.evaluate import closed_loop_stability, judge_loops, verdict as judge_verdict
-from savant_cli.linear.margins import MarginRow, bandwidth_hz, disk_margins
-from savant_cli.linear.modes import ModePeak, aero_unstable, state_groups
-from savant_cli.linear.plant import linearize_plant
+from savant_cli.linear.margins import MarginRow
+from savant_cli.linear.point_analysis import analyse, scan_tailoff
 from savant_cli.linear.requirements import PointVerdict, summary as requirement_summary
 from savant_cli.linear.store import write_checks_csv, write_linear_group, write_margins_csv, write_mat
-from savant_cli.linear.frozen_time import FrozenTimeWindow, scan_point, window as window_of
-from savant_cli.sim.run import simulate
+from savant_cli.linear.frozen_time import FrozenTimeWindow
 from savant_cli.studies import flight as flight_mod
 from savant_cli.timedomain.tailoff import checks as tailoff_checks, verdict_text as tailoff_verdict
 
@@ -76,72 +71,12 @@ def check_times(times: list[float], t_final: float, events: dict[str, float], st
     return keep
 
 
-def scan_tailoff(model, separation_s: float | None, study: LinearStudyConfig, dt: float,
-                 requirements: RequirementSet) -> tuple[FrozenTimeWindow | None, list]:
-    """The first-stage tail-off window of a flight that separated at ``separation_s``
-    (``linear/frozen_time.py``): the flight flown again from its start to separation,
-    keeping its state every ``study.frozen_time.step_s`` over the last ``scan_s`` (the same
-    compiled model: the same trajectory), each state analysed, the criteria evaluated.
-    Returns the window (None without a separation or with no criterion configured) and
-    the scan's snapshots in time order."""
-    spec = study.frozen_time
-    if not spec.criteria or separation_s is None or not np.isfinite(separation_s):
-        return None, []
-    rt = model.rates
-    control = rt.dt * rt.n_fcs
-    first = max(separation_s - spec.scan_s, control)
-    times = np.arange(first, separation_s - study.event_clearance_s, spec.step_s)
-    steps = sorted({int(round(t / control)) * rt.n_fcs for t in times})
-    flown = simulate(model, progress=False, snapshot_steps=tuple(steps), t_stop=separation_s)
-    snaps = [flown.snapshots[k] for k in sorted(flown.snapshots) if flown.snapshots[k].t < separation_s]
-    points = []
-    for snap in snaps:
-        a = analyse(model, snap, study, dt, None)
-        points.append(scan_point(a.point, a.rows))
-    return window_of(points, separation_s, tuple(spec.criteria), requirements.rigid.gain_dB), snaps
-
-
 def not_judged_line(window: FrozenTimeWindow, verdicts: list[PointVerdict]) -> str:
     """The verdict line's note on the points of the tail-off window: each with what it
     would score against the requirements in the frequency domain."""
     pts = "; ".join(f"{v.time_s:.1f} s passes" if v.passed else f"would fail: {v.worst.text()}"
                     for v in verdicts) or "no point"
     return f"not judged in the frequency domain inside the window: {pts}"
-
-
-@dataclass
-class PointAnalysis:
-    """Everything ``study=linear`` computes at one operating point."""
-
-    point: LinearPoint
-    rows: list[MarginRow]  # every crossing of both loops, labelled by mode
-    peaks: list[ModePeak]  # the loops' peak gain at each bending mode they carry
-    scalars: dict  # disk margins, bandwidths, closed-loop stability
-    verdict: PointVerdict | None  # against the requirement set, when one is given
-
-
-def analyse(model, snap, study: LinearStudyConfig, dt: float,
-            requirements: RequirementSet | None = None) -> PointAnalysis:
-    """Linear systems, margins, bending-mode peaks, scalar results and (with
-    ``requirements``) the requirement verdict of one point."""
-    lin = linearize_plant(model, snap, mode=study.jacobian, rel_step=study.jacobian_step)
-    pt = assemble(model, snap, lin, dt)
-    groups = state_groups(lin, pt.plant, pt.controller)
-    rows, peaks, responses = judge_loops(pt.loops, groups, aero_unstable(lin), snap.t)
-    extra: dict[str, float] = {"time_s": snap.t}
-    for c, axis in enumerate(AXES):
-        for k, v in disk_margins(pt.loops[axis], responses[axis]).items():
-            extra[f"{axis}_{k}"] = v
-        extra[f"{axis}_bandwidth_hz"] = bandwidth_hz(pt.closed[c, c])
-    for k, v in disk_margins(pt.mimo).items():
-        extra[f"mimo_{k}"] = v
-    stable, max_real = closed_loop_stability(pt.closed.poles(), dt)
-    extra["closed_loop_stable"] = stable
-    extra["closed_loop_max_real_1_per_s"] = max_real
-    verdict = None
-    if requirements is not None:
-        rows, verdict = judge_verdict(snap.t, pt.phase, rows, peaks, stable, max_real, requirements)
-    return PointAnalysis(pt, rows, peaks, extra, verdict)
 
 
 def _table(rows: list[MarginRow]) -> Table:

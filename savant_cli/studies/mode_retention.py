@@ -49,10 +49,10 @@ from savant_cli.errors import ConfigError
 from savant_cli.io.atomic import write_json_atomic, write_text_atomic
 from savant_cli.io.hdf5 import write_study_file
 from savant_cli.io.provenance import collect_provenance
+from savant_cli.linear.point_analysis import analyse
 from savant_cli.sim.run import simulate
 from savant_cli.sim.setup import prepare
 from savant_cli.studies import flight as flight_mod
-from savant_cli.studies.linear import analyse
 
 
 @dataclass

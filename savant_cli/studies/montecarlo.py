@@ -33,7 +33,8 @@ from savant_cli.io.provenance import collect_provenance
 from savant_cli.io.record import FLOWN
 from savant_cli.montecarlo.batch import (BatchStop, Case, Journal, RunOutcome, execute, fingerprint, fly_run,
                                          history_columns, read_outcome, shard_runs)
-from savant_cli.montecarlo.results import inventory, ranges_text, write_outputs
+from savant_cli.montecarlo.inventory import inventory, ranges_text
+from savant_cli.montecarlo.outputs import write_outputs
 from savant_cli.montecarlo.spec import DispersionSet, parse
 from savant_cli.montecarlo.targets import TABLE_TARGETS
 from savant_cli.processes import default_workers
@@ -82,7 +83,7 @@ def _tailoff_lead(model, cfg: SavantConfig) -> float | None:
     window). A dispersed motor's tail-off scales with its burn rate (a few per cent), so
     each run's window is its own separation less this lead."""
     from savant_cli.config import LinearStudyConfig
-    from savant_cli.studies.linear import scan_tailoff
+    from savant_cli.linear.point_analysis import scan_tailoff
 
     nominal = simulate(model, progress=False)
     t_sep = float(nominal.events[E.EV_SEPARATION])

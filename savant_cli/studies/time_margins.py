@@ -3,7 +3,7 @@ time-varying simulation, beside the frequency-domain margins of the same points.
 
 One time run (written like ``study=nominal``) stores the state at the start of every
 search window. The frequency-domain margins of each point come from ``study=linear``'s
-analysis (:func:`savant_cli.studies.linear.analyse`) in the same run; they also size
+analysis (:func:`savant_cli.linear.point_analysis.analyse`) in the same run; they also size
 each window (at least ``study.min_periods`` periods of the crossing that governs the
 margin, up to ``study.max_window_s``), which keeps clear of events. Each search
 (:mod:`savant_cli.timedomain.search`) runs on the process pool. Outputs:
@@ -31,9 +31,9 @@ from savant_cli.errors import ConfigError
 from savant_cli.io.atomic import write_text_atomic
 from savant_cli.io.console import print_run_summary, print_verdict, study_console
 from savant_cli.linear.margins import MarginRow
+from savant_cli.linear.point_analysis import analyse
 from savant_cli.processes import default_workers
 from savant_cli.studies import flight as flight_mod
-from savant_cli.studies.linear import analyse
 from savant_cli.timedomain.growth import Growth, decay_threshold
 from savant_cli.timedomain.search import UNITS, Search, SearchResult, Trial, run_searches
 
