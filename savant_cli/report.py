@@ -125,7 +125,7 @@ def report(run_dir: Path | str, console: Console | None = None) -> list[Path]:
                                "time_margins"})
     if studies:
         console.print(f"redrawn from {RUN_FILE}: {', '.join(studies)}")
-    from savant_cli.studies import write_report_or_say
+    from savant_cli.html_report import write_report_or_say
 
     write_report_or_say(run_dir, console, raise_write_errors=True)  # report.html, with the figures just drawn
     return paths
