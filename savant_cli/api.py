@@ -13,69 +13,19 @@ and its status, as the command line exits 1. :func:`load` reads a finished folde
 
 from __future__ import annotations
 
-import copy
 import logging
 import sys
 from collections.abc import Sequence
 from pathlib import Path
 
 from savant_cli.errors import ConfigError
+from savant_cli.hydra_compose import compose_config, task_config
 from savant_cli.result import Result, load
 
 __all__ = ["run", "load", "Result", "ConfigError"]
 
 #: The log format of Hydra's job logging (what ``savant run`` writes to ``savant.log``).
 LOG_FORMAT = "[%(asctime)s][%(name)s][%(levelname)s] - %(message)s"
-
-
-def compose_config(overrides: list[str], config_dir: Path | None):
-    """The composed config with its ``hydra`` node; Hydra's errors as ConfigError.
-
-    The search path is the command line's: the shipped tree as the primary config
-    folder and, with ``config_dir``, that folder in front of it (what ``savant run -cd``
-    does, Hydra's ``command-line`` search-path entry)."""
-    from hydra import compose, version
-    from hydra._internal.hydra import Hydra
-    from hydra._internal.utils import create_config_search_path
-    from hydra.core.global_hydra import GlobalHydra
-    from hydra.errors import HydraException
-    from hydra.initialize import get_gh_backup, restore_gh_from_backup
-
-    from savant_cli.paths import shipped_config_dir
-
-    backup = get_gh_backup()  # a notebook may have its own Hydra initialised: keep it
-    GlobalHydra.instance().clear()
-    try:
-        version.setbase("1.3")
-        search_path = create_config_search_path(search_path_dir=f"file://{shipped_config_dir()}")
-        if config_dir is not None:
-            search_path.prepend(provider="command-line", path=f"file://{config_dir}")
-        Hydra.create_main_hydra2(task_name="savant", config_search_path=search_path)
-        return compose(config_name="config", overrides=overrides, return_hydra_config=True)
-    except HydraException as exc:
-        from savant_cli.cli import variant_hint
-
-        text = str(exc).strip()
-        culprit = next((o for o in overrides if o in text or o.split("=", 1)[0].lstrip("+~") in text), None)
-        if culprit is None:
-            key, value = "overrides", overrides
-        else:
-            key, _, value = culprit.partition("=")
-            key = key.lstrip("+~") or culprit
-        hint = variant_hint(overrides)
-        raise ConfigError(key, value, f"{hint} (Hydra: {text.splitlines()[0]})" if hint else text) from None
-    finally:
-        restore_gh_from_backup(backup)
-
-
-def task_config(cfg):
-    """What Hydra hands a task: a copy of the composed config without its ``hydra`` node."""
-    from omegaconf import open_dict, read_write
-
-    task = copy.deepcopy(cfg)
-    with read_write(task), open_dict(task):
-        del task["hydra"]
-    return task
 
 
 def _write_hydra_files(out_dir: Path, cfg, task_cfg, overrides: list[str]) -> None:
@@ -141,7 +91,8 @@ def run(overrides: Sequence[str] | None = None, config_dir: str | Path | None = 
 
     from savant_cli import lifecycle, run_lock
     from savant_cli.config import validate
-    from savant_cli.studies import check_folder, run_study
+    from savant_cli.runner import run_study
+    from savant_cli.studies import check_folder
 
     if isinstance(overrides, (str, bytes)):
         raise ConfigError("overrides", overrides, "must be a list of override strings, e.g. ['study=linear']")

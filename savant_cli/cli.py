@@ -61,7 +61,7 @@ def _hydra_task(cfg) -> int:
 
     from savant_cli import lifecycle, run_lock
     from savant_cli.config import validate
-    from savant_cli.studies import run_study
+    from savant_cli.runner import run_study
 
     console = Console(stderr=True)
     hc = HydraConfig.get()
@@ -91,10 +91,14 @@ def _hydra_task(cfg) -> int:
 
 
 def _run_hydra(argv: list[str]) -> None:
+    """``savant run ARGV``: Hydra's main over the shipped config tree, with our schema in
+    its ConfigStore; Hydra's own refusals exit with status 2."""
     import hydra
 
+    from savant_cli.hydra_compose import register_schema, variant_hint
     from savant_cli.paths import shipped_config_dir
 
+    register_schema()
     main = hydra.main(config_path=str(shipped_config_dir()), config_name="config", version_base="1.3")(_hydra_task)
     sys.argv = ["savant run", *argv]
     try:
@@ -109,24 +113,6 @@ def _run_hydra(argv: list[str]) -> None:
                 Console(stderr=True).print(f"[bold red]configuration error[/]: {hint}")
             raise SystemExit(ConfigError.exit_code) from None
         raise
-
-
-def variant_hint(argv: list[str]) -> str:
-    """Our explanation of an override Hydra refused because it names a key of another
-    option of its group (the shipped defaults say which option is chosen)."""
-    from omegaconf import OmegaConf
-
-    from savant_cli.config import variant_key_hint
-    from savant_cli.paths import shipped_config_dir
-
-    try:
-        defaults = {}
-        for entry in OmegaConf.to_container(OmegaConf.load(shipped_config_dir() / "config.yaml")).get("defaults", []):
-            if isinstance(entry, dict):
-                defaults.update({str(k): str(v) for k, v in entry.items()})
-        return variant_key_hint([a for a in argv if "=" in a and not a.startswith("-")], defaults)
-    except Exception:  # noqa: BLE001 - a hint must never hide Hydra's own message
-        return ""
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -240,7 +226,8 @@ def _batch_command(cmd: str, rest: list[str]) -> int:
         err.print(f"[bold red]error[/]: {folder} is not a folder\n{usage}")
         return 2
     from savant_cli import run_lock
-    from savant_cli.studies import montecarlo, write_report_or_say
+    from savant_cli.html_report import write_report_or_say
+    from savant_cli.studies import montecarlo
 
     try:
         if cmd == "collect":

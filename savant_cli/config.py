@@ -1,11 +1,12 @@
-"""Configuration schema (structured dataclasses registered in Hydra's ConfigStore) and
-physical validation.
+"""Configuration schema (structured dataclasses) and physical validation.
 
 Hydra composes the YAML tree in ``conf/``; :func:`validate` then merges the result onto
 the schema, which refuses unknown keys and wrong types, and checks physical sense
 (rates that divide each other, positive frequencies, blending weights summing to 1 …).
 Every refusal is a :class:`savant_cli.errors.ConfigError` naming the key, the value and
-what is allowed; the command line turns it into exit status 2.
+what is allowed; the command line turns it into exit status 2. Nothing here imports
+Hydra: the schema is put in Hydra's ConfigStore by
+:func:`savant_cli.hydra_compose.register_schema`, which the entry points call.
 """
 
 from __future__ import annotations
@@ -16,7 +17,6 @@ from dataclasses import dataclass, field
 from typing import Any, Optional
 
 import numpy as np
-from hydra.core.config_store import ConfigStore
 from omegaconf import DictConfig, OmegaConf
 from omegaconf.errors import OmegaConfBaseException
 
@@ -982,14 +982,6 @@ class SavantConfig:
     output: OutputConfig = field(default_factory=OutputConfig)
 
 
-def register_schema() -> None:
-    """Put the schema in Hydra's ConfigStore as ``savant_schema`` (for `--info` and
-    for users' own configs that want to extend it)."""
-    ConfigStore.instance().store(name="savant_schema", node=SavantConfig)
-
-
-register_schema()
-
 # ------------------------------------------------------------------------ validation
 
 
@@ -1447,31 +1439,6 @@ def group_option(group: str, node: Any) -> Any:
             value = value.get(part) if isinstance(value, dict) else None
         raise ConfigError(key, value, allowed) from None
     return OmegaConf.to_object(merged)
-
-
-def variant_key_hint(overrides: list[str], defaults: dict[str, str]) -> str:
-    """For command-line overrides Hydra refused before validation: the first one that
-    names a key of another option of a :data:`GROUP_VARIANTS` group, explained
-    (``flex.n_modes`` with ``flex=off``); ``""`` when none does. ``defaults``: the option
-    of each group when the command line does not choose one."""
-    chosen = dict(defaults)
-    for o in overrides:
-        k, _, v = o.lstrip("+~").partition("=")
-        if k in GROUP_VARIANTS:
-            chosen[k] = v
-    for o in overrides:
-        k, _, v = o.lstrip("+~").partition("=")
-        group, _, sub = k.partition(".")
-        if group in GROUP_VARIANTS and sub and chosen.get(group) in GROUP_VARIANTS[group]:
-            flown = chosen[group]
-            if has_key(GROUP_VARIANTS[group][flown], sub.split(".")):
-                continue
-            where = [opt for opt, schema in GROUP_VARIANTS[group].items() if opt != flown
-                     and has_key(schema, sub.split("."))]
-            if where:
-                return str(ConfigError(k, v, f"not a key of {group}={flown}; it belongs to "
-                                             f"{' and '.join(f'{group}={w}' for w in where)}"))
-    return ""
 
 
 def _study(node: Any) -> Any:

@@ -1,6 +1,7 @@
 """``report.html``: one self-contained page of a finished study, for a design review.
 
-Every study writes it into its run folder (:func:`savant_cli.studies.run_study`);
+Every study writes it into its run folder (:func:`savant_cli.runner.run_study`, through
+:func:`write_report_or_say`);
 ``savant report DIR`` writes it again after redrawing the figures. It is built from the
 folder's files alone (:func:`savant_cli.result.load`): ``summary.json``, ``savant.h5``
 and ``plots/``. Sections, in order:
@@ -35,13 +36,16 @@ import html
 import math
 from collections.abc import Iterable, Mapping
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from savant_cli.html_tables import format_cell, summary_tables, worst_offender
 from savant_cli.io.atomic import write_text_atomic
 from savant_cli.io.console import loads_line, split_unit
 from savant_cli.montecarlo.console_summary import loads_by_choice_lines, loads_verdict
 from savant_cli.result import Result, load
+
+if TYPE_CHECKING:
+    from rich.console import Console
 
 REPORT_FILE = "report.html"
 
@@ -305,7 +309,7 @@ def shipped_defaults() -> dict[str, Any]:
     from omegaconf import OmegaConf
 
     from savant_cli.version import __version__
-    from savant_cli.api import compose_config, task_config
+    from savant_cli.hydra_compose import compose_config, task_config
     from savant_cli.paths import shipped_config_dir
 
     root = shipped_config_dir()
@@ -403,3 +407,47 @@ def write_report(run_dir: Path | str) -> Path:
     path = result.run_dir / REPORT_FILE
     write_text_atomic(path, render(result))
     return path
+
+
+def write_report_or_say(folder: Path, console: Console, raise_write_errors: bool = False,
+                        say_written: bool = True) -> int:
+    """``report.html`` into ``folder`` (:func:`write_report`), or a line on ``console``
+    saying why not (and, with ``say_written``, where it was written). What a study's run
+    (:func:`savant_cli.runner.run_study`), ``savant report``, ``savant collect`` and
+    ``savant rerun`` call.
+
+    Parameters
+    ----------
+    folder : pathlib.Path
+        The run folder.
+    console : rich.console.Console
+        Where the line goes (stderr in the commands).
+    raise_write_errors : bool
+        Raise an :class:`~savant_cli.errors.OutputWriteError` instead of saying it.
+    say_written : bool
+        Say where the page was written.
+
+    Returns
+    -------
+    int
+        1 when the page could not be written (:class:`~savant_cli.errors.OutputWriteError`:
+        disk full, folder not writable), else 0: a page that cannot be built leaves the
+        exit status alone.
+    """
+    from savant_cli.errors import OutputWriteError
+
+    try:
+        path = write_report(folder)
+    except OutputWriteError as exc:
+        if raise_write_errors:
+            raise
+        console.print(f"[red]report.html not written[/red]: {exc}", highlight=False)
+        return exc.exit_code
+    except FileNotFoundError as exc:
+        console.print(f"no report.html: {exc}", highlight=False)
+    except Exception as exc:  # noqa: BLE001 - the study's own outputs stand without the page
+        console.print(f"[red]report.html not written[/red]: {type(exc).__name__}: {exc}", highlight=False)
+    else:
+        if say_written:
+            console.print(f"report: {path}", highlight=False)
+    return 0

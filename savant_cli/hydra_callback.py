@@ -62,10 +62,10 @@ class RunFolderCallback(Callback):
 
         from savant_cli import run_lock
         from savant_cli.config import validate
+        from savant_cli.hydra_compose import register_schema, task_config
         from savant_cli.studies import check_folder
 
-        from savant_cli.api import task_config
-
+        register_schema()  # as savant run does; for a Hydra app of its own using this callback
         HydraConfig.instance().set_config(config)  # what run_job does first; data paths read it
         try:
             typed = validate(task_config(config))  # what the task gets: the config without its hydra node

@@ -102,7 +102,7 @@ def report(run_dir: Path | str, console: Console | None = None) -> list[Path]:
 
         paths += flex_sweep.draw(*flex_sweep.read_group(h5), folder)
     if "montecarlo" in groups:
-        from savant_cli.montecarlo.figures import redraw
+        from savant_cli.plots.montecarlo_batch import redraw
 
         paths += redraw(run_dir)
     if "flyoff" in groups:
@@ -125,7 +125,7 @@ def report(run_dir: Path | str, console: Console | None = None) -> list[Path]:
                                "time_margins"})
     if studies:
         console.print(f"redrawn from {RUN_FILE}: {', '.join(studies)}")
-    from savant_cli.studies import write_report_or_say
+    from savant_cli.html_report import write_report_or_say
 
     write_report_or_say(run_dir, console, raise_write_errors=True)  # report.html, with the figures just drawn
     return paths

@@ -217,7 +217,7 @@ def test_each_option_is_typed_by_its_own_schema():
 
 
 def test_hydra_refusal_of_another_options_key_gets_the_same_explanation():
-    from savant_cli.config import variant_key_hint
+    from savant_cli.hydra_compose import variant_key_hint
 
     defaults = {"flex": "off", "actuator": "third_order"}
     assert "not a key of flex=off; it belongs to flex=on" in variant_key_hint(["flex.n_modes=3"], defaults)

@@ -134,13 +134,13 @@ def test_no_progress_bar_in_a_notebook_without_ipywidgets(monkeypatch, caplog):
         has_widgets = False
     assert live_display_ok(Console(force_jupyter=True)) is has_widgets
     assert live_display_ok(Console(force_jupyter=False, file=io.StringIO()))
-    import savant_cli.studies as studies
+    import savant_cli.runner as runner
 
     monkeypatch.setattr("savant_cli.io.console.live_display_ok", lambda console=None: False)
-    monkeypatch.setitem(studies._NOTEBOOK_NOTE, "said", False)
+    monkeypatch.setitem(runner._NOTEBOOK_NOTE, "said", False)
     with caplog.at_level(logging.INFO, logger="savant_cli"):
-        assert studies._progress_drawable() is False
-        assert studies._progress_drawable() is False
+        assert runner._progress_drawable() is False
+        assert runner._progress_drawable() is False
     assert [r.getMessage() for r in caplog.records].count(
         "no progress bars in this notebook: install ipywidgets to see them") == 1
 

@@ -152,7 +152,7 @@ def test_config_refuses_values_outside_the_error_model(compose_cfg):
 
 
 def test_perfect_navigation_has_no_error_keys():
-    from savant_cli.config import variant_key_hint
+    from savant_cli.hydra_compose import variant_key_hint
 
     hint = variant_key_hint(["navigation.gyro.bias_deg_per_h=[1,0,0]"], {"navigation": "perfect"})
     assert "not a key of navigation=perfect; it belongs to navigation=inertial" in hint

@@ -1,10 +1,13 @@
 """From the journal of a batch (one or many shard folders) to the batch's outputs:
 ``savant.h5`` (group ``montecarlo``), ``minmax.csv``, ``percentiles.csv``,
 ``dispersion_statistics.csv``, ``margin_spread.csv``, ``insertion_accuracy.csv``,
-``summary.json``, plots and the console summary, in one call (:func:`write_outputs`)."""
+``summary.json``, plots and the console summary, in one call (:func:`write_outputs`).
+The figures are drawn by the function the caller hands in
+(:func:`savant_cli.plots.montecarlo_batch.draw_figures`, a floor above this one)."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -17,19 +20,24 @@ from savant_cli.io.atomic import write_json_atomic
 from savant_cli.io.h5write import atomic_h5
 from savant_cli.montecarlo.analysis import analyse
 from savant_cli.montecarlo.console_summary import print_analysis
-from savant_cli.montecarlo.figures import draw_figures
 from savant_cli.montecarlo.inventory import Inventory
+from savant_cli.montecarlo.results import Tables
 from savant_cli.montecarlo.storage import write_csv, write_group, write_tables
+
+
+DrawFigures = Callable[[Path, Tables, list[dict[str, Any]], dict[str, tuple[float, float]] | None], list[Path]]
+"""The batch's figure drawer: (folder, tables, dispersions, band requirements) → PNGs."""
 
 
 def write_outputs(out_dir: Path, inv: Inventory, expected: list[int], dispersions: list[dict[str, Any]],
                   config_yaml: str, provenance: dict[str, str], history_names: list[str],
                   history_time: np.ndarray, requirements: RequirementSet | None,
-                  plots: bool, console: Console | None = None,
+                  draw: DrawFigures | None, console: Console | None = None,
                   reliability_spec: ReliabilitySpec | None = None) -> dict[str, Any]:
     """Write every batch output into ``out_dir``; returns the ``summary.json`` content.
     ``requirements``: the set the runs' margins were judged against (its band values
-    mark the margin-spread plot); ``reliability_spec``: the demonstrated success's
+    mark the margin-spread plot); ``draw``: draws the figures into ``out_dir/plots``
+    after the files are written (None: no plots); ``reliability_spec``: the demonstrated success's
     confidence, target and success statuses (``study.reliability``; its defaults when
     None).
 
@@ -64,8 +72,8 @@ def write_outputs(out_dir: Path, inv: Inventory, expected: list[int], dispersion
             write_csv(out_dir / "insertion_accuracy.csv",
                       an.insertion["accuracy"] + an.insertion.get("navigation_errors", []))
         write_json_atomic(out_dir / "summary.json", an.summary)
-        if plots:
-            draw_figures(out_dir, tb, dispersions, bands or None)
+        if draw is not None:
+            draw(out_dir, tb, dispersions, bands or None)
     except OutputWriteError:
         if console is not None:  # the summary still reaches the console
             tb = done.get("tb") or write_tables(None, inv, runs, [], history_time)

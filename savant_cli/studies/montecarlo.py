@@ -37,6 +37,7 @@ from savant_cli.montecarlo.inventory import inventory, ranges_text
 from savant_cli.montecarlo.outputs import write_outputs
 from savant_cli.montecarlo.spec import DispersionSet, parse
 from savant_cli.montecarlo.targets import TABLE_TARGETS
+from savant_cli.plots.montecarlo_batch import draw_figures
 from savant_cli.processes import default_workers
 from savant_cli.paths import hydra_search_dirs, resolve_data_path
 from savant_cli.sim import engine as E
@@ -165,7 +166,8 @@ def fly_batch(cfg: SavantConfig, config_yaml: str, out_dir: Path, console: Conso
     try:
         summary = write_outputs(out_dir, inv, list(mine), dispersion_table(case.dispersions),
                                 config_yaml, collect_provenance(), names, case.history_time, cfg.requirements,
-                                cfg.output.plots, console if print_tables else None, cfg.study.reliability)
+                                draw_figures if cfg.output.plots else None, console if print_tables else None,
+                                cfg.study.reliability)
     except OutputWriteError:
         if stop.reason == "write failed":  # said before the outputs' own failure
             console.print(f"[bold red]batch stopped[/]: {stop.detail}", highlight=False)
@@ -358,7 +360,8 @@ def collect(folder: Path, console: Console | None = None, allow_missing: bool = 
     if before_write is not None:
         before_write()
     write_outputs(folder, inv, expected, dispersion_table(case.dispersions), OmegaConf.to_yaml(raw, resolve=True),
-                  collect_provenance(), names, case.history_time, cfg.requirements, cfg.output.plots, console,
+                  collect_provenance(), names, case.history_time, cfg.requirements,
+                  draw_figures if cfg.output.plots else None, console,
                   cfg.study.reliability)
     console.print(f"collected {len(inv.files)} runs from {len(run_dirs)} shard folder(s) into {folder}")
     if missing:

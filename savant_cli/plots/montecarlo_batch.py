@@ -16,6 +16,7 @@ from savant_cli.io.console import split_unit
 from savant_cli.montecarlo.batch import AXIS_CODES, BAND_CODES, KIND_CODES
 from savant_cli.montecarlo.results import Tables
 from savant_cli.montecarlo.storage import read_tables
+from savant_cli.plots import montecarlo as mcp
 
 
 def redraw(out_dir: Path) -> list[Path]:
@@ -54,8 +55,6 @@ def draw_figures(out_dir: Path, tb: Tables, dispersions: list[dict[str, Any]],
         value marked) and of the dispersions, an envelope per history signal, and the
         margin spread when the runs have margins.
     """
-    from savant_cli.plots import montecarlo as mcp
-
     folder = out_dir / "plots"
     paths = []
     ok = tb.ok
