@@ -59,6 +59,7 @@ def run_study(cfg, raw_cfg, out_dir, raise_errors: bool = False) -> int:
     from savant_cli import lifecycle
     from savant_cli.errors import DamagedFileError, OutputWriteError
     from savant_cli.io.console import print_quiet_lines
+    from savant_cli.sim.compile_notice import silenced
 
     quiet = cfg.output.console == "quiet"
     if cfg.sim.progress and (quiet or not _progress_drawable()):
@@ -66,7 +67,8 @@ def run_study(cfg, raw_cfg, out_dir, raise_errors: bool = False) -> int:
     err = Console(stderr=True)
     lifecycle.stage("study")
     try:
-        code = get_study(cfg.study.name).run(cfg, raw_cfg, out_dir)
+        with silenced(quiet):  # quiet: no compile line either
+            code = get_study(cfg.study.name).run(cfg, raw_cfg, out_dir)
     except (OutputWriteError, DamagedFileError) as exc:
         if raise_errors:
             raise
