@@ -139,3 +139,51 @@ def test_compile_time_s_is_a_wall_clock_key():
     from savant_cli.montecarlo.batch import WALL_KEYS
 
     assert "compile_time_s" in WALL_CLOCK_KEYS and "compile_time_s" in WALL_KEYS
+
+
+@pytest.mark.slow
+def test_nominal_path_imports_no_scipy_stats_or_ndimage(first_contact, tmp_path):
+    """A nominal flight (plots off) through the API loads neither ``scipy.stats`` nor
+    ``scipy.ndimage`` (seconds of import a flight does not need)."""
+    cache = first_contact[0]
+    code = textwrap.dedent(f"""
+        import sys
+        import savant_cli
+        savant_cli.run(["output.plots=false", "sim.progress=false"], out_dir={str(tmp_path / "run")!r}, quiet=True)
+        print(sorted(m for m in ("scipy.stats", "scipy.ndimage") if m in sys.modules))
+    """)
+    env = dict(os.environ, SAVANT_CACHE_DIR=str(cache))
+    env.pop("NUMBA_CACHE_DIR", None)
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, check=True,
+                         timeout=600)
+    assert out.stdout.strip().splitlines()[-1] == "[]", out.stdout
+    assert LINE not in out.stderr  # warm, and quiet
+
+
+@pytest.mark.slow
+def test_parallel_figures_are_the_serial_ones(first_contact, tmp_path, monkeypatch):
+    """The PNGs drawn by forked workers (the cold run's) have the names and bytes of the
+    same figures drawn serially in this process."""
+    from savant_cli.io.hdf5 import read_run
+    from savant_cli.plots import ascent
+
+    cold_dir = first_contact[2]
+    monkeypatch.setattr(ascent, "_draw_workers", lambda: 1)
+    serial = ascent.plot_ascent(read_run(cold_dir / "savant.h5"), tmp_path / "plots")
+    parallel = sorted((cold_dir / "plots").glob("*.png"))
+    assert [p.name for p in serial] == [s.filename for s in ascent.FIGURES if (cold_dir / "plots" / s.filename).is_file()]
+    assert sorted(p.name for p in serial) == [p.name for p in parallel] and len(parallel) >= 7
+    for p in parallel:
+        assert p.read_bytes() == (tmp_path / "plots" / p.name).read_bytes(), p.name
+
+
+def test_figures_are_drawn_in_parallel_only_in_a_forking_main_process(monkeypatch):
+    import multiprocessing
+
+    from savant_cli.plots import ascent
+    from savant_cli.processes import default_workers
+
+    if sys.platform.startswith("linux"):
+        assert ascent._draw_workers() == default_workers()
+    monkeypatch.setattr(multiprocessing, "parent_process", lambda: object())
+    assert ascent._draw_workers() == 1

@@ -23,7 +23,7 @@ import os
 import sys
 import time
 from collections.abc import Callable, Iterator, Sequence
-from contextlib import contextmanager
+from contextlib import contextmanager, nullcontext
 from typing import Any
 
 #: The cold compile of the nominal flight's kernels, s, on the 2-core reference machine
@@ -106,20 +106,57 @@ def compiling(where: str, estimate_s: float = ESTIMATE_S) -> Iterator[None]:
         yield
 
 
+def _compile_in_child(dispatcher: Any, args: Sequence[Any]) -> None:
+    dispatcher(*args)  # compiles, and numba saves it to the on-disk cache
+
+
+@contextmanager
+def compiled_apart(dispatcher: Any, args: Sequence[Any]) -> Iterator[None]:
+    """Within the block, a forked helper process compiles ``dispatcher`` for ``args``
+    (into numba's on-disk cache) while this process compiles the rest; when this
+    process comes to need ``dispatcher`` it waits for the helper and loads its result
+    from the cache rather than compiling it again. Both cores work on a cold compile.
+
+    Nothing happens when ``dispatcher`` is already cached or the platform cannot fork.
+    The call in the helper must do nothing the caller would see (it writes only into
+    the helper's copies of ``args``)."""
+    import multiprocessing
+
+    if not hasattr(os, "fork") or kernel_cached(dispatcher, args):
+        yield
+        return
+    helper = multiprocessing.get_context("fork").Process(target=_compile_in_child, args=(dispatcher, args),
+                                                          name="savant-compile", daemon=True)
+    helper.start()
+    own_compile = dispatcher.compile
+
+    def compile_after_helper(sig: Any) -> Any:
+        helper.join()
+        return own_compile(sig)
+
+    dispatcher.compile = compile_after_helper  # numba compiles a callee through this method
+    try:
+        yield
+    finally:
+        del dispatcher.compile
+        if helper.is_alive():
+            helper.terminate()
+        helper.join()
+
+
 def load_kernels(calls: Sequence[tuple[Callable[..., Any], Sequence[Any]]],
-                 warm: Callable[[], None] | None = None) -> float:
+                 apart: tuple[Any, Sequence[Any]] | None = None) -> float:
     """Call each compiled ``(dispatcher, args)`` of ``calls`` once (they must do nothing
     the flight would see), announcing the compile on a cold cache (:func:`compiling`);
-    ``warm()``, when given, runs first under the same announcement (e.g. a helper that
-    compiles part of the plant in parallel). Returns the wall time, s."""
+    ``apart``, a ``(dispatcher, args)`` the calls compile on the way, is compiled by a
+    helper process meanwhile (:func:`compiled_apart`). Returns the wall time, s."""
     t0 = time.perf_counter()
     if kernels_cached(calls):
         for f, args in calls:
             f(*args)
         return time.perf_counter() - t0
-    with compiling(cache_dir(calls[0][0] if calls else None)):
-        if warm is not None:
-            warm()
+    with compiling(cache_dir(calls[0][0] if calls else None)), \
+            (compiled_apart(*apart) if apart is not None else nullcontext()):
         for f, args in calls:
             f(*args)
     return time.perf_counter() - t0

@@ -20,7 +20,7 @@ from savant_cli.sim import engine as E
 from savant_cli.sim import layout as L
 from savant_cli.sim import compile_notice, loop_perturbation
 from savant_cli.sim.build import SimModel
-from savant_cli.sim.plant import derivative
+from savant_cli.sim.plant import compose, derivative
 
 STOP_MESSAGES = {
     E.STOP_CUTOFF: "cutoff: target orbital energy reached",
@@ -130,7 +130,7 @@ def simulate(model: SimModel, progress: bool = True, chunk_s: float = 10.0,
         (E.advance, (x, d, u, events, k, 0, rt, model.p, tb, model.fcs, model.gyro, model.guidance, model.sched,
                      log, row, pert)),
         (derivative, (k * rt.dt, x, u, model.p, tb, np.zeros(L.N_AUX), np.zeros(nx))),
-    ])
+    ], apart=(compose, (k * rt.dt, x, u, model.p, tb, np.zeros(L.N_AUX), np.zeros(nx), True)))  # the plant, in parallel
     bar = Progress(TextColumn("[bold]flight"), BarColumn(), TextColumn("t = {task.fields[t]:6.1f} s"),
                    TimeElapsedColumn(), transient=True, disable=not progress)
     with bar:
