@@ -56,6 +56,7 @@ def run_study(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: str | Path, raise
     from savant_cli.errors import DamagedFileError, OutputWriteError
     from savant_cli.html_report import write_report_or_say
     from savant_cli.io.console import print_quiet_lines
+    from savant_cli.sim.compile_notice import silenced
     from savant_cli.studies import get_study
 
     quiet = cfg.output.console == "quiet"
@@ -64,7 +65,8 @@ def run_study(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: str | Path, raise
     err = Console(stderr=True)
     lifecycle.stage("study")
     try:
-        code = get_study(cfg.study.name).run(cfg, raw_cfg, out_dir)
+        with silenced(quiet):  # quiet: no compile line either
+            code = get_study(cfg.study.name).run(cfg, raw_cfg, out_dir)
     except (OutputWriteError, DamagedFileError) as exc:
         if raise_errors:
             raise

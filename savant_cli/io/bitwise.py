@@ -19,8 +19,8 @@ import h5py
 import numpy as np
 
 #: Summary keys and root attributes that measure the machine, not the flight.
-WALL_CLOCK_KEYS = ("study_wall_time_s", "process_wall_time_s", "sim_wall_time_s", "realtime_factor", "wall_time_s", "wall_s",
-                   "simulation_wall_time_s", "elapsed_s", "runs_per_minute", "stage_wall_s")
+WALL_CLOCK_KEYS = ("study_wall_time_s", "process_wall_time_s", "sim_wall_time_s", "compile_time_s", "realtime_factor",
+                   "wall_time_s", "wall_s", "simulation_wall_time_s", "elapsed_s", "runs_per_minute", "stage_wall_s")
 #: Root attributes of a run file that describe the flight (the rest is provenance).
 RUN_ATTRS = ("complete", "status", "message")
 

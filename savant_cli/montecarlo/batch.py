@@ -42,7 +42,7 @@ from savant_cli.sim.run import simulate, signals
 from savant_cli.sim.run_summary import run_summary
 
 #: summary keys that vary from machine to machine, kept out of the run tables
-WALL_KEYS = ("sim_wall_time_s", "realtime_factor", "study_wall_time_s")
+WALL_KEYS = ("sim_wall_time_s", "compile_time_s", "realtime_factor", "study_wall_time_s")
 AXIS_CODES = AXIS_NAMES
 KIND_CODES = ("gain", "phase")
 BAND_CODES = ("rigid/aero", "slosh", "flex")

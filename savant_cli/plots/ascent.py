@@ -354,6 +354,8 @@ def plot_ascent(record: RunRecord, out_dir: Path) -> list[Path]:
     list of pathlib.Path
         The files written, in the order of :data:`FIGURES`. A figure whose signals are
         all missing is skipped silently; a panel whose signal is missing is left out.
+        The figures are drawn by forked worker processes in parallel, one per core
+        (serially where processes cannot fork): the same files either way.
 
     Notes
     -----
@@ -368,14 +370,48 @@ def plot_ascent(record: RunRecord, out_dir: Path) -> list[Path]:
     base = _time_base(record)
     if base is None:
         return []
-    t, idx = base
-    written: list[Path] = []
-    for spec in FIGURES:
-        fig = _draw(spec, record, t, idx)
-        if fig is None:
-            continue
-        path = out_dir / spec.filename
-        with atomic_path(path) as tmp:
-            fig.savefig(tmp, format="png", dpi=DPI, pil_kwargs={"compress_level": _PNG_LEVEL})
-        written.append(path)
-    return written
+    _JOB["args"] = (record, base, out_dir)
+    try:
+        workers = min(len(FIGURES), _draw_workers())
+        if workers > 1:  # forked children inherit the record: nothing pickled but the paths back
+            from concurrent.futures import ProcessPoolExecutor
+
+            from savant_cli.processes import process_context, worker_initializer
+
+            with ProcessPoolExecutor(workers, mp_context=process_context(), **worker_initializer()) as pool:
+                drawn = list(pool.map(_draw_file, range(len(FIGURES))))
+        else:
+            drawn = [_draw_file(i) for i in range(len(FIGURES))]
+    finally:
+        _JOB.clear()
+    return [path for path in drawn if path is not None]
+
+
+#: The figures' job for :func:`_draw_file`, set by :func:`plot_ascent` (forked workers inherit it).
+_JOB: dict = {}
+
+
+def _draw_workers() -> int:
+    """Processes that draw the figures at once: the cores, in a main process where
+    ``fork`` is how processes start (a spawned worker would pay matplotlib's import and
+    the record's pickling; a worker of a study's pool has the other cores busy); else one."""
+    import multiprocessing
+
+    from savant_cli.processes import default_workers, process_context
+
+    if multiprocessing.parent_process() is not None or process_context().get_start_method() != "fork":
+        return 1
+    return default_workers()
+
+
+def _draw_file(i: int) -> Path | None:
+    """Draw figure ``FIGURES[i]`` of the job into its PNG; its path (None: nothing to draw)."""
+    record, (t, idx), out_dir = _JOB["args"]
+    spec = FIGURES[i]
+    fig = _draw(spec, record, t, idx)
+    if fig is None:
+        return None
+    path = out_dir / spec.filename
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png", dpi=DPI, pil_kwargs={"compress_level": _PNG_LEVEL})
+    return path

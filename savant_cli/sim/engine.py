@@ -181,7 +181,7 @@ def handle_events(t: float, x: np.ndarray, u: np.ndarray, d: np.ndarray,
         d[propulsion.D_FS_PROP_SEP] = x[MFS]
         if sched[S_STOP_AT_SEP] != 0.0:
             return STOP_SEPARATION
-        cg_stack = reference_cg(x, p, tb, CONFIG_STACK)
+        cg_stack = reference_cg(x, p, tb, np.int64(CONFIG_STACK))  # (not a literal: one compile for every config)
         u[U_CONFIG] = CONFIG_UPPER_LES
         u[U_ENGINE] = ENGINE_OFF
         x[MFS] = 0.0
@@ -195,7 +195,7 @@ def handle_events(t: float, x: np.ndarray, u: np.ndarray, d: np.ndarray,
         fo = int(p[flex.P_OFFSET])
         if fo >= 0:  # new modal set: its modes start at rest (paper: liftoff → ignition set)
             x[fo:fo + 2 * int(p[flex.P_N_MODES])] = 0.0
-        move_reference(x, cg_stack, reference_cg(x, p, tb, CONFIG_UPPER_LES))
+        move_reference(x, cg_stack, reference_cg(x, p, tb, np.int64(CONFIG_UPPER_LES)))
         reset_phase(d)
     t_sep = events[EV_SEPARATION]
     if not np.isnan(t_sep) and np.isnan(events[EV_IGNITION]) and t >= t_sep + sched[S_T_IGN_DELAY]:
@@ -205,9 +205,9 @@ def handle_events(t: float, x: np.ndarray, u: np.ndarray, d: np.ndarray,
     t_ign = events[EV_IGNITION]
     if not np.isnan(t_ign) and np.isnan(events[EV_LES]) and t >= t_ign + sched[S_T_LES_DELAY]:
         events[EV_LES] = t
-        cg_les = reference_cg(x, p, tb, CONFIG_UPPER_LES)
+        cg_les = reference_cg(x, p, tb, np.int64(CONFIG_UPPER_LES))
         u[U_CONFIG] = CONFIG_UPPER
-        move_reference(x, cg_les, reference_cg(x, p, tb, CONFIG_UPPER))
+        move_reference(x, cg_les, reference_cg(x, p, tb, np.int64(CONFIG_UPPER)))
     if int(u[U_ENGINE]) == ENGINE_UPPER:
         if u[U_T_CUT] > 0.0:  # shutdown transient: the impulse after the command (trapezoid)
             f_us = propulsion.upper_stage_thrust_vac(x, tb, p, t, u[U_T_IGN], u[U_T_CUT])

@@ -43,7 +43,7 @@ def derivative(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.nda
                aux: np.ndarray, xd: np.ndarray) -> None:
     """Time derivative of the continuous state into ``xd`` and every diagnostic into
     ``aux`` (see :func:`compose` for the arguments)."""
-    compose(t, x, u, p, tb, aux, xd, True)
+    compose(t, x, u, p, tb, aux, xd, np.bool_(True))  # a run-time flag: a literal compiles compose per value
 
 
 @njit(cache=True, error_model="numpy")
@@ -52,7 +52,7 @@ def derivative_state(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: 
     """:func:`derivative` without the diagnostics only a log reads (latitude, longitude,
     Earth-relative speed): ``xd`` is bit for bit the same; of ``aux`` only the altitude
     is written (the engine's ground check)."""
-    compose(t, x, u, p, tb, aux, xd, False)
+    compose(t, x, u, p, tb, aux, xd, np.bool_(False))
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -89,7 +89,7 @@ def reference_cg(x: np.ndarray, p: np.ndarray, tb: np.ndarray, config: int) -> t
     return rigid[1], rigid[2], rigid[3]
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy")
 def compose(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarray,
             aux: np.ndarray, xd: np.ndarray, diagnostics: bool) -> None:
     """Time derivative of the continuous state, written into ``xd``.
@@ -116,7 +116,10 @@ def compose(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarra
     Notes
     -----
     The models are compiled inline and pass scalars: this function runs four times per
-    plant step, and heap temporaries would dominate its cost.
+    plant step, and heap temporaries would dominate its cost. It is itself compiled once,
+    as its own function, not inlined into :func:`derivative` and
+    :func:`derivative_state`: inlined, the whole plant compiled twice on a cold cache
+    (about half the first run's compile time), for a run time a few percent shorter.
     """
     config = int(u[U_CONFIG])
     engine = int(u[U_ENGINE])

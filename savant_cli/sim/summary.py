@@ -261,6 +261,7 @@ def summarize(result: SimResult, sig: dict[str, Signal], study_wall_s: float | N
         "apogee_altitude_km": orbit["apogee_altitude_km"],
         "inclination_deg": orbit["inclination_deg"],
         "sim_wall_time_s": result.sim_wall_time_s,
+        "compile_time_s": result.compile_time_s,
         "realtime_factor": float(result.t_final / result.sim_wall_time_s) if result.sim_wall_time_s > 0 else None,
     })
     out.update(load_indicators(t, qbar, sig["alpha"].data, sig["beta"].data, qalpha_total, qalpha_limit))
