@@ -17,13 +17,23 @@ from savant_cli.config import FlexOnConfig, SloshOnConfig
 from savant_cli.errors import ConfigError
 from savant_cli.io.modal_data import ModalSet, read_modal_set, read_numeric_csv
 from savant_cli.io.table_order import require_increasing, table_key
-from savant_cli.sim import layout as L
 from savant_cli.vehicle import Vehicle
+
+
+#: The plant's points that use mode shapes, by their key under the vehicle YAML's
+#: ``flex.nodes`` (a point may average several nodes), in the order of the shape tables'
+#: point axis (``models/flex.py``'s ``PT_*`` indices).
+POINT_KEYS = ("imu", "rate_gyro_upper_stage", "rate_gyro_first_stage", "rcs", "gimbal_first_stage",
+              "gimbal_upper_stage", "slosh_lox", "slosh_lh2")
+#: The points on the first stage: absent from the upper-stage modal sets (zero shapes).
+FIRST_STAGE_KEYS = ("rate_gyro_first_stage", "gimbal_first_stage")
+#: The modal data sets (file names in the flex folder), in the order of the tables.
+FLEX_SETS = ("first_stage_liftoff", "first_stage_burnout", "second_stage_ignition", "second_stage_burnout")
 
 
 @dataclass(frozen=True)
 class FlexTables:
-    """Modal data at the plant's points, all four sets (``layout.FLEX_SETS`` order)."""
+    """Modal data at the plant's points, all four sets (:data:`FLEX_SETS` order)."""
 
     frequency_rad_s: np.ndarray  # (4, n_modes)
     damping: np.ndarray  # (n_modes,)
@@ -84,12 +94,12 @@ def load_flex(vehicle: Vehicle, fcfg: FlexOnConfig, plant_rate_hz: float) -> Fle
     if not folder.is_dir():
         raise ConfigError(f"{key}.directory", str(folder), "modal data folder not found")
     nodes = spec.get("nodes") or {}
-    for pk in L.POINT_KEYS:
+    for pk in POINT_KEYS:
         ids = nodes.get(pk)
         if not isinstance(ids, (list, tuple)) or not ids or not all(isinstance(i, int) for i in ids):
             raise ConfigError(f"{key}.nodes.{pk}", ids, "must be a non-empty list of integer node ids")
     unit_pair = (str(units.get("length", "")), str(units.get("force", "")))
-    sets = tuple(_modal_set(folder, name, unit_pair, f"{key} set {name}") for name in L.FLEX_SETS)
+    sets = tuple(_modal_set(folder, name, unit_pair, f"{key} set {name}") for name in FLEX_SETS)
     n = fcfg.n_modes
     for ms in sets:
         if ms.frequency_rad_s.size < n:
@@ -102,11 +112,11 @@ def load_flex(vehicle: Vehicle, fcfg: FlexOnConfig, plant_rate_hz: float) -> Fle
         raise ConfigError("flex.n_modes", n, f"the highest retained mode ({in_use.max() / 2 / np.pi:.1f} Hz) must stay "
                           f"below sim.plant_rate_hz / 8 = {plant_rate_hz / 8:g} Hz for the RK4 step; keep fewer "
                           "modes or raise sim.plant_rate_hz")
-    shapes = np.zeros((len(sets), n, L.N_POINTS, 6))
+    shapes = np.zeros((len(sets), n, len(POINT_KEYS), 6))
     for s, ms in enumerate(sets):
         upper = s >= 2
-        for pt, pk in enumerate(L.POINT_KEYS):
-            if upper and pt in L.FIRST_STAGE_POINTS:
+        for pt, pk in enumerate(POINT_KEYS):
+            if upper and pk in FIRST_STAGE_KEYS:
                 continue  # the first stage is gone in the upper-stage sets
             shapes[s, :, pt, :] = ms.at_nodes(nodes[pk], f"{key}.nodes.{pk}")[:n]
     shapes *= fcfg.shape_scale

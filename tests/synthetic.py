@@ -8,7 +8,7 @@ import numpy as np
 from savant_cli import constants as C
 from savant_cli.models import actuator, aero as aero_model, earth, flex, gravity, propulsion, rcs, slosh
 from savant_cli.models.atmosphere import upper_atmosphere_table
-from savant_cli.sim import layout as L
+from savant_cli.models import layout as L
 from savant_cli.sim.plant import PlantTables
 
 

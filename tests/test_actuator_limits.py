@@ -14,7 +14,7 @@ from savant_cli.config import validate
 from savant_cli.models import actuator
 from savant_cli.models.configurations import ENGINE_FIRST, ENGINE_UPPER
 from savant_cli.paths import hydra_search_dirs, shipped_config_dir
-from savant_cli.sim import layout as L
+from savant_cli.models import layout as L
 from savant_cli.sim.setup import prepare
 from conftest import compose_config
 

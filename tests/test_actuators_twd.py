@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from savant_cli.models import actuator, propulsion, twd
-from savant_cli.sim import layout as L
+from savant_cli.models import layout as L
 from savant_cli.sim.plant import derivative, pack_tables
 import synthetic
 

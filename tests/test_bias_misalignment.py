@@ -18,7 +18,7 @@ from savant_cli.linear.plant import SENSOR_NAMES, linearize_plant
 from savant_cli.models.sensors import misalignment
 from savant_cli.sim import engine as E
 from savant_cli.models import actuator, propulsion, sensors
-from savant_cli.sim import layout as L
+from savant_cli.models import layout as L
 from savant_cli.sim.plant import derivative, pack_tables
 from savant_cli.sim.run import log_columns, simulate
 from savant_cli.sim.setup import prepare

@@ -5,7 +5,7 @@ import pytest
 
 from savant_cli import constants as C
 from savant_cli.models import propulsion
-from savant_cli.sim import layout as L
+from savant_cli.models import layout as L
 from savant_cli.sim.engine import rk4, work_array
 from savant_cli.sim.plant import derivative, pack_tables
 import synthetic

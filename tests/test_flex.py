@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 from savant_cli.models import flex, mass as mass_model, propulsion, rcs, rigid_body, twd as twd_model
-from savant_cli.sim import layout as L
+from savant_cli.models import layout as L
 from savant_cli.sim.engine import rk4, work_array
 from savant_cli.models.flex import flex_point
 from savant_cli.sim.plant import derivative, pack_tables

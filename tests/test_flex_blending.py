@@ -9,7 +9,7 @@ import pytest
 from conftest import compose_config
 from savant_cli.config import validate
 from savant_cli.datagen.flex_filters import stack_blend
-from savant_cli.sim import layout as L
+from savant_cli.models import layout as L
 from savant_cli.sim.setup import prepare
 
 

@@ -14,7 +14,7 @@ from savant_cli.models.fcs import (
 )
 from savant_cli.models.guidance import command_at, guidance_sample, smoother_step
 from savant_cli.models.sensors import gyro_discrete, gyro_step
-from savant_cli.sim.layout import D_CMD_P, D_GAINS, D_INT_ATT, D_QS, D_VS, N_DISC
+from savant_cli.models.layout import D_CMD_P, D_GAINS, D_INT_ATT, D_QS, D_VS, N_DISC
 
 
 @pytest.mark.parametrize("zeta", [0.3, 0.5, 0.7])

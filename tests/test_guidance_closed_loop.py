@@ -14,7 +14,7 @@ from savant_cli.errors import ConfigError
 from savant_cli.models import command_schedule as cs
 from savant_cli.models import peg
 from savant_cli.sim import engine as E
-from savant_cli.sim import layout as L
+from savant_cli.models import layout as L
 from savant_cli.sim.summary import orbit_elements
 from savant_cli.studies.flight import fly
 

@@ -16,7 +16,7 @@ from savant_cli.linear.loops import assemble
 from savant_cli.linear.margins import Bands, loop_margins
 from savant_cli.linear.plant import linearize_plant
 from savant_cli.models import actuator, aero, atmosphere, mass as mass_model, propulsion, rigid_body, slosh, twd
-from savant_cli.sim import layout as L
+from savant_cli.models import layout as L
 from savant_cli.sim.engine import rk4, work_array
 from savant_cli.sim.plant import derivative
 from savant_cli.sim.run import simulate

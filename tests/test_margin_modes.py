@@ -13,7 +13,7 @@ import pytest
 from savant_cli.linear.margins import Bands, loop_margins
 from savant_cli.linear.modes import MarginLabeler, band_of
 from savant_cli.models import slosh as slosh_model
-from savant_cli.sim import layout as L
+from savant_cli.models import layout as L
 from savant_cli.sim.plant import derivative
 
 DT = 0.02

@@ -26,7 +26,7 @@ from savant_cli.errors import ConfigError
 from savant_cli.models import earth, gravity, navigation as nav, quaternion as qt
 from savant_cli.models.peg import insertion_target
 from savant_cli.paths import hydra_search_dirs
-from savant_cli.sim.layout import N_DISC, N_PARAM
+from savant_cli.models.layout import N_DISC, N_PARAM
 from savant_cli.sim.run import signals, simulate
 from savant_cli.sim.setup import prepare
 from savant_cli.sim.summary import orbit_elements, summarize

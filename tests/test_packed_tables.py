@@ -13,7 +13,7 @@ from conftest import compose_config
 from savant_cli.config import validate
 from savant_cli.models import quaternion as qt
 from savant_cli.models import aero, atmosphere, earth, mass, propulsion, winds
-from savant_cli.sim import layout as L
+from savant_cli.models import layout as L
 from savant_cli.sim.plant import derivative, pack_tables
 from savant_cli.sim.setup import prepare
 

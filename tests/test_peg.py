@@ -12,7 +12,7 @@ from scipy.integrate import quad, solve_bvp
 
 from savant_cli import constants as C
 from savant_cli.models import gravity, peg
-from savant_cli.sim import layout as L
+from savant_cli.models import layout as L
 from savant_cli.sim.summary import orbit_elements
 
 VE = 448.0 * C.G0  # J-2X-like exhaust velocity, m/s

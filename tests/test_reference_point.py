@@ -14,7 +14,7 @@ from savant_cli.models import quaternion as qt
 from savant_cli.models.configurations import CONFIG_STACK, CONFIG_UPPER, CONFIG_UPPER_LES
 from savant_cli.paths import hydra_search_dirs
 from savant_cli.sim import engine as E
-from savant_cli.sim import layout as L
+from savant_cli.models import layout as L
 from savant_cli.sim.run import simulate
 from savant_cli.sim.setup import prepare
 from conftest import compose_config

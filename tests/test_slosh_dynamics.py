@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from savant_cli.models import gravity, propulsion, slosh
-from savant_cli.sim import layout as L
+from savant_cli.models import layout as L
 from savant_cli.sim.engine import rk4, work_array
 from savant_cli.sim.plant import pack_tables
 import synthetic

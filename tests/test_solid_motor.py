@@ -20,7 +20,7 @@ from savant_cli.models import propulsion
 from savant_cli.montecarlo.targets import Target, apply_samples, build_dispersed
 from savant_cli.paths import hydra_search_dirs
 from savant_cli.sim import engine as E
-from savant_cli.sim import layout as L
+from savant_cli.models import layout as L
 from savant_cli.sim.run import simulate
 from savant_cli.sim.setup import prepare
 

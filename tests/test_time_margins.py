@@ -21,7 +21,7 @@ from savant_cli.config import TimeMarginsStudyConfig, validate
 from savant_cli.errors import ConfigError
 from savant_cli.linear.margins import MarginRow
 from savant_cli.linear.point_analysis import analyse
-from savant_cli.sim import layout as L
+from savant_cli.models import layout as L
 from savant_cli.sim import loop_perturbation as LP
 from savant_cli.studies import flight as flight_mod
 from savant_cli.studies.time_margins import COLUMNS, frequency_margin, read_group, window

@@ -93,7 +93,7 @@ def test_dispersed_load_stays_inside_the_slosh_tables(base):
 def test_flown_mixture_ratio_sets_the_limiting_propellant():
     """Fly the upper stage at MR 5.6 from tanks loaded at 5.5: the engine draws LOX : LH2 =
     5.6 (from the flown states), LOX limits, and the LH2 left beyond L/5.6 is unusable."""
-    from savant_cli.sim import layout as L
+    from savant_cli.models import layout as L
     from savant_cli.sim.run import simulate
     from savant_cli.sim.summary import propulsion_keys
 

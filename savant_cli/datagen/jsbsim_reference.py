@@ -137,7 +137,7 @@ def fly(out_csv: Path) -> Path:
     from savant_cli.io.atomic import write_text_atomic
     from savant_cli.models import earth
     from savant_cli.paths import shipped_config_dir
-    from savant_cli.sim import layout as L
+    from savant_cli.models import layout as L
     from savant_cli.sim.setup import prepare
 
     with initialize_config_dir(config_dir=str(shipped_config_dir()), version_base="1.3"):

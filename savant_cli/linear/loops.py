@@ -28,7 +28,7 @@ from scipy.signal import tf2ss
 
 from savant_cli.models.fcs import FCS_STACK, GYRO_FIRST, GYRO_UPPER, FcsTables
 from savant_cli.sim import engine as E
-from savant_cli.sim import layout as L
+from savant_cli.models import layout as L
 from savant_cli.sim.build import SimModel
 from savant_cli.sim.run import Snapshot
 from savant_cli.linear.plant import SENSOR_NAMES, PlantLinearization

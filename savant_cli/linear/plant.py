@@ -25,7 +25,7 @@ import numpy as np
 
 from savant_cli.models import actuator, aero, quaternion as qt, sensors
 from savant_cli.models.sensors import misalignment
-from savant_cli.sim import layout as L
+from savant_cli.models import layout as L
 from savant_cli.sim.build import SimModel
 from savant_cli.models.flex import flex_point
 from savant_cli.sim.plant import derivative

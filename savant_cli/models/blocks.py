@@ -165,13 +165,15 @@ class TableBlock:
 @dataclass
 class ModelInputs:
     """What a model's ``build(inputs, p, tables)`` reads: the validated config, the
-    loaded vehicle, and data loaded once per run (``slosh``: the slosh tables when slosh
-    is on; ``layout``: the run's state layout)."""
+    loaded vehicle, and data loaded once per run by the vehicle-data layer
+    (``savant_cli.flex_slosh``: ``slosh``, the slosh tables when slosh is on; ``flex``, the
+    modal data at the plant's points when flex is on); ``layout``: the run's state layout."""
 
     cfg: "SavantConfig"
     vehicle: "Vehicle"
     layout: Any
     slosh: Any = None
+    flex: Any = None
 
 
 def pack(arrays: list[np.ndarray]) -> np.ndarray:
@@ -200,7 +202,7 @@ def stack_padded(arrays: list[np.ndarray], fill: float = 0.0) -> tuple[np.ndarra
     return np.ascontiguousarray(out), np.array([a.shape[0] for a in arrays], dtype=np.int64)
 
 
-#: Core continuous states (optional model blocks follow them; see sim/layout.py).
+#: Core continuous states (optional model blocks follow them; see models/layout.py).
 STATE = Vector("x", "core continuous state")
 #: Scalar parameters.
 PARAMETERS = Vector("p", "scalar parameters")
@@ -212,21 +214,3 @@ DISCRETE = Vector("d", "discrete flight-software state")
 INPUTS = Vector("u", "held plant inputs")
 #: Packed tabular data.
 TABLES = Tables()
-
-
-def all_fields() -> list[Field]:
-    """Every declared field of every vector (the models must be imported)."""
-    return [*STATE.fields, *PARAMETERS.fields, *DIAGNOSTICS.fields, *DISCRETE.fields, *INPUTS.fields, *TABLES.fields]
-
-
-def field_reference() -> str:
-    """Markdown table of every declared field (``docs/models.md`` carries it; a test keeps
-    the two equal). Regenerate with ``python -m savant_cli.models``."""
-    import savant_cli.models  # noqa: F401  (every model declares its fields on import)
-    import savant_cli.sim.layout  # noqa: F401  (the held inputs)
-
-    lines = ["| vector | field | size | units | description |", "|---|---|---|---|---|"]
-    for f in all_fields():
-        size = "table" if f.vector == "tb" else str(f.size)
-        lines.append(f"| `{f.vector}` | `{f.key}` | {size} | {f.units} | {f.description} |")
-    return "\n".join(lines)

@@ -177,7 +177,7 @@ def fcs_step(d: np.ndarray, q_nav: np.ndarray, phase: int, schedule_var: float,
     Parameters
     ----------
     d : ndarray
-        Discrete state (see :mod:`savant_cli.sim.layout`).
+        Discrete state (see :mod:`savant_cli.models.layout`).
     q_nav : ndarray (4,)
         Sensed attitude q_b2i from the navigation unit.
     phase : int

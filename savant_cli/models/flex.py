@@ -27,6 +27,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from savant_cli.flex_slosh import FIRST_STAGE_KEYS, POINT_KEYS
 from savant_cli.models import blocks
 from savant_cli.models.configurations import CONFIG_STACK
 from savant_cli.models.interp import tab, tab_offset
@@ -43,11 +44,11 @@ PT_GIMBAL_US = 5
 PT_SLOSH_LOX = 6
 PT_SLOSH_LH2 = 7
 N_POINTS = 8
-POINT_KEYS = ("imu", "rate_gyro_upper_stage", "rate_gyro_first_stage", "rcs", "gimbal_first_stage",
-              "gimbal_upper_stage", "slosh_lox", "slosh_lh2")
+# POINT_KEYS (the YAML key of each point, in PT_ order), FIRST_STAGE_KEYS and FLEX_SETS (the
+# modal data sets, in this order in the packed tables) are vehicle-data names: they live
+# with the reader (savant_cli/flex_slosh.py), which arranges the data in their order.
 FIRST_STAGE_POINTS = (PT_GYRO_FS, PT_GIMBAL_FS)  # absent from the upper-stage modal sets
-# modal data sets, in this order in the packed tables
-FLEX_SETS = ("first_stage_liftoff", "first_stage_burnout", "second_stage_ignition", "second_stage_burnout")
+assert len(POINT_KEYS) == N_POINTS and tuple(POINT_KEYS[i] for i in FIRST_STAGE_POINTS) == FIRST_STAGE_KEYS
 SHAPE = blocks.Record(
     "mode shape at a point",
     ("phi_x", "1/sqrt(kg)", "translation per unit modal coordinate, body X"),
@@ -73,15 +74,14 @@ A_GIMBAL_ROTATION = _AUX.array("gimbal_rotation", 3, "rad", "flex rotation at th
 
 
 def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarray]) -> None:
-    """The ``flex`` group and the vehicle's modal sets (placeholders when off)."""
+    """The ``flex`` group and the vehicle's modal sets, loaded once per run by the
+    vehicle-data layer and handed in as ``inputs.flex`` (placeholders when off)."""
     f = inputs.cfg.flex
     p[P_OFFSET] = inputs.layout.flex
     p[P_N_MODES] = inputs.layout.n_modes
     p[P_SWITCH] = 1.0 if f.enabled and f.switching == "propellant" else 0.0
     if f.enabled:
-        from savant_cli.flex_slosh import load_flex
-
-        fx = load_flex(inputs.vehicle, f, inputs.cfg.sim.plant_rate_hz)
+        fx = inputs.flex
         tables.update(flex_freq=fx.frequency_rad_s, flex_zeta=fx.damping, flex_shape=fx.shapes)
     else:
         tables.update(flex_freq=np.zeros((4, 1)), flex_zeta=np.zeros(1), flex_shape=np.zeros((4, 1, N_POINTS, N_SHAPE)))

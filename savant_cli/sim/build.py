@@ -18,9 +18,9 @@ from savant_cli.models.command_schedule import SCHEDULES
 from savant_cli.models.fcs import FcsTables, fcs_tables
 from savant_cli.models.sensors import GYRO_MISALIGN, gyro_discrete, gyro_steady_state, misalignment
 from savant_cli.sim import engine as E
-from savant_cli.sim import layout as L
+from savant_cli.models import layout as L
 from savant_cli.sim.engine import GyroModel, Rates
-from savant_cli.flex_slosh import SloshData, load_slosh
+from savant_cli.flex_slosh import FlexTables, SloshData, load_flex, load_slosh
 from savant_cli.io.guidance_file import SPEED_COLUMN, GuidanceTable
 from savant_cli.io.table_order import table_key
 from savant_cli.sim.plant import PlantTables, mass_state, pack_tables
@@ -53,18 +53,23 @@ class SimModel:
         return pack_tables(self.tables)
 
 
-def model_inputs(cfg: SavantConfig, vehicle: Vehicle, slosh: SloshData | None = None) -> blocks.ModelInputs:
-    """What the models' builders read (the slosh data loaded here when slosh is on)."""
+def model_inputs(cfg: SavantConfig, vehicle: Vehicle, slosh: SloshData | None = None,
+                 flex: FlexTables | None = None) -> blocks.ModelInputs:
+    """What the models' builders read: the slosh and flex data are loaded here, once, when
+    their model is on and they are not handed in (``savant_cli.flex_slosh``)."""
     if cfg.slosh.enabled and slosh is None:
         slosh = load_slosh(vehicle, cfg.slosh)
+    if cfg.flex.enabled and flex is None:
+        flex = load_flex(vehicle, cfg.flex, cfg.sim.plant_rate_hz)
     return blocks.ModelInputs(cfg=cfg, vehicle=vehicle, layout=state_layout(cfg),
-                              slosh=slosh if cfg.slosh.enabled else None)
+                              slosh=slosh if cfg.slosh.enabled else None, flex=flex if cfg.flex.enabled else None)
 
 
-def plant_data(cfg: SavantConfig, vehicle: Vehicle, slosh: SloshData | None = None) -> tuple[np.ndarray, PlantTables]:
+def plant_data(cfg: SavantConfig, vehicle: Vehicle, slosh: SloshData | None = None,
+               flex: FlexTables | None = None) -> tuple[np.ndarray, PlantTables]:
     """The scalar parameters ``p`` and the tables of the plant: every model of
     :data:`savant_cli.models.PLANT_MODELS` fills its own block."""
-    inputs = model_inputs(cfg, vehicle, slosh)
+    inputs = model_inputs(cfg, vehicle, slosh, flex)
     p = np.zeros(L.N_PARAM)
     tables: dict[str, np.ndarray] = {}
     for model in PLANT_MODELS:
@@ -80,9 +85,10 @@ def _contiguous(a) -> np.ndarray:
     return np.ascontiguousarray(a, dtype=np.int64 if a.dtype.kind in "iu" else np.float64)
 
 
-def plant_tables(cfg: SavantConfig, vehicle: Vehicle, slosh: SloshData | None = None) -> PlantTables:
+def plant_tables(cfg: SavantConfig, vehicle: Vehicle, slosh: SloshData | None = None,
+                 flex: FlexTables | None = None) -> PlantTables:
     """Tabular plant data from the vehicle and the winds, flex and slosh configs."""
-    return plant_data(cfg, vehicle, slosh)[1]
+    return plant_data(cfg, vehicle, slosh, flex)[1]
 
 
 def state_layout(cfg: SavantConfig) -> L.StateLayout:

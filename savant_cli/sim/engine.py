@@ -42,7 +42,7 @@ from savant_cli.models.guidance import D_TG, D_VG, guidance_sample, smoother_ste
 from savant_cli.models.sensors import (
     GYRO_MISALIGN, GYRO_POINTS, IMU_GYRO, N_GYROS, P_IMU_MISALIGN, gyro_step, misalignment,
 )
-from savant_cli.sim.layout import (
+from savant_cli.models.layout import (
     ACT_P, ACT_Y, CONFIG_STACK, CONFIG_UPPER, CONFIG_UPPER_LES, D_CMD_P, D_CMD_RCS, D_CMD_Y,
     D_FLEX_NAV, D_GYRO_X, D_GYRO_Y, ENGINE_OFF, ENGINE_UPPER, MFS, MLH2, MLOX, N_AUX, N_STATE,
     Q, R, RCS_NEG, RCS_POS, U_CONFIG, U_DPC, U_DYC, U_ENGINE, U_RCS, U_T_CUT, U_T_IGN, V, W,

@@ -49,7 +49,7 @@ from savant_cli.io.record import Signal
 from savant_cli.models import actuator
 from savant_cli.models.configurations import ENGINE_FIRST
 from savant_cli.sim import engine as E
-from savant_cli.sim import layout as L
+from savant_cli.models import layout as L
 from savant_cli.sim.build import SimModel
 from savant_cli.sim.oscillation import band_top_hz, find_limit_cycles, find_slow_divergence
 from savant_cli.sim.run import SimResult

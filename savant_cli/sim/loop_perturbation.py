@@ -27,7 +27,7 @@ import math
 import numpy as np
 from numba import njit
 
-from savant_cli.sim.layout import U_DPC, U_DYC
+from savant_cli.models.layout import U_DPC, U_DYC
 
 AXIS = 0  # 0 pitch, 1 yaw, −1: nothing inserted
 T_START = 1  # s, mission time

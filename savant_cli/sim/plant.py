@@ -24,7 +24,7 @@ from savant_cli.models import (
     rigid_body, slosh, twd, winds, quaternion as qt,
 )
 from savant_cli.models.configurations import ENGINE_FIRST
-from savant_cli.sim.layout import (
+from savant_cli.models.layout import (
     MFS, MLH2, MLOX, Q, R, RCS_NEG, RCS_POS, U_CONFIG, U_DPC, U_DYC, U_ENGINE, U_GUST, U_RCS, U_T_CUT, U_T_IGN, V, W,
 )
 
@@ -99,7 +99,7 @@ def compose(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarra
     t : float
         Mission time, s (0 at liftoff).
     x : ndarray (n_state,)
-        Continuous state (see :mod:`savant_cli.sim.layout`).
+        Continuous state (see :mod:`savant_cli.models.layout`).
     u : ndarray (N_INPUT,)
         Held inputs from the discrete flight software and the event logic.
     p : ndarray (N_PARAM,)

@@ -17,7 +17,7 @@ from savant_cli.models import (
     rigid_body, slosh, twd, winds,
 )
 from savant_cli.sim import engine as E
-from savant_cli.sim import layout as L
+from savant_cli.models import layout as L
 from savant_cli.sim import compile_notice, loop_perturbation
 from savant_cli.sim.build import SimModel
 from savant_cli.sim.plant import compose, derivative

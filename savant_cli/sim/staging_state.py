@@ -7,7 +7,7 @@ a run resumed from it separates on its first step exactly as the full ascent doe
 
 JSON layout: ``format`` ("savant-staging-state"), ``format_version``, ``vehicle``,
 ``guidance``, ``dt_s`` (plant step), ``step`` (plant step index), ``time_s``, ``state``
-(name → value, SI, the names of :meth:`savant_cli.sim.layout.StateLayout.names`: the core
+(name → value, SI, the names of :meth:`savant_cli.models.layout.StateLayout.names`: the core
 states plus those of the optional models that were on), ``discrete`` and ``inputs``
 (flight-software state and held inputs, as lists).
 """
@@ -22,7 +22,7 @@ import numpy as np
 
 from savant_cli.errors import ConfigError
 from savant_cli.io.atomic import write_json_atomic
-from savant_cli.sim import layout as L
+from savant_cli.models import layout as L
 
 FORMAT = "savant-staging-state"
 FORMAT_VERSION = 1
@@ -49,7 +49,7 @@ class StagingState:
     u : ndarray
         Held plant inputs (``layout.N_INPUT`` values).
     names : tuple of str
-        One name per element of ``x`` (:meth:`savant_cli.sim.layout.StateLayout.names`).
+        One name per element of ``x`` (:meth:`savant_cli.models.layout.StateLayout.names`).
     """
 
     vehicle: str

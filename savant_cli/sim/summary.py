@@ -8,7 +8,7 @@ import numpy as np
 from savant_cli import constants as C
 from savant_cli.io.record import Signal
 from savant_cli.models import propulsion
-from savant_cli.sim.layout import U_T_CUT
+from savant_cli.models.layout import U_T_CUT
 from savant_cli.sim import engine as E
 from savant_cli.sim.run import SimResult
 

@@ -27,7 +27,7 @@ import numpy as np
 from savant_cli.models import actuator
 from savant_cli import lifecycle
 from savant_cli.processes import process_context, terminate_workers, worker_initializer
-from savant_cli.sim import layout as L
+from savant_cli.models import layout as L
 from savant_cli.sim import loop_perturbation as LP
 from savant_cli.sim.build import SimModel
 from savant_cli.sim.run import Snapshot, simulate

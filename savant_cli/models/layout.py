@@ -4,8 +4,8 @@ optional blocks, and the held inputs.
 Every field of the state ``x``, the parameters ``p``, the diagnostics ``aux``, the
 discrete flight-software state ``d`` and the packed tables is declared by the model that
 owns it (``savant_cli/models/*.py``, through :mod:`savant_cli.models.blocks`); this
-module only adds them up and re-exports the state and discrete-state indices that the
-engine, the linearization and the tests address.
+module declares the held inputs ``u``, adds the vectors up and re-exports the state and
+discrete-state indices that the engine, the linearization and the tests address.
 
 Continuous state ``x`` (SI): the core states in the order the models are imported
 (rigid body ``R V Q W``, propulsion ``MFS MLOX MLH2``, actuators ``ACT_P ACT_Y``, roll jets
@@ -21,6 +21,7 @@ Continuous state ``x`` (SI): the core states in the order the models are importe
 
 from __future__ import annotations
 
+from savant_cli.flex_slosh import FLEX_SETS  # noqa: F401  (the modal sets, in table order)
 from savant_cli.models import blocks
 from savant_cli.models.actuator import ACT_P, ACT_Y, N_VALVE  # noqa: F401  (re-exported state indices)
 from savant_cli.models.actuator import STATE_NAMES as _ACTUATOR_NAMES
@@ -32,7 +33,7 @@ from savant_cli.models.fcs import (  # noqa: F401  (discrete-state indices)
     D_RATE_CMD_B, D_RATE_ERR, D_ROLL_FILT,
 )
 from savant_cli.models.flex import (  # noqa: F401
-    FIRST_STAGE_POINTS, FLEX_SETS, N_POINTS, POINT_KEYS, PT_GIMBAL_FS, PT_GIMBAL_US, PT_GYRO_FS,
+    FIRST_STAGE_POINTS, N_POINTS, POINT_KEYS, PT_GIMBAL_FS, PT_GIMBAL_US, PT_GYRO_FS,
     PT_GYRO_US, PT_IMU, PT_RCS, PT_SLOSH_LH2, PT_SLOSH_LOX,
 )
 from savant_cli.models.guidance import D_QG, D_QS, D_TG, D_VG, D_VS  # noqa: F401
@@ -105,3 +106,16 @@ U_T_CUT = _INPUTS.scalar("cutoff_command_time", "s",
                          "upper-stage cutoff command time, mission time (0: none yet; never at liftoff)")
 U_GUST = _INPUTS.array("gust", 3, "m/s", "gust velocity, body axes: the air moves with it (linear-analysis input)")
 N_INPUT = blocks.INPUTS.size
+
+
+def all_fields() -> list[blocks.Field]:
+    """Every declared field of every vector of the plant, the held inputs included.
+
+    Returns
+    -------
+    list of blocks.Field
+        The fields of ``x``, ``p``, ``aux``, ``d``, ``u`` and the packed tables, each
+        vector in declaration order (importing this module imports every model first).
+    """
+    return [*blocks.STATE.fields, *blocks.PARAMETERS.fields, *blocks.DIAGNOSTICS.fields, *blocks.DISCRETE.fields,
+            *blocks.INPUTS.fields, *blocks.TABLES.fields]
