@@ -2,7 +2,10 @@
 checked against the config and arranged as the compiled plant's tables.
 
 Modal sets come from ``vehicle.flex`` (files read by :mod:`savant_cli.io.modal_data`);
-slosh tables from ``vehicle.slosh``. Every problem is a ConfigError naming the key.
+slosh tables from ``vehicle.slosh``, read by the vehicle tables' unit-aware reader
+(:func:`savant_cli.vehicle.read_table`: any unit of ``vehicle.UNITS`` in a column's
+suffix, converted to SI). Every problem is a ConfigError naming the key
+(``<folder>/<file>.csv:<column>`` for a table's cell), the value and what is allowed.
 """
 
 from __future__ import annotations
@@ -15,9 +18,9 @@ import numpy as np
 
 from savant_cli.config import FlexOnConfig, SloshOnConfig
 from savant_cli.errors import ConfigError
-from savant_cli.io.modal_data import ModalSet, read_modal_set, read_numeric_csv
-from savant_cli.io.table_order import require_increasing, table_key
-from savant_cli.vehicle import Vehicle
+from savant_cli.io.modal_data import ModalSet, read_modal_set
+from savant_cli.io.table_order import table_key
+from savant_cli.vehicle import Vehicle, read_table
 
 
 #: The plant's points that use mode shapes, by their key under the vehicle YAML's
@@ -124,9 +127,6 @@ def load_flex(vehicle: Vehicle, fcfg: FlexOnConfig, plant_rate_hz: float) -> Fle
     return FlexTables(frequency_rad_s=freq, damping=zeta, shapes=shapes, sets=sets)
 
 
-SLOSH_COLUMNS = ("level_m", "frequency_hz", "damping", "slosh_mass_kg", "slosh_height_m")
-
-
 def _tank(name: str, node: dict, vdir: Path, load_kg: float) -> SloshTank:
     key = f"vehicle.slosh.{name}"
     for k in ("table", "radius_m", "bottom_station_m", "density_kgm3"):
@@ -136,29 +136,27 @@ def _tank(name: str, node: dict, vdir: Path, load_kg: float) -> SloshTank:
         if not float(node[k]) > 0.0:
             raise ConfigError(f"{key}.{k}", node[k], "must be positive")
     path = vdir / str(node["table"])
-    header, data, lines = read_numeric_csv(path, f"{key}.table")
-    if header != list(SLOSH_COLUMNS):
-        raise ConfigError(f"{key}.table", str(path), f"header must be {','.join(SLOSH_COLUMNS)}")
-    level = data[:, 0]
+    # the vehicle tables' reader: columns in any unit of vehicle.UNITS, converted to SI;
+    # the level axis refused out of order (TABLE_COLUMNS["slosh"], TABLE_AXES["slosh"])
+    cols, names = read_table(path, "slosh")
+    level = cols["level"]
     tkey = table_key(path)
-    if level.size < 2:
-        raise ConfigError(f"{tkey}:level_m", level.tolist(), "needs at least 2 rows")
-    require_increasing(f"{tkey}:level_m", level, lines, what="the liquid level")
+    column = {base: f"{tkey}:{names[base]}" for base in names}
     radius, density = float(node["radius_m"]), float(node["density_kgm3"])
     full = load_kg / (density * np.pi * radius**2)
     if level[0] > 0.0 or level[-1] < full * (1.0 - 1e-9):
-        raise ConfigError(f"{tkey}:level_m", [float(level[0]), float(level[-1])],
+        raise ConfigError(column["level"], [float(level[0]), float(level[-1])],
                           f"must cover the tank from 0 to the full-load level {full:.4f} m")
-    for col, what in ((1, "frequency_hz"), (3, "slosh_mass_kg"), (4, "slosh_height_m")):
-        if np.any(data[:, col] < 0.0):
-            raise ConfigError(f"{tkey}:{what}", float(data[:, col].min()), "must be zero or positive")
-    if np.any(data[:, 2] < 0.0):
-        raise ConfigError(f"{tkey}:damping", float(data[:, 2].min()), "damping must not be negative")
-    if np.any(data[:, 3] > density * np.pi * radius**2 * level + 1e-6 * load_kg):
-        raise ConfigError(f"{tkey}:slosh_mass_kg", float(data[:, 3].max()), "exceeds the liquid mass at its level")
-    return SloshTank(name=name, level_m=level, frequency_rad_s=2.0 * np.pi * data[:, 1], damping=data[:, 2],
-                     mass_kg=data[:, 3], height_m=data[:, 4], radius_m=radius,
-                     bottom_station_m=float(node["bottom_station_m"]), density_kgm3=density)
+    for base in ("frequency", "slosh_mass", "slosh_height"):
+        if np.any(cols[base] < 0.0):
+            raise ConfigError(column[base], float(cols[base].min()), "must be zero or positive")
+    if np.any(cols["damping"] < 0.0):
+        raise ConfigError(column["damping"], float(cols["damping"].min()), "damping must not be negative")
+    if np.any(cols["slosh_mass"] > density * np.pi * radius**2 * level + 1e-6 * load_kg):
+        raise ConfigError(column["slosh_mass"], float(cols["slosh_mass"].max()), "exceeds the liquid mass at its level")
+    return SloshTank(name=name, level_m=level, frequency_rad_s=2.0 * np.pi * cols["frequency"],
+                     damping=cols["damping"], mass_kg=cols["slosh_mass"], height_m=cols["slosh_height"],
+                     radius_m=radius, bottom_station_m=float(node["bottom_station_m"]), density_kgm3=density)
 
 
 def load_slosh(vehicle: Vehicle, scfg: SloshOnConfig) -> SloshData:

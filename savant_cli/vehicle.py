@@ -54,6 +54,7 @@ UNITS: dict[str, tuple[str, float]] = {
     "m2": ("area", 1.0), "ft2": ("area", FT**2),
     "Pa": ("pressure", 1.0), "psf": ("pressure", LBF / FT**2),
     "mps": ("speed", 1.0), "fps": ("speed", FT),
+    "hz": ("frequency", 1.0), "Hz": ("frequency", 1.0),
 }
 _INERTIA = ("ixx", "iyy", "izz", "ixy", "ixz", "iyz")
 
@@ -66,13 +67,17 @@ TABLE_COLUMNS: dict[str, tuple[tuple[str, str | None], ...]] = {
     "first_stage_thrust": (("time", "time"), ("thrust_vac", "force")),
     "startup": (("time", "time"), ("thrust_fraction", None)),
     "rcs_thrust": (("altitude", "length"), ("thrust_vac", "force")),
+    # one tank's slosh parameters vs liquid level (savant_cli/flex_slosh.py); the frequency
+    # at the slosh section's reference acceleration, the mass's height above the tank bottom
+    "slosh": (("level", "length"), ("frequency", "frequency"), ("damping", None), ("slosh_mass", "mass"),
+              ("slosh_height", "length")),
 }
 
 #: table kind -> its axis columns (base names), slowest first: checked in the order written,
 #: strictly increasing (a grid's rows with the first column slowest); refused, never sorted
 TABLE_AXES: dict[str, tuple[str, ...]] = {
     "mass": ("propellant_remaining",), "aero": ("mach", "alpha", "beta"), "base_force": ("time",),
-    "first_stage_thrust": ("time",), "startup": ("time",), "rcs_thrust": ("altitude",),
+    "first_stage_thrust": ("time",), "startup": ("time",), "rcs_thrust": ("altitude",), "slosh": ("level",),
 }
 
 MASS_TOLERANCE_KG = 1.0   # staging consistency of the mass tables

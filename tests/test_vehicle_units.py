@@ -1,0 +1,83 @@
+"""Unit suffixes of the slosh tables: read by the vehicle tables' unit-aware reader
+(``savant_cli/vehicle.py::read_table``), so a table in other units flies the same SI
+numbers as the SI table, and a wrong suffix is refused with the file, column, value and
+the units allowed."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+from omegaconf import OmegaConf
+
+from conftest import compose_config
+from savant_cli.config import validate
+from savant_cli.errors import ConfigError
+from savant_cli.flex_slosh import load_slosh
+from savant_cli.paths import shipped_config_dir
+from savant_cli.vehicle import load_vehicle
+
+CONF = shipped_config_dir()
+DATA_DIR = CONF / "vehicle" / "ares_i"
+# exact definitions (NIST SP 811), written here independently of savant_cli.constants
+FOOT_M, INCH_M, POUND_KG = 0.3048, 0.0254, 0.45359237
+
+
+def _cfg() -> dict:
+    return OmegaConf.to_container(OmegaConf.load(CONF / "vehicle" / "ares_i.yaml").vehicle, resolve=True)
+
+
+@pytest.fixture
+def copy(tmp_path) -> Path:
+    d = tmp_path / "ares_i"
+    shutil.copytree(DATA_DIR, d)
+    return d
+
+
+def _rewrite(path: Path, header: list[str], scale: list[float]) -> None:
+    """Write ``path`` again with a new header, each column divided by its ``scale``."""
+    lines = path.read_text().splitlines()
+    body = [ln for ln in lines if ln.strip() and not ln.lstrip().startswith("#")][1:]
+    data = np.array([[float(c) for c in ln.split(",")] for ln in body]) / np.array(scale)
+    path.write_text(",".join(header) + "\n" + "\n".join(",".join(repr(float(v)) for v in row) for row in data) + "\n")
+
+
+def _slosh(folder: Path):
+    return load_slosh(load_vehicle(_cfg(), folder), validate(compose_config(["slosh=on"])).slosh)
+
+
+def test_slosh_table_in_other_units_gives_the_si_numbers(copy):
+    si = _slosh(copy)
+    for tank in ("lox", "lh2"):  # columns in any order, in feet, pounds and inches
+        _rewrite(copy / f"slosh_{tank}.csv", ["level_ft", "frequency_Hz", "damping", "slosh_mass_lbm", "slosh_height_in"],
+                 [FOOT_M, 1.0, 1.0, POUND_KG, INCH_M])
+    other = _slosh(copy)
+    assert other.reference_accel_mps2 == si.reference_accel_mps2
+    for a, b in zip(si.tanks, other.tanks):
+        for name in ("level_m", "frequency_rad_s", "damping", "mass_kg", "height_m"):
+            np.testing.assert_allclose(getattr(b, name), getattr(a, name), rtol=1e-13, atol=1e-13, err_msg=name)
+
+
+def test_slosh_table_with_a_wrong_unit_is_refused(copy):
+    path = copy / "slosh_lox.csv"
+    path.write_text(path.read_text().replace("slosh_mass_kg", "slosh_mass_m"))
+    with pytest.raises(ConfigError) as info:
+        _slosh(copy)
+    assert info.value.key == "ares_i/slosh_lox.csv:slosh_mass_m"
+    assert "mass unit suffix" in info.value.allowed and "lbm" in info.value.allowed
+
+
+def test_slosh_table_with_a_bad_cell_names_file_column_and_line(copy):
+    path = copy / "slosh_lh2.csv"
+    lines = path.read_text().splitlines()
+    i = next(k for k, ln in enumerate(lines) if ln and not ln.startswith("#")) + 3  # the third data row
+    cells = lines[i].split(",")
+    cells[1] = "fast"
+    lines[i] = ",".join(cells)
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(ConfigError) as info:
+        _slosh(copy)
+    assert info.value.key == "ares_i/slosh_lh2.csv:frequency_hz"
+    assert info.value.value == "fast" and f"line {i + 1}" in info.value.allowed
