@@ -3,7 +3,7 @@ checked against the config and arranged as the compiled plant's tables.
 
 Modal sets come from ``vehicle.flex`` (files read by :mod:`savant_cli.io.modal_data`);
 slosh tables from ``vehicle.slosh``, read by the vehicle tables' unit-aware reader
-(:func:`savant_cli.vehicle.read_table`: any unit of ``vehicle.UNITS`` in a column's
+(:func:`savant_cli.vehicle.read_table`: any unit of ``io.units.UNITS`` in a column's
 suffix, converted to SI). Every problem is a ConfigError naming the key
 (``<folder>/<file>.csv:<column>`` for a table's cell), the value and what is allowed.
 """
@@ -136,7 +136,7 @@ def _tank(name: str, node: dict, vdir: Path, load_kg: float) -> SloshTank:
         if not float(node[k]) > 0.0:
             raise ConfigError(f"{key}.{k}", node[k], "must be positive")
     path = vdir / str(node["table"])
-    # the vehicle tables' reader: columns in any unit of vehicle.UNITS, converted to SI;
+    # the vehicle tables' reader: columns in any unit of io.units.UNITS, converted to SI;
     # the level axis refused out of order (TABLE_COLUMNS["slosh"], TABLE_AXES["slosh"])
     cols, names = read_table(path, "slosh")
     level = cols["level"]

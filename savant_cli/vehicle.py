@@ -4,7 +4,8 @@ to SI once, and refuse bad data before any computation.
 Table format
 ------------
 CSV, ``#`` comment lines allowed, one header row of column names, then numbers. A
-column name's suffix after the last ``_`` is its unit when it is one of :data:`UNITS`
+column name's suffix after the last ``_`` is its unit when it is one of ``UNITS``
+(:mod:`savant_cli.io.units`, shared with the modal data files)
 (``thrust_vac_N``, ``alpha_deg``, ``cg_x_in``); the loader converts to SI and checks the
 unit's dimension against the column's. Names without a unit suffix are dimensionless
 (``mach``, ``CA``, ``thrust_fraction``).
@@ -32,9 +33,9 @@ from typing import Any
 
 import numpy as np
 
-from savant_cli.constants import FT, IN, LBF, LBM, SLUG
 from savant_cli.errors import ConfigError
 from savant_cli.io.table_order import data_line_numbers, require_grid_order, require_increasing, table_key
+from savant_cli.io.units import UNITS, split_unit, units_of
 
 #: The vehicle's configurations, in the order the aero and mass tables are stacked
 #: (models/configurations.py numbers them).
@@ -43,19 +44,6 @@ CONFIG_NAMES = ("stack", "upper_les", "upper")
 #: the packed table's coefficient axis (models/aero.py).
 AERO_COEFFICIENTS = ("CA", "CY", "CN", "Cl", "Cm", "Cn")
 
-#: unit suffix -> (dimension, factor to SI)
-UNITS: dict[str, tuple[str, float]] = {
-    "m": ("length", 1.0), "km": ("length", 1000.0), "ft": ("length", FT), "in": ("length", IN),
-    "kg": ("mass", 1.0), "lbm": ("mass", LBM), "slug": ("mass", SLUG),
-    "N": ("force", 1.0), "kN": ("force", 1e3), "MN": ("force", 1e6), "lbf": ("force", LBF),
-    "s": ("time", 1.0),
-    "deg": ("angle", np.pi / 180.0), "rad": ("angle", 1.0),
-    "kgm2": ("inertia", 1.0), "slugft2": ("inertia", SLUG * FT**2),
-    "m2": ("area", 1.0), "ft2": ("area", FT**2),
-    "Pa": ("pressure", 1.0), "psf": ("pressure", LBF / FT**2),
-    "mps": ("speed", 1.0), "fps": ("speed", FT),
-    "hz": ("frequency", 1.0), "Hz": ("frequency", 1.0),
-}
 _INERTIA = ("ixx", "iyy", "izz", "ixy", "ixz", "iyz")
 
 #: table kind -> required columns (base name, dimension); ``None`` = dimensionless
@@ -342,13 +330,6 @@ def _vec3(value: Any) -> np.ndarray:
 _table_key = table_key
 
 
-def _split_unit(name: str) -> tuple[str, str | None]:
-    base, sep, unit = name.rpartition("_")
-    if sep and base and unit in UNITS:
-        return base, unit
-    return name, None
-
-
 def read_table(path: Path, kind: str) -> tuple[dict[str, np.ndarray], dict[str, str]]:
     """Read one CSV table of the given kind (a key of :data:`TABLE_COLUMNS`).
 
@@ -390,7 +371,7 @@ def read_table(path: Path, kind: str) -> tuple[dict[str, np.ndarray], dict[str, 
     allowed = ", ".join(f"{b}_<{d} unit>" if d else b for b, d in spec.items())
     columns: dict[str, tuple[int, str | None]] = {}
     for j, name in enumerate(header):
-        base, unit = _split_unit(name)
+        base, unit = split_unit(name)
         if base not in spec:
             raise ConfigError(f"{key}:{name or '<empty>'}", header, f"unknown column; the columns are {allowed}")
         if base in columns:
@@ -399,7 +380,7 @@ def read_table(path: Path, kind: str) -> tuple[dict[str, np.ndarray], dict[str, 
         if dim is None and unit is not None:
             raise ConfigError(f"{key}:{name}", unit, "dimensionless column: no unit suffix")
         if dim is not None and (unit is None or UNITS[unit][0] != dim):
-            units = ", ".join(u for u, (d, _) in UNITS.items() if d == dim)
+            units = ", ".join(units_of(dim))
             raise ConfigError(f"{key}:{name}", unit, f"needs a {dim} unit suffix: one of {units}")
         columns[base] = (j, unit)
     for base, dim in spec.items():
@@ -465,7 +446,7 @@ def _aero(cfg: Mapping, vdir: Path, cname: str) -> AeroTable:
         # the rows are a strictly ordered subset of the grid (read_table): the first that differs marks a gap
         mismatch = np.any(rows != grid[:rows.shape[0]], axis=1)
         first = int(np.argmax(mismatch)) if mismatch.any() else rows.shape[0]
-        factor = [UNITS[_split_unit(tn[c])[1]][1] if _split_unit(tn[c])[1] else 1.0 for c in names]
+        factor = [UNITS[split_unit(tn[c])[1]][1] if split_unit(tn[c])[1] else 1.0 for c in names]
         at = ", ".join(f"{tn[c]} = {grid[first, j] / factor[j]:.9g}" for j, c in enumerate(names))
         raise ConfigError(key, f"{rows.shape[0]} rows", f"must be a full rectangular grid: every (mach, alpha, beta) "
                                                          f"combination of {shape[0]}x{shape[1]}x{shape[2]} = "

@@ -1,7 +1,7 @@
-"""Unit suffixes of the slosh tables: read by the vehicle tables' unit-aware reader
-(``savant_cli/vehicle.py::read_table``), so a table in other units flies the same SI
-numbers as the SI table, and a wrong suffix is refused with the file, column, value and
-the units allowed."""
+"""Unit suffixes of the slosh tables and the modal shape files (one unit table,
+``savant_cli/io/units.py``): a file in other units gives the same SI numbers as the
+shipped SI (or declared-unit) file, and a wrong suffix is refused with the file, column,
+value and the units allowed."""
 
 from __future__ import annotations
 
@@ -16,6 +16,7 @@ from conftest import compose_config
 from savant_cli.config import validate
 from savant_cli.errors import ConfigError
 from savant_cli.flex_slosh import load_slosh
+from savant_cli.io.modal_data import read_modal_set
 from savant_cli.paths import shipped_config_dir
 from savant_cli.vehicle import load_vehicle
 
@@ -25,15 +26,10 @@ DATA_DIR = CONF / "vehicle" / "ares_i"
 FOOT_M, INCH_M, POUND_KG = 0.3048, 0.0254, 0.45359237
 
 
-def _cfg() -> dict:
-    return OmegaConf.to_container(OmegaConf.load(CONF / "vehicle" / "ares_i.yaml").vehicle, resolve=True)
-
-
 @pytest.fixture
 def copy(tmp_path) -> Path:
-    d = tmp_path / "ares_i"
-    shutil.copytree(DATA_DIR, d)
-    return d
+    """The shipped ares_i data folder, copied to be edited."""
+    return Path(shutil.copytree(DATA_DIR, tmp_path / "ares_i"))
 
 
 def _rewrite(path: Path, header: list[str], scale: list[float]) -> None:
@@ -45,7 +41,9 @@ def _rewrite(path: Path, header: list[str], scale: list[float]) -> None:
 
 
 def _slosh(folder: Path):
-    return load_slosh(load_vehicle(_cfg(), folder), validate(compose_config(["slosh=on"])).slosh)
+    """The slosh data of ares_i with its tables read from ``folder``."""
+    vehicle_cfg = OmegaConf.to_container(OmegaConf.load(CONF / "vehicle" / "ares_i.yaml").vehicle, resolve=True)
+    return load_slosh(load_vehicle(vehicle_cfg, folder), validate(compose_config(["slosh=on"])).slosh)
 
 
 def test_slosh_table_in_other_units_gives_the_si_numbers(copy):
@@ -81,3 +79,35 @@ def test_slosh_table_with_a_bad_cell_names_file_column_and_line(copy):
         _slosh(copy)
     assert info.value.key == "ares_i/slosh_lh2.csv:frequency_hz"
     assert info.value.value == "fast" and f"line {i + 1}" in info.value.allowed
+
+
+# ------------------------------------------------------------------------ modal data
+SET = "first_stage_liftoff"
+DECLARED = ("in", "lbf")  # conf/vehicle/ares_i.yaml: flex.units
+
+
+def test_modal_shapes_in_other_units_give_the_si_numbers(copy):
+    si = read_modal_set(copy / "flex", SET, DECLARED, "vehicle.flex")
+    path = copy / "flex" / f"{SET}_shapes.csv"
+    header = path.read_text().splitlines()
+    assert [h for h in header if not h.startswith("#")][0] == "mode,node,station_in,dx_in,dy_in,dz_in,rx_rad,ry_rad,rz_rad"
+    # stations in metres, displacements in feet, rotations in degrees (new = old / scale)
+    _rewrite(path, ["mode", "node", "station_m", "dx_ft", "dy_ft", "dz_ft", "rx_deg", "ry_deg", "rz_deg"],
+             [1.0, 1.0, 1.0 / INCH_M] + [FOOT_M / INCH_M] * 3 + [np.pi / 180.0] * 3)
+    other = read_modal_set(copy / "flex", SET, DECLARED, "vehicle.flex")
+    np.testing.assert_array_equal(other.nodes, si.nodes)
+    np.testing.assert_array_equal(other.frequency_rad_s, si.frequency_rad_s)
+    np.testing.assert_allclose(other.station_m, si.station_m, rtol=1e-13, atol=1e-13)
+    scale = np.abs(si.shapes).max(axis=(0, 1))  # per component, for the absolute tolerance
+    np.testing.assert_allclose(other.shapes, si.shapes, rtol=1e-12, atol=1e-14 * scale.max())
+
+
+@pytest.mark.parametrize("column,dimension", [("rx_rad", "angle"), ("dz_in", "length"), ("station_in", "length")])
+def test_modal_shapes_with_a_wrong_unit_are_refused(copy, column, dimension):
+    path = copy / "flex" / f"{SET}_shapes.csv"
+    bad = column.split("_")[0] + "_kg"
+    path.write_text(path.read_text().replace(column, bad))
+    with pytest.raises(ConfigError) as info:
+        read_modal_set(copy / "flex", SET, DECLARED, "vehicle.flex")
+    assert info.value.key == f"flex/{SET}_shapes.csv:{bad}" and info.value.value == "kg"
+    assert f"needs a {dimension} unit suffix" in info.value.allowed

@@ -4,8 +4,11 @@ A set is three CSV files in the vehicle's flex folder (``#`` comment lines, then
 
 * ``<set>_modes.csv`` — ``mode, frequency_hz, generalized_mass``;
 * ``<set>_shapes.csv`` — ``mode, node, station_<len>, dx_<len>, dy_<len>, dz_<len>,
-  rx_rad, ry_rad, rz_rad``: displacement and rotation per unit modal coordinate at each
-  node, structure frame (x aft of the nose tip, y = body y, z = −body z);
+  rx_<ang>, ry_<ang>, rz_<ang>``: displacement and rotation per unit modal coordinate at
+  each node, structure frame (x aft of the nose tip, y = body y, z = −body z). The
+  suffixes are units of :data:`savant_cli.io.units.UNITS`: a displacement column in
+  another length unit than the declared one is taken to the declared unit first, a
+  rotation in ``deg`` to rad;
 * ``<set>_nodes.csv`` (optional) — ``node, station_<len>, mass_*, rotary_inertia_*``:
   the lumped masses, only used to check generalized-mass consistency.
 
@@ -29,6 +32,7 @@ import numpy as np
 from savant_cli import constants as C
 from savant_cli.errors import ConfigError
 from savant_cli.io.table_order import data_line_numbers, require_increasing, row_text, table_key
+from savant_cli.io.units import UNITS, units_of
 
 LENGTH_TO_M = {"in": C.IN, "ft": C.FT, "m": 1.0}
 FORCE_TO_N = {"lbf": C.LBF, "N": 1.0}
@@ -133,6 +137,14 @@ def _column(header: list[str], data: np.ndarray, prefix: str, path: Path, key: s
     raise ConfigError(key, str(path), f"missing column {prefix!r} (has {', '.join(header)})")
 
 
+def _unit_factor(ckey: str, unit: str, dimension: str) -> float:
+    """The factor to SI of a column's unit suffix (:data:`savant_cli.io.units.UNITS`), or a
+    ConfigError at ``<folder>/<file>.csv:<column>`` naming the units of ``dimension``."""
+    if unit not in UNITS or UNITS[unit][0] != dimension:
+        raise ConfigError(ckey, unit, f"needs a {dimension} unit suffix: one of {', '.join(units_of(dimension))}")
+    return UNITS[unit][1]
+
+
 def read_modal_set(folder: Path, name: str, units: tuple[str, str], key: str) -> ModalSet:
     """Read one set and convert it to SI, body frame.
 
@@ -184,16 +196,14 @@ def read_modal_set(folder: Path, name: str, units: tuple[str, str], key: str) ->
     smode, snode = smode.astype(int), snode.astype(int)
     station, st_unit = _column(sh, sd, "station", spath, key)
     cols = []
-    for comp in ("dx", "dy", "dz"):
+    for comp in ("dx", "dy", "dz"):  # any length unit, taken to the declared one of the modal system
         vals, unit = _column(sh, sd, comp, spath, key)
-        if unit != length_unit:
-            raise ConfigError(_ckey(spath, sh, comp), unit, f"must be in the declared length unit {length_unit!r}")
-        cols.append(vals)
-    for comp in ("rx", "ry", "rz"):
+        factor = _unit_factor(_ckey(spath, sh, comp), unit, "length")
+        cols.append(vals if unit == length_unit else vals * (factor / LENGTH_TO_M[length_unit]))
+    for comp in ("rx", "ry", "rz"):  # any angle unit, taken to rad
         vals, unit = _column(sh, sd, comp, spath, key)
-        if unit != "rad":
-            raise ConfigError(_ckey(spath, sh, comp), unit, "rotations must be in rad")
-        cols.append(vals)
+        factor = _unit_factor(_ckey(spath, sh, comp), unit, "angle")
+        cols.append(vals if unit == "rad" else vals * factor)
     outside = (smode < 1) | (smode > modes.size)
     if np.any(outside):
         i = int(np.argmax(outside))
@@ -220,9 +230,7 @@ def read_modal_set(folder: Path, name: str, units: tuple[str, str], key: str) ->
                           f"mode 1's {n_n} nodes in mode 1's order ({n_m} x {n_n} = {n_m * n_n} rows); this row "
                           f"should be {want}")
     shapes = np.column_stack(cols).reshape(n_m, n_n, 6)  # row i is (mode i // n_n, node i % n_n)
-    stations = station[:n_n] * LENGTH_TO_M.get(st_unit, np.nan)  # mode 1's rows: one per node
-    if not np.all(np.isfinite(stations)):
-        raise ConfigError(_ckey(spath, sh, "station"), st_unit, f"unknown length unit; one of {', '.join(LENGTH_TO_M)}")
+    stations = station[:n_n] * _unit_factor(_ckey(spath, sh, "station"), st_unit, "length")  # mode 1's rows
     shapes /= np.sqrt(gmass)[:, None, None]  # to unit generalized mass
     shapes = convert_shapes(shapes, (length_unit, force_unit), ("m", "N"))
     shapes[..., :3] *= STRUCTURE_TO_BODY
