@@ -34,7 +34,8 @@ from typing import Any
 import numpy as np
 
 from savant_cli.errors import ConfigError
-from savant_cli.io.table_order import data_line_numbers, require_grid_order, require_increasing, table_key
+from savant_cli.io.data_csv import read_numeric_csv
+from savant_cli.io.table_order import require_grid_order, require_increasing, table_key
 from savant_cli.io.units import UNITS, split_unit, units_of
 
 #: The vehicle's configurations, in the order the aero and mass tables are stacked
@@ -356,67 +357,35 @@ def read_table(path: Path, kind: str) -> tuple[dict[str, np.ndarray], dict[str, 
         (and its line) and the value; the table is never re-sorted.
     """
     key = _table_key(path)
-    if not path.is_file():
-        raise ConfigError(key, str(path), "no such data file")
-    try:
-        text = path.read_text()
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ConfigError(key, str(path), f"unreadable ({exc})") from None
-    lines = text.splitlines()
-    header_at = next((i for i, ln in enumerate(lines) if ln.strip() and not ln.lstrip().startswith("#")), None)
-    if header_at is None:
-        raise ConfigError(key, "empty", "needs a header row of column names and at least 2 data rows")
-    header = [h.strip() for h in lines[header_at].split(",")]
     spec = dict(TABLE_COLUMNS[kind])
     allowed = ", ".join(f"{b}_<{d} unit>" if d else b for b, d in spec.items())
     columns: dict[str, tuple[int, str | None]] = {}
-    for j, name in enumerate(header):
-        base, unit = split_unit(name)
-        if base not in spec:
-            raise ConfigError(f"{key}:{name or '<empty>'}", header, f"unknown column; the columns are {allowed}")
-        if base in columns:
-            raise ConfigError(f"{key}:{name}", header, "duplicate column")
-        dim = spec[base]
-        if dim is None and unit is not None:
-            raise ConfigError(f"{key}:{name}", unit, "dimensionless column: no unit suffix")
-        if dim is not None and (unit is None or UNITS[unit][0] != dim):
-            units = ", ".join(units_of(dim))
-            raise ConfigError(f"{key}:{name}", unit, f"needs a {dim} unit suffix: one of {units}")
-        columns[base] = (j, unit)
-    for base, dim in spec.items():
-        if base not in columns:
-            raise ConfigError(f"{key}:{base}", header, f"missing column; the columns are {allowed}")
-    body = lines[header_at + 1:]
-    try:
-        data = np.loadtxt(body, delimiter=",", comments="#", ndmin=2, dtype=np.float64)
-    except ValueError:
-        data = None
-    if data is None or (data.size and data.shape[1] != len(header)):
-        for i, ln in enumerate(body, start=header_at + 2):  # locate the culprit for the message
-            s = ln.split("#", 1)[0].strip()
-            if not s:
-                continue
-            cells = s.split(",")
-            if len(cells) != len(header):
-                raise ConfigError(f"{key}:line {i}", ln, f"has {len(cells)} cells; the header has {len(header)}")
-            for c, name in zip(cells, header):
-                try:
-                    float(c)
-                except ValueError:
-                    raise ConfigError(f"{key}:{name}", c.strip(), f"line {i}: cells must be numbers") from None
-        raise ConfigError(key, str(path), "malformed numeric table")
-    if data.shape[0] < 2:
-        raise ConfigError(key, data.shape[0], "needs at least 2 data rows")
+
+    def check_header(header: list[str]) -> None:  # the columns, before any row is read
+        for j, name in enumerate(header):
+            base, unit = split_unit(name)
+            if base not in spec:
+                raise ConfigError(f"{key}:{name or '<empty>'}", header, f"unknown column; the columns are {allowed}")
+            if base in columns:
+                raise ConfigError(f"{key}:{name}", header, "duplicate column")
+            dim = spec[base]
+            if dim is None and unit is not None:
+                raise ConfigError(f"{key}:{name}", unit, "dimensionless column: no unit suffix")
+            if dim is not None and (unit is None or UNITS[unit][0] != dim):
+                units = ", ".join(units_of(dim))
+                raise ConfigError(f"{key}:{name}", unit, f"needs a {dim} unit suffix: one of {units}")
+            columns[base] = (j, unit)
+        for base, dim in spec.items():
+            if base not in columns:
+                raise ConfigError(f"{key}:{base}", header, f"missing column; the columns are {allowed}")
+
+    header, data, rows = read_numeric_csv(path, min_rows=2, check_header=check_header)
     out: dict[str, np.ndarray] = {}
     for base, (j, unit) in columns.items():
         col = data[:, j]
-        if not np.all(np.isfinite(col)):
-            bad = int(np.nonzero(~np.isfinite(col))[0][0])
-            raise ConfigError(f"{key}:{header[j]}", float(col[bad]), "all values must be finite")
         out[base] = np.ascontiguousarray(col * UNITS[unit][1] if unit else col)
     names = {base: header[j] for base, (j, _) in columns.items()}
     axes = TABLE_AXES[kind]  # checked as written (in the file's units), before anything uses the order
-    rows = data_line_numbers(lines, header_at + 1)
     if len(axes) == 1:
         require_increasing(f"{key}:{names[axes[0]]}", data[:, columns[axes[0]][0]], rows)
     else:

@@ -111,3 +111,20 @@ def test_modal_shapes_with_a_wrong_unit_are_refused(copy, column, dimension):
         read_modal_set(copy / "flex", SET, DECLARED, "vehicle.flex")
     assert info.value.key == f"flex/{SET}_shapes.csv:{bad}" and info.value.value == "kg"
     assert f"needs a {dimension} unit suffix" in info.value.allowed
+
+
+# ------------------------------------------------------- one reader, one error format
+@pytest.mark.parametrize("cell,allowed", [("x", "line {line}: cells must be numbers"),
+                                          ("nan", "row 2 (line {line}): all values must be finite")])
+def test_a_bad_modal_cell_names_file_column_row_and_line(copy, cell, allowed):
+    path = copy / "flex" / f"{SET}_modes.csv"
+    lines = path.read_text().splitlines()
+    i = [k for k, ln in enumerate(lines) if ln and not ln.startswith("#")][2]  # header, row 1, row 2
+    cells = lines[i].split(",")
+    cells[1] = cell
+    lines[i] = ",".join(cells)
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(ConfigError) as info:
+        read_modal_set(copy / "flex", SET, DECLARED, "vehicle.flex")
+    assert info.value.key == f"flex/{SET}_modes.csv:frequency_hz"
+    assert info.value.allowed == allowed.format(line=i + 1)

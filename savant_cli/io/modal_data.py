@@ -25,13 +25,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import NamedTuple
 
 import numpy as np
 
 from savant_cli import constants as C
 from savant_cli.errors import ConfigError
-from savant_cli.io.table_order import data_line_numbers, require_increasing, row_text, table_key
+from savant_cli.io.data_csv import read_numeric_csv
+from savant_cli.io.table_order import require_increasing, row_text, table_key
 from savant_cli.io.units import UNITS, units_of
 
 LENGTH_TO_M = {"in": C.IN, "ft": C.FT, "m": 1.0}
@@ -95,34 +95,6 @@ def convert_shapes(shapes: np.ndarray, from_units: tuple[str, str], to_units: tu
     return out
 
 
-class NumericCsv(NamedTuple):
-    """A CSV's header, its numeric rows and the file line of each row."""
-
-    header: list[str]
-    data: np.ndarray
-    lines: list[int]
-
-
-def read_numeric_csv(path: Path, key: str) -> NumericCsv:
-    """Header names, the numeric rows and their line numbers of a CSV with `#` comment lines."""
-    if not path.is_file():
-        raise ConfigError(key, str(path), "modal data file not found")
-    with open(path) as f:
-        text = f.read().splitlines()
-    header_at = next((i for i, ln in enumerate(text) if ln.split("#", 1)[0].strip()), None)
-    lines = data_line_numbers(text, header_at + 1) if header_at is not None else []
-    if header_at is None or not lines:
-        raise ConfigError(key, str(path), "needs a header row and at least one data row")
-    header = [h.strip() for h in text[header_at].split(",")]
-    try:
-        data = np.array([[float(v) for v in text[n - 1].split("#", 1)[0].split(",")] for n in lines])
-    except ValueError as exc:
-        raise ConfigError(key, str(path), f"non-numeric entry ({exc})") from None
-    if data.ndim != 2 or data.shape[1] != len(header) or not np.all(np.isfinite(data)):
-        raise ConfigError(key, str(path), "every row needs one finite number per header column")
-    return NumericCsv(header, data, lines)
-
-
 def _ckey(path: Path, header: list[str], prefix: str) -> str:
     """``<folder>/<file>.csv:<column>`` of the column named ``prefix`` or ``prefix_<unit>``."""
     name = next((h for h in header if h == prefix or h.startswith(prefix + "_")), prefix)
@@ -134,7 +106,7 @@ def _column(header: list[str], data: np.ndarray, prefix: str, path: Path, key: s
     for i, h in enumerate(header):
         if h == prefix or h.startswith(prefix + "_"):
             return data[:, i], h[len(prefix) + 1:]
-    raise ConfigError(key, str(path), f"missing column {prefix!r} (has {', '.join(header)})")
+    raise ConfigError(f"{table_key(path)}:{prefix}", header, f"missing column (modal set of {key})")
 
 
 def _unit_factor(ckey: str, unit: str, dimension: str) -> float:
@@ -165,7 +137,7 @@ def read_modal_set(folder: Path, name: str, units: tuple[str, str], key: str) ->
     if force_unit not in FORCE_TO_N:
         raise ConfigError(f"{key}.units.force", force_unit, f"must be one of {', '.join(FORCE_TO_N)}")
     mpath = folder / f"{name}_modes.csv"
-    mh, md, mlines = read_numeric_csv(mpath, key)
+    mh, md, mlines = read_numeric_csv(mpath)
     modes = _column(mh, md, "mode", mpath, key)[0]
     freq_hz = _column(mh, md, "frequency", mpath, key)[0]
     gmass = _column(mh, md, "generalized_mass", mpath, key)[0]
@@ -187,7 +159,7 @@ def read_modal_set(folder: Path, name: str, units: tuple[str, str], key: str) ->
                        what="the modal frequency (modes listed lowest first; equal frequencies allowed)")
 
     spath = folder / f"{name}_shapes.csv"
-    sh, sd, slines = read_numeric_csv(spath, key)
+    sh, sd, slines = read_numeric_csv(spath)
     smode = _column(sh, sd, "mode", spath, key)[0]
     snode = _column(sh, sd, "node", spath, key)[0]
     # rows grouped by mode, modes in order (the table's axis): refused otherwise, never sorted
@@ -239,7 +211,7 @@ def read_modal_set(folder: Path, name: str, units: tuple[str, str], key: str) ->
     node_mass = node_inertia = None
     npath = folder / f"{name}_nodes.csv"
     if npath.is_file():
-        nh, nd, nlines = read_numeric_csv(npath, key)
+        nh, nd, nlines = read_numeric_csv(npath)
         nn = _column(nh, nd, "node", npath, key)[0]
         nn = nn.astype(int)
         _, once = np.unique(nn, return_index=True)
