@@ -4,44 +4,86 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from savant_cli.errors import ConfigError
+from omegaconf import MISSING
+
 from savant_cli.config.checks import non_negative, one_of, positive, small_angles
+from savant_cli.errors import ConfigError
 
 
 @dataclass
 class ActuatorStageCommon:
-    """Keys of one stage's TVC actuator common to both variants."""
+    """Keys of one stage's TVC actuator common to both variants. The values live in the
+    option's YAML (``conf/actuator/<option>.yaml``); the schema gives no defaults.
 
-    loop_gain_rad_s: float = 25.0
-    rate_limit_deg_s: float = 10.0
-    # thrust-line misalignment from the actuator null, pitch and yaw, deg
-    null_bias_deg: list[float] = field(default_factory=lambda: [0.0, 0.0])
+    Attributes
+    ----------
+    loop_gain_rad_s : float
+        Position-loop gain (rad/s).
+    rate_limit_deg_s : float
+        Gimbal rate limit (deg/s).
+    null_bias_deg : list of float
+        Thrust-line misalignment from the actuator null, pitch and yaw (deg, each within ±2).
+    """
+
+    loop_gain_rad_s: float = MISSING
+    rate_limit_deg_s: float = MISSING
+    null_bias_deg: list[float] = MISSING
 
 
 @dataclass
 class ThirdOrderStage(ActuatorStageCommon):
     """``actuator=third_order``: position loop of gain ``loop_gain_rad_s`` driving a
-    second-order load."""
+    second-order load.
 
-    natural_frequency_hz: float = 12.0
-    damping: float = 0.6
+    Attributes
+    ----------
+    natural_frequency_hz : float
+        Natural frequency of the second-order load (Hz).
+    damping : float
+        Damping ratio of the load (–).
+    """
+
+    natural_frequency_hz: float = MISSING
+    damping: float = MISSING
+
+
+#: ``actuator.<stage>.feedback`` options of ``actuator=simplex``: the ram's LVDT or the nozzle angle.
+SIMPLEX_FEEDBACKS = ("piston", "nozzle")
 
 
 @dataclass
 class SimplexStage(ActuatorStageCommon):
     """``actuator=simplex``: power valve, hydraulic ram and compliant nozzle mount (load
-    inertia: the vehicle's engine inertia about the gimbal)."""
+    inertia: the vehicle's engine inertia about the gimbal).
 
-    valve_frequency_hz: float = 50.0
-    valve_damping: float = 0.7
-    stiffness_Nm_per_rad: float = 1.99e8  # the first stage's: ω_n = 12 Hz with J = 35,000 kg m²
-    damping_Nms_per_rad: float = 3.17e6  # ζ = C / (2 √(K J)) = 0.6 with that J
-    leakage_rad_s_per_Nm: float = 0.0
-    feedback: str = "piston"  # piston (ram LVDT) | nozzle
+    Attributes
+    ----------
+    valve_frequency_hz : float
+        Power-valve natural frequency (Hz), below a quarter of ``sim.plant_rate_hz``.
+    valve_damping : float
+        Power-valve damping ratio (–).
+    stiffness_Nm_per_rad : float
+        Nozzle-mount stiffness K (N·m/rad).
+    damping_Nms_per_rad : float
+        Nozzle-mount damping C (N·m·s/rad).
+    leakage_rad_s_per_Nm : float
+        Ram leakage: rate lost per load torque (rad/s per N·m; 0: none).
+    feedback : str
+        What the position loop is closed on, one of :data:`SIMPLEX_FEEDBACKS`.
+    """
+
+    valve_frequency_hz: float = MISSING
+    valve_damping: float = MISSING
+    stiffness_Nm_per_rad: float = MISSING
+    damping_Nms_per_rad: float = MISSING
+    leakage_rad_s_per_Nm: float = MISSING
+    feedback: str = MISSING
 
 
 @dataclass
 class ThirdOrderActuatorConfig:
+    """``actuator=third_order``: both stages' third-order actuators (:class:`ThirdOrderStage`)."""
+
     name: str = "third_order"
     first_stage: ThirdOrderStage = field(default_factory=ThirdOrderStage)
     upper_stage: ThirdOrderStage = field(default_factory=ThirdOrderStage)
@@ -49,6 +91,8 @@ class ThirdOrderActuatorConfig:
 
 @dataclass
 class SimplexActuatorConfig:
+    """``actuator=simplex``: both stages' simplex actuators (:class:`SimplexStage`)."""
+
     name: str = "simplex"
     first_stage: SimplexStage = field(default_factory=SimplexStage)
     upper_stage: SimplexStage = field(default_factory=SimplexStage)
@@ -66,7 +110,7 @@ def check_actuator(a: ThirdOrderActuatorConfig | SimplexActuatorConfig, plant_ra
         small_angles(f"actuator.{stage}.null_bias_deg", st.null_bias_deg, 2, 2.0, "pitch, yaw")
         if a.name == "simplex":
             non_negative(f"actuator.{stage}.leakage_rad_s_per_Nm", st.leakage_rad_s_per_Nm)
-            one_of(f"actuator.{stage}.feedback", st.feedback, ("piston", "nozzle"))
+            one_of(f"actuator.{stage}.feedback", st.feedback, SIMPLEX_FEEDBACKS)
             # the valve is integrated by the plant's RK4: keep it well inside its stability
             nyq = 0.25 * plant_rate_hz
             if st.valve_frequency_hz >= nyq:

@@ -122,7 +122,7 @@ def group_option(group: str, node: Any) -> Any:
     if name not in variants:
         raise ConfigError(f"{group}.name", name, f"must be one of {', '.join(variants)}")
     try:
-        merged = OmegaConf.merge(OmegaConf.structured(variants[name]), node)
+        return OmegaConf.to_object(OmegaConf.merge(OmegaConf.structured(variants[name]), node))
     except OmegaConfBaseException as exc:
         sub = str(getattr(exc, "full_key", None) or "?")
         key = f"{group}.{sub}"
@@ -131,10 +131,11 @@ def group_option(group: str, node: Any) -> Any:
             where = [opt for opt, schema in variants.items() if opt != name and has_key(schema, sub.split("."))]
             allowed = (f"not a key of {group}={name}; it belongs to {' and '.join(f'{group}={w}' for w in where)}"
                        if where else f"not a key of {group}={name} (nor of any other {group} option)")
+        elif "missing mandatory value" in msg.lower():
+            allowed = f"is required: {group}={name} has no default for it (conf/{group}/{name}.yaml gives one)"
         else:
             allowed = msg
         value = node
         for part in sub.split("."):
             value = value.get(part) if isinstance(value, dict) else None
         raise ConfigError(key, value, allowed) from None
-    return OmegaConf.to_object(merged)
