@@ -7,19 +7,40 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from savant_cli.errors import ConfigError
 from savant_cli.config.checks import increasing, non_negative, one_of
 from savant_cli.config.run import SimConfig
+from savant_cli.errors import ConfigError
 
 
 @dataclass
 class FilterSection:
+    """One fourth-order section of a discrete flex filter, z-domain coefficients at the
+    flight-control rate.
+
+    Attributes
+    ----------
+    b : list of float
+        Numerator coefficients, 5 (–).
+    a : list of float
+        Denominator coefficients, 5, ``a[0]`` non-zero, poles inside the unit circle (–)."""
+
     b: list[float] = field(default_factory=list)
     a: list[float] = field(default_factory=list)
 
 
 @dataclass
 class FilterSet:
+    """One schedule's flex filters: two fourth-order sections per path.
+
+    Attributes
+    ----------
+    rate : list of FilterSection
+        The blended rate path.
+    integrated_rate : list of FilterSection
+        The integrated-rate path.
+    roll : list of FilterSection
+        The roll-rate path."""
+
     rate: list[FilterSection] = field(default_factory=list)
     integrated_rate: list[FilterSection] = field(default_factory=list)
     roll: list[FilterSection] = field(default_factory=list)
@@ -27,18 +48,46 @@ class FilterSet:
 
 @dataclass
 class FilterSets:
+    """``controller.flex_filters``: the filters of the stack and upper-stage schedules.
+
+    Attributes
+    ----------
+    stack, upper : FilterSet
+        The integrated vehicle's and the upper stage's filters."""
+
     stack: FilterSet = field(default_factory=FilterSet)
     upper: FilterSet = field(default_factory=FilterSet)
 
 
 @dataclass
 class Blending:
+    """``controller.blending``: the rate-gyro blend weights (–), upper-stage gyro, IMU,
+    first-stage gyro; three non-negative weights summing to 1.
+
+    Attributes
+    ----------
+    stack, upper : list of float
+        The integrated vehicle's and the upper stage's weights."""
+
     stack: list[float] = field(default_factory=list)
     upper: list[float] = field(default_factory=list)
 
 
 @dataclass
 class AxisGains:
+    """One axis's PID gains, one value per breakpoint of its table.
+
+    Attributes
+    ----------
+    kp : list of float
+        Attitude gain (deg of gimbal per deg).
+    ki : list of float
+        Integral gain (deg of gimbal per deg·s).
+    kd : list of float
+        Rate gain (deg of gimbal per deg/s).
+    kir : list of float
+        Integrated-rate gain (deg of gimbal per deg)."""
+
     kp: list[float] = field(default_factory=list)
     ki: list[float] = field(default_factory=list)
     kd: list[float] = field(default_factory=list)
@@ -47,6 +96,17 @@ class AxisGains:
 
 @dataclass
 class GainTable:
+    """A gain schedule: gains per axis tabulated against one scheduling variable.
+
+    Attributes
+    ----------
+    schedule : str
+        The scheduling variable: ``altitude_m`` (stack) or ``velocity_mps`` (coast, upper).
+    breakpoints : list of float
+        Strictly increasing breakpoints, in the unit the schedule's name carries (m or m/s).
+    pitch, yaw : AxisGains
+        Each axis's gains at the breakpoints."""
+
     schedule: str = "altitude_m"
     breakpoints: list[float] = field(default_factory=list)
     pitch: AxisGains = field(default_factory=AxisGains)
@@ -55,6 +115,17 @@ class GainTable:
 
 @dataclass
 class GainTables:
+    """``controller.gains``: the three gain schedules.
+
+    Attributes
+    ----------
+    stack : GainTable
+        First-stage flight (by altitude, m).
+    coast : GainTable
+        Between separation and upper-stage ignition (by velocity, m/s).
+    upper : GainTable
+        Upper-stage flight (by velocity, m/s)."""
+
     stack: GainTable = field(default_factory=GainTable)
     coast: GainTable = field(default_factory=GainTable)
     upper: GainTable = field(default_factory=GainTable)
@@ -62,6 +133,17 @@ class GainTables:
 
 @dataclass
 class RollControl:
+    """``controller.roll``: the roll jets' phase plane.
+
+    Attributes
+    ----------
+    attitude_deadband_deg : float
+        Roll-attitude deadband (deg).
+    rate_deadband_deg_s : float
+        Roll-rate deadband (deg/s).
+    lead_time_s : float
+        Lead time of the switching line (s)."""
+
     attitude_deadband_deg: float = 1.0
     rate_deadband_deg_s: float = 1.0
     lead_time_s: float = 1.0
@@ -91,6 +173,33 @@ class ControllerDesign:
 
 @dataclass
 class ControllerConfig:
+    """``controller``: a flight-control design (``conf/controller/<name>.yaml``).
+
+    Attributes
+    ----------
+    name : str
+        The design's name.
+    vehicle : str
+        The vehicle the design is for ("": any); another is refused unless
+        ``allow_other_vehicle``.
+    allow_other_vehicle : bool
+        Fly it on another vehicle anyway.
+    blending : Blending
+        Rate-gyro blend weights (–).
+    flex_filters : FilterSets
+        Discrete flex filters.
+    gains : GainTables
+        PID gain schedules.
+    roll : RollControl
+        Roll phase plane.
+    ignition_fade : IgnitionFade
+        Upper-stage engagement at ignition (s).
+    delay_s : float
+        Transport delay from the sensor sample to the actuator command (s): a whole number
+        of plant steps, shorter than the control period.
+    design : ControllerDesign
+        Provenance: the design rules and tuned values."""
+
     name: str = "msfc_pid"
     vehicle: str = ""  # the vehicle the design is for ("": any); another is refused ...
     allow_other_vehicle: bool = False  # ... unless this is true

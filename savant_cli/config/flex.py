@@ -4,8 +4,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from savant_cli.errors import ConfigError
 from savant_cli.config.checks import non_negative, one_of, positive
+from savant_cli.errors import ConfigError
+
+
+#: ``flex.switching`` options: the modal set switched at separation, or blended by the propellant burned.
+FLEX_SWITCHINGS = ("separation", "propellant")
 
 
 @dataclass
@@ -42,6 +46,6 @@ def check_flex(f: FlexOffConfig | FlexOnConfig) -> None:
     if f.damping_per_mode and len(f.damping_per_mode) < f.n_modes:
         raise ConfigError("flex.damping_per_mode", list(f.damping_per_mode),
                           f"must give at least flex.n_modes = {f.n_modes} values, or be empty")
-    one_of("flex.switching", f.switching, ("separation", "propellant"))
+    one_of("flex.switching", f.switching, FLEX_SWITCHINGS)
     positive("flex.frequency_scale", f.frequency_scale)
     non_negative("flex.shape_scale", f.shape_scale)

@@ -5,13 +5,26 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, Optional
 
-from savant_cli.errors import ConfigError
 from savant_cli.config.checks import non_negative, one_of, positive
 from savant_cli.config.run import SimConfig
+from savant_cli.errors import ConfigError
 
 
 @dataclass
 class LaunchSite:
+    """``guidance.launch_site``: where the vehicle lifts off.
+
+    Attributes
+    ----------
+    latitude_deg : float
+        Geodetic latitude (deg, within ±90).
+    longitude_deg : float
+        Longitude (deg, −180 to 360).
+    base_altitude_m : float
+        Altitude of the pad above the WGS84 ellipsoid (m).
+    pad_heading_deg : float
+        Heading of the vehicle's reference axis on the pad (deg)."""
+
     latitude_deg: float = 28.627
     longitude_deg: float = -80.621
     base_altitude_m: float = 0.0
@@ -66,12 +79,47 @@ class PegConfig:
 
 @dataclass
 class SmootherConfig:
+    """``guidance.smoother``: the second-order command smoother between guidance samples.
+
+    Attributes
+    ----------
+    damping : float
+        Damping ratio (–).
+    natural_frequency_rad_s : float
+        Natural frequency (rad/s)."""
+
     damping: float = 0.8
     natural_frequency_rad_s: float = 1.0
 
 
 @dataclass
 class GuidanceConfig:
+    """``guidance``: the stored command profile, the launch site, the target orbit and PEG
+    (``conf/guidance/<name>.yaml``).
+
+    Attributes
+    ----------
+    name : str
+        The guidance's name.
+    vehicle : str
+        The vehicle the command file was generated for ("": any).
+    allow_other_vehicle : bool
+        Fly it on another vehicle anyway.
+    command_file : str
+        The guidance command file (CSV or HDF5), looked up in ``<config dir>/guidance/``.
+    launch_site : LaunchSite
+        Where the vehicle lifts off (deg, m).
+    target : OrbitTarget
+        The insertion orbit (km, deg, s).
+    smoother : SmootherConfig
+        The command smoother (–, rad/s).
+    generator : dict
+        How the command file was generated (provenance).
+    first_stage_schedule : str
+        The stored profile's first-stage index, one of :data:`FIRST_STAGE_SCHEDULES`.
+    peg : PegConfig
+        Closed-loop upper-stage guidance."""
+
     name: str = ""
     vehicle: str = ""  # the vehicle the command file was generated for ("": any); another is refused ...
     allow_other_vehicle: bool = False  # ... unless this is true

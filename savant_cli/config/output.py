@@ -9,6 +9,17 @@ from savant_cli.config.checks import one_of
 
 @dataclass
 class OutputConfig:
+    """``output``: what a run writes and what the console shows.
+
+    Attributes
+    ----------
+    hdf5 : bool
+        Write ``savant.h5``.
+    plots : bool
+        Draw PNG figures into ``plots/``.
+    console : str
+        What the console shows, one of :data:`CONSOLE_MODES`."""
+
     hdf5: bool = True
     plots: bool = True
     console: str = "full"  # full | summary | quiet (savant_cli.io.console.CONSOLE_MODES)

@@ -63,6 +63,13 @@ class FlexStageRequirement:
 
 @dataclass
 class FlexRequirement:
+    """``requirements.flex``: the bending-mode requirements of each stage (dB, deg).
+
+    Attributes
+    ----------
+    first_stage, upper_stage : FlexStageRequirement
+        Each stage's default and per-mode requirements."""
+
     first_stage: FlexStageRequirement = field(default_factory=FlexStageRequirement)
     upper_stage: FlexStageRequirement = field(default_factory=FlexStageRequirement)
 

@@ -8,8 +8,8 @@ from typing import Optional
 
 import numpy as np
 
-from savant_cli.errors import ConfigError
 from savant_cli.config.checks import non_negative, one_of, positive
+from savant_cli.errors import ConfigError
 
 
 @dataclass
@@ -58,6 +58,32 @@ def check_health(sim: SimConfig) -> None:
 
 @dataclass
 class SimConfig:
+    """``sim``: rates, the run's length and its divergence bound. Rates are bounded by
+    :data:`SIM_BOUNDS` and must divide the plant rate into whole steps.
+
+    Attributes
+    ----------
+    plant_rate_hz : float
+        RK4 integration rate of the continuous plant (Hz).
+    sensor_rate_hz : float
+        Rate-gyro sampling rate (Hz).
+    fcs_rate_hz : float
+        Flight control, smoother and roll-jet rate (Hz).
+    guidance_rate_hz : float
+        Rate of new guidance command samples (Hz).
+    log_rate_hz : float
+        Time-history output rate (Hz).
+    max_time_s : float
+        Hard stop (s).
+    chunk_s : float
+        Simulated time per compiled call (s; the progress granularity).
+    progress : bool
+        Progress bar on the console.
+    max_body_rate_deg_s : float
+        A body-rate magnitude above this is a divergence (deg/s).
+    health : HealthConfig
+        When a run that flew to its end is not a clean ``complete``."""
+
     plant_rate_hz: float = 200.0
     sensor_rate_hz: float = 200.0
     fcs_rate_hz: float = 50.0
@@ -105,6 +131,17 @@ def check_sim(sim: SimConfig) -> None:
 
 @dataclass
 class EnvironmentConfig:
+    """``environment``: the physics switched on.
+
+    Attributes
+    ----------
+    gravity_order : int
+        Highest zonal harmonic, one of :data:`GRAVITY_ORDERS` (0: point mass).
+    aero : bool
+        Aerodynamic forces and moments.
+    thrust : bool
+        Propulsion forces and moments."""
+
     gravity_order: int = 4
     aero: bool = True
     thrust: bool = True
@@ -112,6 +149,20 @@ class EnvironmentConfig:
 
 @dataclass
 class PhaseConfig:
+    """``phase``: the part of the flight flown.
+
+    Attributes
+    ----------
+    name : str
+        The phase's name.
+    start : str
+        One of :data:`PHASE_STARTS`: ``liftoff``, or ``staging`` from ``staging_state_file``.
+    stop_at : str
+        One of :data:`PHASE_STOPS`.
+    staging_state_file : str
+        The staging state a phase starting at staging starts from (looked up in
+        ``<config dir>/phase/``)."""
+
     name: str = "ascent"
     start: str = "liftoff"  # liftoff | staging (from staging_state_file)
     stop_at: str = "cutoff"

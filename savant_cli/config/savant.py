@@ -18,6 +18,12 @@ from savant_cli.errors import ConfigError
 
 @dataclass
 class SavantConfig:
+    """The whole configuration: every group, as validated by
+    :func:`savant_cli.config.validate`. ``vehicle`` is checked by
+    :func:`savant_cli.vehicle.load_vehicle`; ``actuator``, ``flex``, ``slosh``, ``twd`` and
+    ``navigation`` are typed by their option's schema (``GROUP_VARIANTS``), ``study`` by its
+    study's (``STUDY_SCHEMAS``). Units: in each group's schema."""
+
     vehicle: Any = None  # validated by savant_cli.vehicle.load_vehicle (tables and keys)
     phase: PhaseConfig = field(default_factory=PhaseConfig)
     # typed per option in validate() (GROUP_VARIANTS)

@@ -4,13 +4,22 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from savant_cli.errors import ConfigError
 from savant_cli.config.checks import positive, small_angles
 from savant_cli.config.run import SimConfig
+from savant_cli.errors import ConfigError
 
 
 @dataclass
 class RateGyroConfig:
+    """``sensors.rate_gyro``: each rate gyro's second-order transfer function.
+
+    Attributes
+    ----------
+    natural_frequency_hz : float
+        Natural frequency (Hz), below the sensor Nyquist frequency.
+    damping : float
+        Damping ratio (–)."""
+
     natural_frequency_hz: float = 25.0
     damping: float = 0.7
 
@@ -27,6 +36,17 @@ class SensorMisalignment:
 
 @dataclass
 class SensorsConfig:
+    """``sensors``: the rate gyros and the sensors' mounting misalignment.
+
+    Attributes
+    ----------
+    name : str
+        The sensor set's name.
+    rate_gyro : RateGyroConfig
+        Gyro dynamics (Hz, –).
+    misalignment_deg : SensorMisalignment
+        Mounting misalignments (deg)."""
+
     name: str = "ares_i_gyros"
     rate_gyro: RateGyroConfig = field(default_factory=RateGyroConfig)
     misalignment_deg: SensorMisalignment = field(default_factory=SensorMisalignment)

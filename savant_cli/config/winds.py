@@ -6,12 +6,21 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from savant_cli.errors import ConfigError
 from savant_cli.config.checks import finite, increasing, non_negative, one_of, positive
+from savant_cli.errors import ConfigError
 
 
 @dataclass
 class WindProfile:
+    """``winds.profile``: the horizontal wind against altitude.
+
+    Attributes
+    ----------
+    altitude_m : list of float
+        Altitudes above the WGS84 ellipsoid (m), strictly increasing.
+    north_mps, east_mps : list of float
+        Wind toward north and east at each altitude (m/s)."""
+
     altitude_m: list[float] = field(default_factory=list)
     north_mps: list[float] = field(default_factory=list)
     east_mps: list[float] = field(default_factory=list)
@@ -53,6 +62,23 @@ class ShearConfig:
 
 @dataclass
 class WindsConfig:
+    """``winds``: a wind profile with an optional gust and shear (``conf/winds/<name>.yaml``).
+
+    Attributes
+    ----------
+    name : str
+        The profile's name.
+    enabled : bool
+        Whether any wind blows.
+    scale : float
+        Multiplies the profile (–, within [0, :data:`MAX_WINDS_SCALE`]).
+    profile : WindProfile
+        Wind against altitude (m, m/s).
+    gust : GustConfig
+        Discrete 1 − cos gust.
+    shear : ShearConfig
+        Wind shear over an altitude band."""
+
     name: str = "none"
     enabled: bool = False
     scale: float = 1.0

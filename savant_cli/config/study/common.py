@@ -7,6 +7,13 @@ import numpy as np
 from savant_cli.errors import ConfigError
 
 
+#: The loops a study judges (``study.axes``, ``study.chart_axes``).
+LOOP_AXES = ("pitch", "yaw")
+
+#: ``study.jacobian`` options: per-state steps, or one fixed step (``study.jacobian_step``).
+JACOBIANS = ("auto", "fixed")
+
+
 #: Most worker processes of a study: each holds a copy of the built model and its
 #: compiled plant, about 170 MB measured, so 256 are about 43 GB; a machine with more cores
 #: is better used by shards.

@@ -8,9 +8,13 @@ from typing import Any, Optional
 
 import numpy as np
 
-from savant_cli.errors import ConfigError
 from savant_cli.config.checks import non_negative, one_of, positive
-from savant_cli.config.study.common import MAX_WORKERS, WORKERS_ALLOWED
+from savant_cli.config.study.common import LOOP_AXES, MAX_WORKERS, WORKERS_ALLOWED
+from savant_cli.errors import ConfigError
+
+
+#: ``study.optimizer.method`` options (``scipy.optimize.minimize``).
+OPTIMIZER_METHODS = ("nelder-mead", "cobyla")
 
 
 @dataclass
@@ -51,6 +55,13 @@ STACK_ONLY_PARAMETERS = {"blend_first": "only the stack blends its gyros",
 
 @dataclass
 class DesignParameters:
+    """``study.parameters``: the tuned parameters of each gain schedule.
+
+    Attributes
+    ----------
+    stack, upper : ScheduleParameters
+        The integrated vehicle's and the upper stage's (units per parameter)."""
+
     stack: ScheduleParameters = field(default_factory=ScheduleParameters)
     upper: ScheduleParameters = field(default_factory=ScheduleParameters)
 
@@ -121,7 +132,7 @@ def check_fcs_design(s: FcsDesignStudyConfig) -> None:
     if not 0 <= s.workers <= MAX_WORKERS:
         raise ConfigError("study.workers", s.workers, WORKERS_ALLOWED)
     for i, axis in enumerate(s.axes):
-        one_of(f"study.axes[{i}]", axis, ("pitch", "yaw"))
+        one_of(f"study.axes[{i}]", axis, LOOP_AXES)
     if not s.axes:
         raise ConfigError("study.axes", [], "must name at least one loop (pitch, yaw)")
     for sched in DESIGN_SCHEDULES:
@@ -139,7 +150,7 @@ def check_fcs_design(s: FcsDesignStudyConfig) -> None:
             if prm.initial is not None and not prm.low <= prm.initial <= prm.high:
                 raise ConfigError(f"{key}.initial", prm.initial, f"must lie within [{prm.low}, {prm.high}]")
     o = s.optimizer
-    one_of("study.optimizer.method", o.method, ("nelder-mead", "cobyla"))
+    one_of("study.optimizer.method", o.method, OPTIMIZER_METHODS)
     if o.max_evaluations < 1:
         raise ConfigError("study.optimizer.max_evaluations", o.max_evaluations, "must be a positive count")
     positive("study.optimizer.tolerance", o.tolerance)

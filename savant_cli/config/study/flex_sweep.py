@@ -6,9 +6,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from savant_cli.errors import ConfigError
 from savant_cli.config.checks import non_negative, one_of
-from savant_cli.config.study.common import flight_times
+from savant_cli.config.study.common import LOOP_AXES, flight_times
+from savant_cli.errors import ConfigError
+
+
+#: ``study.parameters`` options: what is scaled.
+SWEEP_PARAMETERS = ("frequency", "shape")
 
 
 @dataclass
@@ -31,7 +35,7 @@ def check_flex_sweep(s: FlexSweepStudyConfig) -> None:
     if not s.parameters:
         raise ConfigError("study.parameters", list(s.parameters), "must list frequency and/or shape")
     for i, prm in enumerate(s.parameters):
-        one_of(f"study.parameters[{i}]", prm, ("frequency", "shape"))
+        one_of(f"study.parameters[{i}]", prm, SWEEP_PARAMETERS)
     if not s.levels:
         raise ConfigError("study.levels", list(s.levels), "must list at least one scale factor")
     for i, v in enumerate(s.levels):
@@ -41,5 +45,5 @@ def check_flex_sweep(s: FlexSweepStudyConfig) -> None:
         if m < 1:
             raise ConfigError(f"study.modes[{i}]", m, "must be a mode number, 1 = the lowest retained mode")
     for i, a in enumerate(s.chart_axes):
-        one_of(f"study.chart_axes[{i}]", a, ("pitch", "yaw"))
+        one_of(f"study.chart_axes[{i}]", a, LOOP_AXES)
     non_negative("study.event_clearance_s", s.event_clearance_s)

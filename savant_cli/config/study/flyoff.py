@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from savant_cli.errors import ConfigError
 from savant_cli.config.study.montecarlo import MonteCarloStudyConfig, check_montecarlo
+from savant_cli.errors import ConfigError
 
 
 @dataclass

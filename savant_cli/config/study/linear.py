@@ -4,9 +4,16 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from savant_cli.errors import ConfigError
 from savant_cli.config.checks import non_negative, one_of, positive
-from savant_cli.config.study.common import flight_times
+from savant_cli.config.study.common import JACOBIANS, flight_times
+from savant_cli.errors import ConfigError
+
+
+#: ``study.frozen_time.criteria`` options (``linear/frozen_time.py``).
+FROZEN_TIME_CRITERIA = ("period", "control_power")
+
+#: ``study.charts`` options: per-point charts for every point, none, or up to 20 points.
+CHART_MODES = ("auto", "all", "none")
 
 
 @dataclass
@@ -28,7 +35,7 @@ def check_frozen_time(f: FrozenTimeSpec, key: str) -> None:
     """Criteria among ``period``, ``control_power`` (each once); positive scan span and
     step, the step at most the span; a positive excitation."""
     for i, c in enumerate(f.criteria):
-        one_of(f"{key}.criteria[{i}]", c, ("period", "control_power"))
+        one_of(f"{key}.criteria[{i}]", c, FROZEN_TIME_CRITERIA)
     if len(set(f.criteria)) != len(f.criteria):
         raise ConfigError(f"{key}.criteria", list(f.criteria), "names each criterion at most once")
     positive(f"{key}.scan_s", f.scan_s)
@@ -63,6 +70,6 @@ def check_linear(s: LinearStudyConfig) -> None:
         flight_times(s.times)
     non_negative("study.event_clearance_s", s.event_clearance_s)
     check_frozen_time(s.frozen_time, "study.frozen_time")
-    one_of("study.jacobian", s.jacobian, ("auto", "fixed"))
+    one_of("study.jacobian", s.jacobian, JACOBIANS)
     positive("study.jacobian_step", s.jacobian_step)
-    one_of("study.charts", s.charts, ("auto", "all", "none"))
+    one_of("study.charts", s.charts, CHART_MODES)

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from savant_cli.errors import ConfigError
 from savant_cli.config.checks import positive
 from savant_cli.config.study.common import flight_times
+from savant_cli.errors import ConfigError
 
 
 @dataclass

@@ -6,9 +6,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from savant_cli.errors import ConfigError
 from savant_cli.config.checks import positive
 from savant_cli.config.study.common import MAX_WORKERS, WORKERS_ALLOWED
+from savant_cli.errors import ConfigError
 
 
 @dataclass

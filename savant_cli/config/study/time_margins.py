@@ -4,9 +4,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from savant_cli.errors import ConfigError
 from savant_cli.config.checks import non_negative, one_of, positive
-from savant_cli.config.study.common import MAX_WORKERS, WORKERS_ALLOWED, flight_times
+from savant_cli.config.study.common import JACOBIANS, LOOP_AXES, MAX_WORKERS, WORKERS_ALLOWED, flight_times
+from savant_cli.errors import ConfigError
 
 
 MARGIN_KINDS = ("gain_high", "gain_low", "delay")
@@ -45,7 +45,7 @@ def check_time_margins(s: TimeMarginsStudyConfig) -> None:
     if not s.axes:
         raise ConfigError("study.axes", [], "must name at least one loop (pitch, yaw)")
     for i, axis in enumerate(s.axes):
-        one_of(f"study.axes[{i}]", axis, ("pitch", "yaw"))
+        one_of(f"study.axes[{i}]", axis, LOOP_AXES)
     if not s.kinds:
         raise ConfigError("study.kinds", [], f"must name at least one of {', '.join(MARGIN_KINDS)}")
     for i, kind in enumerate(s.kinds):
@@ -69,5 +69,5 @@ def check_time_margins(s: TimeMarginsStudyConfig) -> None:
                           "reach (0 would leave the verdict on a neutral oscillation to round-off)")
     if not 0 <= s.workers <= MAX_WORKERS:
         raise ConfigError("study.workers", s.workers, WORKERS_ALLOWED)
-    one_of("study.jacobian", s.jacobian, ("auto", "fixed"))
+    one_of("study.jacobian", s.jacobian, JACOBIANS)
     positive("study.jacobian_step", s.jacobian_step)
