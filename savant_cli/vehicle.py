@@ -33,6 +33,7 @@ from typing import Any
 
 import numpy as np
 
+from savant_cli.config.checks import no_negative_entries, non_negative, positive
 from savant_cli.errors import ConfigError
 from savant_cli.io.data_csv import read_numeric_csv
 from savant_cli.io.table_order import require_grid_order, require_increasing, table_key
@@ -316,13 +317,6 @@ def _check_keys(node: Mapping, schema: Mapping, path: str) -> None:
             raise ConfigError(full, value, "must be a string")
 
 
-def _positive(key: str, value: float, allow_zero: bool = False) -> float:
-    ok = value >= 0.0 if allow_zero else value > 0.0
-    if not ok:
-        raise ConfigError(key, value, "must be zero or positive" if allow_zero else "must be positive")
-    return float(value)
-
-
 def _vec3(value: Any) -> np.ndarray:
     return np.ascontiguousarray(np.asarray(value, dtype=np.float64))
 
@@ -393,11 +387,6 @@ def read_table(path: Path, kind: str) -> tuple[dict[str, np.ndarray], dict[str, 
     return out, names
 
 
-def _non_negative(key: str, x: np.ndarray, what: str) -> None:
-    if np.any(x < 0.0):
-        raise ConfigError(key, float(x[np.argmax(x < 0.0)]), f"{what} must not be negative")
-
-
 def _aero(cfg: Mapping, vdir: Path, cname: str) -> AeroTable:
     path = vdir / cfg["aero_table"]
     key = _table_key(path)
@@ -435,8 +424,8 @@ def _aero(cfg: Mapping, vdir: Path, cname: str) -> AeroTable:
         mach=axes[0], alpha_rad=axes[1], beta_rad=axes[2],
         coeffs=np.ascontiguousarray(coeffs.reshape((6,) + shape)),
         base_time_s=b["time"], base_force_N=b["base_force"],
-        area_m2=_positive(f"{p}.reference_area_m2", cfg["reference_area_m2"]),
-        lref_m=_vec3([_positive(f"{p}.reference_length_m", v) for v in cfg["reference_length_m"]]),
+        area_m2=positive(f"{p}.reference_area_m2", cfg["reference_area_m2"]),
+        lref_m=_vec3([positive(f"{p}.reference_length_m", v) for v in cfg["reference_length_m"]]),
         mrp_m=_vec3(cfg["moment_reference_m"]),
     )
 
@@ -446,7 +435,7 @@ def _mass(cfg: Mapping, vdir: Path, length_m: float) -> MassTable:
     key = _table_key(path)
     t, tn = read_table(path, "mass")
     prop = t["propellant_remaining"]
-    _non_negative(f"{key}:{tn['propellant_remaining']}", prop, "propellant remaining")
+    no_negative_entries(f"{key}:{tn['propellant_remaining']}", prop, "propellant remaining")
     for c in ("mass", "ixx", "iyy", "izz"):
         bad = np.nonzero(t[c] <= 0.0)[0]
         if bad.size:
@@ -479,7 +468,7 @@ def _mass(cfg: Mapping, vdir: Path, length_m: float) -> MassTable:
 
 
 def _engine(node: Mapping, path: str) -> Engine:
-    return Engine(**{k: _positive(f"{path}.{k}", node[k]) for k in ENGINE_KEYS})
+    return Engine(**{k: positive(f"{path}.{k}", node[k]) for k in ENGINE_KEYS})
 
 
 def _gimbal_limit(key: str, deg: float) -> float:
@@ -530,7 +519,7 @@ def load_vehicle(vehicle_cfg: Mapping, data_dir: Path) -> Vehicle:
     node = _to_plain(vehicle_cfg)
     _check_keys(node, SCHEMA, "vehicle")
     vdir = Path(data_dir)
-    length = _positive("vehicle.length_m", node["length_m"])
+    length = positive("vehicle.length_m", node["length_m"])
 
     configs = {}
     for cname in CONFIG_NAMES:
@@ -541,16 +530,16 @@ def load_vehicle(vehicle_cfg: Mapping, data_dir: Path) -> Vehicle:
     fs_node = node["first_stage"]
     fpath = vdir / fs_node["thrust_table"]
     ft, ftn = read_table(fpath, "first_stage_thrust")
-    _non_negative(f"{_table_key(fpath)}:{ftn['thrust_vac']}", ft["thrust_vac"], "thrust")
+    no_negative_entries(f"{_table_key(fpath)}:{ftn['thrust_vac']}", ft["thrust_vac"], "thrust")
     if ft["thrust_vac"].max() <= 0.0:
         raise ConfigError(f"{_table_key(fpath)}:{ftn['thrust_vac']}", 0.0, "thrust must be positive somewhere")
     fs = FirstStage(
         thrust_time_s=ft["time"], thrust_vac_N=ft["thrust_vac"],
-        isp_vac_s=_positive(f"{p}.isp_vac_s", fs_node["isp_vac_s"]),
-        isp_sl_s=_positive(f"{p}.isp_sl_s", fs_node["isp_sl_s"]),
-        nozzle_exit_area_m2=_positive(f"{p}.nozzle_exit_area_m2", fs_node["nozzle_exit_area_m2"], True),
-        propellant_kg=_positive(f"{p}.propellant_kg", fs_node["propellant_kg"]),
-        jettison_mass_kg=_positive(f"{p}.jettison_mass_kg", fs_node["jettison_mass_kg"], True),
+        isp_vac_s=positive(f"{p}.isp_vac_s", fs_node["isp_vac_s"]),
+        isp_sl_s=positive(f"{p}.isp_sl_s", fs_node["isp_sl_s"]),
+        nozzle_exit_area_m2=non_negative(f"{p}.nozzle_exit_area_m2", fs_node["nozzle_exit_area_m2"]),
+        propellant_kg=positive(f"{p}.propellant_kg", fs_node["propellant_kg"]),
+        jettison_mass_kg=non_negative(f"{p}.jettison_mass_kg", fs_node["jettison_mass_kg"]),
         gimbal_m=_vec3(fs_node["gimbal_m"]),
         gimbal_limit_rad=_gimbal_limit(f"{p}.gimbal_limit_deg", fs_node["gimbal_limit_deg"]),
         engine=_engine(fs_node["engine"], f"{p}.engine"),
@@ -567,17 +556,17 @@ def load_vehicle(vehicle_cfg: Mapping, data_dir: Path) -> Vehicle:
         raise ConfigError(f"{_table_key(spath)}:thrust_fraction", float(frac[np.argmax((frac < 0) | (frac > 1))]),
                           "thrust fraction must be within [0, 1]")
     us = UpperStage(
-        thrust_vac_N=_positive(f"{p}.thrust_vac_N", us_node["thrust_vac_N"]),
-        isp_vac_s=_positive(f"{p}.isp_vac_s", us_node["isp_vac_s"]),
-        mixture_ratio=_positive(f"{p}.mixture_ratio", us_node["mixture_ratio"]),
-        nozzle_exit_area_m2=_positive(f"{p}.nozzle_exit_area_m2", us_node["nozzle_exit_area_m2"], True),
-        lox_kg=_positive(f"{p}.lox_kg", us_node["lox_kg"]),
-        lh2_kg=_positive(f"{p}.lh2_kg", us_node["lh2_kg"]),
+        thrust_vac_N=positive(f"{p}.thrust_vac_N", us_node["thrust_vac_N"]),
+        isp_vac_s=positive(f"{p}.isp_vac_s", us_node["isp_vac_s"]),
+        mixture_ratio=positive(f"{p}.mixture_ratio", us_node["mixture_ratio"]),
+        nozzle_exit_area_m2=non_negative(f"{p}.nozzle_exit_area_m2", us_node["nozzle_exit_area_m2"]),
+        lox_kg=positive(f"{p}.lox_kg", us_node["lox_kg"]),
+        lh2_kg=positive(f"{p}.lh2_kg", us_node["lh2_kg"]),
         startup_time_s=st["time"], startup_fraction=frac,
-        shutdown_impulse_Ns=_positive(f"{p}.shutdown_impulse_Ns", us_node["shutdown_impulse_Ns"], True),
+        shutdown_impulse_Ns=non_negative(f"{p}.shutdown_impulse_Ns", us_node["shutdown_impulse_Ns"]),
         gimbal_m=_vec3(us_node["gimbal_m"]),
         gimbal_limit_rad=_gimbal_limit(f"{p}.gimbal_limit_deg", us_node["gimbal_limit_deg"]),
-        les_mass_kg=_positive(f"{p}.les_mass_kg", us_node["les_mass_kg"], True),
+        les_mass_kg=non_negative(f"{p}.les_mass_kg", us_node["les_mass_kg"]),
         engine=_engine(us_node["engine"], f"{p}.engine"),
     )
 
@@ -585,13 +574,13 @@ def load_vehicle(vehicle_cfg: Mapping, data_dir: Path) -> Vehicle:
     rn = node["rcs"]
     rpath = vdir / rn["thrust_table"]
     rt, rtn = read_table(rpath, "rcs_thrust")
-    _non_negative(f"{_table_key(rpath)}:{rtn['thrust_vac']}", rt["thrust_vac"], "thrust")
+    no_negative_entries(f"{_table_key(rpath)}:{rtn['thrust_vac']}", rt["thrust_vac"], "thrust")
     rcs = Rcs(altitude_m=rt["altitude"], thrust_vac_N=rt["thrust_vac"],
-              exit_area_m2=_positive(f"{p}.exit_area_m2", rn["exit_area_m2"], True),
-              jets_per_direction=int(_positive(f"{p}.jets_per_direction", rn["jets_per_direction"])),
-              moment_arm_m=_positive(f"{p}.moment_arm_m", rn["moment_arm_m"]),
-              ramp_up_s=_positive(f"{p}.ramp_up_s", rn["ramp_up_s"], True),
-              ramp_down_s=_positive(f"{p}.ramp_down_s", rn["ramp_down_s"], True),
+              exit_area_m2=non_negative(f"{p}.exit_area_m2", rn["exit_area_m2"]),
+              jets_per_direction=int(positive(f"{p}.jets_per_direction", rn["jets_per_direction"])),
+              moment_arm_m=positive(f"{p}.moment_arm_m", rn["moment_arm_m"]),
+              ramp_up_s=non_negative(f"{p}.ramp_up_s", rn["ramp_up_s"]),
+              ramp_down_s=non_negative(f"{p}.ramp_down_s", rn["ramp_down_s"]),
               location_m=_vec3(rn["location_m"]))
 
     sensors = Sensors(**{k: _vec3(node["sensors"][k]) for k in SCHEMA["sensors"]})
@@ -600,12 +589,12 @@ def load_vehicle(vehicle_cfg: Mapping, data_dir: Path) -> Vehicle:
     if not 0.0 < frac_sep < 1.0:
         raise ConfigError("vehicle.events.separation_thrust_fraction", frac_sep, "must be within (0, 1)")
     events = Events(separation_thrust_fraction=float(frac_sep),
-                    ignition_delay_s=_positive("vehicle.events.ignition_delay_s", en["ignition_delay_s"], True),
-                    les_jettison_delay_s=_positive("vehicle.events.les_jettison_delay_s",
-                                                   en["les_jettison_delay_s"], True))
+                    ignition_delay_s=non_negative("vehicle.events.ignition_delay_s", en["ignition_delay_s"]),
+                    les_jettison_delay_s=non_negative("vehicle.events.les_jettison_delay_s",
+                                                  en["les_jettison_delay_s"]))
     qalpha_limit = None
     if node.get("loads") is not None:
-        qalpha_limit = _positive("vehicle.loads.qalpha_limit_Pa_deg", node["loads"]["qalpha_limit_Pa_deg"])
+        qalpha_limit = positive("vehicle.loads.qalpha_limit_Pa_deg", node["loads"]["qalpha_limit_Pa_deg"])
     vehicle = Vehicle(name=str(node["name"]), description=str(node.get("description") or ""), length_m=length,
                       configurations=configs, first_stage=fs, upper_stage=us, rcs=rcs, sensors=sensors,
                       events=events, data_dir=vdir, flex_spec=node.get("flex"), slosh_spec=node.get("slosh"),

@@ -103,7 +103,7 @@ def test_reloaded_point_reproduces_the_margin_table(linear_run):
 
 
 @pytest.mark.parametrize("times,message", [
-    ("[900]", "must be earlier than sim.max_time_s = 800 s"),  # refused before flying (config.py)
+    ("[900]", "must be earlier than sim.max_time_s = 800 s"),  # refused before flying (config/study/__init__.py)
     ("[700]", "inside the flight"),  # within sim.max_time_s but after the flown cutoff: known once flown
     ("[130.45]", "event separation"),
 ])

@@ -1,0 +1,90 @@
+"""The configuration schema (structured dataclasses) and its physical validation, one
+module per concern; this package's public API is every name below.
+
+Hydra composes the YAML tree in ``conf/``; :func:`validate` then merges the result onto
+the schema, which refuses unknown keys and wrong types, and checks physical sense
+(rates that divide each other, positive frequencies, blending weights summing to 1 …).
+Every refusal is a :class:`savant_cli.errors.ConfigError` naming the key, the value and
+what is allowed; the command line turns it into exit status 2. Nothing here imports
+Hydra: the schema is put in Hydra's ConfigStore by
+:func:`savant_cli.hydra_compose.register_schema`, which the entry points call.
+
+Where things are: ``run`` (sim, environment, phase), ``output``, ``requirements``,
+``dispersions``, one module per model group (``actuator``, ``flex``, ``slosh``, ``twd``,
+``navigation``, ``winds``, ``sensors``, ``controller``, ``guidance``), ``study/`` (one
+module per study), ``savant`` (the whole config), ``checks`` (the generic validators)
+and ``validation`` (:func:`validate`). Each schema's checks follow it in its module.
+"""
+
+from __future__ import annotations
+
+from savant_cli.config.actuator import (
+    ActuatorStageCommon, SimplexActuatorConfig, SimplexStage, ThirdOrderActuatorConfig, ThirdOrderStage,
+    check_actuator,
+)
+from savant_cli.config.controller import (
+    AxisGains, Blending, ControllerConfig, ControllerDesign, FilterSection, FilterSet, FilterSets, GainTable,
+    GainTables, IgnitionFade, RollControl, check_delay,
+)
+from savant_cli.config.dispersions import CorrelationGroup, DispersionSetConfig, DispersionSpec
+from savant_cli.config.flex import FlexOffConfig, FlexOnConfig, check_flex
+from savant_cli.config.guidance import (
+    GuidanceConfig, InsertionTolerance, LaunchSite, OrbitTarget, PegConfig, SmootherConfig, check_peg, check_target,
+)
+from savant_cli.config.navigation import (
+    AccelerometerErrorsConfig, GyroErrorsConfig, NAVIGATION_BOUNDS, NavigationInertialConfig,
+    NavigationPerfectConfig, check_navigation,
+)
+from savant_cli.config.output import OutputConfig
+from savant_cli.config.requirements import (
+    AeroRequirement, FlexModeRequirement, FlexRequirement, FlexStageRequirement, MissionRequirement, RequirementSet,
+    RigidRequirement, STABILIZATIONS, SeparationRequirement, SloshRequirement, check_requirements,
+)
+from savant_cli.config.run import EnvironmentConfig, HealthConfig, MAX_LOG_ROWS, PhaseConfig, SIM_BOUNDS, SimConfig
+from savant_cli.config.savant import SavantConfig, check_vehicle_match
+from savant_cli.config.sensors import RateGyroConfig, SensorMisalignment, SensorsConfig
+from savant_cli.config.slosh import SloshOffConfig, SloshOnConfig, check_slosh
+from savant_cli.config.study import STUDY_SCHEMAS, check_study_times
+from savant_cli.config.study.common import MAX_WORKERS, WORKERS_ALLOWED
+from savant_cli.config.study.fcs_design import (
+    DESIGN_SCHEDULES, DesignOptimizer, DesignParameter, DesignParameters, FcsDesignStudyConfig,
+    STACK_ONLY_PARAMETERS, ScheduleParameters, design_controller_name,
+)
+from savant_cli.config.study.flex_sweep import FlexSweepStudyConfig
+from savant_cli.config.study.flyoff import FlyoffStudyConfig
+from savant_cli.config.study.linear import FrozenTimeSpec, LinearStudyConfig, check_frozen_time
+from savant_cli.config.study.mode_retention import ModeRetentionStudyConfig
+from savant_cli.config.study.montecarlo import (
+    HistoriesSpec, MAX_HISTORY_SAMPLES, MAX_N_RUNS, MAX_SHARDS, MonteCarloStudyConfig, ReliabilitySpec,
+)
+from savant_cli.config.study.nominal import StudyConfig
+from savant_cli.config.study.time_margins import MARGIN_KINDS, TimeMarginsStudyConfig
+from savant_cli.config.twd import TwdOffConfig, TwdOnConfig
+from savant_cli.config.validation import GROUP_VARIANTS, check_physics, group_option, has_key, validate
+from savant_cli.config.winds import (
+    GUST_FRAMES, GUST_ONSETS, GustConfig, MAX_WINDS_SCALE, SHEAR_SHAPES, ShearConfig, WindProfile, WindsConfig,
+    check_gust_shear,
+)
+
+__all__ = [
+    "AccelerometerErrorsConfig", "ActuatorStageCommon", "AeroRequirement", "AxisGains", "Blending",
+    "ControllerConfig", "ControllerDesign", "CorrelationGroup", "DESIGN_SCHEDULES", "DesignOptimizer",
+    "DesignParameter", "DesignParameters", "DispersionSetConfig", "DispersionSpec", "EnvironmentConfig",
+    "FcsDesignStudyConfig", "FilterSection", "FilterSet", "FilterSets", "FlexModeRequirement", "FlexOffConfig",
+    "FlexOnConfig", "FlexRequirement", "FlexStageRequirement", "FlexSweepStudyConfig", "FlyoffStudyConfig",
+    "FrozenTimeSpec", "GROUP_VARIANTS", "GUST_FRAMES", "GUST_ONSETS", "GainTable", "GainTables", "GuidanceConfig",
+    "GustConfig", "GyroErrorsConfig", "HealthConfig", "HistoriesSpec", "IgnitionFade", "InsertionTolerance",
+    "LaunchSite", "LinearStudyConfig", "MARGIN_KINDS", "MAX_HISTORY_SAMPLES", "MAX_LOG_ROWS", "MAX_N_RUNS",
+    "MAX_SHARDS", "MAX_WINDS_SCALE", "MAX_WORKERS", "MissionRequirement", "ModeRetentionStudyConfig",
+    "MonteCarloStudyConfig", "NAVIGATION_BOUNDS", "NavigationInertialConfig", "NavigationPerfectConfig",
+    "OrbitTarget", "OutputConfig", "PegConfig", "PhaseConfig", "RateGyroConfig", "ReliabilitySpec",
+    "RequirementSet", "RigidRequirement", "RollControl", "SHEAR_SHAPES", "SIM_BOUNDS", "STABILIZATIONS",
+    "STACK_ONLY_PARAMETERS", "STUDY_SCHEMAS", "SavantConfig", "ScheduleParameters", "SensorMisalignment",
+    "SensorsConfig", "SeparationRequirement", "ShearConfig", "SimConfig", "SimplexActuatorConfig", "SimplexStage",
+    "SloshOffConfig", "SloshOnConfig", "SloshRequirement", "SmootherConfig", "StudyConfig",
+    "ThirdOrderActuatorConfig", "ThirdOrderStage", "TimeMarginsStudyConfig", "TwdOffConfig", "TwdOnConfig",
+    "WORKERS_ALLOWED", "WindProfile", "WindsConfig", "check_actuator", "check_delay", "check_flex",
+    "check_frozen_time", "check_gust_shear", "check_navigation", "check_peg", "check_physics", "check_requirements",
+    "check_slosh", "check_study_times", "check_target", "check_vehicle_match", "design_controller_name",
+    "group_option", "has_key", "validate",
+]

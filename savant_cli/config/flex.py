@@ -1,0 +1,51 @@
+"""``flex``: the rigid vehicle or retained bending modes."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from savant_cli.config.checks import non_negative, one_of, positive
+from savant_cli.errors import ConfigError
+
+
+#: ``flex.switching`` options: the modal set switched at separation, or blended by the propellant burned.
+FLEX_SWITCHINGS = ("separation", "propellant")
+
+
+@dataclass
+class FlexOffConfig:
+    """``flex=off``: the rigid vehicle."""
+
+    name: str = "off"
+    enabled: bool = False
+
+
+@dataclass
+class FlexOnConfig:
+    """``flex=on``: retained bending modes from the vehicle's modal data."""
+
+    name: str = "on"
+    enabled: bool = True
+    n_modes: int = 4  # retained modes, lowest first
+    damping: float = 0.005  # structural damping ratio of every retained mode
+    damping_per_mode: list[float] = field(default_factory=list)  # overrides `damping` when given
+    switching: str = "separation"  # separation | propellant
+    frequency_scale: float = 1.0
+    shape_scale: float = 1.0
+
+
+def check_flex(f: FlexOffConfig | FlexOnConfig) -> None:
+    """Physical checks of the ``flex`` group."""
+    if not f.enabled:
+        return
+    if f.n_modes < 1:
+        raise ConfigError("flex.n_modes", f.n_modes, "must be at least 1 when flex is on (flex=off turns it off)")
+    non_negative("flex.damping", f.damping)
+    for i, z in enumerate(f.damping_per_mode):
+        non_negative(f"flex.damping_per_mode[{i}]", z)
+    if f.damping_per_mode and len(f.damping_per_mode) < f.n_modes:
+        raise ConfigError("flex.damping_per_mode", list(f.damping_per_mode),
+                          f"must give at least flex.n_modes = {f.n_modes} values, or be empty")
+    one_of("flex.switching", f.switching, FLEX_SWITCHINGS)
+    positive("flex.frequency_scale", f.frequency_scale)
+    non_negative("flex.shape_scale", f.shape_scale)

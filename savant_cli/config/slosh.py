@@ -1,0 +1,32 @@
+"""``slosh``: propellant slosh off or on."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from savant_cli.config.checks import non_negative, positive
+
+
+@dataclass
+class SloshOffConfig:
+    """``slosh=off``: no propellant slosh."""
+
+    name: str = "off"
+    enabled: bool = False
+
+
+@dataclass
+class SloshOnConfig:
+    """``slosh=on``: LOX and LH2 spring-mass slosh from the vehicle's tables."""
+
+    name: str = "on"
+    enabled: bool = True
+    frequency_scale: float = 1.0
+    damping_scale: float = 1.0
+
+
+def check_slosh(s: SloshOffConfig | SloshOnConfig) -> None:
+    """Physical checks of the ``slosh`` group."""
+    if s.enabled:
+        positive("slosh.frequency_scale", s.frequency_scale)
+        non_negative("slosh.damping_scale", s.damping_scale)

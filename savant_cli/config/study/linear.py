@@ -1,0 +1,75 @@
+"""``study=linear``: frozen-time linearization and stability margins."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from savant_cli.config.checks import non_negative, one_of, positive
+from savant_cli.config.study.common import JACOBIANS, flight_times
+from savant_cli.errors import ConfigError
+
+
+#: ``study.frozen_time.criteria`` options (``linear/frozen_time.py``).
+FROZEN_TIME_CRITERIA = ("period", "control_power")
+
+#: ``study.charts`` options: per-point charts for every point, none, or up to 20 points.
+CHART_MODES = ("auto", "all", "none")
+
+
+@dataclass
+class FrozenTimeSpec:
+    """``study.frozen_time``: the first-stage tail-off window, where frozen-time margins
+    are analysed and reported but not judged, and the time domain judges instead
+    (``linear/frozen_time.py``, ``timedomain/tailoff.py``; docs/requirements.md)."""
+
+    # period: crossover period >= time to separation; control_power: the control power
+    # falls within one period by the rigid gain requirement; []: no window, judge every point
+    criteria: list[str] = field(default_factory=lambda: ["period", "control_power"])
+    scan_s: float = 20.0  # s before the flown separation scanned for the criteria
+    step_s: float = 0.5  # s between scan points
+    excitation_deg: float = 0.5  # time-domain checks: doublet at the gimbal command, deg ...
+    excitation_s: float = 0.4  # ... and its duration, s
+
+
+def check_frozen_time(f: FrozenTimeSpec, key: str) -> None:
+    """Criteria among ``period``, ``control_power`` (each once); positive scan span and
+    step, the step at most the span; a positive excitation."""
+    for i, c in enumerate(f.criteria):
+        one_of(f"{key}.criteria[{i}]", c, FROZEN_TIME_CRITERIA)
+    if len(set(f.criteria)) != len(f.criteria):
+        raise ConfigError(f"{key}.criteria", list(f.criteria), "names each criterion at most once")
+    positive(f"{key}.scan_s", f.scan_s)
+    positive(f"{key}.step_s", f.step_s)
+    if f.step_s > f.scan_s:
+        raise ConfigError(f"{key}.step_s", f.step_s, f"must be at most {key}.scan_s ({f.scan_s} s)")
+    positive(f"{key}.excitation_deg", f.excitation_deg)
+    positive(f"{key}.excitation_s", f.excitation_s)
+
+
+@dataclass
+class LinearStudyConfig:
+    """``study=linear``: frozen-time linearization and stability margins."""
+
+    name: str = "linear"
+    times: list[float] = field(default_factory=lambda: [55.0, 130.0, 180.0, 230.0])
+    every: float = 0.0  # > 0: points every `every` s over the whole flight instead of `times`
+    event_clearance_s: float = 0.1  # a time this close to an event is refused (skipped with `every`)
+    # the first-stage tail-off window: points in it are analysed and reported but judged
+    # in the time domain (separation state with the required margins inserted)
+    frozen_time: FrozenTimeSpec = field(default_factory=FrozenTimeSpec)
+    jacobian: str = "auto"  # auto: per-state steps; fixed: one user step
+    jacobian_step: float = 1e-6  # the fixed step, as an attitude perturbation in rad
+    charts: str = "auto"  # all | none | auto (per-point charts up to 20 points)
+    exclusion_zones: bool = True  # Nichols exclusion zones
+
+
+def check_linear(s: LinearStudyConfig) -> None:
+    if s.every < 0:
+        raise ConfigError("study.every", s.every, "must be zero (use study.times) or a positive interval in s")
+    if s.every == 0:
+        flight_times(s.times)
+    non_negative("study.event_clearance_s", s.event_clearance_s)
+    check_frozen_time(s.frozen_time, "study.frozen_time")
+    one_of("study.jacobian", s.jacobian, JACOBIANS)
+    positive("study.jacobian_step", s.jacobian_step)
+    one_of("study.charts", s.charts, CHART_MODES)

@@ -1,0 +1,73 @@
+"""``study=time_margins``: gain and delay margins in the nonlinear time simulation."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from savant_cli.config.checks import non_negative, one_of, positive
+from savant_cli.config.study.common import JACOBIANS, LOOP_AXES, MAX_WORKERS, WORKERS_ALLOWED, flight_times
+from savant_cli.errors import ConfigError
+
+
+MARGIN_KINDS = ("gain_high", "gain_low", "delay")
+
+
+@dataclass
+class TimeMarginsStudyConfig:
+    """``study=time_margins``: gain and delay margins measured in the nonlinear time
+    simulation, beside the frequency-domain ones (docs/design_studies.md)."""
+
+    name: str = "time_margins"
+    times: list[float] = field(default_factory=lambda: [55.0, 130.0, 180.0, 230.0])
+    axes: list[str] = field(default_factory=lambda: ["pitch", "yaw"])
+    kinds: list[str] = field(default_factory=lambda: list(MARGIN_KINDS))
+    lead_s: float = 10.0  # the perturbation starts this long before the point
+    window_s: float = 20.0  # and is held this long
+    min_periods: float = 3.0  # the window stretched to hold this many periods of the frequency-domain crossing
+    max_window_s: float = 60.0  # longest stretched window
+    event_clearance_s: float = 0.2  # the window keeps this far from events
+    gain_bound_dB: float = 20.0  # search bound of the gain margins
+    delay_bound_ms: float = 1000.0  # search bound of the delay margin
+    gain_tolerance_dB: float = 0.1  # bisection tolerance
+    delay_tolerance_ms: float = 2.0
+    scan_points: int = 8  # coarse scan before the bisection
+    excitation_deg: float = 0.5  # doublet amplitude at the gimbal command
+    excitation_s: float = 0.4  # doublet duration
+    settle_s: float = 2.0  # left out of the growth analysis after the window starts
+    min_damping_ratio: float = 0.01  # stable only when the envelope decays per period as a mode of this damping
+    workers: int = 0  # processes; 0: all cores
+    jacobian: str = "auto"  # of the frequency-domain side (as study=linear)
+    jacobian_step: float = 1e-6
+
+
+def check_time_margins(s: TimeMarginsStudyConfig) -> None:
+    flight_times(s.times)
+    if not s.axes:
+        raise ConfigError("study.axes", [], "must name at least one loop (pitch, yaw)")
+    for i, axis in enumerate(s.axes):
+        one_of(f"study.axes[{i}]", axis, LOOP_AXES)
+    if not s.kinds:
+        raise ConfigError("study.kinds", [], f"must name at least one of {', '.join(MARGIN_KINDS)}")
+    for i, kind in enumerate(s.kinds):
+        one_of(f"study.kinds[{i}]", kind, MARGIN_KINDS)
+    for key in ("window_s", "max_window_s", "gain_bound_dB", "delay_bound_ms", "gain_tolerance_dB",
+                "delay_tolerance_ms", "excitation_deg", "excitation_s"):
+        positive(f"study.{key}", getattr(s, key))
+    for key in ("lead_s", "min_periods", "event_clearance_s", "settle_s"):
+        non_negative(f"study.{key}", getattr(s, key))
+    if s.lead_s > s.window_s:
+        raise ConfigError("study.lead_s", s.lead_s, f"must not exceed study.window_s ({s.window_s} s)")
+    if s.max_window_s < s.window_s:
+        raise ConfigError("study.max_window_s", s.max_window_s, f"must be at least study.window_s ({s.window_s} s)")
+    if s.settle_s >= s.window_s:
+        raise ConfigError("study.settle_s", s.settle_s, f"must be shorter than study.window_s ({s.window_s} s)")
+    if s.scan_points < 1:
+        raise ConfigError("study.scan_points", s.scan_points, "must be a positive count")
+    if not 0.0 < s.min_damping_ratio < 1.0:
+        raise ConfigError("study.min_damping_ratio", s.min_damping_ratio,
+                          "must lie in (0, 1): the damping ratio whose decay per period a stable response must "
+                          "reach (0 would leave the verdict on a neutral oscillation to round-off)")
+    if not 0 <= s.workers <= MAX_WORKERS:
+        raise ConfigError("study.workers", s.workers, WORKERS_ALLOWED)
+    one_of("study.jacobian", s.jacobian, JACOBIANS)
+    positive("study.jacobian_step", s.jacobian_step)

@@ -1,0 +1,21 @@
+"""``twd``: the engine-inertia reaction (tail-wags-dog) off or on."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass
+class TwdOffConfig:
+    """``twd=off``: no engine-inertia reaction."""
+
+    name: str = "off"
+    enabled: bool = False
+
+
+@dataclass
+class TwdOnConfig:
+    """``twd=on``: the engine-inertia reaction (data: the vehicle's engines)."""
+
+    name: str = "on"
+    enabled: bool = True

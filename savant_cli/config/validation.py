@@ -1,0 +1,141 @@
+"""The validation entry: a composed config merged onto the schema (:func:`validate`),
+the groups whose options carry different keys (:data:`GROUP_VARIANTS`), the physical
+checks of every group (:func:`check_physics`)."""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+from omegaconf import DictConfig, OmegaConf
+from omegaconf.errors import OmegaConfBaseException
+
+from savant_cli.config.actuator import SimplexActuatorConfig, ThirdOrderActuatorConfig, check_actuator
+from savant_cli.config.controller import check_controller, check_delay
+from savant_cli.config.flex import FlexOffConfig, FlexOnConfig, check_flex
+from savant_cli.config.guidance import check_guidance
+from savant_cli.config.navigation import NavigationInertialConfig, NavigationPerfectConfig, check_navigation
+from savant_cli.config.output import check_output
+from savant_cli.config.requirements import check_requirements
+from savant_cli.config.run import check_environment, check_phase, check_sim
+from savant_cli.config.savant import SavantConfig, check_vehicle_match
+from savant_cli.config.sensors import check_sensors
+from savant_cli.config.slosh import SloshOffConfig, SloshOnConfig, check_slosh
+from savant_cli.config.study import check_study_times, study_option
+from savant_cli.config.twd import TwdOffConfig, TwdOnConfig
+from savant_cli.config.winds import check_winds, check_winds_scale
+from savant_cli.errors import ConfigError
+
+
+GROUP_VARIANTS: dict[str, dict[str, type]] = {
+    "actuator": {"third_order": ThirdOrderActuatorConfig, "simplex": SimplexActuatorConfig},
+    "flex": {"off": FlexOffConfig, "on": FlexOnConfig},
+    "slosh": {"off": SloshOffConfig, "on": SloshOnConfig},
+    "twd": {"off": TwdOffConfig, "on": TwdOnConfig},
+    "navigation": {"perfect": NavigationPerfectConfig, "inertial": NavigationInertialConfig},
+}
+
+
+def _strict_merge(cfg: DictConfig) -> DictConfig:
+    """Merge ``cfg`` onto the schema; unknown keys and wrong types raise ConfigError."""
+    schema = OmegaConf.structured(SavantConfig)
+    plain = OmegaConf.to_container(cfg, resolve=True)
+    plain.pop("hydra", None)
+    try:
+        merged = OmegaConf.merge(schema, plain)
+    except OmegaConfBaseException as exc:
+        key = getattr(exc, "full_key", None) or "?"
+        value = getattr(exc, "value", None)
+        msg = str(exc).splitlines()[0]
+        if "not in struct" in msg or "Key '" in msg and "not in" in msg:
+            allowed = "unknown key; see `savant run --cfg job` for the known keys"
+        else:
+            allowed = msg
+        raise ConfigError(key, value, allowed) from None
+    return merged
+
+
+def check_physics(cfg: SavantConfig) -> None:
+    """Physical checks of a typed config (every group); raises ConfigError naming the key."""
+    check_vehicle_match(cfg)
+    check_sim(cfg.sim)
+    check_environment(cfg.environment)
+    check_phase(cfg.phase)
+    check_output(cfg.output)
+    check_actuator(cfg.actuator, cfg.sim.plant_rate_hz)
+    check_delay(cfg.controller.delay_s, cfg.sim)
+    check_flex(cfg.flex)
+    check_slosh(cfg.slosh)
+    check_navigation(cfg.navigation)
+    check_requirements(cfg.requirements)
+    check_sensors(cfg.sensors, cfg.sim)
+    check_winds_scale(cfg.winds)
+    check_study_times(cfg)
+    check_winds(cfg.winds)
+    check_controller(cfg.controller)
+    check_guidance(cfg.guidance, cfg.sim)
+
+
+def validate(cfg: DictConfig) -> SavantConfig:
+    """Merge a composed config onto the schema and check it.
+
+    Returns
+    -------
+    SavantConfig
+        A typed (OmegaConf structured) view of the validated config.
+
+    Raises
+    ------
+    ConfigError
+        Naming the key, the value and what is allowed.
+    """
+    merged = _strict_merge(cfg)
+    typed = OmegaConf.to_object(merged)
+    typed.study = study_option(typed.study)
+    for group in GROUP_VARIANTS:
+        setattr(typed, group, group_option(group, getattr(typed, group)))
+    check_physics(typed)
+    return typed
+
+
+def has_key(schema: type, path: list[str]) -> bool:
+    """Whether the dotted ``path`` names a field of the dataclass ``schema``."""
+    node: Any = schema
+    for part in path:
+        fields = {f.name: f for f in dataclasses.fields(node)} if dataclasses.is_dataclass(node) else {}
+        if part not in fields:
+            return False
+        default = fields[part].default_factory() if fields[part].default_factory is not dataclasses.MISSING \
+            else fields[part].default
+        node = type(default) if dataclasses.is_dataclass(default) else None
+    return True
+
+
+def group_option(group: str, node: Any) -> Any:
+    """The section of a group with per-option schemas (:data:`GROUP_VARIANTS`), merged onto
+    its option's schema: a key of another option, or of a model that is switched off, is
+    refused naming the options where it exists."""
+    variants = GROUP_VARIANTS[group]
+    if dataclasses.is_dataclass(node):
+        node = OmegaConf.to_container(OmegaConf.structured(node))
+    name = node.get("name") if isinstance(node, dict) else None
+    if name not in variants:
+        raise ConfigError(f"{group}.name", name, f"must be one of {', '.join(variants)}")
+    try:
+        return OmegaConf.to_object(OmegaConf.merge(OmegaConf.structured(variants[name]), node))
+    except OmegaConfBaseException as exc:
+        sub = str(getattr(exc, "full_key", None) or "?")
+        key = f"{group}.{sub}"
+        msg = str(exc).splitlines()[0]
+        if "not in struct" in msg or ("Key '" in msg and "not in" in msg):
+            where = [opt for opt, schema in variants.items() if opt != name and has_key(schema, sub.split("."))]
+            allowed = (f"not a key of {group}={name}; it belongs to {' and '.join(f'{group}={w}' for w in where)}"
+                       if where else f"not a key of {group}={name} (nor of any other {group} option)")
+        elif "missing mandatory value" in msg.lower():
+            allowed = f"is required: {group}={name} has no default for it (conf/{group}/{name}.yaml gives one)"
+        else:
+            allowed = msg
+        value = node
+        for part in sub.split("."):
+            value = value.get(part) if isinstance(value, dict) else None
+        raise ConfigError(key, value, allowed) from None

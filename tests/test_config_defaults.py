@@ -1,0 +1,140 @@
+"""A default lives in one place (issue 28 item 3; docs/architecture.md, "Where a new config
+option goes").
+
+The rule: a key a shipped YAML sets must not also have a schema default of the same
+value. For each shipped YAML of a group (``conf/<group>/<option>.yaml``, the ``study``
+section of a ``# @package _global_`` study file, the sections of ``conf/config.yaml``),
+every leaf key is compared with the default its schema gives it: the option's schema for
+a :data:`~savant_cli.config.GROUP_VARIANTS` group, the study's for ``study``, the
+:class:`~savant_cli.config.SavantConfig` field's type otherwise. Equal (a float and an
+int of the same value count as equal) is a duplicate. ``name`` (the option's identity)
+is exempt. Either the YAML holds the value and the schema says ``MISSING``, or the
+schema holds it and the YAML is silent.
+
+:data:`KNOWN` lists the duplicates that stood when the rule came in, to be removed one by
+one; an entry that is no longer a duplicate fails the test too, so the list only shrinks.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import yaml
+from omegaconf import MISSING, OmegaConf
+
+from savant_cli.config import GROUP_VARIANTS, STUDY_SCHEMAS, SavantConfig
+from savant_cli.paths import shipped_config_dir
+
+KNOWN = set((Path(__file__).parent / "config_default_duplicates.txt").read_text().split("\n")) - {""}
+
+
+def _schema_of(group: str, node: dict) -> type | None:
+    if group in GROUP_VARIANTS:
+        return GROUP_VARIANTS[group].get(node.get("name"))
+    if group == "study":
+        return STUDY_SCHEMAS.get(node.get("name"))
+    f = {f.name: f for f in dataclasses.fields(SavantConfig)}.get(group)
+    if f is None:
+        return None
+    default = f.default_factory() if f.default_factory is not dataclasses.MISSING else f.default
+    return type(default) if dataclasses.is_dataclass(default) else None
+
+
+def _leaves(node, prefix=()):
+    if isinstance(node, dict):
+        for k, v in node.items():
+            yield from _leaves(v, prefix + (k,))
+    else:
+        yield prefix, node
+
+
+def _default_at(schema: type, path: tuple) -> object:
+    node = OmegaConf.to_container(OmegaConf.structured(schema))
+    for part in path:
+        if not isinstance(node, dict) or part not in node:
+            return MISSING
+        node = node[part]
+    return node
+
+
+def _same(default: object, value: object) -> bool:
+    if default is MISSING or default == MISSING:
+        return False
+    if isinstance(default, float) and isinstance(value, (int, float)) and not isinstance(value, bool):
+        return default == value
+    return type(default) is type(value) and default == value
+
+
+def _sections(conf: Path):
+    for f in sorted(conf.glob("*/*.yaml")):
+        text = f.read_text()
+        data = yaml.safe_load(text) or {}
+        if text.startswith("# @package _global_"):
+            yield from ((f, g, s) for g, s in data.items() if g != "defaults" and isinstance(s, dict))
+        else:
+            yield f, f.parent.name, data
+    top = yaml.safe_load((conf / "config.yaml").read_text())
+    yield from ((conf / "config.yaml", g, s) for g, s in top.items() if g not in ("defaults", "hydra"))
+
+
+def duplicates(conf: Path) -> set[str]:
+    """``<file>: <key> = <value>`` of every key a shipped YAML and its schema both give."""
+    out = set()
+    for f, group, section in _sections(conf):
+        if group == "study" and "name" not in section:
+            section = dict(section, name=f.stem)  # a study file inheriting another's keys
+        schema = _schema_of(group, section)
+        if schema is None:
+            continue
+        for path, value in _leaves(section):
+            if path != ("name",) and _same(_default_at(schema, path), value):
+                out.add(f"{f.relative_to(conf)}: {group}.{'.'.join(map(str, path))} = {value!r}")
+    return out
+
+
+def test_a_default_lives_in_one_place():
+    found = duplicates(shipped_config_dir())
+    new = sorted(found - KNOWN)
+    gone = sorted(KNOWN - found)
+    assert not new, ("these keys have a default both in the schema and in the YAML; drop one (docs/architecture.md, "
+                     "'Where a new config option goes'):\n" + "\n".join(new))
+    assert not gone, ("no longer duplicates: remove them from tests/config_default_duplicates.txt:\n" + "\n".join(gone))
+
+
+def test_the_actuator_values_live_in_the_yaml_only():
+    assert not any(d.startswith("actuator/") for d in duplicates(shipped_config_dir()))
+    from savant_cli.config import SimplexStage, ThirdOrderStage
+
+    for stage in (ThirdOrderStage, SimplexStage):
+        assert all(f.default == MISSING for f in dataclasses.fields(stage) if f.default is not dataclasses.MISSING)
+
+
+def test_the_rule_sees_a_duplicate(tmp_path):
+    """The check itself: a YAML repeating its schema's default is found."""
+    (tmp_path / "slosh").mkdir()
+    (tmp_path / "slosh" / "on.yaml").write_text("name: 'on'\nenabled: true\nfrequency_scale: 2.0\ndamping_scale: 1.0\n")
+    (tmp_path / "config.yaml").write_text("defaults: []\n")
+    assert duplicates(tmp_path) == {"slosh/on.yaml: slosh.enabled = True", "slosh/on.yaml: slosh.damping_scale = 1.0"}
+
+
+def test_a_missing_actuator_value_and_a_bad_choice_are_refused_clearly():
+    import pytest
+
+    from conftest import compose_config
+    from savant_cli.config import group_option, validate
+    from savant_cli.errors import ConfigError
+
+    with pytest.raises(ConfigError) as exc:
+        group_option("actuator", {"name": "third_order", "first_stage": {"loop_gain_rad_s": 1.0}})
+    assert exc.value.key == "actuator.first_stage.rate_limit_deg_s"
+    assert "is required" in exc.value.allowed and "conf/actuator/third_order.yaml" in exc.value.allowed
+    for overrides, key, value, allowed in (
+            (["actuator=simplex", "actuator.first_stage.feedback=ram"], "actuator.first_stage.feedback", "ram",
+             "must be one of piston, nozzle"),
+            (["flex=on", "flex.switching=never"], "flex.switching", "never", "must be one of separation, propellant"),
+            (["output.console=loud"], "output.console", "loud", "must be one of full, summary, quiet"),
+            (["study=linear", "study.charts=some"], "study.charts", "some", "must be one of auto, all, none")):
+        with pytest.raises(ConfigError) as exc:
+            validate(compose_config(overrides))
+        assert (exc.value.key, exc.value.value, exc.value.allowed) == (key, value, allowed)
