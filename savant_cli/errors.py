@@ -102,6 +102,16 @@ class OutputWriteError(SavantError, OSError):
         self.reason = _reason(cause)
         super().__init__(f"could not write {self.path.name} in {self.path.parent}: {self.reason}")
 
+    def __reduce__(self) -> tuple:
+        # rebuilt from its path and reason when it crosses a process boundary (a figure
+        # drawn by a worker process into a full disk)
+        return (_output_write_error, (str(self.path), self.reason))
+
+
+def _output_write_error(path: str, reason: str) -> OutputWriteError:
+    """An :class:`OutputWriteError` rebuilt from its path and its reason's words."""
+    return OutputWriteError(path, OSError(reason))
+
 
 class SimulationDiverged(RuntimeError):
     """A run stopped because a signal became non-finite or nonsensical."""

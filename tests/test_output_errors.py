@@ -123,6 +123,18 @@ def test_a_write_that_fails_names_the_file_and_keeps_the_old_one(tmp_path, monke
     assert [p.name for p in target.parent.iterdir()] == ["summary.json"]  # the temporary file is gone
 
 
+def test_a_write_error_crosses_a_process_boundary_whole():
+    """A figure drawn by a worker process into a full disk: its OutputWriteError is
+    pickled back to the main process with the same file, reason and exit code."""
+    import pickle
+
+    sent = OutputWriteError("/run/plots/altitude.png", OSError(errno.ENOSPC, os.strerror(errno.ENOSPC)))
+    got = pickle.loads(pickle.dumps(sent))
+    assert type(got) is OutputWriteError
+    assert (got.path, got.reason, got.exit_code, str(got)) == (sent.path, sent.reason, 1, str(sent))
+    assert got.reason == f"{os.strerror(errno.ENOSPC)} (errno {errno.ENOSPC})"
+
+
 def test_a_folder_that_cannot_be_made_is_named(tmp_path):
     (tmp_path / "plots").write_text("a file where a folder should be")
     with pytest.raises(OutputWriteError) as err:

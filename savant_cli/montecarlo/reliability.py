@@ -22,7 +22,9 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from scipy.stats import binom, binomtest
+
+# scipy.stats (about a second to import) is imported where a batch's statistics are
+# computed, not by every run that imports this module on its way to report.html
 
 
 def demonstrated(successes: int, runs: int, confidence: float) -> float:
@@ -30,6 +32,8 @@ def demonstrated(successes: int, runs: int, confidence: float) -> float:
     (one-sided exact binomial lower bound; 0 with no run)."""
     if runs <= 0:
         return 0.0
+    from scipy.stats import binomtest
+
     ci = binomtest(successes, runs, alternative="greater").proportion_ci(confidence_level=confidence, method="exact")
     return float(ci.low)
 
@@ -100,6 +104,8 @@ def lower_quantile_rank(runs: int, probability: float, confidence: float) -> int
     the lowest sample does not reach it (too few runs: see :func:`runs_for_quantile`)."""
     q = 1.0 - probability
     k = np.arange(1, runs + 1)
+    from scipy.stats import binom
+
     ok = binom.sf(k - 1, runs, q) >= confidence
     return int(k[ok].max()) if ok.any() else None
 
