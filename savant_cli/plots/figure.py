@@ -126,8 +126,13 @@ def sheet(key: tuple, layout: Callable[[], tuple[Figure, list]]) -> tuple[Figure
 
 @contextmanager
 def fresh_sheets() -> Iterator[None]:
-    """Within the block, :func:`sheet` makes a new figure on every call (a figure the
-    caller keeps), in this thread."""
+    """A block in which :func:`sheet` makes a new figure on every call, in this thread.
+
+    Yields
+    ------
+    None
+        Figures drawn inside are the caller's to keep (``savant_cli.Result.plot``).
+    """
     _SHEETS.fresh = True
     try:
         yield
@@ -224,12 +229,37 @@ def write_png(rgba: np.ndarray, path: Path) -> Path:
 
 
 def save_rendered(fig: Figure, path: Path) -> Path:
-    """:func:`render` ``fig``, then :func:`write_png` it to ``path``; ``path``."""
+    """Draw and encode in turn: :func:`render`, then :func:`write_png`.
+
+    Parameters
+    ----------
+    fig : Figure
+        A figure on the Agg canvas (kept, not cleared: a :func:`sheet` is drawn again).
+    path : Path
+        The PNG file.
+
+    Returns
+    -------
+    Path
+        The file written.
+    """
     return write_png(render(fig), path)
 
 
 def file_stem(name: str) -> str:
-    """A signal name made safe for a file name (other characters become ``_``)."""
+    """A signal name made safe for a file name.
+
+    Parameters
+    ----------
+    name : str
+        A signal or metric name (``q/bar`` …).
+
+    Returns
+    -------
+    str
+        ``name`` with every run of characters other than letters, digits, ``.``, ``_``
+        and ``-`` made one ``_``, stripped of ``_`` at both ends; ``signal`` if empty.
+    """
     return re.sub(r"[^A-Za-z0-9._-]+", "_", name).strip("_") or "signal"
 
 
