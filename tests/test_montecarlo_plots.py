@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 from conftest import PYPLOT_STUB, imported_names
-from savant_cli.plots import montecarlo
+from savant_cli.plots import figure, montecarlo
 from savant_cli.plots.montecarlo import plot_envelopes, plot_histograms, plot_margin_spread, plot_montecarlo
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
@@ -123,7 +123,7 @@ def test_histogram_panel_contents() -> None:
         finite = v[np.isfinite(v)]
         counts, edges = _by_gid(ax, "histogram").get_data()[:2]
         assert counts.sum() == finite.size  # every finite value counted, NaN ignored
-        assert 5 <= counts.size <= montecarlo.MAX_BINS
+        assert 5 <= counts.size <= figure.MAX_BINS
         np.testing.assert_array_equal(counts, np.histogram(finite, bins=edges)[0])
         assert edges[0] == finite.min() and edges[-1] == finite.max()
         pct = sorted(float(line.get_xdata()[0]) for line in ax.lines if line.get_gid() == "percentile")
@@ -138,10 +138,10 @@ def test_histogram_panel_contents() -> None:
 def test_bin_count_is_numpy_auto_capped() -> None:
     rng = np.random.default_rng(4)
     for x in (rng.normal(size=300), rng.uniform(size=50), rng.exponential(size=1000)):
-        assert montecarlo._bin_count(x) == min(len(np.histogram_bin_edges(x, "auto")) - 1, 60)
+        assert figure.bin_count(x) == min(len(np.histogram_bin_edges(x, "auto")) - 1, 60)
     outlier = np.append(rng.normal(size=1000), 1e12)  # 'auto' would ask for ~10^12 bins
-    assert montecarlo._bin_count(outlier) == 60
-    assert montecarlo._bin_count(np.full(10, 3.0)) == 1 and montecarlo._bin_count(np.array([1.0])) == 1
+    assert figure.bin_count(outlier) == 60
+    assert figure.bin_count(np.full(10, 3.0)) == 1 and figure.bin_count(np.array([1.0])) == 1
 
 
 def test_histogram_degenerate_values(tmp_path: Path) -> None:

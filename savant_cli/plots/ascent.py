@@ -3,7 +3,8 @@
 Figures are drawn with matplotlib's object-oriented API on the Agg canvas
 (``matplotlib.figure.Figure`` + ``FigureCanvasAgg``): no pyplot, no GUI backend, no
 global state, so plotting works headless and never changes the backend of a caller's
-interactive session. Each figure is written atomically as a 120-dpi PNG.
+interactive session. Each figure is made and written through the drawing base,
+:mod:`savant_cli.plots.figure` (a 120-dpi PNG, written atomically).
 
 Figures (file, paper figure, signals):
 
@@ -33,15 +34,12 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from savant_cli.io.atomic import atomic_path
 from savant_cli.io.record import RunRecord, Signal
+from savant_cli.plots.figure import new_figure, save_figure
 
-DPI = 120
 _WIDTH_IN = 8.0
-_PNG_LEVEL = 3  # zlib level of the PNGs: a third of the encoding time of the default 6
 #: Most points drawn per line; longer signals are strided.
 MAX_POINTS = 5000
 
@@ -248,10 +246,7 @@ def _draw(spec: FigureSpec, record: RunRecord, t: np.ndarray, idx: np.ndarray) -
     clean = record.complete and record.status == "complete"
     top_in = 0.5 if clean else 0.72
     height = top_in + 0.55 + 1.75 * len(panels)
-    fig = Figure(figsize=(_WIDTH_IN, height), dpi=DPI)
-    FigureCanvasAgg(fig)
-    fig.subplots_adjust(left=0.95 / _WIDTH_IN, right=1.0 - 0.25 / _WIDTH_IN, bottom=0.55 / height,
-                        top=1.0 - top_in / height, hspace=0.15)
+    fig = new_figure(_WIDTH_IN, height, left=0.95, right=0.25, bottom=0.55, top=top_in, hspace=0.15)
     axes = fig.subplots(len(panels), 1, sharex=True, squeeze=False)[:, 0]
     tt = t[idx]
     for k, (ax, panel) in enumerate(zip(axes, panels)):
@@ -411,7 +406,4 @@ def _draw_file(i: int) -> Path | None:
     fig = _draw(spec, record, t, idx)
     if fig is None:
         return None
-    path = out_dir / spec.filename
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png", dpi=DPI, pil_kwargs={"compress_level": _PNG_LEVEL})
-    return path
+    return save_figure(fig, out_dir / spec.filename)

@@ -1,6 +1,5 @@
 """Fly-off comparison figures: the controllers' nominal histories overlaid, and their
-dispersed distributions of each metric overlaid (same style and writer as
-:mod:`savant_cli.plots.montecarlo`)."""
+dispersed distributions of each metric overlaid (drawn and written through :mod:`savant_cli.plots.figure`)."""
 
 from __future__ import annotations
 
@@ -9,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from savant_cli.plots.montecarlo import _bin_count, _figure, _file_stem, _save, _style
+from savant_cli.plots.figure import bin_count, file_stem, new_figure, save_figure, style_axes
 
 
 def plot_history_overlays(time_s: np.ndarray, histories: Mapping[str, Mapping[str, np.ndarray]], folder: Path,
@@ -33,9 +32,9 @@ def plot_history_overlays(time_s: np.ndarray, histories: Mapping[str, Mapping[st
     """
     paths = []
     for name, per_controller in histories.items():
-        fig = _figure(8.0, 3.6)
+        fig = new_figure(8.0, 3.6)
         ax = fig.add_subplot(1, 1, 1)
-        _style(ax)
+        style_axes(ax)
         for k, (ctrl, y) in enumerate(per_controller.items()):
             ax.plot(time_s, y, lw=1.0, color=f"C{k}", label=ctrl)
         unit = (units or {}).get(name, "")
@@ -43,7 +42,7 @@ def plot_history_overlays(time_s: np.ndarray, histories: Mapping[str, Mapping[st
         ax.set_ylabel(f"{name} [{unit}]" if unit else name, fontsize=8)
         ax.legend(fontsize=7, loc="best")
         fig.suptitle(f"{title}: {name}", fontsize=10)
-        paths.append(_save(fig, folder / f"{prefix}_{_file_stem(name)}.png"))
+        paths.append(save_figure(fig, folder / f"{prefix}_{file_stem(name)}.png"))
     return paths
 
 
@@ -54,14 +53,14 @@ def plot_metric_histograms(values: Mapping[str, Mapping[str, np.ndarray]], out_p
     named in the panel title)."""
     names = list(values)
     rows = max(1, -(-len(names) // per_row))
-    fig = _figure(3.2 * per_row, 2.4 * rows + 0.9, left=0.5, bottom=0.45, top=0.95, wspace=0.3, hspace=0.55)
+    fig = new_figure(3.2 * per_row, 2.4 * rows + 0.9, left=0.5, bottom=0.45, top=0.95, wspace=0.3, hspace=0.55)
     for i, name in enumerate(names):
         ax = fig.add_subplot(rows, per_row, i + 1)
-        _style(ax, 4)
+        style_axes(ax, 4, 4)
         data = {c: v[np.isfinite(v)] for c, v in values[name].items()}
         pooled = np.concatenate(list(data.values())) if data else np.zeros(0)
         if pooled.size:
-            edges = np.histogram_bin_edges(pooled, bins=max(_bin_count(pooled), 1))
+            edges = np.histogram_bin_edges(pooled, bins=max(bin_count(pooled), 1))
             for k, (ctrl, v) in enumerate(data.items()):
                 counts, _ = np.histogram(v, bins=edges)
                 ax.stairs(counts, edges, color=f"C{k}", lw=1.2, label=ctrl)
@@ -70,4 +69,4 @@ def plot_metric_histograms(values: Mapping[str, Mapping[str, np.ndarray]], out_p
         if i == 0:
             ax.legend(fontsize=6.5)
     fig.suptitle("fly-off: dispersed distributions", fontsize=10)
-    return _save(fig, out_path)
+    return save_figure(fig, out_path)

@@ -9,7 +9,7 @@ or read back by ``savant report``.
 
 Figures are drawn with matplotlib's object-oriented API on the Agg canvas
 (``matplotlib.figure.Figure`` + ``FigureCanvasAgg``): no pyplot, no GUI backend. Each
-figure is written atomically as a 120-dpi PNG (:func:`savant_cli.io.atomic.atomic_path`).
+figure is made and written by the drawing base, :mod:`savant_cli.plots.figure`.
 
 Files of one operating point (``tNNNN.N`` is ``f"t{time_s:06.1f}"``, e.g. ``t0055.0``):
 
@@ -48,7 +48,7 @@ The six charts of a point take 0.75–1.0 s with the study's 85-state loops on a
 machine (median of 18 points; matplotlib 3.11). What it takes: short labels and few
 ticks (text and ticks are most of the drawing time); one artist per kind of marker;
 each chart's figure kept per thread from one point to the next with its axes and ticks
-(:func:`_sheet`: 40 % less drawing); text drawn unhinted (``text.hinting = "none"``
+(:func:`savant_cli.plots.figure.sheet`: 40 % less drawing); text drawn unhinted (``text.hinting = "none"``
 during the draw only: 15–20 % less); PNG compression on a worker thread while the next
 chart is drawn.
 """
@@ -56,14 +56,11 @@ chart is drawn.
 from __future__ import annotations
 
 import math
-import threading
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
-import matplotlib
 import numpy as np
-from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Circle, Rectangle
@@ -74,9 +71,7 @@ from matplotlib.ticker import (
     MultipleLocator,
     NullLocator,
 )
-from PIL import Image
 
-from savant_cli.io.atomic import atomic_path
 from savant_cli.linear.charts import (
     CommandResponses,
     LoopResponse,
@@ -86,11 +81,9 @@ from savant_cli.linear.charts import (
     sorted_axes,
 )
 from savant_cli.linear.margins import MarginRow
+from savant_cli.plots.figure import fresh_sheets, new_figure, render, save_rendered, sheet, style_axes, write_png
 
 __all__ = ["MarginRow", "plot_linear_point", "plot_margin_envelope", "plot_nichols_overlay", "point_tag"]
-
-DPI = 120
-_PNG_LEVEL = 3  # zlib level of the PNGs, as in plots/ascent.py
 
 #: Launch-vehicle rigid/aero exclusion zone around each critical point: ±dB, ±deg.
 EXCLUSION_GAIN_DB = 6.0
@@ -135,57 +128,7 @@ def _margin_index(loop: LoopResponse, freq_hz: float) -> int | None:
 # tick, created per axes) and axes set-up. So: labels are short, ticks few, markers of one
 # kind are one artist, axes titles sit at a fixed height (an automatic one measures the
 # tick labels), and each chart's figure is kept from one operating point to the next
-# (see :func:`_sheet`).
-
-
-def _figure(width: float, height: float, left: float = 0.8, right: float = 0.2, bottom: float = 0.55,
-            top: float = 0.45, wspace: float = 0.25, hspace: float = 0.2) -> Figure:
-    """A figure on the Agg canvas with fixed margins in inches (no layout engine, which
-    would draw every figure twice)."""
-    fig = Figure(figsize=(width, height), dpi=DPI)
-    FigureCanvasAgg(fig)
-    fig.subplots_adjust(left=left / width, right=1.0 - right / width, bottom=bottom / height,
-                        top=1.0 - top / height, wspace=wspace, hspace=hspace)
-    return fig
-
-
-_SHEETS = threading.local()
-
-
-def _sheet(key: tuple, layout: Callable[[], tuple[Figure, list]]) -> tuple[Figure, list]:
-    """The figure and axes of one chart, kept for the next operating point.
-
-    ``layout()`` makes the figure with everything that does not depend on the data (axes,
-    scales, tick locators and formatters, axis labels). Later calls with the same ``key``
-    get the same figure back with the data artists of the previous point removed (lines,
-    patches, texts, collections, legends) and the data limits forgotten; the axes, ticks
-    and labels are reused, which takes 40 % off the drawing time of the next point
-    (measured). One set per thread, so concurrent threads never share a figure. A figure
-    returned here is valid until the same chart is drawn again in the same thread.
-    """
-    if getattr(_SHEETS, "fresh", False):  # chart_figure: a figure of the caller's own
-        return layout()
-    sheets = getattr(_SHEETS, "sheets", None)
-    if sheets is None:
-        sheets = _SHEETS.sheets = {}
-    if key not in sheets:
-        sheets[key] = layout()
-        return sheets[key]
-    fig, axes = sheets[key]
-    for legend in list(fig.legends):
-        legend.remove()
-    for ax in fig.axes:  # twins included
-        for group in (ax.lines, ax.patches, ax.texts, ax.collections, ax.images):
-            for artist in list(group):
-                artist.remove()
-        if ax.get_legend() is not None:
-            ax.get_legend().remove()
-        # forget the data limits: relim() empties them (no artists are left); the flag
-        # alone is cleared by the first line that updates one direction only (axhline)
-        ax.relim()
-        ax.ignore_existing_data_limits = True
-        ax.set_autoscale_on(True)
-    return fig, axes
+# (see :func:`savant_cli.plots.figure.sheet`).
 
 
 def _title(fig: Figure, text: str, time_s: float | None) -> None:
@@ -198,12 +141,7 @@ def _axes_title(ax, text: str) -> None:
 
 
 def _style(ax, nbins_x: int | None = 4, nbins_y: int | None = 4) -> None:
-    ax.grid(True, lw=0.4, alpha=0.6)
-    ax.tick_params(labelsize=8)
-    if nbins_x:
-        ax.xaxis.set_major_locator(MaxNLocator(nbins_x))
-    if nbins_y:
-        ax.yaxis.set_major_locator(MaxNLocator(nbins_y))
+    style_axes(ax, nbins_x, nbins_y, labelsize=8)
 
 
 def _log_x(ax) -> None:
@@ -220,36 +158,6 @@ def _unit_circle(ax, radius: float = 1.0) -> None:
 def _cross_hairs(ax) -> None:
     ax.axhline(0.0, color="0.3", lw=0.5)
     ax.axvline(0.0, color="0.3", lw=0.5)
-
-
-def _render(fig: Figure) -> np.ndarray:
-    """Draw ``fig`` on its Agg canvas; its RGBA pixels (a view into the canvas, valid until
-    the figure is drawn again).
-
-    Text is drawn unhinted (``text.hinting = "none"`` for the duration of the draw, then
-    restored): 15–20 % less drawing time, no visible difference at 120 dpi.
-    """
-    with matplotlib.rc_context({"text.hinting": "none"}):
-        fig.canvas.draw()
-    return np.asarray(fig.canvas.buffer_rgba())
-
-
-def _write_png(rgba: np.ndarray, path: Path) -> Path:
-    """Encode drawn pixels as a 120-dpi PNG, atomically.
-
-    What ``Figure.savefig`` does after drawing (Pillow, zlib level 3), minus the alpha
-    channel, which an opaque figure does not need (a quarter less to compress). Pillow
-    releases the GIL while compressing, so :func:`plot_linear_point` encodes one figure on
-    a worker thread while it draws the next.
-    """
-    with atomic_path(path) as tmp:
-        Image.fromarray(rgba, "RGBA").convert("RGB").save(tmp, format="png", compress_level=_PNG_LEVEL,
-                                                          dpi=(DPI, DPI))
-    return path
-
-
-def _save(fig: Figure, path: Path) -> Path:
-    return _write_png(_render(fig), path)
 
 
 def _critical_phases(lo: float, hi: float) -> list[float]:
@@ -302,7 +210,7 @@ def _vertical_lines(ax, x: Sequence[float], **kw) -> None:
 
 
 def _bode_layout() -> tuple[Figure, list]:
-    fig = _figure(8.0, 5.8, left=0.75, bottom=0.95, hspace=0.07)
+    fig = new_figure(8.0, 5.8, left=0.75, bottom=0.95, hspace=0.07)
     ax_m, ax_p = fig.subplots(2, 1, sharex=True)
     for ax in (ax_m, ax_p):
         _log_x(ax)
@@ -316,7 +224,7 @@ def _bode_layout() -> tuple[Figure, list]:
 
 def _bode_figure(time_s: float, loops: Sequence[LoopResponse], margins: Sequence[MarginRow]) -> Figure:
     """Magnitude and phase of the loops, overlaid; crossovers of the margin table marked."""
-    fig, (ax_m, ax_p) = _sheet(("bode",), _bode_layout)
+    fig, (ax_m, ax_p) = sheet(("bode",), _bode_layout)
     plo, phi = np.inf, -np.inf
     for j, lp in enumerate(loops):
         color = _color(lp.axis, j)
@@ -350,7 +258,7 @@ _OFFSETS = ((5, 3, "left", "bottom"), (-5, 3, "right", "bottom"), (5, -3, "left"
 
 
 def _nichols_layout() -> tuple[Figure, list]:
-    fig = _figure(8.0, 6.0, left=0.75, bottom=0.5)
+    fig = new_figure(8.0, 6.0, left=0.75, bottom=0.5)
     ax = fig.add_subplot(1, 1, 1)
     _style(ax, None, 6)
     ax.set_xlabel("open-loop phase ∠L (deg, unwrapped)", fontsize=9)
@@ -361,7 +269,7 @@ def _nichols_layout() -> tuple[Figure, list]:
 def _nichols_figure(time_s: float, loops: Sequence[LoopResponse], margins: Sequence[MarginRow],
                     exclusion_zones: bool = True) -> Figure:
     """Gain vs unwrapped phase of the loops, critical points, exclusion zones, margins."""
-    fig, (ax,) = _sheet(("nichols",), _nichols_layout)
+    fig, (ax,) = sheet(("nichols",), _nichols_layout)
     ylo, yhi = _db_limits(loops)
     # phase range: the part of each curve inside the drawn magnitudes, and [−360°, 0°]
     xs = [-360.0, 0.0]
@@ -440,7 +348,7 @@ def _compress(h: np.ndarray) -> np.ndarray:
 
 
 def _nyquist_layout() -> tuple[Figure, list]:
-    fig = _figure(7.0, 6.4, left=0.75, bottom=0.85, top=0.5)
+    fig = new_figure(7.0, 6.4, left=0.75, bottom=0.85, top=0.5)
     ax = fig.add_subplot(1, 1, 1)
     ax.set_aspect("equal", adjustable="box")
     _style(ax)
@@ -451,7 +359,7 @@ def _nyquist_layout() -> tuple[Figure, list]:
 
 def _nyquist_figure(time_s: float, loops: Sequence[LoopResponse]) -> Figure:
     """L in the complex plane, radius compressed beyond the unit circle."""
-    fig, (ax,) = _sheet(("nyquist",), _nyquist_layout)
+    fig, (ax,) = sheet(("nyquist",), _nyquist_layout)
     handles = []
     rmax = 1.5
     for j, lp in enumerate(loops):
@@ -485,7 +393,7 @@ def _nyquist_figure(time_s: float, loops: Sequence[LoopResponse]) -> Figure:
 
 
 def _root_locus_layout(discrete: bool) -> tuple[Figure, list]:
-    fig = _figure(9.6, 5.3, left=0.7, bottom=0.85, wspace=0.22)
+    fig = new_figure(9.6, 5.3, left=0.7, bottom=0.85, wspace=0.22)
     ax_all, ax_zoom = fig.subplots(1, 2)
     for ax in (ax_all, ax_zoom):
         ax.set_aspect("equal", adjustable="box")
@@ -500,7 +408,7 @@ def _root_locus_layout(discrete: bool) -> tuple[Figure, list]:
 def _root_locus_figure(time_s: float, loci: Sequence[RootLocus]) -> Figure:
     """Root loci of 1 + k L = 0 of all loops, overlaid: whole plane and a zoom near z = 1 (s = 0)."""
     discrete = all(rl.dt is not None for rl in loci)
-    fig, (ax_all, ax_zoom) = _sheet(("rootlocus", discrete), lambda: _root_locus_layout(discrete))
+    fig, (ax_all, ax_zoom) = sheet(("rootlocus", discrete), lambda: _root_locus_layout(discrete))
     gains = loci[0].gains
     handles = []
     extent = 1.0
@@ -544,7 +452,7 @@ def _root_locus_figure(time_s: float, loci: Sequence[RootLocus]) -> Figure:
 
 
 def _pzmap_layout(discrete: bool) -> tuple[Figure, list]:
-    fig = _figure(9.6, 5.0, left=0.65, bottom=0.85, wspace=0.25)
+    fig = new_figure(9.6, 5.0, left=0.65, bottom=0.85, wspace=0.25)
     ax_z, ax_s = fig.subplots(1, 2)
     if discrete:
         ax_z.set_aspect("equal", adjustable="box")
@@ -566,7 +474,7 @@ def _pzmap_layout(discrete: bool) -> tuple[Figure, list]:
 def _pzmap_figure(time_s: float, pz: PoleZeroMap) -> Figure:
     """Closed-loop poles and zeros: z-plane and the equivalent s-plane (Hz)."""
     dt = pz.dt
-    fig, (ax_z, ax_s) = _sheet(("pzmap", dt is not None), lambda: _pzmap_layout(dt is not None))
+    fig, (ax_z, ax_s) = sheet(("pzmap", dt is not None), lambda: _pzmap_layout(dt is not None))
     poles, zeros, sp, sz = pz.poles, pz.zeros, pz.s_poles, pz.s_zeros
     at_origin = int(np.count_nonzero(~np.isfinite(sp)))
     sigma = np.where(np.isfinite(sp), sp.real, -np.inf)
@@ -609,7 +517,7 @@ _RESPONSE_ROWS = (("step", "1° step"), ("impulse", "1°·s pulse"), ("ramp", "1
 
 
 def _response_layout(named: bool, gimbal: bool) -> tuple[Figure, list]:
-    fig = _figure(9.0, 6.8, left=0.8, right=0.8, bottom=0.85, hspace=0.1)
+    fig = new_figure(9.0, 6.8, left=0.8, right=0.8, bottom=0.85, hspace=0.1)
     axes = list(fig.subplots(len(_RESPONSE_ROWS), 1, sharex=True))
     twins = []
     for ax, (kind, what) in zip(axes, _RESPONSE_ROWS):
@@ -632,7 +540,7 @@ def _response_figure(time_s: float, data: CommandResponses) -> Figure:
     duration_s = float(t[-1])
     named = any(o.endswith(("_attitude", "_gimbal")) for o in outputs)
     gimbal = any(o.endswith("_gimbal") for o in outputs)
-    fig, axes = _sheet(("response", named, gimbal), lambda: _response_layout(named, gimbal))
+    fig, axes = sheet(("response", named, gimbal), lambda: _response_layout(named, gimbal))
     rows = len(_RESPONSE_ROWS)
     lefts, rights = axes[:rows], (axes[rows:] if gimbal else [None] * rows)
     references = {"step": np.ones_like(t), "ramp": t}
@@ -673,7 +581,7 @@ def _envelope_figure(rows: Sequence[MarginRow], requirements: Mapping[str, tuple
                      failed_label: str = "point fails its\nrequirement set") -> Figure:
     """Gain and phase margins vs flight time, by band (colour) and axis (marker); the
     points failing their requirement set marked by a red line across both panels."""
-    fig = _figure(9.0, 7.0, left=0.85, right=2.2, bottom=0.6, top=0.5, hspace=0.08)
+    fig = new_figure(9.0, 7.0, left=0.85, right=2.2, bottom=0.6, top=0.5, hspace=0.08)
     ax_g, ax_p = fig.subplots(2, 1, sharex=True)
     requirements = dict(requirements or {})
     axes_names = sorted_axes({r.axis for r in rows})
@@ -797,7 +705,7 @@ def plot_linear_point(charts: PointCharts, margins: Sequence[MarginRow], out_dir
             (f"pzmap_{tag}.png", lambda: _pzmap_figure(time_s, charts.pzmap)),
             (f"response_{tag}.png", lambda: _response_figure(time_s, charts.responses)),
         )
-        jobs = [worker.submit(_write_png, _render(build()), out_dir / filename) for filename, build in figures]
+        jobs = [worker.submit(write_png, render(build()), out_dir / filename) for filename, build in figures]
         return [job.result() for job in jobs]
 
 
@@ -814,11 +722,8 @@ def chart_figure(name: str, charts: PointCharts, margins: Sequence[MarginRow], e
                 "response": lambda: _response_figure(t, charts.responses)}
     if name not in builders:
         raise KeyError(f"no linear chart {name!r}; known: {', '.join(builders)}")
-    _SHEETS.fresh = True
-    try:
+    with fresh_sheets():
         return builders[name]()
-    finally:
-        _SHEETS.fresh = False
 
 
 def envelope_figure(rows: list[MarginRow], requirements: dict[str, tuple[float, float]] | None = None,
@@ -862,7 +767,7 @@ def plot_margin_envelope(rows: list[MarginRow], out_path: Path,
     Top panel: gain margins (dB); bottom panel: phase margins (deg); colour = band
     (rigid/aero, slosh, flex), marker = axis (pitch ○, yaw △).
     """
-    return _save(_envelope_figure(rows, requirements, failed_times, failed_label), Path(out_path))
+    return save_rendered(_envelope_figure(rows, requirements, failed_times, failed_label), Path(out_path))
 
 
 def plot_nichols_overlay(time_s: float, loops: Sequence[LoopResponse], out_path: Path, title: str = "Nichols chart",
@@ -890,4 +795,4 @@ def plot_nichols_overlay(time_s: float, loops: Sequence[LoopResponse], out_path:
     """
     fig = _nichols_figure(time_s, list(loops), [], exclusion_zones)
     _title(fig, title, time_s)
-    return _save(fig, Path(out_path))
+    return save_rendered(fig, Path(out_path))

@@ -1,6 +1,5 @@
 """Mode-retention figures: the closed-loop step responses of every retained-mode count
-overlaid, and the critical margins against the count (same style and writer as
-:mod:`savant_cli.plots.montecarlo`)."""
+overlaid, and the critical margins against the count (drawn and written through :mod:`savant_cli.plots.figure`)."""
 
 from __future__ import annotations
 
@@ -10,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from savant_cli.plots.flyoff import plot_history_overlays
-from savant_cli.plots.montecarlo import _figure, _save, _style
+from savant_cli.plots.figure import new_figure, save_figure, style_axes
 
 
 def plot_mode_retention(time_s: np.ndarray, responses: Mapping[str, Mapping[int, np.ndarray]],
@@ -32,10 +31,10 @@ def plot_mode_retention(time_s: np.ndarray, responses: Mapping[str, Mapping[int,
     """
     hist = {name: {f"{n} modes": y for n, y in per_count.items()} for name, per_count in responses.items()}
     paths = plot_history_overlays(time_s, hist, folder, prefix="mode_retention", title="attitude-command step response")
-    fig = _figure(8.0, 4.5)
+    fig = new_figure(8.0, 4.5)
     axes = [fig.add_subplot(1, 2, i + 1) for i in range(2)]
     for ax, kind, unit in zip(axes, ("gain", "phase"), ("dB", "deg")):
-        _style(ax)
+        style_axes(ax)
         for (t, axis, k), per_count in margins.items():
             if k != kind:
                 continue
@@ -45,5 +44,5 @@ def plot_mode_retention(time_s: np.ndarray, responses: Mapping[str, Mapping[int,
         ax.set_ylabel(f"critical {kind} margin ({unit})", fontsize=8)
         ax.legend(fontsize=6)
     fig.suptitle("critical margins vs retained modes", fontsize=10)
-    paths.append(_save(fig, folder / "mode_retention_margins.png"))
+    paths.append(save_figure(fig, folder / "mode_retention_margins.png"))
     return paths

@@ -3,8 +3,8 @@ time histories and the spread of the stability margins over the runs.
 
 Figures are drawn with matplotlib's object-oriented API on the Agg canvas
 (``matplotlib.figure.Figure`` + ``FigureCanvasAgg``): no pyplot, no GUI backend, no
-global state. Each figure is written atomically as a 120-dpi PNG
-(:func:`savant_cli.io.atomic.atomic_path`) and cleared once written.
+global state. Each figure is made and written through the drawing base
+(:mod:`savant_cli.plots.figure`: a 120-dpi PNG, written atomically) and cleared once written.
 
 Files (in the folder given):
 
@@ -25,28 +25,20 @@ and the shaded band are the 0.135 and 99.865 percentiles (±3σ of a normal dist
 
 from __future__ import annotations
 
-import math
-import re
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
-from matplotlib.ticker import MaxNLocator
 
-from savant_cli.io.atomic import atomic_path
+from savant_cli.plots.figure import bin_count, file_stem, new_figure, save_figure, style_axes
 
 __all__ = ["P_HIGH", "P_LOW", "plot_envelopes", "plot_histograms", "plot_margin_spread", "plot_montecarlo"]
 
-DPI = 120
-_PNG_LEVEL = 3  # zlib level of the PNGs, as in plots/ascent.py
 #: Lower and upper percentiles (%) of the dispersion lines and bands (±3σ of a normal law).
 P_LOW, P_HIGH = 0.135, 99.865
-#: Most histogram bins.
-MAX_BINS = 60
 #: Columns of the histogram grid.
 HIST_COLUMNS = 4
 #: Most samples per individual run line of an envelope figure (longer runs are strided;
@@ -63,57 +55,10 @@ _NOMINAL_COLOR = "C3"
 # --------------------------------------------------------------------------- helpers
 
 
-def _figure(width: float, height: float, left: float = 0.8, right: float = 0.2, bottom: float = 0.55,
-            top: float = 0.45, wspace: float = 0.25, hspace: float = 0.2) -> Figure:
-    """A figure on the Agg canvas with fixed margins in inches (no layout engine)."""
-    fig = Figure(figsize=(width, height), dpi=DPI)
-    FigureCanvasAgg(fig)
-    fig.subplots_adjust(left=left / width, right=1.0 - right / width, bottom=bottom / height,
-                        top=1.0 - top / height, wspace=wspace, hspace=hspace)
-    return fig
-
-
-def _save(fig: Figure, path: Path) -> Path:
-    """Write ``fig`` atomically as a PNG, then clear it (frees its artists)."""
-    try:
-        with atomic_path(path) as tmp:
-            fig.savefig(tmp, format="png", dpi=DPI, pil_kwargs={"compress_level": _PNG_LEVEL})
-    finally:
-        fig.clear()
-    return path
-
-
-def _style(ax, nbins: int | None = None) -> None:
-    ax.grid(True, lw=0.4, alpha=0.6)
-    ax.tick_params(labelsize=7)
-    if nbins:  # few ticks: text is most of the drawing time
-        ax.xaxis.set_major_locator(MaxNLocator(nbins))
-        ax.yaxis.set_major_locator(MaxNLocator(nbins))
-
-
 def _label(name: str, units: Mapping[str, str] | None) -> str:
     """``name [unit]``, or ``name`` alone when the unit is unknown or empty."""
     unit = (units or {}).get(name, "")
     return f"{name} [{unit}]" if unit else name
-
-
-def _file_stem(name: str) -> str:
-    """A signal name made safe for a file name (other characters become ``_``)."""
-    return re.sub(r"[^A-Za-z0-9._-]+", "_", name).strip("_") or "signal"
-
-
-def _bin_count(x: np.ndarray) -> int:
-    """numpy's ``'auto'`` bin count (the larger of Sturges and Freedman–Diaconis),
-    computed without building the edges (an outlier could ask for millions) and capped to
-    :data:`MAX_BINS`; 1 for fewer than 2 values or no spread."""
-    span = float(x.max() - x.min()) if x.size else 0.0
-    if x.size < 2 or not (math.isfinite(span) and span > 0.0):
-        return 1
-    sturges = math.log2(x.size) + 1.0
-    q25, q75 = np.percentile(x, [25.0, 75.0])
-    fd_width = 2.0 * float(q75 - q25) * x.size ** (-1.0 / 3.0)
-    fd = span / fd_width if fd_width > 0.0 else 0.0
-    return int(min(max(math.ceil(max(sturges, fd)), 1), MAX_BINS))
 
 
 # --------------------------------------------------------------------------- histograms
@@ -124,11 +69,11 @@ def _histogram_panel(ax, name: str, values: np.ndarray, units: Mapping[str, str]
     x = np.asarray(values, dtype=np.float64).ravel()
     x = x[np.isfinite(x)]
     ax.set_title(_label(name, units), fontsize=8, pad=3.0)
-    _style(ax, nbins=4)
+    style_axes(ax, 4, 4)
     if x.size:
         lo, hi = float(x.min()), float(x.max())
         half = 0.0 if hi > lo else 0.01 * abs(lo) if lo != 0.0 else 0.5  # no spread: one bar 2 % wide
-        counts, edges = np.histogram(x, bins=_bin_count(x), range=(lo - half, hi + half))
+        counts, edges = np.histogram(x, bins=bin_count(x), range=(lo - half, hi + half))
         ax.stairs(counts, edges, fill=True, color="C0", alpha=0.75, gid="histogram")  # one artist: fast
         if x.size >= 2:
             for p in np.percentile(x, [P_LOW, P_HIGH]):
@@ -150,7 +95,7 @@ def _histogram_page(names: list[str], values: Mapping[str, np.ndarray], units: M
     ncols = max(1, min(ncols, len(names)))
     nrows = -(-len(names) // ncols)
     width, height = max(2.4 * ncols + 0.3, 5.0), 2.0 * nrows + 0.95
-    fig = _figure(width, height, left=0.45, right=0.15, bottom=0.6, top=0.4, wspace=0.3, hspace=0.45)
+    fig = new_figure(width, height, left=0.45, right=0.15, bottom=0.6, top=0.4, wspace=0.3, hspace=0.45)
     axes = fig.subplots(nrows, ncols, squeeze=False).ravel()
     for ax, name in zip(axes, names):
         _histogram_panel(ax, name, values[name], units, (nominal or {}).get(name))
@@ -194,7 +139,7 @@ def plot_histograms(values: dict[str, np.ndarray], folder: Path, *, units: dict[
     Notes
     -----
     Each panel shows the histogram (numpy's ``'auto'`` bin count, at most
-    :data:`MAX_BINS`), dashed lines at the :data:`P_LOW` and :data:`P_HIGH` percentiles,
+    :data:`savant_cli.plots.figure.MAX_BINS`), dashed lines at the :data:`P_LOW` and :data:`P_HIGH` percentiles,
     and the mean, sample standard deviation σ (``ddof=1``) and number N of finite values.
     A result with one finite value or no spread is one bar; with none, the panel says so.
     """
@@ -206,7 +151,7 @@ def plot_histograms(values: dict[str, np.ndarray], folder: Path, *, units: dict[
     ncols = min(HIST_COLUMNS, per_page)
     for k in range(pages):
         fig = _histogram_page(names[k * per_page:(k + 1) * per_page], values, units, nominal, k + 1, pages, ncols)
-        written.append(_save(fig, Path(folder) / f"histograms_{k + 1:02d}.png"))
+        written.append(save_figure(fig, Path(folder) / f"histograms_{k + 1:02d}.png"))
     return written
 
 
@@ -260,7 +205,7 @@ def _envelope_figure(time_s: np.ndarray, runs: np.ndarray, name: str, units: Map
         raise ValueError(f"history {name!r}: shape {np.shape(runs)} does not match time_s of shape {t.shape} "
                          "(expected (n_runs, n_t))")
     env = _envelope_stats(data)
-    fig = _figure(9.0, 4.6, left=0.85, right=2.3, bottom=0.6, top=0.45)
+    fig = new_figure(9.0, 4.6, left=0.85, right=2.3, bottom=0.6, top=0.45)
     ax = fig.subplots()
     rows = _run_rows(data.shape[0], max_lines)
     if rows.size:  # all runs as one line, separated by NaN (fast to draw, gaps respected)
@@ -281,7 +226,7 @@ def _envelope_figure(time_s: np.ndarray, runs: np.ndarray, name: str, units: Map
         ax.set_xlim(float(t[0]), float(t[-1]))
     ax.set_xlabel("time (s)", fontsize=9)
     ax.set_ylabel(_label(name, units), fontsize=9)
-    _style(ax)
+    style_axes(ax)
     ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=8, frameon=False, borderaxespad=0.0)
     fig.suptitle(f"Monte Carlo envelope: {name}", fontsize=11, y=1.0 - 0.08 / 4.6, va="top")
     return fig
@@ -326,7 +271,7 @@ def plot_envelopes(time_s: np.ndarray, histories: dict[str, np.ndarray], folder:
     written = []
     for name, runs in histories.items():
         fig = _envelope_figure(time_s, runs, name, units, max_lines)
-        written.append(_save(fig, Path(folder) / f"envelope_{_file_stem(name)}.png"))
+        written.append(save_figure(fig, Path(folder) / f"envelope_{file_stem(name)}.png"))
     return written
 
 
@@ -373,7 +318,7 @@ def _margin_figure(margins: Mapping[str, np.ndarray],
                    requirements: Mapping[str, tuple[float, float]] | None) -> Figure:
     """Gain (top) and phase (bottom) margins vs time, pitch (left) and yaw (right)."""
     tab = _margin_table(margins)
-    fig = _figure(11.0, 7.0, left=0.95, right=2.3, bottom=0.6, top=0.6, wspace=0.08, hspace=0.1)
+    fig = new_figure(11.0, 7.0, left=0.95, right=2.3, bottom=0.6, top=0.6, wspace=0.08, hspace=0.1)
     axes = fig.subplots(2, 2, sharex=True, sharey="row", squeeze=False)
     bands = [b for b in _BAND_COLORS if b in tab["band"]] + sorted(set(tab["band"]) - set(_BAND_COLORS))
     times = np.unique(tab["time_s"])
@@ -413,7 +358,7 @@ def _margin_figure(margins: Mapping[str, np.ndarray],
         for c, axis in enumerate(_AXES):
             ax = axes[r, c]
             ax.axhline(0.0, color="0.3", lw=0.6)
-            _style(ax)
+            style_axes(ax)
             if r == 0:
                 ax.set_title(axis, fontsize=10, pad=3.0)
             else:
@@ -464,7 +409,7 @@ def plot_margin_spread(margins: dict[str, np.ndarray], out_path: Path, *,
     slot, and the nominal run's as black-edged diamonds. A panel without margins says
     "no crossings".
     """
-    return _save(_margin_figure(margins, requirements), Path(out_path))
+    return save_figure(_margin_figure(margins, requirements), Path(out_path))
 
 
 # --------------------------------------------------------------------------- all

@@ -1,6 +1,6 @@
 """Time-domain margin figures: one per search, its bisection history (every judged change
 in order, stable or not) beside the last stable and first unstable responses
-overlaid (same style and writer as :mod:`savant_cli.plots.montecarlo`)."""
+overlaid (drawn and written through :mod:`savant_cli.plots.figure`)."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from savant_cli.plots.montecarlo import _figure, _save, _style
+from savant_cli.plots.figure import new_figure, save_figure, style_axes
 from savant_cli.timedomain.search import UNITS, SearchResult
 
 
@@ -16,10 +16,10 @@ def plot_search(res: SearchResult, folder: Path) -> Path:
     """``t<time>_<axis>_<kind>.png`` in ``folder``: the search history and the bracketing
     responses (gimbal angle, excited minus unexcited run, deg)."""
     s = res.search
-    fig = _figure(9.0, 3.6, wspace=0.3)
+    fig = new_figure(9.0, 3.6, wspace=0.3)
     ax1, ax2 = fig.add_subplot(1, 2, 1), fig.add_subplot(1, 2, 2)
     for ax in (ax1, ax2):
-        _style(ax)
+        style_axes(ax)
     n = np.arange(1, len(res.trials) + 1)
     vals = np.array([tr.value for tr in res.trials])
     bad = np.array([tr.growth.unstable for tr in res.trials], bool)
@@ -39,4 +39,4 @@ def plot_search(res: SearchResult, folder: Path) -> Path:
     ax2.set_ylabel(f"{s.axis} gimbal response (deg)", fontsize=8)
     ax2.legend(fontsize=7)
     fig.suptitle(f"t = {s.time_s:g} s, {s.axis}, {s.kind}: window {s.start_s:.1f}-{s.end_s:.1f} s", fontsize=9)
-    return _save(fig, folder / f"t{s.time_s:g}_{s.axis}_{s.kind}.png")
+    return save_figure(fig, folder / f"t{s.time_s:g}_{s.axis}_{s.kind}.png")
