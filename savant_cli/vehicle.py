@@ -32,6 +32,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from omegaconf import DictConfig, OmegaConf
 
 from savant_cli.config.checks import no_negative_entries, non_negative, positive
 from savant_cli.errors import ConfigError
@@ -478,13 +479,9 @@ def _gimbal_limit(key: str, deg: float) -> float:
 
 
 def _to_plain(vehicle_cfg: Mapping) -> dict:
-    try:
-        from omegaconf import DictConfig, OmegaConf
-
-        if isinstance(vehicle_cfg, DictConfig):
-            return OmegaConf.to_container(vehicle_cfg, resolve=True)  # type: ignore[return-value]
-    except ImportError:  # pragma: no cover
-        pass
+    """The vehicle section as plain Python containers (interpolations resolved)."""
+    if isinstance(vehicle_cfg, DictConfig):
+        return OmegaConf.to_container(vehicle_cfg, resolve=True)  # type: ignore[return-value]
     if not isinstance(vehicle_cfg, Mapping):
         raise ConfigError("vehicle", vehicle_cfg, "must be a mapping (the vehicle YAML)")
     return dict(vehicle_cfg)

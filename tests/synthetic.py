@@ -5,10 +5,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from savant_cli import constants as C
+from savant_cli import constants
 from savant_cli.models import actuator, aero as aero_model, earth, flex, gravity, propulsion, rcs, slosh
 from savant_cli.models.atmosphere import upper_atmosphere_table
-from savant_cli.models import layout as L
+from savant_cli.models import layout
 from savant_cli.sim.plant import PlantTables
 
 
@@ -28,21 +28,21 @@ def tables(mass: float = 1000.0, inertia=(100.0, 400.0, 400.0, 0.0, 0.0, 0.0),
         fs_time=ax, fs_thrust=np.zeros(2), us_start_time=ax, us_start_frac=np.ones(2),
         rcs_alt=ax, rcs_thrust=np.zeros(2), atm_alt=atm_alt, atm_lnp=atm_lnp, atm_lnrho=atm_lnrho,
         wind_alt=ax, wind_north=np.zeros(2), wind_east=np.zeros(2),
-        flex_freq=np.zeros((4, 1)), flex_zeta=np.zeros(1), flex_shape=np.zeros((4, 1, L.N_POINTS, 6)),
+        flex_freq=np.zeros((4, 1)), flex_zeta=np.zeros(1), flex_shape=np.zeros((4, 1, layout.N_POINTS, 6)),
         slosh_level=np.tile(ax, (2, 1)), slosh_data=np.zeros((2, 2, 4)), slosh_len=np.array([2, 2]),
     )
 
 
 def parameters(gravity_order: int = 0, aero: bool = False, thrust: bool = False) -> np.ndarray:
-    p = np.zeros(L.N_PARAM)
-    p[gravity.P_MU] = C.MU_EARTH
-    p[earth.P_RE] = C.WGS84_A
-    p[gravity.P_J2], p[gravity.P_J3], p[gravity.P_J4] = C.EGM2008_J2, C.EGM2008_J3, C.EGM2008_J4
-    p[earth.P_OMEGA_E] = C.OMEGA_EARTH
-    p[earth.P_E2] = C.WGS84_E2
+    p = np.zeros(layout.N_PARAM)
+    p[gravity.P_MU] = constants.MU_EARTH
+    p[earth.P_RE] = constants.WGS84_A
+    p[gravity.P_J2], p[gravity.P_J3], p[gravity.P_J4] = constants.EGM2008_J2, constants.EGM2008_J3, constants.EGM2008_J4
+    p[earth.P_OMEGA_E] = constants.OMEGA_EARTH
+    p[earth.P_E2] = constants.WGS84_E2
     p[propulsion.P_FS_ISP] = p[propulsion.P_US_ISP] = 300.0
     p[propulsion.P_US_MR] = 5.0
-    p[propulsion.P_FS_FLOW_PER_THRUST] = 1.0 / (C.G0 * p[propulsion.P_FS_ISP])  # F_vac = the table
+    p[propulsion.P_FS_FLOW_PER_THRUST] = 1.0 / (constants.G0 * p[propulsion.P_FS_ISP])  # F_vac = the table
     for g in (actuator.P_FS_GIMBAL, actuator.P_US_GIMBAL):
         p[g + actuator.G_LIMIT] = 0.1
     p[propulsion.P_FS_GIMBAL + propulsion.GIMBAL_X] = p[propulsion.P_US_GIMBAL + propulsion.GIMBAL_X] = 10.0
@@ -61,7 +61,7 @@ def parameters(gravity_order: int = 0, aero: bool = False, thrust: bool = False)
 
 
 def coast_inputs() -> np.ndarray:
-    u = np.zeros(L.N_INPUT)
-    u[L.U_CONFIG] = L.CONFIG_UPPER
-    u[L.U_ENGINE] = L.ENGINE_OFF
+    u = np.zeros(layout.N_INPUT)
+    u[layout.U_CONFIG] = layout.CONFIG_UPPER
+    u[layout.U_ENGINE] = layout.ENGINE_OFF
     return u

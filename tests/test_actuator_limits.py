@@ -14,7 +14,7 @@ from savant_cli.config import validate
 from savant_cli.models import actuator
 from savant_cli.models.configurations import ENGINE_FIRST, ENGINE_UPPER
 from savant_cli.paths import hydra_search_dirs, shipped_config_dir
-from savant_cli.models import layout as L
+from savant_cli.models import layout
 from savant_cli.sim.setup import prepare
 from conftest import compose_config
 
@@ -47,15 +47,15 @@ def fly(model, engine: int, command, t_end: float = 2.0, dt: float = DT,
     flow move with it)."""
     p = model.p
     x = model.x0.copy()
-    x[L.ACT_P:L.ACT_P + 3] = 0.0
-    x[L.ACT_Y:L.ACT_Y + 3] = 0.0
+    x[layout.ACT_P:layout.ACT_P + 3] = 0.0
+    x[layout.ACT_Y:layout.ACT_Y + 3] = 0.0
     vo = int(p[actuator.P_VALVE_OFFSET])
     if vo >= 0:
         x[vo:vo + actuator.N_VALVE] = 0.0
-    x[L.ACT_P], x[L.ACT_P + 1] = start
+    x[layout.ACT_P], x[layout.ACT_P + 1] = start
     if vo >= 0:  # ram with the nozzle (mount unloaded but for its damping), flow = rate
         base = actuator.P_FS_SPX if engine == ENGINE_FIRST else actuator.P_US_SPX
-        x[L.ACT_P + 2] = start[0] + p[base + actuator.SX_C] * start[1] / p[base + actuator.SX_K]
+        x[layout.ACT_P + 2] = start[0] + p[base + actuator.SX_C] * start[1] / p[base + actuator.SX_K]
         x[vo] = start[1]
 
     def f(xs, c):
@@ -68,8 +68,8 @@ def fly(model, engine: int, command, t_end: float = 2.0, dt: float = DT,
         t = i * dt
         c = command(t)
         k1, acc = f(x, c)
-        for key, v in (("t", t), ("delta", x[L.ACT_P]), ("rate", x[L.ACT_P + 1]), ("acc", acc),
-                       ("flow", x[vo] if vo >= 0 else np.nan), ("ram_rate", k1[L.ACT_P + 2] if vo >= 0 else np.nan)):
+        for key, v in (("t", t), ("delta", x[layout.ACT_P]), ("rate", x[layout.ACT_P + 1]), ("acc", acc),
+                       ("flow", x[vo] if vo >= 0 else np.nan), ("ram_rate", k1[layout.ACT_P + 2] if vo >= 0 else np.nan)):
             out[key].append(v)
         k2, _ = f(x + 0.5 * dt * k1, c)
         k3, _ = f(x + 0.5 * dt * k2, c)

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from savant_cli.models import actuator, propulsion, twd
-from savant_cli.models import layout as L
+from savant_cli.models import layout
 from savant_cli.sim.plant import derivative, pack_tables
 import synthetic
 
@@ -115,8 +115,8 @@ def _twd_setup(thrust: float):
     p[twd.P_US_ENGINE:twd.P_US_ENGINE + 3] = (2500.0, 1.5, 8125.0)
     p[twd.P_ON] = 1.0
     u = synthetic.coast_inputs()
-    u[L.U_ENGINE] = L.ENGINE_UPPER
-    u[L.U_T_IGN] = -100.0  # long after the start transient
+    u[layout.U_ENGINE] = layout.ENGINE_UPPER
+    u[layout.U_T_IGN] = -100.0  # long after the start transient
     return tb, p, u
 
 
@@ -129,21 +129,21 @@ def test_tail_wags_dog_moment_closed_form_and_zero_pair():
     jj = 8125.0 + 2500.0 * 1.5 * l_c
     w_twd = np.sqrt(thrust * l_c / jj)
     amp = 0.01
-    aux = np.zeros(L.N_AUX)
-    x = np.zeros(L.N_STATE)
-    x[L.Q] = 1.0
-    x[L.R] = 7.0e6
-    x[L.MLOX] = x[L.MLH2] = 1000.0
+    aux = np.zeros(layout.N_AUX)
+    x = np.zeros(layout.N_STATE)
+    x[layout.Q] = 1.0
+    x[layout.R] = 7.0e6
+    x[layout.MLOX] = x[layout.MLH2] = 1000.0
     for w in (0.3 * w_twd, w_twd, 2.0 * w_twd):
         for tt in np.linspace(0.1, 2.0, 7):
             d, dd, ddd = amp * np.sin(w * tt), amp * w * np.cos(w * tt), -amp * w * w * np.sin(w * tt)
-            x[L.ACT_P:L.ACT_P + 3] = d, dd, ddd
-            derivative(0.0, x, u, p, tb, aux, np.zeros(L.N_STATE))
+            x[layout.ACT_P:layout.ACT_P + 3] = d, dd, ddd
+            derivative(0.0, x, u, p, tb, aux, np.zeros(layout.N_STATE))
             total = aux[propulsion.A_MOMENT + 1] + aux[twd.A_MOMENT + 1]
             expected = thrust * l_c * np.sin(d) + jj * ddd
             assert total == pytest.approx(expected, rel=1e-9, abs=1e-6 * thrust * l_c * amp)
             if w == w_twd:  # cancellation to small-angle accuracy
                 assert abs(total) < 1e-4 * thrust * l_c * amp
     p[twd.P_ON] = 0.0
-    derivative(0.0, x, u, p, tb, aux, np.zeros(L.N_STATE))
+    derivative(0.0, x, u, p, tb, aux, np.zeros(layout.N_STATE))
     assert aux[twd.A_MOMENT + 1] == 0.0

@@ -15,10 +15,10 @@ from conftest import compose_config
 from savant_cli.config import validate
 from savant_cli.errors import ConfigError
 from savant_cli.linear.plant import SENSOR_NAMES, linearize_plant
-from savant_cli.models.sensors import misalignment
-from savant_cli.sim import engine as E
+from savant_cli.models.sensors import GyroModel, misalignment
+from savant_cli.sim import engine
 from savant_cli.models import actuator, propulsion, sensors
-from savant_cli.models import layout as L
+from savant_cli.models import layout
 from savant_cli.sim.plant import derivative, pack_tables
 from savant_cli.sim.run import log_columns, simulate
 from savant_cli.sim.setup import prepare
@@ -44,15 +44,15 @@ def _first_stage_point():
     tb = pack_tables(synthetic.tables(cg=(5.0, 0.0, 0.0))._replace(fs_thrust=np.full(2, THRUST)))
     p = synthetic.parameters(thrust=True)
     u = synthetic.coast_inputs()
-    u[L.U_CONFIG], u[L.U_ENGINE] = L.CONFIG_STACK, L.ENGINE_FIRST
-    x = np.zeros(L.N_STATE)
-    x[L.R], x[L.Q], x[L.MFS] = 7.0e6, 1.0, 1000.0  # vacuum, no aero: thrust alone
+    u[layout.U_CONFIG], u[layout.U_ENGINE] = layout.CONFIG_STACK, layout.ENGINE_FIRST
+    x = np.zeros(layout.N_STATE)
+    x[layout.R], x[layout.Q], x[layout.MFS] = 7.0e6, 1.0, 1000.0  # vacuum, no aero: thrust alone
     return tb, p, u, x
 
 
 def _thrust_moment(tb, p, u, x) -> tuple[np.ndarray, np.ndarray]:
-    aux = np.zeros(L.N_AUX)
-    derivative(0.5, x, u, p, tb, aux, np.zeros(L.N_STATE))
+    aux = np.zeros(layout.N_AUX)
+    derivative(0.5, x, u, p, tb, aux, np.zeros(layout.N_STATE))
     return aux[propulsion.A_MOMENT:propulsion.A_MOMENT + 3].copy(), aux
 
 
@@ -62,7 +62,7 @@ def test_gimbal_bias_turns_the_thrust_line():
     applies to the actuator, and the other stage's bias plays no part."""
     tb, p, u, x = _first_stage_point()
     delta, b = 0.03, 0.01
-    x[L.ACT_P] = delta
+    x[layout.ACT_P] = delta
     m0, _ = _thrust_moment(tb, p, u, x)
     p[FS_BIAS] = b
     p[US_BIAS:US_BIAS + 2] = 0.05, -0.05  # inactive stage
@@ -74,7 +74,7 @@ def test_gimbal_bias_turns_the_thrust_line():
 
     # both axes against an independent cross product
     p[FS_BIAS + 1] = -0.02
-    x[L.ACT_Y] = 0.015
+    x[layout.ACT_Y] = 0.015
     m2, aux = _thrust_moment(tb, p, u, x)
     a, c = delta + b, 0.015 - 0.02
     t_hat = np.array([np.cos(a) * np.cos(c), -np.sin(c), np.sin(a) * np.cos(c)])
@@ -82,7 +82,7 @@ def test_gimbal_bias_turns_the_thrust_line():
     assert aux[actuator.A_ANGLES + 1] == 0.015
 
     # the actuator at its stop: the thrust line is the limit plus the bias
-    x[L.ACT_P], x[L.ACT_Y] = 0.5, 0.0
+    x[layout.ACT_P], x[layout.ACT_Y] = 0.5, 0.0
     m3, aux = _thrust_moment(tb, p, u, x)
     lim = p[actuator.P_FS_GIMBAL + actuator.G_LIMIT]
     assert aux[actuator.A_ANGLES] == lim
@@ -102,7 +102,7 @@ def test_controller_trims_a_gimbal_bias_out():
                       progress=False)
     t = nom.log[:, 0]
     settled = (t >= 5.0) & (t <= 15.0)
-    for c, state in enumerate((L.ACT_P, L.ACT_Y)):
+    for c, state in enumerate((layout.ACT_P, layout.ACT_Y)):
         offset = biased.log[settled, 1 + state] - nom.log[settled, 1 + state]
         assert np.all(np.abs(offset + bias[c]) < 0.10 * abs(bias[c])), (c, offset.min(), offset.max())
     assert biased.status == "complete"
@@ -117,10 +117,10 @@ def _first_cycle(model, w0=None) -> np.ndarray:
 
     x, d, u, ev = model.x0.copy(), model.d0.copy(), model.u0.copy(), model.events0.copy()
     if w0 is not None:
-        x[L.W:L.W + 3] = w0
+        x[layout.W:layout.W + 3] = w0
     log = np.empty((1, log_columns(x.size)))
-    E.advance(x, d, u, ev, model.k0, 1, model.rates, model.p, model.packed_tables, model.fcs, model.gyro,
-              model.guidance, model.sched, log, 0, loop_perturbation.NONE)
+    engine.advance(x, d, u, ev, model.k0, 1, model.rates, model.p, model.packed_tables, model.fcs, model.gyro,
+              model.smoother, model.guidance, model.sched, log, 0, loop_perturbation.NONE)
     return d
 
 
@@ -136,8 +136,8 @@ def test_imu_misalignment_shifts_the_attitude_error():
     state is larger by ε (sensed attitude q_b2i ⊗ q(ε)); roll and yaw errors change only
     to second order."""
     eps = np.radians(0.5)
-    e_ref = _first_cycle(_model([]))[L.D_ERR:L.D_ERR + 3]
-    e_mis = _first_cycle(_model(["sensors.misalignment_deg.imu=[0.0,0.5,0.0]"]))[L.D_ERR:L.D_ERR + 3]
+    e_ref = _first_cycle(_model([]))[layout.D_ERR:layout.D_ERR + 3]
+    e_mis = _first_cycle(_model(["sensors.misalignment_deg.imu=[0.0,0.5,0.0]"]))[layout.D_ERR:layout.D_ERR + 3]
     small = np.abs(e_ref).max() * eps + eps**3  # second-order terms
     assert abs(e_ref[1]) < 0.1 * eps  # the reference error is small next to ε
     assert e_mis[1] - e_ref[1] == pytest.approx(eps, abs=small)
@@ -151,11 +151,11 @@ def test_gyro_misalignment_mixes_pitch_rate_into_the_other_axes():
     model = _model(["sensors.misalignment_deg.rate_gyro_upper_stage=[0.5,0.0,0.0]",
                     "sensors.misalignment_deg.imu=[0.0,0.0,0.8]",
                     "sensors.misalignment_deg.rate_gyro_first_stage=[0.0,0.3,0.0]"])
-    model.gyro = E.GyroModel(ad=np.zeros((2, 2)), bd=np.zeros(2), cd=np.zeros(2), dd=1.0)  # pass-through
+    model.gyro = GyroModel(ad=np.zeros((2, 2)), bd=np.zeros(2), cd=np.zeros(2), dd=1.0)  # pass-through
     q = 0.02
     w = np.array([0.0, q, 0.0])
     d = _first_cycle(model, w)
-    read = d[L.D_GYRO_Y:L.D_GYRO_Y + 9].reshape(3, 3)  # [gyro (upper, IMU, first)][axis]
+    read = d[layout.D_GYRO_Y:layout.D_GYRO_Y + 9].reshape(3, 3)  # [gyro (upper, IMU, first)][axis]
     for g, eps_deg in enumerate(([0.5, 0.0, 0.0], [0.0, 0.0, 0.8], [0.0, 0.3, 0.0])):
         eps = np.radians(eps_deg)
         exact = Rotation.from_rotvec(eps).as_matrix().T @ w  # R(ε)ᵀ ω, independent rotation code
@@ -224,7 +224,7 @@ def test_limits_are_accepted_and_reach_the_parameters_in_radians():
     np.testing.assert_allclose(p[sensors.P_IMU_MISALIGN:sensors.P_IMU_MISALIGN + 3], np.radians([1.0, -1.0, 0.25]))
     np.testing.assert_allclose(p[sensors.P_GYRO_US_MISALIGN:sensors.P_GYRO_US_MISALIGN + 3], np.radians([0.1, 0.2, 0.3]))
     np.testing.assert_allclose(p[sensors.P_GYRO_FS_MISALIGN:sensors.P_GYRO_FS_MISALIGN + 3], np.radians([-0.1, 0.0, 1.0]))
-    assert p.size == L.N_PARAM
+    assert p.size == layout.N_PARAM
     default = prepare(validate(compose_config([]))).model.p
     error_sources = [*range(FS_BIAS, FS_BIAS + 2), *range(US_BIAS, US_BIAS + 2)] + [
         base + i for base in (sensors.P_IMU_MISALIGN, sensors.P_GYRO_US_MISALIGN, sensors.P_GYRO_FS_MISALIGN)

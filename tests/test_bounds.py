@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from savant_cli import config as C
+from savant_cli import config
 from savant_cli.config import validate
 from savant_cli.errors import ConfigError
 from conftest import compose_config
@@ -21,15 +21,15 @@ def _refused(overrides: list[str]) -> ConfigError:
 
 
 @pytest.mark.parametrize("inside, outside, key, allowed", [
-    (["study=montecarlo", f"study.n_runs={C.MAX_N_RUNS}", "study.histories.signals=[]"],
-     ["study=montecarlo", f"study.n_runs={C.MAX_N_RUNS + 1}", "study.histories.signals=[]"], "study.n_runs", "1,000,000"),
-    (["study=montecarlo", "study.n_runs=20000", f"study.shards={C.MAX_SHARDS}", "study.histories.signals=[]"],
-     ["study=montecarlo", "study.n_runs=20000", f"study.shards={C.MAX_SHARDS + 1}"], "study.shards", "10,000"),
-    (["study=montecarlo", f"study.workers={C.MAX_WORKERS}"], ["study=montecarlo", f"study.workers={C.MAX_WORKERS + 1}"],
+    (["study=montecarlo", f"study.n_runs={config.MAX_N_RUNS}", "study.histories.signals=[]"],
+     ["study=montecarlo", f"study.n_runs={config.MAX_N_RUNS + 1}", "study.histories.signals=[]"], "study.n_runs", "1,000,000"),
+    (["study=montecarlo", "study.n_runs=20000", f"study.shards={config.MAX_SHARDS}", "study.histories.signals=[]"],
+     ["study=montecarlo", "study.n_runs=20000", f"study.shards={config.MAX_SHARDS + 1}"], "study.shards", "10,000"),
+    (["study=montecarlo", f"study.workers={config.MAX_WORKERS}"], ["study=montecarlo", f"study.workers={config.MAX_WORKERS + 1}"],
      "study.workers", "256"),
-    (["study=time_margins", f"study.workers={C.MAX_WORKERS}"],
-     ["study=time_margins", f"study.workers={C.MAX_WORKERS + 1}"], "study.workers", "256"),
-    ([f"winds.scale={C.MAX_WINDS_SCALE}"], [f"winds.scale={C.MAX_WINDS_SCALE * 1.001}"], "winds.scale", "0 and 5"),
+    (["study=time_margins", f"study.workers={config.MAX_WORKERS}"],
+     ["study=time_margins", f"study.workers={config.MAX_WORKERS + 1}"], "study.workers", "256"),
+    ([f"winds.scale={config.MAX_WINDS_SCALE}"], [f"winds.scale={config.MAX_WINDS_SCALE * 1.001}"], "winds.scale", "0 and 5"),
     (["sim.plant_rate_hz=1000", "sim.sensor_rate_hz=1000", "sim.log_rate_hz=500", "sim.max_time_s=1000"],
      ["sim.plant_rate_hz=1000", "sim.sensor_rate_hz=1000", "sim.log_rate_hz=500", "sim.max_time_s=1001"],
      "sim.log_rate_hz", "at most 500,000"),
@@ -75,7 +75,7 @@ def test_the_issue_values_are_refused_at_once():
 
 
 def test_histories_bound_ignores_a_batch_without_histories():
-    validate(compose_config(["study=montecarlo", f"study.n_runs={C.MAX_N_RUNS}", "study.histories.signals=[]"]))
+    validate(compose_config(["study=montecarlo", f"study.n_runs={config.MAX_N_RUNS}", "study.histories.signals=[]"]))
 
 
 def test_nonfinite_summary_says_why():

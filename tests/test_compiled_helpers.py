@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from numba import njit
 
-from savant_cli import constants as C
+from savant_cli import constants
 from savant_cli.models import earth
 from savant_cli.models.fused import fma
 from savant_cli.sim.borrow import borrowed
@@ -67,7 +67,7 @@ def _height(t, r, omega, a, e2):
 def test_gain_schedule_height():
     """On the equator and over the pole the geodetic height is |r| − a and |z| − b; at any
     point and time it is the height of numpy's R3(ωt) r (to round-off)."""
-    a, e2, w = C.WGS84_A, C.WGS84_E2, C.OMEGA_EARTH
+    a, e2, w = constants.WGS84_A, constants.WGS84_E2, constants.OMEGA_EARTH
     b = a * np.sqrt(1.0 - e2)
     assert _height(123.0, np.array([a + 1000.0, 0.0, 0.0]), w, a, e2) == pytest.approx(1000.0, abs=1e-6)
     assert _height(0.0, np.array([0.0, 0.0, -(b + 5.0e4)]), w, a, e2) == pytest.approx(5.0e4, abs=1e-6)

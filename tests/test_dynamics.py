@@ -3,23 +3,23 @@
 import numpy as np
 import pytest
 
-from savant_cli import constants as C
+from savant_cli import constants
 from savant_cli.models import propulsion
-from savant_cli.models import layout as L
+from savant_cli.models import layout
 from savant_cli.sim.engine import rk4, work_array
 from savant_cli.sim.plant import derivative, pack_tables
 import synthetic
 
 
 def _orbit_state(alt_m=400e3, inc_deg=51.6):
-    r = C.WGS84_A + alt_m
-    v = np.sqrt(C.MU_EARTH / r) * 1.01  # slightly elliptic
+    r = constants.WGS84_A + alt_m
+    v = np.sqrt(constants.MU_EARTH / r) * 1.01  # slightly elliptic
     i = np.radians(inc_deg)
-    x = np.zeros(L.N_STATE)
-    x[L.R:L.R + 3] = [r, 0.0, 0.0]
-    x[L.V:L.V + 3] = [0.0, v * np.cos(i), v * np.sin(i)]
-    x[L.Q] = 1.0
-    x[L.MLOX] = x[L.MLH2] = 1.0
+    x = np.zeros(layout.N_STATE)
+    x[layout.R:layout.R + 3] = [r, 0.0, 0.0]
+    x[layout.V:layout.V + 3] = [0.0, v * np.cos(i), v * np.sin(i)]
+    x[layout.Q] = 1.0
+    x[layout.MLOX] = x[layout.MLH2] = 1.0
     return x
 
 
@@ -32,19 +32,19 @@ def test_vacuum_coast_conserves_energy_and_angular_momentum(order):
 
     tb, p, u = pack_tables(synthetic.tables()), synthetic.parameters(gravity_order=order), synthetic.coast_inputs()
     x = _orbit_state()
-    aux, work = np.zeros(L.N_AUX), work_array()
-    j2, j3, j4 = (C.EGM2008_J2, C.EGM2008_J3, C.EGM2008_J4) if order else (0.0, 0.0, 0.0)
+    aux, work = np.zeros(layout.N_AUX), work_array()
+    j2, j3, j4 = (constants.EGM2008_J2, constants.EGM2008_J3, constants.EGM2008_J4) if order else (0.0, 0.0, 0.0)
 
     def invariants(x):
-        r, v = x[L.R:L.R + 3], x[L.V:L.V + 3]
-        energy = 0.5 * v @ v - gravity_potential(r, C.MU_EARTH, C.WGS84_A, j2, j3, j4)
+        r, v = x[layout.R:layout.R + 3], x[layout.V:layout.V + 3]
+        energy = 0.5 * v @ v - gravity_potential(r, constants.MU_EARTH, constants.WGS84_A, j2, j3, j4)
         return energy, np.cross(r, v)
 
     e0, h0 = invariants(x)
     dt = 1.0
     for k in range(5600):  # about one orbit
         rk4(k * dt, x, u, dt, p, tb, aux, work)
-        x[L.Q:L.Q + 4] /= np.linalg.norm(x[L.Q:L.Q + 4])
+        x[layout.Q:layout.Q + 4] /= np.linalg.norm(x[layout.Q:layout.Q + 4])
     e1, h1 = invariants(x)
     assert abs(e1 - e0) / abs(e0) < 1e-9
     if order == 0:
@@ -61,20 +61,20 @@ def test_torque_free_axisymmetric_body_precesses_at_theory_rate():
     p, u = synthetic.parameters(), synthetic.coast_inputs()
     x = _orbit_state()
     spin, trans = 2.0, 0.3
-    x[L.W:L.W + 3] = [spin, trans, 0.0]
-    aux, work = np.zeros(L.N_AUX), work_array()
+    x[layout.W:layout.W + 3] = [spin, trans, 0.0]
+    aux, work = np.zeros(layout.N_AUX), work_array()
     dt, n = 0.001, 4000
     phase = []
     for k in range(n):
         rk4(k * dt, x, u, dt, p, tb, aux, work)
-        phase.append(np.arctan2(x[L.W + 2], x[L.W + 1]))
+        phase.append(np.arctan2(x[layout.W + 2], x[layout.W + 1]))
     lam = np.polyfit(np.arange(1, n + 1) * dt, np.unwrap(phase), 1)[0]
     # Euler: d(ωy + iωz)/dt = −iλ(ωy + iωz): the transverse rate turns negatively in body axes
     assert lam == pytest.approx(-spin * (it - ix) / it, rel=1e-6)
-    assert x[L.W] == pytest.approx(spin, rel=1e-12)
-    assert np.hypot(x[L.W + 1], x[L.W + 2]) == pytest.approx(trans, rel=1e-9)
+    assert x[layout.W] == pytest.approx(spin, rel=1e-12)
+    assert np.hypot(x[layout.W + 1], x[layout.W + 2]) == pytest.approx(trans, rel=1e-9)
     # kinetic energy and |H| conserved
-    w = x[L.W:L.W + 3]
+    w = x[layout.W:layout.W + 3]
     assert 0.5 * (ix * w[0] ** 2 + it * w[1] ** 2 + it * w[2] ** 2) == pytest.approx(
         0.5 * (ix * spin**2 + it * trans**2), rel=1e-9)
 
@@ -85,14 +85,14 @@ def test_gimbal_moment_sign_and_magnitude():
     tb, u = pack_tables(synthetic.tables(cg=(5.0, 0.0, 0.0))), synthetic.coast_inputs()
     p = synthetic.parameters(thrust=True)
     p[propulsion.P_US_THRUST] = 1000.0
-    u[L.U_ENGINE] = L.ENGINE_UPPER
+    u[layout.U_ENGINE] = layout.ENGINE_UPPER
     x = _orbit_state()
-    aux = np.zeros(L.N_AUX)
+    aux = np.zeros(layout.N_AUX)
     delta = 0.05
-    x[L.ACT_P] = delta
-    derivative(0.0, x, u, p, tb, aux, np.zeros(L.N_STATE))
+    x[layout.ACT_P] = delta
+    derivative(0.0, x, u, p, tb, aux, np.zeros(layout.N_STATE))
     arm = 10.0 - 5.0  # gimbal station minus CG station
     assert aux[propulsion.A_MOMENT + 1] == pytest.approx(1000.0 * arm * np.sin(delta), rel=1e-9)
-    x[L.ACT_P], x[L.ACT_Y] = 0.0, delta
-    derivative(0.0, x, u, p, tb, aux, np.zeros(L.N_STATE))
+    x[layout.ACT_P], x[layout.ACT_Y] = 0.0, delta
+    derivative(0.0, x, u, p, tb, aux, np.zeros(layout.N_STATE))
     assert aux[propulsion.A_MOMENT + 2] == pytest.approx(1000.0 * arm * np.sin(delta), rel=1e-9)

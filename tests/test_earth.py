@@ -9,10 +9,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from savant_cli import constants as C
-from savant_cli.models import earth as E
+from savant_cli import constants
+from savant_cli.models import earth
 
-A, E2, B, W = C.WGS84_A, C.WGS84_E2, C.WGS84_B, C.OMEGA_EARTH
+A, E2, B, W = constants.WGS84_A, constants.WGS84_E2, constants.WGS84_B, constants.OMEGA_EARTH
 LATS = np.radians([-90.0, -89.9999, -60.0, -28.627, -1e-7, 0.0, 1e-7, 15.0, 45.0, 75.0,
                    89.99, 89.9999999, 90.0])
 LONS = np.radians([-180.0, -80.621, 0.0, 33.3, 90.0, 179.0])
@@ -32,9 +32,9 @@ def test_geodetic_round_trip_grid():
     for lat in LATS:
         for lon in LONS:
             for h in HEIGHTS:
-                r = E.geodetic_to_ecef(lat, lon, h, A, E2)
+                r = earth.geodetic_to_ecef(lat, lon, h, A, E2)
                 np.testing.assert_allclose(r, reference_ecef(lat, lon, h), rtol=0.0, atol=1e-6)
-                la, lo, hh = E.ecef_to_geodetic(r, A, E2)
+                la, lo, hh = earth.ecef_to_geodetic(r, A, E2)
                 assert abs(la - lat) < 1e-9
                 assert abs(hh - h) < 1e-3
                 if abs(lat) < np.radians(89.9999):   # longitude undefined at the pole
@@ -48,28 +48,28 @@ def test_ecef_to_geodetic_random_points():
         lat = np.arcsin(rng.uniform(-1.0, 1.0))
         lon = rng.uniform(-np.pi, np.pi)
         h = rng.uniform(-5e3, 1e6)
-        la, lo, hh = E.ecef_to_geodetic(reference_ecef(lat, lon, h), A, E2)
+        la, lo, hh = earth.ecef_to_geodetic(reference_ecef(lat, lon, h), A, E2)
         assert abs(la - lat) < 1e-9 and abs(hh - h) < 1e-3
 
 
 def test_known_points():
-    np.testing.assert_allclose(E.geodetic_to_ecef(0.0, 0.0, 0.0, A, E2), [A, 0.0, 0.0],
+    np.testing.assert_allclose(earth.geodetic_to_ecef(0.0, 0.0, 0.0, A, E2), [A, 0.0, 0.0],
                                rtol=0.0, atol=1e-9)
     for lon in (0.0, 1.234):
-        np.testing.assert_allclose(E.geodetic_to_ecef(np.pi / 2, lon, 0.0, A, E2),
+        np.testing.assert_allclose(earth.geodetic_to_ecef(np.pi / 2, lon, 0.0, A, E2),
                                    [0.0, 0.0, B], rtol=0.0, atol=1e-6)
-        np.testing.assert_allclose(E.geodetic_to_ecef(-np.pi / 2, lon, 0.0, A, E2),
+        np.testing.assert_allclose(earth.geodetic_to_ecef(-np.pi / 2, lon, 0.0, A, E2),
                                    [0.0, 0.0, -B], rtol=0.0, atol=1e-6)
     assert B == pytest.approx(6356752.314245, abs=1e-6)     # WGS84 semi-minor axis
-    lat, lon, h = E.ecef_to_geodetic(np.array([0.0, 0.0, B + 100.0]), A, E2)
+    lat, lon, h = earth.ecef_to_geodetic(np.array([0.0, 0.0, B + 100.0]), A, E2)
     assert lat == np.pi / 2 and h == pytest.approx(100.0, abs=1e-6)
-    lat, lon, h = E.ecef_to_geodetic(np.array([0.0, -(A + 10.0), 0.0]), A, E2)
+    lat, lon, h = earth.ecef_to_geodetic(np.array([0.0, -(A + 10.0), 0.0]), A, E2)
     assert (lat, lon) == (0.0, -np.pi / 2) and h == pytest.approx(10.0, abs=1e-9)
 
 
 def test_lc39b_geocentric_radius():
     lat, lon = np.radians(28.627), np.radians(-80.621)
-    r = E.geodetic_to_ecef(lat, lon, 0.0, A, E2)
+    r = earth.geodetic_to_ecef(lat, lon, 0.0, A, E2)
     # radius of the meridian ellipse at geodetic latitude φ:
     # r² = ((a² cos φ)² + (b² sin φ)²) / ((a cos φ)² + (b sin φ)²)
     c, s = np.cos(lat), np.sin(lat)
@@ -85,41 +85,41 @@ def test_lc39b_geocentric_radius():
 @pytest.mark.parametrize("lat", LATS)
 @pytest.mark.parametrize("lon", LONS[:3])
 def test_ned_dcm(lat, lon):
-    c = E.dcm_ecef_to_ned(lat, lon)
+    c = earth.dcm_ecef_to_ned(lat, lon)
     np.testing.assert_allclose(c @ c.T, np.eye(3), atol=1e-15)
     assert np.linalg.det(c) == pytest.approx(1.0, abs=1e-14)
     normal = np.array([np.cos(lat) * np.cos(lon), np.cos(lat) * np.sin(lon), np.sin(lat)])
     np.testing.assert_allclose(c[2], -normal, atol=1e-15)
     # north and east are the directions of increasing latitude and longitude
     d = 1e-7
-    dn = E.geodetic_to_ecef(lat + d, lon, 0.0, A, E2) - E.geodetic_to_ecef(lat - d, lon, 0.0, A, E2)
+    dn = earth.geodetic_to_ecef(lat + d, lon, 0.0, A, E2) - earth.geodetic_to_ecef(lat - d, lon, 0.0, A, E2)
     np.testing.assert_allclose(c[0], dn / np.linalg.norm(dn), atol=1e-7)
     if abs(lat) < np.radians(89.0):
-        de = E.geodetic_to_ecef(lat, lon + d, 0.0, A, E2) - E.geodetic_to_ecef(lat, lon - d, 0.0, A, E2)
+        de = earth.geodetic_to_ecef(lat, lon + d, 0.0, A, E2) - earth.geodetic_to_ecef(lat, lon - d, 0.0, A, E2)
         np.testing.assert_allclose(c[1], de / np.linalg.norm(de), atol=1e-7)
 
 
 def test_eci_ecef_rotation():
     t = 1234.5
-    c = E.dcm_eci_to_ecef(t, W)
+    c = earth.dcm_eci_to_ecef(t, W)
     np.testing.assert_allclose(c @ c.T, np.eye(3), atol=1e-15)
     v = np.array([1.0e6, -2.0e6, 3.0e6])
-    np.testing.assert_allclose(E.eci_to_ecef(v, t, W), c @ v, rtol=1e-15)
-    np.testing.assert_allclose(E.ecef_to_eci(E.eci_to_ecef(v, t, W), t, W), v, rtol=1e-15)
-    np.testing.assert_allclose(E.dcm_eci_to_ecef(0.0, W), np.eye(3))
+    np.testing.assert_allclose(earth.eci_to_ecef(v, t, W), c @ v, rtol=1e-15)
+    np.testing.assert_allclose(earth.ecef_to_eci(earth.eci_to_ecef(v, t, W), t, W), v, rtol=1e-15)
+    np.testing.assert_allclose(earth.dcm_eci_to_ecef(0.0, W), np.eye(3))
     # after a quarter turn the inertial X axis is seen along ECEF −Y
     quarter = 0.5 * np.pi / W
-    np.testing.assert_allclose(E.eci_to_ecef(np.array([1.0, 0.0, 0.0]), quarter, W),
+    np.testing.assert_allclose(earth.eci_to_ecef(np.array([1.0, 0.0, 0.0]), quarter, W),
                                [0.0, -1.0, 0.0], atol=1e-15)
-    np.testing.assert_allclose(E.dcm_eci_to_ecef(2 * np.pi / W, W), np.eye(3), atol=1e-14)
+    np.testing.assert_allclose(earth.dcm_eci_to_ecef(2 * np.pi / W, W), np.eye(3), atol=1e-14)
 
 
 def test_relative_velocity_of_earth_fixed_point_is_zero():
-    r_ecef = E.geodetic_to_ecef(np.radians(28.627), np.radians(-80.621), 50.0, A, E2)
+    r_ecef = earth.geodetic_to_ecef(np.radians(28.627), np.radians(-80.621), 50.0, A, E2)
     t, dt = 300.0, 1e-3
-    r_eci = E.ecef_to_eci(r_ecef, t, W)
-    v_eci = (E.ecef_to_eci(r_ecef, t + dt, W) - E.ecef_to_eci(r_ecef, t - dt, W)) / (2 * dt)
+    r_eci = earth.ecef_to_eci(r_ecef, t, W)
+    v_eci = (earth.ecef_to_eci(r_ecef, t + dt, W) - earth.ecef_to_eci(r_ecef, t - dt, W)) / (2 * dt)
     assert np.linalg.norm(v_eci) == pytest.approx(W * np.hypot(r_ecef[0], r_ecef[1]), rel=1e-9)
-    np.testing.assert_allclose(E.velocity_relative_eci(r_eci, v_eci, W), 0.0, atol=1e-6)
+    np.testing.assert_allclose(earth.velocity_relative_eci(r_eci, v_eci, W), 0.0, atol=1e-6)
     # and an inertially fixed point moves at −ω ẑ × r relative to the Earth
-    np.testing.assert_allclose(E.velocity_relative_eci(r_eci, np.zeros(3), W), -v_eci, rtol=1e-8)
+    np.testing.assert_allclose(earth.velocity_relative_eci(r_eci, np.zeros(3), W), -v_eci, rtol=1e-8)

@@ -26,7 +26,7 @@ from conftest import compose_config
 from savant_cli.config import validate
 from savant_cli.errors import ConfigError
 from savant_cli.paths import shipped_config_dir
-from savant_cli.sim import engine as E
+from savant_cli.sim import engine
 from savant_cli.sim.setup import prepare
 
 FLEX_ON = ["flex=on"]
@@ -169,7 +169,7 @@ def test_every_model_combination_flies_without_divergence(flex, slosh, twd, actu
         cfg, model, result, sig = _fly(flex, slosh, twd, actuator, phase)
         where = f"{phase} flex={flex} slosh={slosh} twd={twd} actuator={actuator}"
         assert result.status == "complete", (where, result.message)
-        assert result.stop_code == E.STOP_TIME, (where, result.message)
+        assert result.stop_code == engine.STOP_TIME, (where, result.message)
         assert result.t_final == pytest.approx(t_max, abs=0.01), where
         assert np.all(np.isfinite(result.log)), where
         assert model.layout.n_modes == (cfg.flex.n_modes if flex == "on" else 0)
@@ -178,7 +178,7 @@ def test_every_model_combination_flies_without_divergence(flex, slosh, twd, actu
         assert np.degrees(np.abs(sig["body_rate"].data).max()) < 10.0, where
         assert np.degrees(np.abs(sig["attitude_error"].data).max()) < 10.0, where
         if phase == "upper_stage":  # reached ignition and the J-2X is at full thrust
-            assert not np.isnan(result.events[E.EV_IGNITION]), where
+            assert not np.isnan(result.events[engine.EV_IGNITION]), where
             assert sig["thrust"].data[-1] > 1.2e6, where
         if twd == "off":
             np.testing.assert_array_equal(sig["twd_moment"].data, 0.0)

@@ -8,21 +8,21 @@ from pathlib import Path
 
 import savant_cli.models  # noqa: F401  (declares every field)
 from savant_cli.models import blocks
-from savant_cli.models import layout as L
+from savant_cli.models import layout
 from savant_cli.models.__main__ import field_reference
 
 DOCS = Path(__file__).resolve().parents[1] / "docs" / "models.md"
 
 
 def test_every_field_has_units_and_a_description():
-    for f in L.all_fields():
+    for f in layout.all_fields():
         assert f.units.strip(), f.key
         assert len(f.description.strip()) > 3, f.key
 
 
 def test_vectors_are_contiguous_and_sized_as_the_layout_says():
-    for vector, size in ((blocks.STATE, L.N_STATE), (blocks.PARAMETERS, L.N_PARAM), (blocks.DIAGNOSTICS, L.N_AUX),
-                         (blocks.DISCRETE, L.N_DISC), (blocks.INPUTS, L.N_INPUT)):
+    for vector, size in ((blocks.STATE, layout.N_STATE), (blocks.PARAMETERS, layout.N_PARAM), (blocks.DIAGNOSTICS, layout.N_AUX),
+                         (blocks.DISCRETE, layout.N_DISC), (blocks.INPUTS, layout.N_INPUT)):
         pos = 0
         for f in vector.fields:
             assert f.index == pos, f"{vector.name}: {f.key} at {f.index}, expected {pos}"
@@ -34,8 +34,8 @@ def test_vectors_are_contiguous_and_sized_as_the_layout_says():
 def test_core_state_order_is_the_staging_file_order():
     """The staging-state files and the logged histories name the core states in this
     order; a model imported out of order would silently move them."""
-    assert L.STATE_NAMES[:L.W + 3][-3:] == ["p", "q", "r"]
-    assert (L.R, L.V, L.Q, L.W, L.MFS, L.MLOX, L.MLH2, L.ACT_P, L.ACT_Y, L.RCS_POS, L.RCS_NEG) == (
+    assert layout.STATE_NAMES[:layout.W + 3][-3:] == ["p", "q", "r"]
+    assert (layout.R, layout.V, layout.Q, layout.W, layout.MFS, layout.MLOX, layout.MLH2, layout.ACT_P, layout.ACT_Y, layout.RCS_POS, layout.RCS_NEG) == (
         0, 3, 6, 10, 13, 14, 15, 16, 19, 22, 23)
 
 

@@ -18,13 +18,13 @@ import numpy as np
 import pytest
 
 from savant_cli.models import flex, mass as mass_model, propulsion, rcs, rigid_body, twd as twd_model
-from savant_cli.models import layout as L
+from savant_cli.models import layout
 from savant_cli.sim.engine import rk4, work_array
 from savant_cli.models.flex import flex_point
 from savant_cli.sim.plant import derivative, pack_tables
 import synthetic
 
-N_SETS = len(L.FLEX_SETS)
+N_SETS = len(layout.FLEX_SETS)
 
 
 def _flex_tables(freq: np.ndarray, zeta: np.ndarray, shapes: np.ndarray, **kw):
@@ -36,8 +36,8 @@ def _flex_tables(freq: np.ndarray, zeta: np.ndarray, shapes: np.ndarray, **kw):
                        flex_shape=np.ascontiguousarray(shapes, dtype=float))
 
 
-def _flex_params(n_modes: int, switch: int = 0, **kw) -> tuple[np.ndarray, L.StateLayout]:
-    lay = L.StateLayout(n_modes=n_modes)
+def _flex_params(n_modes: int, switch: int = 0, **kw) -> tuple[np.ndarray, layout.StateLayout]:
+    lay = layout.StateLayout(n_modes=n_modes)
     p = synthetic.parameters(**kw)
     p[flex.P_OFFSET] = lay.flex
     p[flex.P_N_MODES] = n_modes
@@ -45,18 +45,18 @@ def _flex_params(n_modes: int, switch: int = 0, **kw) -> tuple[np.ndarray, L.Sta
     return p, lay
 
 
-def _orbit_state(lay: L.StateLayout) -> np.ndarray:
+def _orbit_state(lay: layout.StateLayout) -> np.ndarray:
     x = np.zeros(lay.n)
-    x[L.R] = 7.0e6  # far above the atmosphere (no pressure loss, no divergence on altitude)
-    x[L.Q] = 1.0
-    x[L.MFS] = x[L.MLOX] = x[L.MLH2] = 1.0
+    x[layout.R] = 7.0e6  # far above the atmosphere (no pressure loss, no divergence on altitude)
+    x[layout.Q] = 1.0
+    x[layout.MFS] = x[layout.MLOX] = x[layout.MLH2] = 1.0
     return x
 
 
 def _random_shapes(rng, n_modes: int, scale_d: float = 1e-3, scale_r: float = 1e-4) -> np.ndarray:
-    s = np.empty((N_SETS, n_modes, L.N_POINTS, 6))
-    s[..., :3] = scale_d * rng.standard_normal((N_SETS, n_modes, L.N_POINTS, 3))
-    s[..., 3:] = scale_r * rng.standard_normal((N_SETS, n_modes, L.N_POINTS, 3))
+    s = np.empty((N_SETS, n_modes, layout.N_POINTS, 6))
+    s[..., :3] = scale_d * rng.standard_normal((N_SETS, n_modes, layout.N_POINTS, 3))
+    s[..., 3:] = scale_r * rng.standard_normal((N_SETS, n_modes, layout.N_POINTS, 3))
     return s
 
 
@@ -85,7 +85,7 @@ def test_undamped_free_modes_conserve_modal_energy():
 
     e0 = energy(x)
     dt, n = 5e-4, 20000
-    aux, work = np.zeros(L.N_AUX), work_array(x.size)
+    aux, work = np.zeros(layout.N_AUX), work_array(x.size)
     max_err = np.zeros(2)
     for k in range(n):
         rk4(k * dt, x, u, dt, p, tb, aux, work)
@@ -98,7 +98,7 @@ def test_undamped_free_modes_conserve_modal_energy():
     amp = np.sqrt(q0**2 + (qd0 / w) ** 2)
     np.testing.assert_allclose(x[fo:fo + 2], q_exact, rtol=0, atol=1e-7 * amp.max())
     # free-free: the unloaded modes do not move the rigid body
-    np.testing.assert_array_equal(x[L.W:L.W + 3], 0.0)
+    np.testing.assert_array_equal(x[layout.W:layout.W + 3], 0.0)
 
 
 @pytest.mark.parametrize("zeta", [0.01, 0.05])
@@ -112,7 +112,7 @@ def test_damped_mode_frequency_and_log_decrement(zeta):
     fo = lay.flex
     x[fo] = 0.3
     dt, n = 1e-3, 8000
-    aux, work = np.zeros(L.N_AUX), work_array(x.size)
+    aux, work = np.zeros(layout.N_AUX), work_array(x.size)
     y = np.empty(n)
     for k in range(n):
         rk4(k * dt, x, u, dt, p, tb, aux, work)
@@ -135,11 +135,11 @@ def test_damped_mode_frequency_and_log_decrement(zeta):
 
 @pytest.mark.parametrize("n_used", [3, 2])  # 2: fewer retained modes than the tables hold
 @pytest.mark.parametrize("config,switch,sets,weight", [
-    (L.CONFIG_STACK, 0, (0, 1), 0.0),
-    (L.CONFIG_UPPER, 0, (2, 3), 0.0),
-    (L.CONFIG_UPPER_LES, 0, (2, 3), 0.0),
-    (L.CONFIG_STACK, 1, (0, 1), 0.25),  # by propellant: 75 % of the stage remains
-    (L.CONFIG_UPPER, 1, (2, 3), 0.6),  # 40 % remains
+    (layout.CONFIG_STACK, 0, (0, 1), 0.0),
+    (layout.CONFIG_UPPER, 0, (2, 3), 0.0),
+    (layout.CONFIG_UPPER_LES, 0, (2, 3), 0.0),
+    (layout.CONFIG_STACK, 1, (0, 1), 0.25),  # by propellant: 75 % of the stage remains
+    (layout.CONFIG_UPPER, 1, (2, 3), 0.6),  # 40 % remains
 ])
 def test_flex_point_rotation_and_rate_at_every_point(config, switch, sets, weight, n_used):
     """``flex_point`` = Σ_i [(1−w) σ_i^a(pt) + w σ_i^b(pt)] q_i (or q̇_i), with w the
@@ -153,9 +153,9 @@ def test_flex_point_rotation_and_rate_at_every_point(config, switch, sets, weigh
     p[propulsion.P_FS_PROP_FULL] = 4.0e5
     p[propulsion.P_US_PROP_FULL] = 1.0e5
     x = _orbit_state(lay)
-    x[L.MFS] = 0.75 * 4.0e5
-    x[L.MLOX], x[L.MLH2] = 0.4 * 1.0e5 * 5 / 6, 0.4 * 1.0e5 / 6
-    x[L.W:L.W + 3] = (0.01, -0.02, 0.03)
+    x[layout.MFS] = 0.75 * 4.0e5
+    x[layout.MLOX], x[layout.MLH2] = 0.4 * 1.0e5 * 5 / 6, 0.4 * 1.0e5 / 6
+    x[layout.W:layout.W + 3] = (0.01, -0.02, 0.03)
     fo = lay.flex
     q = rng.standard_normal(nm)
     qd = rng.standard_normal(nm)
@@ -164,7 +164,7 @@ def test_flex_point_rotation_and_rate_at_every_point(config, switch, sets, weigh
     sa, sb = sets
     sig = (1.0 - weight) * shapes[sa, :, :, 3:] + weight * shapes[sb, :, :, 3:]  # (nd, N_POINTS, 3)
     out = np.zeros(3)
-    for pt in range(L.N_POINTS):
+    for pt in range(layout.N_POINTS):
         expected_rate = sum(sig[i, pt] * qd[i] for i in range(nm))
         expected_rot = sum(sig[i, pt] * q[i] for i in range(nm))
         flex_point(x, config, p, tb, pt, True, out)
@@ -173,11 +173,11 @@ def test_flex_point_rotation_and_rate_at_every_point(config, switch, sets, weigh
         np.testing.assert_allclose(out, expected_rot, rtol=1e-12, atol=1e-18)
     # flex off: zero
     p[flex.P_OFFSET] = -1
-    flex_point(x, config, p, tb, L.PT_IMU, True, out)
+    flex_point(x, config, p, tb, layout.PT_IMU, True, out)
     np.testing.assert_array_equal(out, 0.0)
 
 
-@pytest.mark.parametrize("config", [L.CONFIG_STACK, L.CONFIG_UPPER])
+@pytest.mark.parametrize("config", [layout.CONFIG_STACK, layout.CONFIG_UPPER])
 def test_engine_feeds_gyros_rigid_plus_flex_rate_and_nav_unit_flex_rotation(config):
     """Spherical inertia and no loads: the body rate ω is constant; modes with ω_i = 0 and
     ζ = 0 drift at constant q̇ (q = q₀ + q̇ t, integrated exactly by RK4). The gyro filter
@@ -187,8 +187,9 @@ def test_engine_feeds_gyros_rigid_plus_flex_rate_and_nav_unit_flex_rotation(conf
     from conftest import compose_config
 
     from savant_cli.config import validate
+    from savant_cli.models.guidance import SmootherGains
     from savant_cli.models.sensors import gyro_discrete
-    from savant_cli.sim import engine as E, loop_perturbation
+    from savant_cli.sim import engine, loop_perturbation
     from savant_cli.models.fcs import fcs_tables
     from savant_cli.sim.run import log_columns
 
@@ -200,10 +201,10 @@ def test_engine_feeds_gyros_rigid_plus_flex_rate_and_nav_unit_flex_rotation(conf
     tb = pack_tables(tables)
     p, lay = _flex_params(nm)
     u = synthetic.coast_inputs()
-    u[L.U_CONFIG] = config
+    u[layout.U_CONFIG] = config
     x = _orbit_state(lay)
     w_body = np.array([0.02, -0.05, 0.03])
-    x[L.W:L.W + 3] = w_body
+    x[layout.W:layout.W + 3] = w_body
     fo = lay.flex
     q0 = np.array([0.5, -1.0])
     qd = np.array([2.0, 0.7])
@@ -211,34 +212,34 @@ def test_engine_feeds_gyros_rigid_plus_flex_rate_and_nav_unit_flex_rotation(conf
     x[fo + nm:fo + 2 * nm] = qd
 
     dt = 0.005
-    rates = E.Rates(dt=dt, n_sensor=1, n_fcs=4, n_guid=200, n_log=4)
-    gyro = E.GyroModel(*gyro_discrete(25.0, 0.7, dt))
-    gt = E.GuidanceTable(time=np.array([0.0, 1.0e4]), quat=np.tile([1.0, 0.0, 0.0, 0.0], (2, 1)),
+    rates = engine.Rates(dt=dt, n_sensor=1, n_fcs=4, n_guid=200, n_log=4)
+    gyro = gyro_discrete(25.0, 0.7, dt)
+    smoother = SmootherGains(damping=0.8, natural_frequency_rad_s=1.0)
+    gt = engine.GuidanceTable(time=np.array([0.0, 1.0e4]), quat=np.tile([1.0, 0.0, 0.0, 0.0], (2, 1)),
                          rate=np.zeros((2, 3)), speed=np.zeros(0))
     ft = fcs_tables(validate(compose_config()).controller)
-    sched = np.zeros(E.N_SCHED)
-    sched[E.S_T_MAX] = 1.0e9  # S_SEP_FRACTION 0: never separates
-    sched[E.S_ENERGY_TARGET] = 1.0e12
-    sched[E.S_SMOOTH_ZETA], sched[E.S_SMOOTH_WN] = 0.8, 1.0
-    sched[E.S_MAX_RATE] = 10.0
-    d = np.zeros(L.N_DISC)
+    sched = engine.EventSchedule(separation_thrust_fraction=0.0, ignition_delay_s=0.0, les_jettison_delay_s=0.0,
+                            cutoff_energy_j_kg=1.0e12, max_time_s=1.0e9, stop_at_separation=False,
+                            max_body_rate_rad_s=10.0, command_delay_steps=0, profile_schedule=0, plant_step_s=dt)
+    d = np.zeros(layout.N_DISC)
     events = np.full(4, np.nan)
     n = 400
     log = np.empty((n // rates.n_log + 2, log_columns(lay.n)))
-    status, done, _, detail = E.advance(x, d, u, events, 0, n, rates, p, tb, ft, gyro, gt, sched, log, 0, loop_perturbation.NONE)
-    assert status == E.RUNNING and done == n, detail
+    status, done, _, detail = engine.advance(x, d, u, events, 0, n, rates, p, tb, ft, gyro, smoother, gt, sched, log, 0,
+                                        loop_perturbation.NONE)
+    assert status == engine.RUNNING and done == n, detail
 
-    np.testing.assert_allclose(x[L.W:L.W + 3], w_body, rtol=1e-12)  # torque-free sphere
+    np.testing.assert_allclose(x[layout.W:layout.W + 3], w_body, rtol=1e-12)  # torque-free sphere
     np.testing.assert_allclose(x[fo + nm:fo + 2 * nm], qd, rtol=1e-12)
-    sets = (0, 1) if config == L.CONFIG_STACK else (2, 3)
+    sets = (0, 1) if config == layout.CONFIG_STACK else (2, 3)
     sig = shapes[sets[0], :, :, 3:]  # separation switch: the first set of the stage
-    for g, pt in enumerate((L.PT_GYRO_US, L.PT_IMU, L.PT_GYRO_FS)):  # FCS gyro order
+    for g, pt in enumerate((layout.PT_GYRO_US, layout.PT_IMU, layout.PT_GYRO_FS)):  # FCS gyro order
         expected = w_body + sig[0, pt] * qd[0] + sig[1, pt] * qd[1]
-        np.testing.assert_allclose(d[L.D_GYRO_Y + 3 * g:L.D_GYRO_Y + 3 * g + 3], expected, rtol=1e-9, atol=1e-13)
+        np.testing.assert_allclose(d[layout.D_GYRO_Y + 3 * g:layout.D_GYRO_Y + 3 * g + 3], expected, rtol=1e-9, atol=1e-13)
     t_c = ((n - 1) // rates.n_fcs) * rates.n_fcs * dt
     q_c = q0 + qd * t_c
-    expected_nav = sig[0, L.PT_IMU] * q_c[0] + sig[1, L.PT_IMU] * q_c[1]
-    np.testing.assert_allclose(d[L.D_FLEX_NAV:L.D_FLEX_NAV + 3], expected_nav, rtol=1e-10, atol=1e-15)
+    expected_nav = sig[0, layout.PT_IMU] * q_c[0] + sig[1, layout.PT_IMU] * q_c[1]
+    np.testing.assert_allclose(d[layout.D_FLEX_NAV:layout.D_FLEX_NAV + 3], expected_nav, rtol=1e-10, atol=1e-15)
     assert np.linalg.norm(expected_nav) > 1e-3  # a non-trivial check
 
 
@@ -259,11 +260,11 @@ def _thrust_setup(engine: int, rng, nm: int = 2, twd: bool = False):
         p[twd_model.P_FS_ENGINE:twd_model.P_FS_ENGINE + 3] = (7000.0, 2.0, 35000.0)  # mass, arm, inertia
         p[twd_model.P_US_ENGINE:twd_model.P_US_ENGINE + 3] = (2500.0, 1.5, 8125.0)
     u = synthetic.coast_inputs()
-    if engine == L.ENGINE_FIRST:
-        u[L.U_CONFIG], u[L.U_ENGINE] = L.CONFIG_STACK, L.ENGINE_FIRST
+    if engine == layout.ENGINE_FIRST:
+        u[layout.U_CONFIG], u[layout.U_ENGINE] = layout.CONFIG_STACK, layout.ENGINE_FIRST
     else:
-        u[L.U_CONFIG], u[L.U_ENGINE] = L.CONFIG_UPPER, L.ENGINE_UPPER
-        u[L.U_T_IGN] = -10.0
+        u[layout.U_CONFIG], u[layout.U_ENGINE] = layout.CONFIG_UPPER, layout.ENGINE_UPPER
+        u[layout.U_T_IGN] = -10.0
     x = _orbit_state(lay)
     return tables, shapes, w, zeta, thrust, p, lay, u, x
 
@@ -278,7 +279,7 @@ def _rotation_matrix(theta: np.ndarray) -> np.ndarray:
     return np.eye(3) + np.sin(a) * kx + (1 - np.cos(a)) * kx @ kx
 
 
-@pytest.mark.parametrize("engine", [L.ENGINE_FIRST, L.ENGINE_UPPER])
+@pytest.mark.parametrize("engine", [layout.ENGINE_FIRST, layout.ENGINE_UPPER])
 @pytest.mark.parametrize("plane", ["pitch", "yaw", "both"])
 def test_modal_acceleration_is_thrust_at_the_gimbal_turned_by_flex(engine, plane):
     """q̈_i = φ_i(gimbal)·F − 2ζ_i ω_i q̇_i − ω_i² q_i with F = T R(θ_g) t̂(δ_p, δ_y),
@@ -287,8 +288,8 @@ def test_modal_acceleration_is_thrust_at_the_gimbal_turned_by_flex(engine, plane
     rng = np.random.default_rng(5 + engine)
     tables, shapes, w, zeta, thrust, p, lay, u, x = _thrust_setup(engine, rng)
     nm = 2
-    pg, other = ((L.PT_GIMBAL_FS, L.PT_GIMBAL_US) if engine == L.ENGINE_FIRST
-                 else (L.PT_GIMBAL_US, L.PT_GIMBAL_FS))
+    pg, other = ((layout.PT_GIMBAL_FS, layout.PT_GIMBAL_US) if engine == layout.ENGINE_FIRST
+                 else (layout.PT_GIMBAL_US, layout.PT_GIMBAL_FS))
     if plane == "pitch":  # pitch-plane modes (dz, ry) and a pitch gimbal angle only
         shapes[..., [0, 1, 3, 5]] = 0.0
         dp, dy = 0.05, 0.0
@@ -303,8 +304,8 @@ def test_modal_acceleration_is_thrust_at_the_gimbal_turned_by_flex(engine, plane
     qd = np.array([0.3, 1.2])
     x[fo:fo + nm] = q
     x[fo + nm:fo + 2 * nm] = qd
-    x[L.ACT_P], x[L.ACT_Y] = dp, dy
-    sa = 0 if engine == L.ENGINE_FIRST else 2
+    x[layout.ACT_P], x[layout.ACT_Y] = dp, dy
+    sa = 0 if engine == layout.ENGINE_FIRST else 2
     phi = shapes[sa, :, pg, :3]
     sig = shapes[sa, :, pg, 3:]
     theta = sig.T @ q
@@ -312,7 +313,7 @@ def test_modal_acceleration_is_thrust_at_the_gimbal_turned_by_flex(engine, plane
     force = thrust * _rotation_matrix(theta) @ t_hat
     expected = phi @ force - 2 * zeta * w * qd - w**2 * q
 
-    aux, xd = np.zeros(L.N_AUX), np.zeros(lay.n)
+    aux, xd = np.zeros(layout.N_AUX), np.zeros(lay.n)
     derivative(0.0, x, u, p, tb, aux, xd)
     assert aux[propulsion.A_THRUST] == pytest.approx(thrust, rel=1e-12)
     np.testing.assert_allclose(xd[fo:fo + nm], qd, rtol=1e-15)
@@ -331,7 +332,7 @@ def test_modal_acceleration_is_thrust_at_the_gimbal_turned_by_flex(engine, plane
     np.testing.assert_array_equal(xd2[fo:], xd[fo:])
 
 
-@pytest.mark.parametrize("engine", [L.ENGINE_FIRST, L.ENGINE_UPPER])
+@pytest.mark.parametrize("engine", [layout.ENGINE_FIRST, layout.ENGINE_UPPER])
 def test_engine_inertia_reaction_loads_the_modes_at_the_gimbal(engine):
     """Tail-wags-dog on, no thrust (P_THRUST_ON = 0), third-order actuator with nozzle
     angular accelerations δ̈_p, δ̈_y: the nozzle (mass m_R, CG l_R aft of the gimbal, inertia
@@ -345,16 +346,16 @@ def test_engine_inertia_reaction_loads_the_modes_at_the_gimbal(engine):
     fo = lay.flex
     q = np.array([0.2, 0.1])
     x[fo:fo + nm] = q
-    x[L.ACT_P], x[L.ACT_P + 2] = 0.01, 4.0
-    x[L.ACT_Y], x[L.ACT_Y + 2] = -0.02, -2.5
-    if engine == L.ENGINE_FIRST:
-        pg, (m_r, l_r, i_r), sa = L.PT_GIMBAL_FS, (7000.0, 2.0, 35000.0), 0
+    x[layout.ACT_P], x[layout.ACT_P + 2] = 0.01, 4.0
+    x[layout.ACT_Y], x[layout.ACT_Y + 2] = -0.02, -2.5
+    if engine == layout.ENGINE_FIRST:
+        pg, (m_r, l_r, i_r), sa = layout.PT_GIMBAL_FS, (7000.0, 2.0, 35000.0), 0
     else:
-        pg, (m_r, l_r, i_r), sa = L.PT_GIMBAL_US, (2500.0, 1.5, 8125.0), 2
+        pg, (m_r, l_r, i_r), sa = layout.PT_GIMBAL_US, (2500.0, 1.5, 8125.0), 2
     force = m_r * l_r * np.array([0.0, 2.5, 4.0])
     moment = i_r * np.array([0.0, 4.0, -2.5])
     expected = shapes[sa, :, pg, :3] @ force + shapes[sa, :, pg, 3:] @ moment - w**2 * q
-    aux, xd = np.zeros(L.N_AUX), np.zeros(lay.n)
+    aux, xd = np.zeros(layout.N_AUX), np.zeros(lay.n)
     derivative(0.0, x, u, p, tb, aux, xd)
     assert aux[propulsion.A_THRUST] == 0.0
     np.testing.assert_allclose(xd[fo + nm:fo + 2 * nm], expected, rtol=1e-12)
@@ -364,23 +365,23 @@ def test_roll_jet_torque_loads_the_modes_at_the_rcs_point():
     """Positive-roll jets fully on: torque T_x = n F_jet arm about body x at the RCS point,
     Q_i = σ_x,i(RCS)·T_x."""
     rng = np.random.default_rng(13)
-    tables, shapes, w, zeta, thrust, p, lay, u, x = _thrust_setup(L.ENGINE_UPPER, rng)
+    tables, shapes, w, zeta, thrust, p, lay, u, x = _thrust_setup(layout.ENGINE_UPPER, rng)
     p[propulsion.P_ON] = 0.0
     f_jet = 3100.0
     tables = tables._replace(rcs_alt=np.array([0.0, 1.0e7]), rcs_thrust=np.array([f_jet, f_jet]))
     p[rcs.P_N], p[rcs.P_ARM] = 2.0, 2.75
     tb = pack_tables(tables)
-    x[L.RCS_POS] = 1.0
+    x[layout.RCS_POS] = 1.0
     fo = lay.flex
     torque = 2.0 * f_jet * 2.75
-    expected = shapes[2, :, L.PT_RCS, 3] * torque
-    aux, xd = np.zeros(L.N_AUX), np.zeros(lay.n)
+    expected = shapes[2, :, layout.PT_RCS, 3] * torque
+    aux, xd = np.zeros(layout.N_AUX), np.zeros(lay.n)
     derivative(0.0, x, u, p, tb, aux, xd)
     assert aux[rcs.A_TORQUE] == pytest.approx(torque, rel=1e-12)
     np.testing.assert_allclose(xd[fo + 2:fo + 4], expected, rtol=1e-12)
 
 
-@pytest.mark.parametrize("engine", [L.ENGINE_FIRST, L.ENGINE_UPPER])
+@pytest.mark.parametrize("engine", [layout.ENGINE_FIRST, layout.ENGINE_UPPER])
 def test_thrust_and_engine_reaction_act_at_the_displaced_gimbal(engine):
     """One pitch-plane mode (φ_x, φ_z, σ_y at the gimbal), nozzle at null: the thrust
     T R(σ_y q) x̂ acts at r_g + φ q, so the modal-to-rigid pitch moment per unit q is,
@@ -389,33 +390,33 @@ def test_thrust_and_engine_reaction_act_at_the_displaced_gimbal(engine):
     F = m_R l_R (0, 0, δ̈_p) at the same point adds ∂M_y/∂q = −φ_x m_R l_R δ̈_p."""
     rng = np.random.default_rng(21 + engine)
     tables, shapes, w, zeta, thrust, p, lay, u, x = _thrust_setup(engine, rng, nm=1, twd=True)
-    pg = L.PT_GIMBAL_FS if engine == L.ENGINE_FIRST else L.PT_GIMBAL_US
-    sa = 0 if engine == L.ENGINE_FIRST else 2
+    pg = layout.PT_GIMBAL_FS if engine == layout.ENGINE_FIRST else layout.PT_GIMBAL_US
+    sa = 0 if engine == layout.ENGINE_FIRST else 2
     shapes[...] = 0.0
     phi_x, phi_z, sigma_y = 4.0e-4, 2.5e-3, -3.0e-4
     shapes[:, 0, pg, flex.PHI_X], shapes[:, 0, pg, flex.PHI_Z], shapes[:, 0, pg, flex.SIGMA_Y] = phi_x, phi_z, sigma_y
     tb = pack_tables(tables._replace(flex_shape=shapes))
     fo = lay.flex
     acc_p = 3.0  # rad/s², the third-order nozzle acceleration state
-    x[L.ACT_P:L.ACT_P + 3] = 0.0, 0.0, acc_p
-    x[L.ACT_Y:L.ACT_Y + 3] = 0.0
+    x[layout.ACT_P:layout.ACT_P + 3] = 0.0, 0.0, acc_p
+    x[layout.ACT_Y:layout.ACT_Y + 3] = 0.0
 
     def moments(q: float) -> tuple[float, float]:
         xs = x.copy()
         xs[fo] = q
-        aux, xd = np.zeros(L.N_AUX), np.zeros(lay.n)
+        aux, xd = np.zeros(layout.N_AUX), np.zeros(lay.n)
         derivative(0.0, xs, u, p, tb, aux, xd)
         return aux[propulsion.A_MOMENT + 1], aux[twd_model.A_MOMENT + 1]
 
     # the arm at q = 0 from the plant's own CG (aux) and the vehicle's gimbal station
-    aux0, xd0 = np.zeros(L.N_AUX), np.zeros(lay.n)
+    aux0, xd0 = np.zeros(layout.N_AUX), np.zeros(lay.n)
     derivative(0.0, x, u, p, tb, aux0, xd0)
     cg = aux0[mass_model.A_CG:mass_model.A_CG + 3]
-    r_gx = propulsion.gimbal_arm(p, int(u[L.U_ENGINE]), *cg)[0]
+    r_gx = propulsion.gimbal_arm(p, int(u[layout.U_ENGINE]), *cg)[0]
     assert r_gx < -1.0  # the gimbal is aft of the CG
     h = 1e-3
     (mp, wp), (mm, wm) = moments(h), moments(-h)
-    e = twd_model.P_FS_ENGINE if engine == L.ENGINE_FIRST else twd_model.P_US_ENGINE
+    e = twd_model.P_FS_ENGINE if engine == layout.ENGINE_FIRST else twd_model.P_US_ENGINE
     m_l = p[e + twd_model.E_MASS] * p[e + twd_model.E_ARM]
     assert (mp - mm) / (2 * h) == pytest.approx(thrust * (phi_z + r_gx * sigma_y), rel=1e-6)
     assert (wp - wm) / (2 * h) == pytest.approx(-phi_x * m_l * acc_p, rel=1e-6)

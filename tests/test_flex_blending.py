@@ -9,7 +9,7 @@ import pytest
 from conftest import compose_config
 from savant_cli.config import validate
 from savant_cli.datagen.flex_filters import stack_blend
-from savant_cli.models import layout as L
+from savant_cli.models import layout
 from savant_cli.sim.setup import prepare
 
 
@@ -32,7 +32,7 @@ def test_design_rule_blend_nulls_first_bending_in_both_planes():
     w = np.asarray(vehicle_stack_blend(cfg.vehicle, prep.vehicle_dir))
     shapes = model.tables.flex_shape[0]  # first-stage liftoff set, (modes, points, 6)
     for mode, comp in ((0, 4), (1, 5)):  # 1st bending x–z plane: body y rotation; x–y plane: body z
-        slopes = np.array([shapes[mode, pt, comp] for pt in L.GYRO_POINTS])
+        slopes = np.array([shapes[mode, pt, comp] for pt in layout.GYRO_POINTS])
         assert abs(slopes[0]) > 1e-5 and slopes[0] * slopes[2] < 0  # opposite signs: a null exists
         assert abs(w @ slopes) < 0.01 * abs(slopes[0])  # the blended slope is nulled to 1 %
     # and the rigid rate passes unchanged

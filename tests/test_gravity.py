@@ -11,11 +11,11 @@ import numpy as np
 import pytest
 from numpy.polynomial import legendre
 
-from savant_cli import constants as C
+from savant_cli import constants
 from savant_cli.models.gravity import gravity_potential, gravity_zonal
 
-MU, RE = C.MU_EARTH, C.WGS84_A
-J = {2: C.EGM2008_J2, 3: C.EGM2008_J3, 4: C.EGM2008_J4}
+MU, RE = constants.MU_EARTH, constants.WGS84_A
+J = {2: constants.EGM2008_J2, 3: constants.EGM2008_J3, 4: constants.EGM2008_J4}
 
 rng = np.random.default_rng(1976)
 POINTS = [np.array(p) for p in (

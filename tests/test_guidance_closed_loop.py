@@ -8,13 +8,13 @@ import numpy as np
 import pytest
 
 from conftest import compose_config
-from savant_cli import constants as C
+from savant_cli import constants
 from savant_cli.config import validate
 from savant_cli.errors import ConfigError
 from savant_cli.models import command_schedule as cs
 from savant_cli.models import peg
-from savant_cli.sim import engine as E
-from savant_cli.models import layout as L
+from savant_cli.sim import engine
+from savant_cli.models import layout
 from savant_cli.sim.summary import orbit_elements
 from savant_cli.studies.flight import fly
 
@@ -26,7 +26,7 @@ def _fly(overrides: list[str]):
 def _insertion_ok(flight, perigee_km: float, apogee_km: float, inclination_deg: float) -> None:
     """Within 0.5 km of the target apsides and 0.01 deg of the inclination (issue 14), from
     the final state by the summary's own two-body elements."""
-    r, v = flight.result.x[L.R:L.R + 3], flight.result.x[L.V:L.V + 3]
+    r, v = flight.result.x[layout.R:layout.R + 3], flight.result.x[layout.V:layout.V + 3]
     orbit = orbit_elements(r, v)
     assert orbit["perigee_altitude_km"] == pytest.approx(perigee_km, abs=0.5)
     assert orbit["apogee_altitude_km"] == pytest.approx(apogee_km, abs=0.5)
@@ -40,7 +40,7 @@ def test_default_flight_inserts_on_target():
     flight = _fly([])
     assert flight.prep.model.p[peg.P_ON] == 1.0
     assert flight.result.status == "complete", flight.result.message
-    assert flight.result.stop_code == E.STOP_GUIDANCE_CUTOFF
+    assert flight.result.stop_code == engine.STOP_GUIDANCE_CUTOFF
     _insertion_ok(flight, 56.0, 185.0, 51.6)
     s = flight.summary
     assert s["peg_engage_time_s"] == pytest.approx(s["time_upper_stage_ignition_s"] + 40.0, abs=1.0)
@@ -59,7 +59,7 @@ def test_default_flight_inserts_on_target():
 def test_small_launcher_inserts_on_its_own_target():
     flight = _fly(["vehicle=small_launcher"])
     assert flight.result.status == "complete", flight.result.message
-    assert flight.result.stop_code == E.STOP_GUIDANCE_CUTOFF
+    assert flight.result.stop_code == engine.STOP_GUIDANCE_CUTOFF
     _insertion_ok(flight, 200.0, 300.0, 40.0)
 
 
@@ -71,10 +71,10 @@ def test_stored_profile_path_still_cuts_off_on_energy():
     flight = _fly(["guidance=ares_i_iss"])
     assert flight.prep.model.p[peg.P_ON] == 0.0
     assert "peg_time_to_go" not in flight.signals
-    assert flight.result.stop_code == E.STOP_CUTOFF
-    r, v = flight.result.x[L.R:L.R + 3], flight.result.x[L.V:L.V + 3]
-    energy = 0.5 * v @ v - C.MU_EARTH / np.linalg.norm(r)
-    target = -C.MU_EARTH / (2.0 * C.WGS84_A + 1e3 * (56.0 + 185.0))
+    assert flight.result.stop_code == engine.STOP_CUTOFF
+    r, v = flight.result.x[layout.R:layout.R + 3], flight.result.x[layout.V:layout.V + 3]
+    energy = 0.5 * v @ v - constants.MU_EARTH / np.linalg.norm(r)
+    target = -constants.MU_EARTH / (2.0 * constants.WGS84_A + 1e3 * (56.0 + 185.0))
     step_gain = np.linalg.norm(v) * 30.0 * flight.prep.model.rates.dt  # v · a_T · dt at cutoff
     tail = np.linalg.norm(v) * flight.prep.vehicle.upper_stage.shutdown_impulse_Ns / flight.summary["cutoff_mass_kg"]
     assert tail > 40e3  # J/kg: ~6 m/s at 7.8 km/s
@@ -104,7 +104,7 @@ def test_failing_guidance_stops_the_run_and_says_why():
     res = flight.result
     assert res.status == "guidance_failed"
     assert "did not converge" in res.message and "guidance.peg.max_iterations" in res.message
-    t_engage = res.events[E.EV_IGNITION] + 40.0
+    t_engage = res.events[engine.EV_IGNITION] + 40.0
     assert res.t_final == pytest.approx(t_engage, abs=1.0)
     assert flight.signals["time"].data[-1] == pytest.approx(res.t_final)
     assert flight.summary["insertion_perigee_error_km"] is None  # no cutoff, no insertion
@@ -115,7 +115,7 @@ def test_profile_time_by_speed_then_by_time():
     running on in time from the speed peak; the rate scale is dτ/dt."""
     ref_t = np.array([0.0, 10.0, 20.0, 30.0])
     ref_v = np.array([0.0, 100.0, 300.0, 600.0])
-    d = np.zeros(L.N_DISC)
+    d = np.zeros(layout.N_DISC)
     assert cs.profile_time(d, 0.0, 0.0, True, ref_v, ref_t, True) == 0.0
     # a hot motor: 200 m/s at 12 s is the reference's 15 s
     assert cs.profile_time(d, 12.0, 200.0, True, ref_v, ref_t, False) == pytest.approx(15.0)

@@ -10,14 +10,14 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from savant_cli import constants as C
+from savant_cli import constants
 from savant_cli.config import validate
 from savant_cli.errors import ConfigError
-from savant_cli.models import earth as E, winds
+from savant_cli.models import earth, winds
 from savant_cli.sim.plant import pack_tables
 import synthetic
 
-W = C.OMEGA_EARTH
+W = constants.OMEGA_EARTH
 
 
 def _p(**kw) -> np.ndarray:
@@ -141,7 +141,7 @@ def test_off_switch_leaves_the_profile_alone_bit_for_bit():
     assert winds.air_relative_velocity(57.0, 12000.0, *args, tb, p_off_armed) == base
     # and that is the profile rotated into ECI (explicit matrices), the down component 0
     wind = np.array([*winds.wind_ned(12000.0, tb, p_off), 0.0])
-    expect = E.dcm_eci_to_ecef(0.1 / W, W).T @ (E.dcm_ecef_to_ned(lat, lon).T @ wind)
+    expect = earth.dcm_eci_to_ecef(0.1 / W, W).T @ (earth.dcm_ecef_to_ned(lat, lon).T @ wind)
     np.testing.assert_allclose(base[:3], np.array(args[6:]) - expect, atol=1e-12)
     assert base[5] == 0.0
 
@@ -151,8 +151,8 @@ def test_gust_reaches_the_air_velocity_rotated_into_eci(lat_deg, lon_deg, t):
     tb = _packed()
     lat, lon = math.radians(lat_deg), math.radians(lon_deg)
     p = _gust_p(amp=9.0, by_time=1.0, start=t - 0.5, length=1.0, frame=1.0, direction_deg=30.0)
-    c_ecef_ned = E.dcm_ecef_to_ned(lat, lon)
-    c_eci_ecef = E.dcm_eci_to_ecef(t, W)
+    c_ecef_ned = earth.dcm_ecef_to_ned(lat, lon)
+    c_eci_ecef = earth.dcm_eci_to_ecef(t, W)
     v_earth = np.array([300.0, -120.0, 350.0])
     v_ned = c_ecef_ned @ (c_eci_ecef @ v_earth)
     gust = np.array(winds.discrete_ned(t, 12000.0, *v_ned, p))

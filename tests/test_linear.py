@@ -16,7 +16,7 @@ from savant_cli.linear.loops import assemble
 from savant_cli.linear.margins import Bands, loop_margins
 from savant_cli.linear.plant import linearize_plant
 from savant_cli.models import actuator, aero, atmosphere, mass as mass_model, propulsion, rigid_body, slosh, twd
-from savant_cli.models import layout as L
+from savant_cli.models import layout
 from savant_cli.sim.engine import rk4, work_array
 from savant_cli.sim.plant import derivative
 from savant_cli.sim.run import simulate
@@ -49,20 +49,20 @@ def test_linear_plant_matches_nonlinear_small_step(maxq):
     x0 = snap.x.copy()
     dt = model.rates.dt
     tb = model.packed_tables
-    aux, work = np.zeros(L.N_AUX), work_array(x.size)
+    aux, work = np.zeros(layout.N_AUX), work_array(x.size)
     n = int(2.0 / dt)
 
     def run(u_in):
         xx = x0.copy()
         out = np.empty(n + 1)
-        out[0] = xx[L.W + 1]
+        out[0] = xx[layout.W + 1]
         for k in range(n):
             rk4(snap.t, xx, u_in, dt, model.p, tb, aux, work)  # frozen time
-            out[k + 1] = xx[L.W + 1]
+            out[k + 1] = xx[layout.W + 1]
         return out
 
     up = u.copy()
-    up[L.U_DPC] += step
+    up[layout.U_DPC] += step
     q_nl = run(up) - run(u)  # the response to the step alone (the drift cancels)
     t = np.arange(n + 1) * dt
     sys = lin.sys
@@ -90,7 +90,7 @@ def test_tail_wags_dog_zero_pair():
     i_q = [sys.state_labels[i] for i in keep].index("q")
     # transfer δ → q with δ̈ = s² δ: G(s) = C (sI − A)⁻¹ (b_δ + s² b_acc); its numerator at q
     # is a polynomial; find the zeros by evaluating on the imaginary axis
-    aux = np.zeros(L.N_AUX)
+    aux = np.zeros(layout.N_AUX)
     derivative(snap.t, snap.x, snap.u, model.p, model.packed_tables, aux, np.zeros(snap.x.size))
     thrust = aux[propulsion.A_THRUST]
     cg_x = aux[mass_model.A_CG]  # total CG (no slosh): the rigid CG
@@ -113,7 +113,7 @@ def test_slosh_and_flex_poles_at_their_model_frequencies():
     lin = linearize_plant(model, snap)
     poles = lin.sys.poles()
     wn = np.abs(poles[poles.imag > 0])
-    aux = np.zeros(L.N_AUX)
+    aux = np.zeros(layout.N_AUX)
     derivative(snap.t, snap.x, snap.u, model.p, model.packed_tables, aux, np.zeros(snap.x.size))
     for w_model in (*aux[slosh.A_FREQUENCY:slosh.A_FREQUENCY + 2], *model.tables.flex_freq[0, :2]):
         assert np.min(np.abs(wn - w_model) / w_model) < 0.03, (w_model, np.sort(wn))
@@ -138,7 +138,7 @@ def test_closed_form_rigid_pitch_loop_margins(maxq):
     from savant_cli.linear.plant import EXTRA_OUTPUTS, INPUT_NAMES, SENSOR_NAMES, PlantLinearization
 
     model, snap = maxq
-    aux = np.zeros(L.N_AUX)
+    aux = np.zeros(layout.N_AUX)
     derivative(snap.t, snap.x, snap.u, model.p, model.packed_tables, aux, np.zeros(snap.x.size))
     tb = model.tables
     qbar, v, mass, thrust = aux[aero.A_QBAR], aux[aero.A_VREL], aux[mass_model.A_MASS], aux[propulsion.A_THRUST]
@@ -159,7 +159,7 @@ def test_closed_form_rigid_pitch_loop_margins(maxq):
 
     s_ref, l_ref, x_mrp = tb.aero_ref[0, 0], tb.aero_ref[0, 2], tb.aero_ref[0, 4]
     n_tab = tb.mass_len[0]
-    iyy = float(np.interp(snap.x[L.MFS], tb.mass_prop[0, :n_tab], tb.mass_data[0, :n_tab, 5]))
+    iyy = float(np.interp(snap.x[layout.MFS], tb.mass_prop[0, :n_tab], tb.mass_data[0, :n_tab, 5]))
     dx = cg - x_mrp
     ca0, cn0, cm0 = coef(0), coef(2), coef(4)
     u0, w0 = v * np.cos(a0), v * np.sin(a0)
@@ -240,20 +240,21 @@ def test_every_crossing_of_a_flex_loop_is_listed():
 def _closed_loop_gust_response(model, snap, gust: float, seconds: float) -> np.ndarray:
     """Pitch gimbal angle at every flight-control cycle of the time run (engine.advance,
     flight software in the loop) from ``snap`` with a constant body-z gust (m/s)."""
-    from savant_cli.sim import engine as E, loop_perturbation
+    from savant_cli.sim import engine, loop_perturbation
     from savant_cli.sim.run import log_columns
 
     x, d, u, ev = snap.x.copy(), snap.d.copy(), snap.u.copy(), snap.events.copy()
-    u[L.U_GUST + 2] = gust
+    u[layout.U_GUST + 2] = gust
     rt = model.rates
     log = np.empty((int(seconds / rt.dt) // rt.n_log + 4, log_columns(x.size)))
-    out, k, row = [x[L.ACT_P]], snap.step, 0
+    out, k, row = [x[layout.ACT_P]], snap.step, 0
     for _ in range(int(round(seconds / (rt.dt * rt.n_fcs)))):
-        status, done, row, _ = E.advance(x, d, u, ev, k, rt.n_fcs, rt, model.p, model.packed_tables, model.fcs,
-                                         model.gyro, model.guidance, model.sched, log, row, loop_perturbation.NONE)
-        assert status == E.RUNNING and done == rt.n_fcs
+        status, done, row, _ = engine.advance(x, d, u, ev, k, rt.n_fcs, rt, model.p, model.packed_tables, model.fcs,
+                                         model.gyro, model.smoother, model.guidance, model.sched, log, row,
+                                         loop_perturbation.NONE)
+        assert status == engine.RUNNING and done == rt.n_fcs
         k += done
-        out.append(x[L.ACT_P])
+        out.append(x[layout.ACT_P])
     return np.asarray(out)
 
 

@@ -13,7 +13,7 @@ import pytest
 from savant_cli.linear.margins import Bands, loop_margins
 from savant_cli.linear.modes import MarginLabeler, band_of
 from savant_cli.models import slosh as slosh_model
-from savant_cli.models import layout as L
+from savant_cli.models import layout
 from savant_cli.sim.plant import derivative
 
 DT = 0.02
@@ -64,7 +64,7 @@ def full_fidelity_margins():
             warnings.simplefilter("ignore")
             a = analyse(model, snap, LinearStudyConfig(times=[t]), DT)
         rows, extra = a.rows, a.scalars
-        aux = np.zeros(L.N_AUX)
+        aux = np.zeros(layout.N_AUX)
         derivative(snap.t, snap.x, snap.u, model.p, model.packed_tables, aux, np.zeros(snap.x.size))
         slosh_hz = aux[slosh_model.A_FREQUENCY:slosh_model.A_FREQUENCY + 2] / (2 * np.pi)
         stage = 0 if t < 130.0 else 2

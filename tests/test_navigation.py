@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 from conftest import compose_config
-from savant_cli import constants as C
+from savant_cli import constants
 from savant_cli.config import validate
 from savant_cli.errors import ConfigError
 from savant_cli.io.bitwise import WALL_CLOCK_KEYS
@@ -32,7 +32,7 @@ from savant_cli.sim.run import signals, simulate
 from savant_cli.sim.setup import prepare
 from savant_cli.sim.summary import orbit_elements, summarize
 
-MU = C.MU_EARTH
+MU = constants.MU_EARTH
 R0 = 6_500_000.0  # m, radius of the synthetic trajectories
 OMEGA_S = np.sqrt(MU / R0 ** 3)  # rad/s, Schuler frequency at R0 (point-mass gravity)
 SPECIFIC_FORCE = MU / R0 ** 2  # m/s², what an IMU held at R0 senses (upward)
@@ -43,7 +43,7 @@ def _params(**errors) -> np.ndarray:
     p = np.zeros(N_PARAM)
     p[gravity.P_MU] = MU
     p[gravity.P_ORDER] = 0.0
-    p[earth.P_RE] = C.WGS84_A
+    p[earth.P_RE] = constants.WGS84_A
     p[nav.P_ON] = 1.0
     fields = {"gyro_bias": nav.P_GYRO_BIAS, "gyro_scale": nav.P_GYRO_SCALE, "gyro_misalign": nav.P_GYRO_MISALIGN,
               "accel_bias": nav.P_ACCEL_BIAS, "accel_scale": nav.P_ACCEL_SCALE,

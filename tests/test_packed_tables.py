@@ -13,7 +13,7 @@ from conftest import compose_config
 from savant_cli.config import validate
 from savant_cli.models import quaternion as qt
 from savant_cli.models import aero, atmosphere, earth, mass, propulsion, winds
-from savant_cli.models import layout as L
+from savant_cli.models import layout
 from savant_cli.sim.plant import derivative, pack_tables
 from savant_cli.sim.setup import prepare
 
@@ -38,14 +38,14 @@ def _state_in_flight(model, alt_m: float, speed_mps: float, alpha_deg: float, be
     """A pad-based state lifted to ``alt_m`` (approximately, along the local radius) with
     the air-relative velocity set at the given angles in body axes."""
     x = model.x0.copy()
-    r = x[L.R:L.R + 3]
-    x[L.R:L.R + 3] = r * (1.0 + alt_m / np.linalg.norm(r))
+    r = x[layout.R:layout.R + 3]
+    x[layout.R:layout.R + 3] = r * (1.0 + alt_m / np.linalg.norm(r))
     a, b = np.radians(alpha_deg), np.radians(beta_deg)
     v_body = speed_mps * np.array([np.cos(a) * np.cos(b), np.sin(b), np.sin(a) * np.cos(b)])
-    c_b2i = qt.dcm(x[L.Q:L.Q + 4])
+    c_b2i = qt.dcm(x[layout.Q:layout.Q + 4])
     omega = np.array([0.0, 0.0, model.p[earth.P_OMEGA_E]])
-    x[L.V:L.V + 3] = c_b2i @ v_body + np.cross(omega, x[L.R:L.R + 3])  # no wind below
-    x[L.MFS] = prop_kg
+    x[layout.V:layout.V + 3] = c_b2i @ v_body + np.cross(omega, x[layout.R:layout.R + 3])  # no wind below
+    x[layout.MFS] = prop_kg
     return x
 
 
@@ -59,15 +59,15 @@ def test_plant_reads_aero_mass_and_thrust_tables_as_independent_lookups(model, a
     p = model.p.copy()
     p[winds.P_SCALE] = 0.0
     u = model.u0.copy()
-    prop = prop_frac * tb.mass_prop[L.CONFIG_STACK, tb.mass_len[L.CONFIG_STACK] - 1]
+    prop = prop_frac * tb.mass_prop[layout.CONFIG_STACK, tb.mass_len[layout.CONFIG_STACK] - 1]
     x = _state_in_flight(model, alt_m, speed, alpha, beta, prop)
-    aux = np.zeros(L.N_AUX)
+    aux = np.zeros(layout.N_AUX)
     t = 40.0
-    derivative(t, x, u, p, model.packed_tables, aux, np.zeros(L.N_STATE))
+    derivative(t, x, u, p, model.packed_tables, aux, np.zeros(layout.N_STATE))
     assert np.degrees(aux[aero.A_ALPHA]) == pytest.approx(alpha, abs=1e-6)
     assert np.degrees(aux[aero.A_BETA]) == pytest.approx(beta, abs=1e-6)
 
-    c = L.CONFIG_STACK
+    c = layout.CONFIG_STACK
     n = tb.mass_len[c]
     data = tb.mass_data[c, :n]
     for col, key in ((0, mass.A_MASS), (1, mass.A_CG)):

@@ -10,12 +10,12 @@ import numpy as np
 import pytest
 from scipy.integrate import quad, solve_bvp
 
-from savant_cli import constants as C
+from savant_cli import constants
 from savant_cli.models import gravity, peg
-from savant_cli.models import layout as L
+from savant_cli.models import layout
 from savant_cli.sim.summary import orbit_elements
 
-VE = 448.0 * C.G0  # J-2X-like exhaust velocity, m/s
+VE = 448.0 * constants.G0  # J-2X-like exhaust velocity, m/s
 
 
 def test_thrust_integrals_match_quadrature():
@@ -118,8 +118,8 @@ def test_converged_steering_is_the_optimal_linear_tangent_law(case):
 def _vacuum_params(terminal_s: float = 10.0) -> tuple[np.ndarray, np.ndarray, float, float]:
     """Plant parameters for PEG alone: point-mass gravity, a 56 x 185 km target at 130 km,
     51.6 deg; returns (p, plane normal, R_d, V_d)."""
-    p = np.zeros(L.N_PARAM)
-    p[gravity.P_MU] = C.MU_EARTH
+    p = np.zeros(layout.N_PARAM)
+    p[gravity.P_MU] = constants.MU_EARTH
     p[gravity.P_ORDER] = 0
     rd, vd, gam = peg.insertion_state(56.0, 185.0, 130.0)
     inc, node = np.radians(51.6), 0.3
@@ -145,23 +145,23 @@ def _fly_vacuum(thrust_scale: float = 1.0):
     node = 0.3
     up = np.array([np.cos(node), np.sin(node), 0.0])
     down_range = np.cross(h, up)
-    r = (C.WGS84_A + 110e3) * up
+    r = (constants.WGS84_A + 110e3) * up
     v = 3000.0 * (np.cos(np.radians(5.0)) * down_range + np.sin(np.radians(5.0)) * up)
     thrust, m = 1.3e6 * thrust_scale, 150e3
     mdot = thrust / VE
-    d = np.zeros(L.N_DISC)
+    d = np.zeros(layout.N_DISC)
     dt, t = 0.02, 100.0
     log = []
 
     def deriv(y, u):
         rn = np.linalg.norm(y[0:3])
-        return np.concatenate([y[3:6], -C.MU_EARTH * y[0:3] / rn ** 3 + thrust / y[6] * u, [-mdot]])
+        return np.concatenate([y[3:6], -constants.MU_EARTH * y[0:3] / rn ** 3 + thrust / y[6] * u, [-mdot]])
 
     y = np.concatenate([r, v, [m]])
     next_cycle = t
     while True:
         if t >= next_cycle - 1e-9:
-            assert peg.guidance_cycle(d, t, y[0:3], y[3:6], 50.0, 1.0, p, C.WGS84_A) == peg.PEG_OK
+            assert peg.guidance_cycle(d, t, y[0:3], y[3:6], 50.0, 1.0, p, constants.WGS84_A) == peg.PEG_OK
             log.append((t, d[peg.D_TGO], d[peg.D_T_CUTOFF], d[peg.D_CONVERGED], d[peg.D_ITERATIONS]))
             next_cycle += 1.0
         if d[peg.D_ACTIVE] and t >= d[peg.D_T_CUTOFF] - 1e-9:

@@ -13,8 +13,8 @@ from savant_cli.config import validate
 from savant_cli.models import quaternion as qt
 from savant_cli.models.configurations import CONFIG_STACK, CONFIG_UPPER, CONFIG_UPPER_LES
 from savant_cli.paths import hydra_search_dirs
-from savant_cli.sim import engine as E
-from savant_cli.models import layout as L
+from savant_cli.sim import engine
+from savant_cli.models import layout
 from savant_cli.sim.run import simulate
 from savant_cli.sim.setup import prepare
 from conftest import compose_config
@@ -35,9 +35,9 @@ def _body(ds: np.ndarray) -> np.ndarray:
 def point_state(x: np.ndarray, cg: np.ndarray, s: np.ndarray = NOSE) -> tuple[np.ndarray, np.ndarray]:
     """Inertial position and velocity of structure point ``s`` when the state's reference
     point is the CG ``cg`` (structure axes)."""
-    c = qt.dcm(x[L.Q:L.Q + 4])
+    c = qt.dcm(x[layout.Q:layout.Q + 4])
     arm = _body(s - cg)
-    return x[L.R:L.R + 3] + c @ arm, x[L.V:L.V + 3] + c @ np.cross(x[L.W:L.W + 3], arm)
+    return x[layout.R:layout.R + 3] + c @ arm, x[layout.V:layout.V + 3] + c @ np.cross(x[layout.W:layout.W + 3], arm)
 
 
 @pytest.fixture(scope="module")
@@ -46,26 +46,26 @@ def flown():
     model = prep.model
     dt = model.rates.dt
     res = simulate(model, progress=False)
-    k_sep = int(round(res.events[E.EV_SEPARATION] / dt))  # the flown separation step
-    k_les = int(round(res.events[E.EV_LES] / dt))
+    k_sep = int(round(res.events[engine.EV_SEPARATION] / dt))  # the flown separation step
+    k_les = int(round(res.events[engine.EV_LES] / dt))
     snaps = simulate(model, progress=False, snapshot_steps=(k_sep, k_les)).snapshots
     return prep, snaps[k_sep], snaps[k_les]
 
 
 def _apply_events(model, snap):
     x, u, d, ev = snap.x.copy(), snap.u.copy(), snap.d.copy(), snap.events.copy()
-    status = E.handle_events(snap.t, x, u, d, ev, model.sched, model.p, model.packed_tables)
+    status = engine.handle_events(snap.t, x, u, d, ev, model.sched, model.p, model.packed_tables)
     return status, x, u, ev
 
 
 def test_nose_tip_is_continuous_across_separation(flown):
     prep, snap, _ = flown
     model, vehicle = prep.model, prep.vehicle
-    assert snap.u[L.U_CONFIG] == CONFIG_STACK
+    assert snap.u[layout.U_CONFIG] == CONFIG_STACK
     status, x, u, ev = _apply_events(model, snap)
-    assert status == E.RUNNING and u[L.U_CONFIG] == CONFIG_UPPER_LES and ev[E.EV_SEPARATION] == snap.t
-    cg_before = _cg(vehicle, "stack", snap.x[L.MFS])
-    cg_after = _cg(vehicle, "upper_les", snap.x[L.MLOX] + snap.x[L.MLH2])
+    assert status == engine.RUNNING and u[layout.U_CONFIG] == CONFIG_UPPER_LES and ev[engine.EV_SEPARATION] == snap.t
+    cg_before = _cg(vehicle, "stack", snap.x[layout.MFS])
+    cg_after = _cg(vehicle, "upper_les", snap.x[layout.MLOX] + snap.x[layout.MLH2])
     assert cg_before[0] - cg_after[0] > 10.0  # the CG moves forward by over 10 m
     r0, v0 = point_state(snap.x, cg_before)
     r1, v1 = point_state(x, cg_after)
@@ -78,10 +78,10 @@ def test_nose_tip_is_continuous_across_separation(flown):
 def test_nose_tip_is_continuous_across_les_jettison(flown):
     prep, _, snap = flown
     model, vehicle = prep.model, prep.vehicle
-    assert snap.u[L.U_CONFIG] == CONFIG_UPPER_LES
+    assert snap.u[layout.U_CONFIG] == CONFIG_UPPER_LES
     status, x, u, ev = _apply_events(model, snap)
-    assert status == E.RUNNING and u[L.U_CONFIG] == CONFIG_UPPER
-    prop = snap.x[L.MLOX] + snap.x[L.MLH2]
+    assert status == engine.RUNNING and u[layout.U_CONFIG] == CONFIG_UPPER
+    prop = snap.x[layout.MLOX] + snap.x[layout.MLH2]
     cg_before, cg_after = _cg(vehicle, "upper_les", prop), _cg(vehicle, "upper", prop)
     assert abs(cg_before[0] - cg_after[0]) > 0.1
     r0, v0 = point_state(snap.x, cg_before)
@@ -97,7 +97,7 @@ def test_slosh_on_starts_from_the_same_pad():
     off = prepare(validate(compose_config(["slosh=off"])), hydra_search_dirs())
     on = prepare(validate(compose_config(["slosh=on"])), hydra_search_dirs())
     vehicle = off.vehicle
-    cg_whole = _cg(vehicle, "stack", off.model.x0[L.MFS])
+    cg_whole = _cg(vehicle, "stack", off.model.x0[layout.MFS])
     # the rigid part's CG, by hand from the plant's slosh masses and stations at the start
     from savant_cli.sim.plant import mass_state
 
@@ -110,5 +110,5 @@ def test_slosh_on_starts_from_the_same_pad():
     r_on, v_on = point_state(on.model.x0, np.array(rigid[1:4]))
     np.testing.assert_allclose(r_on, r_off, rtol=0, atol=1e-6)
     np.testing.assert_allclose(v_on, v_off, rtol=0, atol=1e-9)
-    assert np.linalg.norm(on.model.x0[L.R:L.R + 3] - off.model.x0[L.R:L.R + 3]) > 0.05
+    assert np.linalg.norm(on.model.x0[layout.R:layout.R + 3] - off.model.x0[layout.R:layout.R + 3]) > 0.05
 

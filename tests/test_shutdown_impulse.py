@@ -12,7 +12,7 @@ from conftest import compose_config
 from savant_cli.config import validate
 from savant_cli.models import propulsion
 from savant_cli.paths import hydra_search_dirs
-from savant_cli.sim import engine as E
+from savant_cli.sim import engine
 from savant_cli.sim.run import signals, simulate
 from savant_cli.sim.setup import prepare
 from savant_cli.sim.summary import propulsion_keys, summarize
@@ -25,7 +25,7 @@ def _fly(overrides):
     cfg = validate(compose_config([*BASE, *overrides]))
     prep = prepare(cfg, hydra_search_dirs())
     res = simulate(prep.model, progress=False)
-    assert res.stop_code == E.STOP_GUIDANCE_CUTOFF, res.message
+    assert res.stop_code == engine.STOP_GUIDANCE_CUTOFF, res.message
     summ = summarize(res, signals(res, prep.model), target=insertion_target(cfg.guidance), p=prep.model.p)
     return prep, res, summ
 
@@ -41,7 +41,7 @@ def _flown_shutdown_impulse(prep, res) -> tuple[float, float]:
     model = prep.model
     t = res.log[:, 0]
     f = res.log[:, 1 + model.layout.n + propulsion.A_THRUST_VAC]
-    t_cut = res.events[E.EV_CUTOFF]
+    t_cut = res.events[engine.EV_CUTOFF]
     after = t >= t_cut - 1e-9
     tt, ff = t[after], f[after]
     if tt[-1] < res.t_final - 1e-9:  # the decay ends at the stop: thrust zero there

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from savant_cli.models import gravity, propulsion, slosh
-from savant_cli.models import layout as L
+from savant_cli.models import layout
 from savant_cli.sim.engine import rk4, work_array
 from savant_cli.sim.plant import pack_tables
 import synthetic
@@ -26,18 +26,18 @@ def _setup(w_ref: float, zeta: float, m_s: float, accel: float, inertia: float =
     p[propulsion.P_US_THRUST] = accel * 1.0e6
     p[propulsion.P_US_ISP] = 1e12  # no mass flow: constant acceleration
     p[propulsion.P_US_GIMBAL:propulsion.P_US_GIMBAL + 3] = (40.0, 0.0, 0.0)
-    lay = L.StateLayout(slosh=True)
+    lay = layout.StateLayout(slosh=True)
     p[slosh.P_OFFSET] = lay.slosh_offset
     p[slosh.P_AREF] = A_REF
     for j, bottom in enumerate((30.0, 15.0)):
         p[slosh.P_TANKS + slosh.N_TANK_FIELDS * j:slosh.P_TANKS + slosh.N_TANK_FIELDS * j + 3] = (2.75, bottom, 1000.0)
     u = synthetic.coast_inputs()
-    u[L.U_ENGINE] = L.ENGINE_UPPER
-    u[L.U_T_IGN] = -100.0
+    u[layout.U_ENGINE] = layout.ENGINE_UPPER
+    u[layout.U_T_IGN] = -100.0
     x = np.zeros(lay.n)
-    x[L.Q] = 1.0
-    x[L.R] = 7.0e6
-    x[L.MLOX] = x[L.MLH2] = 5.0e4  # level 2.1 m, inside the table
+    x[layout.Q] = 1.0
+    x[layout.R] = 7.0e6
+    x[layout.MLOX] = x[layout.MLH2] = 5.0e4  # level 2.1 m, inside the table
     return pack_tables(tables), p, u, x, lay
 
 
@@ -49,7 +49,7 @@ def test_free_slosh_frequency_and_decay(accel, zeta):
     x[so] = 0.05  # LOX mass displaced along body y
     x[so + 5] = 0.03  # LH2 mass along body z
     dt = 0.002
-    aux, work = np.zeros(L.N_AUX), work_array(x.size)
+    aux, work = np.zeros(layout.N_AUX), work_array(x.size)
     n = 20000
     hist = np.empty((n, 2))
     for k in range(n):
@@ -80,11 +80,11 @@ def test_slosh_force_is_the_reaction_on_the_vehicle():
     x[so] = 0.2
     m_r = 1.0e6 - 2 * 5.0e3
     dt = 0.002
-    aux, work = np.zeros(L.N_AUX), work_array(x.size)
+    aux, work = np.zeros(layout.N_AUX), work_array(x.size)
 
     def lateral_momentum():
         # body frame = inertial frame here (no rotation, identity attitude): ECI y
-        return m_r * x[L.V + 1] + 5.0e3 * (x[L.V + 1] + x[so + 2]) + 5.0e3 * (x[L.V + 1] + x[so + 6])
+        return m_r * x[layout.V + 1] + 5.0e3 * (x[layout.V + 1] + x[so + 2]) + 5.0e3 * (x[layout.V + 1] + x[so + 6])
 
     p0 = lateral_momentum()
     for k in range(3000):

@@ -13,14 +13,14 @@ import numpy as np
 import pytest
 
 from conftest import compose_config
-from savant_cli import constants as C
+from savant_cli import constants
 from savant_cli.config import validate
 from savant_cli.io.guidance_file import read_guidance
 from savant_cli.models import propulsion
 from savant_cli.montecarlo.targets import Target, apply_samples, build_dispersed
 from savant_cli.paths import hydra_search_dirs
-from savant_cli.sim import engine as E
-from savant_cli.models import layout as L
+from savant_cli.sim import engine
+from savant_cli.models import layout
 from savant_cli.sim.run import simulate
 from savant_cli.sim.setup import prepare
 
@@ -55,14 +55,14 @@ def _whole_burn(base, **factors):
     """Fly the stack without separating (fraction 0) past the end of the dispersed trace;
     return the vehicle, times (s), flown vacuum thrust (N) and first-stage propellant (kg)."""
     applied, model = _model(base, **factors)
-    model.sched[E.S_SEP_FRACTION] = 0.0
+    model.sched = model.sched._replace(separation_thrust_fraction=0.0)
     t_end = applied.vehicle.first_stage.thrust_time_s[-1]
     res = simulate(model, progress=False, t_stop=t_end + 2.0)
-    assert np.isnan(res.events[E.EV_SEPARATION])
+    assert np.isnan(res.events[engine.EV_SEPARATION])
     log = res.log
     t = log[:, 0]
     f_vac = log[:, 1 + model.layout.n + propulsion.A_THRUST_VAC]
-    prop = log[:, 1 + L.MFS]
+    prop = log[:, 1 + layout.MFS]
     return applied.vehicle, t, f_vac, prop
 
 
@@ -78,7 +78,7 @@ def _impulse(t, f):
 def test_nominal_motor_delivers_g0_isp_load_and_burns_its_load(base, nominal_burn):
     vehicle, t, f, prop = nominal_burn
     fs = vehicle.first_stage
-    assert _impulse(t, f) == pytest.approx(C.G0 * fs.isp_vac_s * fs.propellant_kg, rel=TOL)
+    assert _impulse(t, f) == pytest.approx(constants.G0 * fs.isp_vac_s * fs.propellant_kg, rel=TOL)
     assert prop[0] - prop[-1] == pytest.approx(fs.propellant_kg, rel=TOL)
     assert prop[-1] < TOL * fs.propellant_kg  # nothing left when the trace ends
     assert np.all(f[t > fs.thrust_time_s[-1]] == 0.0)  # and no thrust after it
@@ -120,7 +120,7 @@ def test_load_scales_flow_and_thrust_at_the_same_burn_time(base, nominal_burn):
 def _separation(base, **factors):
     applied, model = _model(base, **factors)
     res = simulate(model, progress=False)
-    assert res.stop_code == E.STOP_SEPARATION
+    assert res.stop_code == engine.STOP_SEPARATION
     return applied, model, res
 
 
@@ -134,7 +134,7 @@ def _flown_thrust(vehicle, t):
     fs = vehicle.first_stage
     mdot = fs.propellant_kg * np.interp(t, fs.thrust_time_s, fs.thrust_vac_N) / np.trapezoid(fs.thrust_vac_N,
                                                                                               fs.thrust_time_s)
-    return C.G0 * fs.isp_vac_s * mdot
+    return constants.G0 * fs.isp_vac_s * mdot
 
 
 def test_separation_is_the_first_step_below_the_fraction_of_the_flown_peak(nominal_separation):
@@ -142,7 +142,7 @@ def test_separation_is_the_first_step_below_the_fraction_of_the_flown_peak(nomin
     frac = applied.vehicle.events.separation_thrust_fraction
     t = res.log[:, 0]
     f = res.log[:, 1 + model.layout.n + propulsion.A_THRUST_VAC]
-    t_sep = res.events[E.EV_SEPARATION]
+    t_sep = res.events[engine.EV_SEPARATION]
     before = t < t_sep - 0.5 * model.rates.dt
     t, f = t[before], f[before]
     np.testing.assert_allclose(np.diff(t), model.rates.dt, rtol=1e-9)  # every step up to separation
@@ -156,9 +156,9 @@ def test_separation_is_the_first_step_below_the_fraction_of_the_flown_peak(nomin
 
 def test_faster_burning_motor_separates_earlier_by_the_burn_rate_scaling(base, nominal_separation):
     dt = nominal_separation[1].rates.dt
-    t0 = nominal_separation[2].events[E.EV_SEPARATION]
+    t0 = nominal_separation[2].events[engine.EV_SEPARATION]
     for k in (1.03, 0.97):
-        t_k = _separation(base, burn_rate=k)[2].events[E.EV_SEPARATION]
+        t_k = _separation(base, burn_rate=k)[2].events[engine.EV_SEPARATION]
         assert t_k == pytest.approx(t0 / k, abs=2 * dt)
     assert t0 / 1.03 < t0 - 3.0  # the check is not trivial: ~3.8 s earlier
 
@@ -172,12 +172,12 @@ def test_summary_impulse_and_propellant_at_separation(nominal_separation):
     fs = applied.vehicle.first_stage
     t = res.log[:, 0]
     f = res.log[:, 1 + model.layout.n + propulsion.A_THRUST_VAC]
-    t_sep = res.events[E.EV_SEPARATION]
+    t_sep = res.events[engine.EV_SEPARATION]
     before = t < t_sep - 0.5 * model.rates.dt
     flown = _impulse(np.append(t[before], t_sep), np.append(f[before], _flown_thrust(applied.vehicle, t_sep)))
     assert keys["first_stage_total_impulse_Ns"] == pytest.approx(flown, rel=1e-6)
     left = keys["first_stage_propellant_at_separation_kg"]
     assert 0.0 < left < 0.001 * fs.propellant_kg  # the 2 % cue leaves ~0.02 % of the load
     # what the motor delivered is g0 Isp times what it burned
-    assert keys["first_stage_total_impulse_Ns"] == pytest.approx(C.G0 * fs.isp_vac_s * (fs.propellant_kg - left),
+    assert keys["first_stage_total_impulse_Ns"] == pytest.approx(constants.G0 * fs.isp_vac_s * (fs.propellant_kg - left),
                                                                  rel=1e-5)

@@ -21,8 +21,8 @@ from savant_cli.config import TimeMarginsStudyConfig, validate
 from savant_cli.errors import ConfigError
 from savant_cli.linear.margins import MarginRow
 from savant_cli.linear.point_analysis import analyse
-from savant_cli.models import layout as L
-from savant_cli.sim import loop_perturbation as LP
+from savant_cli.models import layout
+from savant_cli.sim import loop_perturbation
 from savant_cli.studies import flight as flight_mod
 from savant_cli.studies.time_margins import COLUMNS, frequency_margin, read_group, window
 from savant_cli.timedomain.growth import assess, decay_threshold
@@ -172,7 +172,7 @@ def test_a_saturated_oscillation_is_beyond_the_margin(monkeypatch, which):
     rides the actuator limits longer than max_saturation_s after the settling time is
     not stable: the search's margin lands where the saturation starts (7 dB here, the
     trial responses built by hand in place of the flights)."""
-    from savant_cli.timedomain import search as S
+    from savant_cli.timedomain import search
 
     t = np.arange(0.0, 20.0, 0.02)
     decaying = np.exp(-0.02 * 2 * np.pi * t) * np.sin(2 * np.pi * t)  # x0.88 per period
@@ -181,7 +181,7 @@ def test_a_saturated_oscillation_is_beyond_the_margin(monkeypatch, which):
         sat = 2.0 if value >= 7.0 else 0.0
         return t, decaying, False, (sat if which == "excited" else 0.0), (sat if which == "unexcited" else 0.0)
 
-    monkeypatch.setattr(S, "response", fake_response)
+    monkeypatch.setattr(search, "response", fake_response)
     res = find_margin(None, None, Search(55.0, "pitch", "gain_high", 0, 0.0, 20.0, 20.0, 0.1, 8,
                                          np.radians(0.5), 0.4, 2.0, ZETA, max_saturation_s=1.0))
     assert res.margin == pytest.approx(7.0, abs=0.1)
@@ -195,16 +195,16 @@ def test_perturbation_applies_gain_delay_and_doublet():
     between plant steps), plus +a then −a over the doublet, and the held command outside
     the window; the yaw slot is untouched."""
     dt = 0.005
-    pert = LP.perturbation("pitch", 1.0, 2.0, gain=2.0, delay_s=0.0123, pulse_rad=0.1, pulse_s=0.2, dt=dt)
-    u = np.zeros(L.N_INPUT)
+    pert = loop_perturbation.perturbation("pitch", 1.0, 2.0, gain=2.0, delay_s=0.0123, pulse_rad=0.1, pulse_s=0.2, dt=dt)
+    u = np.zeros(layout.N_INPUT)
     out = []
     for k in range(600):
         t = k * dt
-        u[L.U_DPC] = 0.5 + t  # a new command every step
-        u[L.U_DYC] = 7.0
-        LP.apply(pert, k, t, dt, True, u)
-        out.append(u[L.U_DPC])
-        assert u[L.U_DYC] == 7.0
+        u[layout.U_DPC] = 0.5 + t  # a new command every step
+        u[layout.U_DYC] = 7.0
+        loop_perturbation.apply(pert, k, t, dt, True, u)
+        out.append(u[layout.U_DPC])
+        assert u[layout.U_DYC] == 7.0
     out = np.array(out)
     t = np.arange(600) * dt
     expect = np.where((t >= 1.0) & (t < 2.0), 2.0 * (0.5 + t - 0.0123), 0.5 + t)

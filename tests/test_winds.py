@@ -6,12 +6,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from savant_cli import constants as C
-from savant_cli.models import earth as E, winds
+from savant_cli import constants
+from savant_cli.models import earth, winds
 from savant_cli.sim.plant import pack_tables
 import synthetic
 
-W = C.OMEGA_EARTH
+W = constants.OMEGA_EARTH
 
 
 def _packed(scale: float = 1.0):
@@ -40,7 +40,7 @@ def test_air_velocity_subtracts_the_wind_rotated_into_eci(lat_deg, lon_deg, t):
     tb, p = _packed()
     lat, lon = np.radians(lat_deg), np.radians(lon_deg)
     wind_ned = np.array([*winds.wind_ned(3000.0, tb, p), 0.0])
-    expect_wind = E.dcm_eci_to_ecef(t, W).T @ (E.dcm_ecef_to_ned(lat, lon).T @ wind_ned)
+    expect_wind = earth.dcm_eci_to_ecef(t, W).T @ (earth.dcm_ecef_to_ned(lat, lon).T @ wind_ned)
     v_earth = np.array([100.0, -50.0, 20.0])
     got = winds.air_relative_velocity(t, 3000.0, np.sin(lat), np.cos(lat), np.sin(lon), np.cos(lon), np.cos(W * t),
                                       np.sin(W * t), *v_earth, tb, p)

@@ -71,19 +71,19 @@ def wait_gone(pids: list[int], timeout_s: float) -> list[int]:
 OWNER = textwrap.dedent("""
     import sys, time
     from concurrent.futures import ProcessPoolExecutor
-    import savant_cli.processes as P
+    import savant_cli.processes
 
     if sys.argv[1] == "watchdog":  # a platform without prctl
-        P._set_parent_death_signal = lambda sig: False
+        processes._set_parent_death_signal = lambda sig: False
 
     def mechanism(_):
-        return P.die_with_parent(P.os.getppid())  # what the initializer chose (idempotent)
+        return processes.die_with_parent(processes.os.getppid())  # what the initializer chose (idempotent)
 
     def sleep(_):
         time.sleep(600)
 
     if __name__ == "__main__":
-        pool = ProcessPoolExecutor(2, mp_context=P.process_context(), **P.worker_initializer())
+        pool = ProcessPoolExecutor(2, mp_context=processes.process_context(), **processes.worker_initializer())
         print(pool.submit(mechanism, 0).result(), flush=True)
         for i in range(2):
             pool.submit(sleep, i)

@@ -55,7 +55,7 @@ from pathlib import Path
 
 import numpy as np
 
-from savant_cli import constants as C
+from savant_cli import constants
 from savant_cli.datagen import flex_filters
 from savant_cli.datagen.guidance_commands import _compose, solve
 from savant_cli.models import aero, atmosphere as atm, earth, mass as mass_model
@@ -120,10 +120,10 @@ def pitch_coefficients(ref, t: float, y: np.ndarray, config: int) -> tuple[float
     _, cg, inertia = mass_model.inertia_tensor(packed, config, max(prop, 0.0))
     iyy = inertia[1, 1]
     r, vel = y[0:3], y[3:6]
-    c_i2e = earth.dcm_eci_to_ecef(t, C.OMEGA_EARTH)
-    _, _, alt = earth.ecef_to_geodetic(c_i2e @ r, C.WGS84_A, C.WGS84_E2)
+    c_i2e = earth.dcm_eci_to_ecef(t, constants.OMEGA_EARTH)
+    _, _, alt = earth.ecef_to_geodetic(c_i2e @ r, constants.WGS84_A, constants.WGS84_E2)
     _, pres, rho, sos = atm.air_at_packed(alt, packed)
-    vv = np.linalg.norm(earth.velocity_relative_eci(r, vel, C.OMEGA_EARTH))
+    vv = np.linalg.norm(earth.velocity_relative_eci(r, vel, constants.OMEGA_EARTH))
     qbar = 0.5 * rho * vv * vv
     ref_row = aero.reference(packed, config)
     arm = -(ref_row[aero.REF_MRP_X] - cg[0])  # body-X arm of the MRP from the CG (structure X is aft)
@@ -183,9 +183,9 @@ def design_points(cfg, vehicle, spec: dict = DESIGN) -> dict[str, list[tuple[flo
         ys.append(s.sol(tt).T)
     t = np.concatenate(ts)
     y = np.concatenate(ys)
-    alt = np.array([earth.ecef_to_geodetic(earth.dcm_eci_to_ecef(ti, C.OMEGA_EARTH) @ yi[0:3], C.WGS84_A, C.WGS84_E2)[2]
+    alt = np.array([earth.ecef_to_geodetic(earth.dcm_eci_to_ecef(ti, constants.OMEGA_EARTH) @ yi[0:3], constants.WGS84_A, constants.WGS84_E2)[2]
                     for ti, yi in zip(t, y)])
-    vrel = np.array([np.linalg.norm(earth.velocity_relative_eci(yi[0:3], yi[3:6], C.OMEGA_EARTH)) for yi in y])
+    vrel = np.array([np.linalg.norm(earth.velocity_relative_eci(yi[0:3], yi[3:6], constants.OMEGA_EARTH)) for yi in y])
     points = {}
     for name, axis_vals, sel, var, config in (
         ("stack", spec["stack_altitudes_m"], t < ref.t_sep - spec["stack_design_end_before_separation_s"], alt,

@@ -43,7 +43,7 @@ from scipy import optimize
 from scipy.integrate import solve_ivp
 from scipy.spatial.transform import Rotation
 
-from savant_cli import constants as C
+from savant_cli import constants
 from savant_cli.config import SavantConfig
 from savant_cli.models import aero, atmosphere as atm, earth, mass as mass_model, quaternion as qt
 from savant_cli.models.configurations import CONFIG_STACK, CONFIG_UPPER, CONFIG_UPPER_LES
@@ -54,7 +54,7 @@ from savant_cli.sim.plant import PlantTables, pack_tables
 from savant_cli.io.guidance_file import SPEED_COLUMN
 from savant_cli.vehicle import Vehicle
 
-G0 = C.G0
+G0 = constants.G0
 
 
 @dataclass
@@ -157,7 +157,7 @@ class Reference:
             return self.launch_attitude(t, azimuth)
         r, v = y[0:3], y[3:6]
         if t < self.t_ign or "plane_normal" not in turn:
-            v_rel = earth.velocity_relative_eci(r, v, C.OMEGA_EARTH)
+            v_rel = earth.velocity_relative_eci(r, v, constants.OMEGA_EARTH)
             v_hat = v_rel / np.linalg.norm(v_rel)
             axis = turn["axis"]
             x_b = Rotation.from_rotvec(axis * turn["alpha0"] * np.exp(-(t - t_turn) / pr.alpha_fade_s)).apply(v_hat)
@@ -196,11 +196,11 @@ class Reference:
         mass = mass_model.mass_properties(self.packed, cfg_i, max(prop, 0.0))[0]
         c_b2i = self.attitude(t, y, azimuth, steer, turn)
         x_b = c_b2i[:, 0]
-        c_i2e = earth.dcm_eci_to_ecef(t, C.OMEGA_EARTH)
-        lat, lon, alt = earth.ecef_to_geodetic(c_i2e @ r, C.WGS84_A, C.WGS84_E2)
+        c_i2e = earth.dcm_eci_to_ecef(t, constants.OMEGA_EARTH)
+        lat, lon, alt = earth.ecef_to_geodetic(c_i2e @ r, constants.WGS84_A, constants.WGS84_E2)
         _, pres, rho, sos = atm.air_at_packed(alt, self.packed)
-        g = gravity_zonal(r, C.MU_EARTH, C.WGS84_A, C.EGM2008_J2, C.EGM2008_J3, C.EGM2008_J4)
-        v_rel = earth.velocity_relative_eci(r, v, C.OMEGA_EARTH)
+        g = gravity_zonal(r, constants.MU_EARTH, constants.WGS84_A, constants.EGM2008_J2, constants.EGM2008_J3, constants.EGM2008_J4)
+        v_rel = earth.velocity_relative_eci(r, v, constants.OMEGA_EARTH)
         f = np.zeros(3)
         mdot = np.zeros(3)
         vv = np.linalg.norm(v_rel)
@@ -249,7 +249,7 @@ class Reference:
         s1 = solve_ivp(self.rhs, (0.0, t_turn), self.initial(), args=(azimuth, (0.0, 0.0), turn), **kw)
         y = s1.y[:, -1]
         x_b = self.launch_attitude(t_turn, azimuth)[:, 0]
-        v_rel = earth.velocity_relative_eci(y[0:3], y[3:6], C.OMEGA_EARTH)
+        v_rel = earth.velocity_relative_eci(y[0:3], y[3:6], constants.OMEGA_EARTH)
         v_hat = v_rel / np.linalg.norm(v_rel)
         axis = np.cross(v_hat, x_b)
         sin_a = np.linalg.norm(axis)
@@ -266,7 +266,7 @@ class Reference:
     def fly_upper(self, y_ign: np.ndarray, azimuth: float, steer, turn, t_end: float | None = None):
         """Integrate ignition → target energy (or ``t_end``)."""
         def energy(t, y, *args):
-            return 0.5 * np.dot(y[3:6], y[3:6]) - C.MU_EARTH / np.linalg.norm(y[0:3]) - self.energy_target
+            return 0.5 * np.dot(y[3:6], y[3:6]) - constants.MU_EARTH / np.linalg.norm(y[0:3]) - self.energy_target
         energy.terminal = t_end is None
         energy.direction = 1.0
         t_stop = t_end if t_end is not None else self.t_ign + 900.0
@@ -278,7 +278,7 @@ class Reference:
         if sol.status != 1 or not sol.t_events[0].size:
             # never reached the energy target: penalize by the energy shortfall
             y = sol.y[:, -1]
-            short = self.energy_target - (0.5 * np.dot(y[3:6], y[3:6]) - C.MU_EARTH / np.linalg.norm(y[0:3]))
+            short = self.energy_target - (0.5 * np.dot(y[3:6], y[3:6]) - constants.MU_EARTH / np.linalg.norm(y[0:3]))
             return np.array([short / 1e4, short / 1e4])
         y = sol.y_events[0][0]
         r = np.linalg.norm(y[0:3])
@@ -298,7 +298,7 @@ def solve(cfg: SavantConfig, vehicle: Vehicle, verbose: bool = True):
     az_inertial = np.arcsin(np.clip(np.cos(ref.inclination) / np.cos(lat), -1.0, 1.0))
     # Earth-relative azimuth of the inertial one (speed near orbital)
     v_orb = 7800.0
-    v_e = C.OMEGA_EARTH * C.WGS84_A * np.cos(lat)
+    v_e = constants.OMEGA_EARTH * constants.WGS84_A * np.cos(lat)
     azimuth = float(np.arctan2(v_orb * np.sin(az_inertial) - v_e, v_orb * np.cos(az_inertial)))
     steer = np.array([0.4, -0.004])
 
@@ -351,7 +351,7 @@ def commands(ref: Reference, sols, turn, azimuth: float, steer, sol_upper, rate_
         else:
             y = ext.sol(min(t, ext.t[-1]))
         quats[i] = qt.from_dcm(ref.attitude(t, y, azimuth, steer, turn))
-        speeds[i] = np.linalg.norm(earth.velocity_relative_eci(y[0:3], y[3:6], C.OMEGA_EARTH))
+        speeds[i] = np.linalg.norm(earth.velocity_relative_eci(y[0:3], y[3:6], constants.OMEGA_EARTH))
     # keep the sign continuous (q and −q are the same attitude)
     for i in range(1, times.size):
         if np.dot(quats[i], quats[i - 1]) < 0.0:
@@ -437,7 +437,7 @@ def main(argv: list[str] | None = None) -> None:
               f"{tgt.cutoff_altitude_km} km\n"
               f"solution: flight azimuth {np.degrees(azimuth):.4f} deg, linear tangent A = {steer[0]:.6f}, "
               f"B = {steer[1]:.7f} 1/s; reference cutoff at {t_cut:.2f} s, "
-              f"{(np.linalg.norm(y_cut[0:3]) - C.WGS84_A) / 1e3:.2f} km\n"
+              f"{(np.linalg.norm(y_cut[0:3]) - constants.WGS84_A) / 1e3:.2f} km\n"
               f"q = q_c2i (commanded body to ECI, scalar first); rate = eigenaxis rate to the next sample, commanded-body axes")
     write_guidance_csv(out, times, quats, rates, header, speed=speeds)
     print(header)

@@ -35,14 +35,14 @@ from pathlib import Path
 
 import numpy as np
 
-from savant_cli import constants as C
+from savant_cli import constants
 from savant_cli.models.propulsion import table_impulse
 
 SAVANT_OVERRIDES = ["phase=first_stage", "winds=none", "environment.gravity_order=2",
                     "guidance.command_file=vertical_hold_commands.csv"]
-FT, LBF, LBM = C.FT, C.LBF, C.LBM
+FT, LBF, LBM = constants.FT, constants.LBF, constants.LBM
 PSF = LBF / FT**2
-SLUG_FT3 = C.SLUG / FT**3
+SLUG_FT3 = constants.SLUG / FT**3
 DT = 1.0 / 200.0
 OUTPUT_EVERY = 20  # steps: the reference is written at 10 Hz
 COLUMNS = (("time_s", "simulation/sim-time-sec", 1.0), ("altitude_m", "position/geod-alt-ft", FT),
@@ -137,7 +137,7 @@ def fly(out_csv: Path) -> Path:
     from savant_cli.io.atomic import write_text_atomic
     from savant_cli.models import earth
     from savant_cli.paths import shipped_config_dir
-    from savant_cli.models import layout as L
+    from savant_cli.models import layout
     from savant_cli.sim.setup import prepare
 
     with initialize_config_dir(config_dir=str(shipped_config_dir()), version_base="1.3"):
@@ -148,7 +148,7 @@ def fly(out_csv: Path) -> Path:
     aero = stack.aero
     ia, ib = int(np.argmin(np.abs(aero.alpha_rad))), int(np.argmin(np.abs(aero.beta_rad)))
     ca = aero.coeffs[0][:, ia, ib]
-    lat, lon, alt = earth.ecef_to_geodetic(model.x0[L.R:L.R + 3], C.WGS84_A, C.WGS84_E2)  # ECI = ECEF at t = 0
+    lat, lon, alt = earth.ecef_to_geodetic(model.x0[layout.R:layout.R + 3], constants.WGS84_A, constants.WGS84_E2)  # ECI = ECEF at t = 0
     t_stop = model.info["predicted_separation_time_s"]  # before any flight: the table rule
     with tempfile.TemporaryDirectory() as root:
         rd = Path(root)
@@ -168,7 +168,7 @@ def fly(out_csv: Path) -> Path:
         rows = []
         # the motor burns its load in the table's shape, as the plant's (models/propulsion.py
         # first_stage_flow): F_vac = g0 Isp M F_tab / I_tab
-        thrust_scale = C.G0 * fs.isp_vac_s * fs.propellant_kg / table_impulse(fs.thrust_time_s, fs.thrust_vac_N)
+        thrust_scale = constants.G0 * fs.isp_vac_s * fs.propellant_kg / table_impulse(fs.thrust_time_s, fs.thrust_vac_N)
 
         def set_inputs(t: float) -> float:
             f_vac = thrust_scale * float(np.interp(t, fs.thrust_time_s, fs.thrust_vac_N))
@@ -191,7 +191,7 @@ def fly(out_csv: Path) -> Path:
                 break
             fdm.run()
             f_next = thrust_scale * float(np.interp(t + DT, fs.thrust_time_s, fs.thrust_vac_N))
-            prop -= 0.5 * (f_vac + f_next) / (C.G0 * fs.isp_vac_s) * DT  # trapezoid of ṁ
+            prop -= 0.5 * (f_vac + f_next) / (constants.G0 * fs.isp_vac_s) * DT  # trapezoid of ṁ
     header = [
         "# JSBSim reference flight for `savant compare` (savant_cli.datagen.jsbsim_reference)",
         f"# JSBSim {jsbsim.__version__}: the ares_i stack rising vertically from LC-39B to {t_stop:.2f} s, no wind;",

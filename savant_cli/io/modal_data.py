@@ -28,14 +28,14 @@ from pathlib import Path
 
 import numpy as np
 
-from savant_cli import constants as C
+from savant_cli import constants
 from savant_cli.errors import ConfigError
 from savant_cli.io.data_csv import read_numeric_csv
 from savant_cli.io.table_order import require_increasing, row_text, table_key
 from savant_cli.io.units import UNITS, units_of
 
-LENGTH_TO_M = {"in": C.IN, "ft": C.FT, "m": 1.0}
-FORCE_TO_N = {"lbf": C.LBF, "N": 1.0}
+LENGTH_TO_M = {"in": constants.IN, "ft": constants.FT, "m": 1.0}
+FORCE_TO_N = {"lbf": constants.LBF, "N": 1.0}
 STRUCTURE_TO_BODY = np.array([-1.0, 1.0, -1.0])
 
 

@@ -27,8 +27,8 @@ from scipy.linalg import block_diag, expm
 from scipy.signal import tf2ss
 
 from savant_cli.models.fcs import FCS_STACK, GYRO_FIRST, GYRO_UPPER, FcsTables
-from savant_cli.sim import engine as E
-from savant_cli.models import layout as L
+from savant_cli.sim import engine
+from savant_cli.models import layout
 from savant_cli.sim.build import SimModel
 from savant_cli.sim.run import Snapshot
 from savant_cli.linear.plant import SENSOR_NAMES, PlantLinearization
@@ -53,7 +53,7 @@ class LinearPoint:
 
 
 def fcs_phase(events: np.ndarray) -> int:
-    return int(E.fcs_phase(events))
+    return int(engine.fcs_phase(events))
 
 
 def _filter(coef: np.ndarray, dt: float) -> ct.StateSpace:
@@ -129,7 +129,7 @@ def sensor_plant(lin: PlantLinearization, model: SimModel, dt: float) -> ct.Stat
     n, nu = b.shape
     rt = model.rates
     h, n_sub = rt.dt, rt.n_fcs
-    m_delay = int(round(model.sched[E.S_DELAY_STEPS]))
+    m_delay = model.sched.command_delay_steps
     if abs(n_sub * h - dt) > 1e-12 or not 0 <= m_delay < n_sub:
         raise ValueError(f"control period {dt} s must be {n_sub} plant steps of {h} s and exceed the delay")
     zoh = expm(np.block([[a * h, b * h], [np.zeros((nu, n + nu))]]))
@@ -177,7 +177,7 @@ def sensor_plant(lin: PlantLinearization, model: SimModel, dt: float) -> ct.Stat
 
 def snapshot_controller(model: SimModel, snap: Snapshot, dt: float) -> ct.StateSpace:
     """:func:`controller_lti` of the model's flight control at a snapshot's gains."""
-    return controller_lti(model.fcs, snap.d[L.D_GAINS:L.D_GAINS + 8], fcs_phase(snap.events), dt)
+    return controller_lti(model.fcs, snap.d[layout.D_GAINS:layout.D_GAINS + 8], fcs_phase(snap.events), dt)
 
 
 def _series(p: tuple, k: tuple) -> tuple:

@@ -25,7 +25,7 @@ import numpy as np
 
 from savant_cli.models import actuator, aero, quaternion as qt, sensors
 from savant_cli.models.sensors import misalignment
-from savant_cli.models import layout as L
+from savant_cli.models import layout
 from savant_cli.sim.build import SimModel
 from savant_cli.models.flex import flex_point
 from savant_cli.sim.plant import derivative
@@ -57,14 +57,14 @@ def linear_states(model: SimModel) -> tuple[list[str], np.ndarray]:
     coordinates carry the index ``Q + 1 + axis`` (their quaternion vector component)."""
     lay = model.layout
     full = lay.names()
-    idx = list(range(L.V, L.V + 3))
+    idx = list(range(layout.V, layout.V + 3))
     names = ["dv_x", "dv_y", "dv_z", "dtheta_x", "dtheta_y", "dtheta_z"]
-    idx += [L.Q + 1, L.Q + 2, L.Q + 3]
-    idx += list(range(L.W, L.W + 3))
+    idx += [layout.Q + 1, layout.Q + 2, layout.Q + 3]
+    idx += list(range(layout.W, layout.W + 3))
     names += ["p", "q", "r"]
-    idx += list(range(L.ACT_P, L.ACT_P + 6))
-    names += full[L.ACT_P:L.ACT_P + 6]
-    extra = [i for i in range(L.N_STATE, lay.n)]
+    idx += list(range(layout.ACT_P, layout.ACT_P + 6))
+    names += full[layout.ACT_P:layout.ACT_P + 6]
+    extra = [i for i in range(layout.N_STATE, lay.n)]
     idx += extra
     names += [full[i] for i in extra]
     return names, np.asarray(idx)
@@ -74,17 +74,17 @@ def _steps(model: SimModel, idx: np.ndarray, mode: str, rel_step: float) -> np.n
     lay = model.layout
     h = np.empty(idx.size)
     for j, i in enumerate(idx):
-        if i < L.R + 3:
+        if i < layout.R + 3:
             h[j] = STEP["r"]
-        elif i < L.V + 3:
+        elif i < layout.V + 3:
             h[j] = STEP["v"]
-        elif L.Q <= i < L.Q + 4:
+        elif layout.Q <= i < layout.Q + 4:
             h[j] = STEP["att"]
-        elif L.W <= i < L.W + 3:
+        elif layout.W <= i < layout.W + 3:
             h[j] = STEP["w"]
-        elif L.ACT_P <= i < L.ACT_Y + 3:
-            h[j] = STEP["act"][(i - L.ACT_P) % 3]
-        elif lay.simplex and lay.valve <= i < lay.valve + L.N_VALVE:
+        elif layout.ACT_P <= i < layout.ACT_Y + 3:
+            h[j] = STEP["act"][(i - layout.ACT_P) % 3]
+        elif lay.simplex and lay.valve <= i < lay.valve + layout.N_VALVE:
             h[j] = STEP["valve"]
         elif lay.slosh and lay.slosh_offset <= i < lay.slosh_offset + 8:
             h[j] = STEP["slosh"][((i - lay.slosh_offset) % 4) // 2]
@@ -104,22 +104,22 @@ def _apply(x0: np.ndarray, idx: np.ndarray, z: np.ndarray) -> np.ndarray:
     x = x0.copy()
     dtheta = np.zeros(3)
     for j, i in enumerate(idx):
-        if L.Q < i < L.Q + 4:
-            dtheta[i - L.Q - 1] = z[j]
+        if layout.Q < i < layout.Q + 4:
+            dtheta[i - layout.Q - 1] = z[j]
         else:
             x[i] += z[j]
     if np.any(dtheta):
         dq = np.array([1.0, *(0.5 * dtheta)])
-        x[L.Q:L.Q + 4] = qt.qnormalize(qt.qmul(x0[L.Q:L.Q + 4], dq / np.linalg.norm(dq)))
+        x[layout.Q:layout.Q + 4] = qt.qnormalize(qt.qmul(x0[layout.Q:layout.Q + 4], dq / np.linalg.norm(dq)))
     return x
 
 
 def _rates(x0: np.ndarray, idx: np.ndarray, x: np.ndarray, xd: np.ndarray) -> np.ndarray:
     """ż from ẋ: the attitude rows are 2·vec(q₀* ⊗ q̇) (q₀ frozen)."""
     out = xd[idx].copy()
-    att = [j for j, i in enumerate(idx) if L.Q < i < L.Q + 4]
+    att = [j for j, i in enumerate(idx) if layout.Q < i < layout.Q + 4]
     if att:
-        dq = qt.qmul(qt.qconj(x0[L.Q:L.Q + 4]), xd[L.Q:L.Q + 4])
+        dq = qt.qmul(qt.qconj(x0[layout.Q:layout.Q + 4]), xd[layout.Q:layout.Q + 4])
         out[att] = 2.0 * dq[1:4]
     return out
 
@@ -130,17 +130,17 @@ def _outputs(model: SimModel, t: float, x: np.ndarray, x0: np.ndarray, u: np.nda
     rotation at the nav unit; each gyro's rigid + flex rate in its own (misaligned) axes;
     then gimbal angles and α, β."""
     p = model.p
-    config = int(u[L.U_CONFIG])
+    config = int(u[layout.U_CONFIG])
     rot = np.zeros(3)
-    flex_point(x, config, p, tb, L.PT_IMU, False, rot)
+    flex_point(x, config, p, tb, layout.PT_IMU, False, rot)
     q_imu = misalignment(p[sensors.P_IMU_MISALIGN:sensors.P_IMU_MISALIGN + 3])[0]
-    dq = qt.qmul(qt.qconj(qt.qmul(x0[L.Q:L.Q + 4], q_imu)), qt.qmul(x[L.Q:L.Q + 4], q_imu))
+    dq = qt.qmul(qt.qconj(qt.qmul(x0[layout.Q:layout.Q + 4], q_imu)), qt.qmul(x[layout.Q:layout.Q + 4], q_imu))
     y = [2.0 * dq[1:4] + rot]
-    for pt, pm in zip(L.GYRO_POINTS, L.GYRO_MISALIGN, strict=True):
+    for pt, pm in zip(layout.GYRO_POINTS, layout.GYRO_MISALIGN, strict=True):
         fr = np.zeros(3)
         flex_point(x, config, p, tb, pt, True, fr)
-        y.append(misalignment(p[pm:pm + 3])[1] @ (x[L.W:L.W + 3] + fr))
-    aux = np.zeros(L.N_AUX)
+        y.append(misalignment(p[pm:pm + 3])[1] @ (x[layout.W:layout.W + 3] + fr))
+    aux = np.zeros(layout.N_AUX)
     derivative(t, x, u, model.p, tb, aux, np.zeros(x.size))
     y.append(np.array([aux[actuator.A_ANGLES], aux[actuator.A_ANGLES + 1], aux[aero.A_ALPHA], aux[aero.A_BETA]]))
     return np.concatenate(y)
@@ -173,7 +173,7 @@ def linearize_plant(model: SimModel, snap: Snapshot, mode: str = "auto", rel_ste
     h = _steps(model, idx, mode, rel_step)
     n = idx.size
     x0, u0, t = snap.x, snap.u.copy(), snap.t
-    aux = np.zeros(L.N_AUX)
+    aux = np.zeros(layout.N_AUX)
     xd = np.zeros(x0.size)
     a = np.zeros((n, n))
     c_rows = len(SENSOR_NAMES) + len(EXTRA_OUTPUTS)
@@ -189,8 +189,8 @@ def linearize_plant(model: SimModel, snap: Snapshot, mode: str = "auto", rel_ste
         xp, xm = _apply(x0, idx, e), _apply(x0, idx, -e)
         a[:, j] = (f(xp, u0) - f(xm, u0)) / (2.0 * h[j])
         c[:, j] = (_outputs(model, t, xp, x0, u0, tb) - _outputs(model, t, xm, x0, u0, tb)) / (2.0 * h[j])
-    inputs = ((L.U_DPC, STEP["input"]), (L.U_DYC, STEP["input"]), (L.U_GUST + 1, STEP["gust"]),
-              (L.U_GUST + 2, STEP["gust"]))
+    inputs = ((layout.U_DPC, STEP["input"]), (layout.U_DYC, STEP["input"]), (layout.U_GUST + 1, STEP["gust"]),
+              (layout.U_GUST + 2, STEP["gust"]))
     b = np.zeros((n, len(inputs)))
     d = np.zeros((c_rows, len(inputs)))
     for k, (ui, hu) in enumerate(inputs):

@@ -101,6 +101,16 @@ A_ANGLES = _AUX.array("angles", 2, "rad", "limited actuator angles pitch, yaw (n
 A_ACCEL = _AUX.array("accelerations", 2, "rad/s^2", "nozzle angular accelerations pitch, yaw")
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def write_diagnostics(aux: np.ndarray, pitch: float, yaw: float, pitch_accel: float, yaw_accel: float) -> None:
+    """Write the limited actuator angles (rad) and the nozzle angular accelerations
+    (rad/s²), pitch and yaw, into ``aux``."""
+    aux[A_ANGLES] = pitch
+    aux[A_ANGLES + 1] = yaw
+    aux[A_ACCEL] = pitch_accel
+    aux[A_ACCEL + 1] = yaw_accel
+
+
 def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarray]) -> None:
     """The ``actuator`` group (the record of its variant; ``kind`` selects it) and the
     vehicle's gimbal limits."""

@@ -63,6 +63,25 @@ A_VREL = _AUX.scalar("air_speed", "m/s", "air-relative speed")
 A_FORCE = _AUX.array("force", 3, "N", "aerodynamic force incl. base force, body")
 A_MOMENT = _AUX.array("moment", 3, "N*m", "aerodynamic moment about the CG, body")
 
+
+@njit(cache=True, error_model="numpy", inline="always")
+def write_diagnostics(aux: np.ndarray, mach: float, qbar: float, alpha: float, beta: float, vair: float,
+                      fx: float, fy: float, fz: float, mx: float, my: float, mz: float) -> None:
+    """Write the air data (Mach, dynamic pressure Pa, α and β rad, air speed m/s) and the
+    aerodynamic force (N) and moment about the CG (N·m), body axes, into ``aux``."""
+    aux[A_MACH] = mach
+    aux[A_QBAR] = qbar
+    aux[A_ALPHA] = alpha
+    aux[A_BETA] = beta
+    aux[A_VREL] = vair
+    aux[A_FORCE] = fx
+    aux[A_FORCE + 1] = fy
+    aux[A_FORCE + 2] = fz
+    aux[A_MOMENT] = mx
+    aux[A_MOMENT + 1] = my
+    aux[A_MOMENT + 2] = mz
+
+
 _GRID_CACHE: list[tuple[tuple, tuple]] = []  # (the aero objects, the resampled grid), newest last
 
 

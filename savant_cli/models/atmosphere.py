@@ -65,6 +65,17 @@ A_PRES = _AUX.scalar("pressure", "Pa", "static pressure")
 A_TEMP = _AUX.scalar("temperature", "K", "kinetic temperature")
 A_SOS = _AUX.scalar("speed_of_sound", "m/s", "speed of sound")
 
+
+@njit(cache=True, error_model="numpy", inline="always")
+def write_diagnostics(aux: np.ndarray, rho: float, pres: float, temp: float, sos: float) -> None:
+    """Write the air's density (kg/m³), pressure (Pa), temperature (K) and speed of sound
+    (m/s) into ``aux``."""
+    aux[A_RHO] = rho
+    aux[A_PRES] = pres
+    aux[A_TEMP] = temp
+    aux[A_SOS] = sos
+
+
 from savant_cli.constants import G0, GAMMA_AIR, M0, P0, R0_US76, R_STAR, T0
 
 # ------------------------------------------------------------------ lower atmosphere

@@ -14,7 +14,7 @@ from numba import njit
 
 from savant_cli.models.fused import fma
 
-from savant_cli import constants as C
+from savant_cli import constants
 from savant_cli.models import blocks
 
 _PARAMS = blocks.PARAMETERS.block("earth")
@@ -28,11 +28,29 @@ A_LON = _AUX.scalar("longitude", "rad", "longitude, east positive")
 A_VEARTH = _AUX.scalar("earth_relative_speed", "m/s", "Earth-relative speed (no wind)")
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def write_altitude(aux: np.ndarray, alt: float) -> None:
+    """Write the altitude (m) into ``aux``: every evaluation, the engine's ground check reads it."""
+    aux[A_ALT] = alt
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def write_diagnostics(aux: np.ndarray, x_ecef: float, y_ecef: float, lat_num: float, lat_den: float,
+                      ex: float, ey: float, ez: float) -> None:
+    """Write the geodetic latitude and longitude (rad; from :func:`geodetic_of_eci`'s
+    by-products, ECEF m) and the Earth-relative speed (m/s; of the velocity ``ex, ey, ez``,
+    ECI axes) into ``aux``."""
+    lat, lon = latitude_longitude(x_ecef, y_ecef, lat_num, lat_den)
+    aux[A_LAT] = lat
+    aux[A_LON] = lon
+    aux[A_VEARTH] = np.sqrt(ex * ex + ey * ey + ez * ez)
+
+
 def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarray]) -> None:
     """WGS84 shape and the Earth rate (``savant_cli.constants``)."""
-    p[P_RE] = C.WGS84_A
-    p[P_E2] = C.WGS84_E2
-    p[P_OMEGA_E] = C.OMEGA_EARTH
+    p[P_RE] = constants.WGS84_A
+    p[P_E2] = constants.WGS84_E2
+    p[P_OMEGA_E] = constants.OMEGA_EARTH
 
 
 @njit(cache=True, error_model="numpy")

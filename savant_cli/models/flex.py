@@ -73,6 +73,14 @@ _AUX = blocks.DIAGNOSTICS.block("flex")
 A_GIMBAL_ROTATION = _AUX.array("gimbal_rotation", 3, "rad", "flex rotation at the active gimbal, body")
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def write_diagnostics(aux: np.ndarray, rx: float, ry: float, rz: float) -> None:
+    """Write the flex rotation at the active gimbal (rad, body axes) into ``aux``."""
+    aux[A_GIMBAL_ROTATION] = rx
+    aux[A_GIMBAL_ROTATION + 1] = ry
+    aux[A_GIMBAL_ROTATION + 2] = rz
+
+
 def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarray]) -> None:
     """The ``flex`` group and the vehicle's modal sets, loaded once per run by the
     vehicle-data layer and handed in as ``inputs.flex`` (placeholders when off)."""

@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from savant_cli import constants as C
+from savant_cli import constants
 from savant_cli.models import blocks
 
 _PARAMS = blocks.PARAMETERS.block("gravity")
@@ -32,12 +32,20 @@ _AUX = blocks.DIAGNOSTICS.block("gravity")
 A_GRAV = _AUX.array("acceleration", 3, "m/s^2", "gravitational acceleration, ECI")
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def write_diagnostics(aux: np.ndarray, gx: float, gy: float, gz: float) -> None:
+    """Write the gravitational acceleration (m/s², ECI) into ``aux``."""
+    aux[A_GRAV] = gx
+    aux[A_GRAV + 1] = gy
+    aux[A_GRAV + 2] = gz
+
+
 def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarray]) -> None:
     """EGM2008 zonal coefficients; ``environment.gravity_order``."""
-    p[P_MU] = C.MU_EARTH
-    p[P_J2] = C.EGM2008_J2
-    p[P_J3] = C.EGM2008_J3
-    p[P_J4] = C.EGM2008_J4
+    p[P_MU] = constants.MU_EARTH
+    p[P_J2] = constants.EGM2008_J2
+    p[P_J3] = constants.EGM2008_J3
+    p[P_J4] = constants.EGM2008_J4
     p[P_ORDER] = inputs.cfg.environment.gravity_order
 
 

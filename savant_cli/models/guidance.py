@@ -14,11 +14,15 @@ the smoothed command. Linearised, the smoothed attitude follows the target like
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING, NamedTuple
+
 import numpy as np
 from numba import njit
 
-from savant_cli.models import quaternion as qt
-from savant_cli.models import blocks
+from savant_cli.models import blocks, quaternion as qt
+
+if TYPE_CHECKING:  # pragma: no cover
+    from savant_cli.config import SmootherConfig
 
 _DISCRETE = blocks.DISCRETE.block("guidance")
 D_QG = _DISCRETE.array("command_quaternion", 4, "1", "latest guidance quaternion q_c2i")
@@ -63,6 +67,26 @@ def guidance_sample(d: np.ndarray, t: float, times: np.ndarray, quats: np.ndarra
     if initialize:
         d[D_QS:D_QS + 4] = q
         d[D_VS:D_VS + 3] = rate
+
+
+class SmootherGains(NamedTuple):
+    """The command smoother's gains (:func:`smoother_step`).
+
+    Attributes
+    ----------
+    damping : float
+        Damping ratio ζ (1).
+    natural_frequency_rad_s : float
+        Natural frequency ω, rad/s.
+    """
+
+    damping: float
+    natural_frequency_rad_s: float
+
+
+def smoother_gains(config: "SmootherConfig") -> SmootherGains:
+    """The smoother's gains from ``guidance.smoother``."""
+    return SmootherGains(float(config.damping), float(config.natural_frequency_rad_s))
 
 
 @njit(cache=True, error_model="numpy")

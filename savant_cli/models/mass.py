@@ -44,6 +44,17 @@ A_CG = _AUX.array("cg", 3, "m", "vehicle CG, structure frame (slosh masses inclu
 A_PROP = _AUX.scalar("propellant", "kg", "propellant remaining of the burning configuration")
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def write_diagnostics(aux: np.ndarray, mass: float, propellant: float, cgx: float, cgy: float, cgz: float) -> None:
+    """Write the whole vehicle's mass (kg), the burning configuration's propellant (kg) and
+    the whole vehicle's CG (m, structure frame) into ``aux``."""
+    aux[A_MASS] = mass
+    aux[A_PROP] = propellant
+    aux[A_CG] = cgx
+    aux[A_CG + 1] = cgy
+    aux[A_CG + 2] = cgz
+
+
 def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarray]) -> None:
     """The vehicle's three mass-properties tables, stacked."""
     masses = [inputs.vehicle.configurations[n].mass for n in CONFIG_NAMES]

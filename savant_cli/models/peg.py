@@ -41,7 +41,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from savant_cli import constants as C
+from savant_cli import constants
 from savant_cli.models import blocks
 from savant_cli.models import quaternion as qt
 from savant_cli.models.gravity import P_J2, P_J3, P_J4, P_MU, P_ORDER, gravity_at, gravity_zonal, gravity_zonal_xyz
@@ -121,7 +121,7 @@ def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarra
     p[P_V_TARGET] = tgt.speed_mps
     p[P_GAMMA_TARGET] = tgt.flight_path_angle_rad
     p[P_IY:P_IY + 3] = -tgt.plane_normal
-    p[P_VE] = C.G0 * g.peg.isp_vac_s
+    p[P_VE] = constants.G0 * g.peg.isp_vac_s
     p[P_TOL] = g.peg.convergence_tolerance
     p[P_TERMINAL] = g.peg.terminal_time_to_go_s
     p[P_MAX_ITER] = g.peg.max_iterations
@@ -165,12 +165,12 @@ def insertion_state(perigee_altitude_km: float, apogee_altitude_km: float,
                     cutoff_altitude_km: float) -> tuple[float, float, float]:
     """Radius (m), speed (m/s) and flight-path angle (rad, ascending) at the cutoff altitude
     of the orbit with the given apsis altitudes (above the WGS84 equatorial radius)."""
-    rp = C.WGS84_A + 1e3 * perigee_altitude_km
-    ra = C.WGS84_A + 1e3 * apogee_altitude_km
-    r = C.WGS84_A + 1e3 * cutoff_altitude_km
+    rp = constants.WGS84_A + 1e3 * perigee_altitude_km
+    ra = constants.WGS84_A + 1e3 * apogee_altitude_km
+    r = constants.WGS84_A + 1e3 * cutoff_altitude_km
     a = 0.5 * (rp + ra)
-    v = float(np.sqrt(C.MU_EARTH * (2.0 / r - 1.0 / a)))
-    h = np.sqrt(C.MU_EARTH * 2.0 * rp * ra / (rp + ra))
+    v = float(np.sqrt(constants.MU_EARTH * (2.0 / r - 1.0 / a)))
+    h = np.sqrt(constants.MU_EARTH * 2.0 * rp * ra / (rp + ra))
     return r, v, float(np.arccos(np.clip(h / (r * v), -1.0, 1.0)))
 
 
@@ -205,8 +205,8 @@ def insertion_target(guidance) -> InsertionTarget:
     tgt, ls = guidance.target, guidance.launch_site
     r, v, gamma = insertion_state(tgt.perigee_altitude_km, tgt.apogee_altitude_km, tgt.cutoff_altitude_km)
     site = earth.geodetic_to_ecef(np.radians(ls.latitude_deg), np.radians(ls.longitude_deg), ls.base_altitude_m,
-                                  C.WGS84_A, C.WGS84_E2)
-    spin = C.OMEGA_EARTH * tgt.in_plane_time_s  # ECEF → ECI rotation at that time
+                                  constants.WGS84_A, constants.WGS84_E2)
+    spin = constants.OMEGA_EARTH * tgt.in_plane_time_s  # ECEF → ECI rotation at that time
     site_eci = np.array([np.cos(spin) * site[0] - np.sin(spin) * site[1],
                          np.sin(spin) * site[0] + np.cos(spin) * site[1], site[2]])
     inc = np.radians(tgt.inclination_deg)

@@ -36,12 +36,12 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from savant_cli import constants as C
+from savant_cli import constants
 from savant_cli.models import blocks
 from savant_cli.models.configurations import CONFIG_STACK, ENGINE_FIRST, ENGINE_UPPER
 from savant_cli.models.interp import interp1_at, tab, tab_offset
 
-G0 = C.G0
+G0 = constants.G0
 
 _STATE = blocks.STATE.block("propulsion")
 MFS = _STATE.scalar("first_stage_propellant", "kg", "first-stage propellant remaining")
@@ -91,6 +91,17 @@ D_US_SD_IMPULSE = _DISCRETE.scalar("shutdown_impulse", "N*s", "upper-stage vacuu
 D_FS_PROP_SEP = _DISCRETE.scalar("first_stage_propellant_at_separation", "kg",
                                  "first-stage propellant left in the motor at separation (0 before)")
 A_MOMENT = _AUX.array("moment", 3, "N*m", "thrust moment about the CG, body")
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def write_diagnostics(aux: np.ndarray, thrust: float, thrust_vac: float, mx: float, my: float, mz: float) -> None:
+    """Write the delivered and vacuum thrust (N) and the thrust moment about the CG (N·m,
+    body axes) into ``aux``."""
+    aux[A_THRUST] = thrust
+    aux[A_THRUST_VAC] = thrust_vac
+    aux[A_MOMENT] = mx
+    aux[A_MOMENT + 1] = my
+    aux[A_MOMENT + 2] = mz
 
 
 def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarray]) -> None:

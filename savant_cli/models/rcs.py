@@ -37,6 +37,12 @@ _AUX = blocks.DIAGNOSTICS.block("rcs")
 A_TORQUE = _AUX.scalar("torque", "N*m", "roll-jet torque about body X")
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def write_diagnostics(aux: np.ndarray, torque: float) -> None:
+    """Write the roll-jet torque (N·m, about body X) into ``aux``."""
+    aux[A_TORQUE] = torque
+
+
 def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarray]) -> None:
     """The vehicle's roll jets."""
     rcs = inputs.vehicle.rcs

@@ -20,6 +20,7 @@ of the structure keeps its position and velocity.
 
 from __future__ import annotations
 
+import numpy as np
 from numba import njit
 
 from savant_cli.models import blocks, quaternion as qt
@@ -31,6 +32,16 @@ Q = _STATE.array("attitude", 4, "1", "attitude quaternion q_b2i (body→ECI, sca
 W = _STATE.array("body_rate", 3, "rad/s", "body angular rate relative to ECI, body axes")
 _AUX = blocks.DIAGNOSTICS.block("rigid_body")
 A_ACCEL = _AUX.array("sensed_acceleration", 3, "m/s^2", "non-gravitational acceleration of the rigid part, body")
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def write_diagnostics(aux: np.ndarray, ax: float, ay: float, az: float) -> None:
+    """Write the rigid part's non-gravitational acceleration (m/s², body axes) into ``aux``."""
+    aux[A_ACCEL] = ax
+    aux[A_ACCEL + 1] = ay
+    aux[A_ACCEL + 2] = az
+
+
 STATE_NAMES = ("r_eci_x", "r_eci_y", "r_eci_z", "v_eci_x", "v_eci_y", "v_eci_z", "q_w", "q_x", "q_y", "q_z",
                "p", "q", "r")
 

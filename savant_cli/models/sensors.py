@@ -15,12 +15,17 @@ checks the result against ``cont2discrete``.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING, NamedTuple
+
 import numpy as np
 from numba import njit
 from scipy.linalg import expm
 
 from savant_cli.models import blocks, quaternion as qt
 from savant_cli.models.flex import PT_GYRO_FS, PT_GYRO_US, PT_IMU
+
+if TYPE_CHECKING:  # pragma: no cover
+    from savant_cli.config import RateGyroConfig
 
 N_GYROS = 3  # in the flight software's order: upper-stage gyro, IMU, first-stage gyro
 GYRO_POINTS = (PT_GYRO_US, PT_IMU, PT_GYRO_FS)  # their flex points, same order
@@ -46,14 +51,34 @@ def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarra
         p[base:base + 3] = np.radians(eps)
 
 
-def gyro_discrete(natural_frequency_hz: float, damping: float, dt_s: float):
-    """Discrete state-space of ω_s² / (s² + 2ζω_s s + ω_s²) sampled at ``dt_s``.
+class GyroModel(NamedTuple):
+    """One rate-gyro axis, discrete at the sensor sample time ``T``: the continuous
+    ω_s² / (s² + 2ζω_s s + ω_s²) in controllable canonical form, held with a zero-order hold.
 
-    Returns
-    -------
-    tuple of ndarray
-        ``(Ad (2,2), Bd (2,), Cd (2,), Dd float)`` for one axis.
+    With the filter state ``x = (x₁ rad, x₂ rad·s)``, the sensed rate ω rad/s in and
+    the output rad/s: ``x⁺ = ad x + bd ω`` and ``y = cd · x + dd ω``.
+
+    Attributes
+    ----------
+    ad : ndarray (2, 2)
+        State transition over ``T`` (row 0: 1, 1/s; row 1: s, 1).
+    bd : ndarray (2,)
+        Input gain over ``T`` (s, s²).
+    cd : ndarray (2,)
+        Output gain (1/s, 1/s²): ``(0, ω_s²)``.
+    dd : float
+        Feedthrough (1): zero.
     """
+
+    ad: np.ndarray
+    bd: np.ndarray
+    cd: np.ndarray
+    dd: float
+
+
+def gyro_discrete(natural_frequency_hz: float, damping: float, dt_s: float) -> GyroModel:
+    """Discrete state-space of ω_s² / (s² + 2ζω_s s + ω_s²) sampled at ``dt_s`` (s), for
+    one axis (natural frequency in Hz, damping ratio 1)."""
     wn = 2.0 * np.pi * natural_frequency_hz
     # controllable canonical form of ω² / (s² + 2ζω s + ω²)
     a = np.array([[-2.0 * damping * wn, -wn * wn], [1.0, 0.0]])
@@ -63,7 +88,13 @@ def gyro_discrete(natural_frequency_hz: float, damping: float, dt_s: float):
     aug[:2, :2] = a * dt_s
     aug[:2, 2] = b * dt_s
     phi = expm(aug)
-    return np.ascontiguousarray(phi[:2, :2]), np.ascontiguousarray(phi[:2, 2]), c, 0.0
+    return GyroModel(np.ascontiguousarray(phi[:2, :2]), np.ascontiguousarray(phi[:2, 2]), c, 0.0)
+
+
+def build_gyro(config: "RateGyroConfig", sample_time_s: float) -> GyroModel:
+    """The rate gyros' discrete model from ``sensors.rate_gyro``, sampled every
+    ``sample_time_s`` (s; the sensor rate's period)."""
+    return gyro_discrete(config.natural_frequency_hz, config.damping, sample_time_s)
 
 
 @njit(cache=True, error_model="numpy", inline="always")

@@ -25,6 +25,8 @@ removes its outward velocity (the paper's only wall interaction). Source: SAVANT
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from numba import njit
 
@@ -78,6 +80,23 @@ A_LEVEL = _AUX.array("level", 2, "m", "liquid level per tank")
 A_FORCE = _AUX.array("force", 6, "N", "force of each slosh mass on the vehicle, body (LOX xyz, LH2 xyz)")
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def write_diagnostics(aux: np.ndarray, w0: float, w1: float, level0: float, level1: float,
+                      fx0: float, fy0: float, fz0: float, fx1: float, fy1: float, fz1: float) -> None:
+    """Write each tank's slosh frequency (rad/s), liquid level (m) and the force of its
+    slosh mass on the vehicle (N, body axes), tank 0 (LOX) then tank 1 (LH2), into ``aux``."""
+    aux[A_FREQUENCY] = w0
+    aux[A_FREQUENCY + 1] = w1
+    aux[A_LEVEL] = level0
+    aux[A_LEVEL + 1] = level1
+    aux[A_FORCE] = fx0
+    aux[A_FORCE + 1] = fy0
+    aux[A_FORCE + 2] = fz0
+    aux[A_FORCE + 3] = fx1
+    aux[A_FORCE + 4] = fy1
+    aux[A_FORCE + 5] = fz1
+
+
 def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarray]) -> None:
     """The ``slosh`` group and the vehicle's slosh tables (placeholders when off)."""
     s = inputs.cfg.slosh
@@ -101,10 +120,54 @@ def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarra
     tables.update(slosh_level=level, slosh_data=data, slosh_len=n)
 
 
+class SloshTank(NamedTuple):
+    """One tank's slosh mode at its current liquid level (zeros with slosh off).
+
+    Attributes
+    ----------
+    level_m : float
+        Liquid level above the tank bottom, m.
+    frequency_rad_s : float
+        Slosh frequency at the reference axial acceleration, rad/s.
+    damping : float
+        Damping ratio ζ (1).
+    mass_kg : float
+        Slosh mass, kg.
+    station_m : float
+        Slosh-mass station, structure x, m.
+    """
+
+    level_m: float
+    frequency_rad_s: float
+    damping: float
+    mass_kg: float
+    station_m: float
+
+
+class RigidMotion(NamedTuple):
+    """The motion of the rigid part a slosh mass rides on (body axes).
+
+    Attributes
+    ----------
+    cg_m : tuple of 3 float
+        The rigid part's CG, structure frame, m.
+    lateral_specific_force_m_s2 : tuple of 2 float
+        Its non-gravitational acceleration along body Y and Z, m/s².
+    rate_rad_s : tuple of 3 float
+        Body rate ω, rad/s.
+    angular_acceleration_rad_s2 : tuple of 3 float
+        Angular acceleration α, rad/s².
+    """
+
+    cg_m: tuple[float, float, float]
+    lateral_specific_force_m_s2: tuple[float, float]
+    rate_rad_s: tuple[float, float, float]
+    angular_acceleration_rad_s2: tuple[float, float, float]
+
+
 @njit(cache=True, error_model="numpy", inline="always")
-def slosh_tank(tb: np.ndarray, p: np.ndarray, j: int, liquid_kg: float):
-    """Level (m), slosh ω at the reference acceleration (rad/s), ζ, slosh mass (kg) and
-    slosh-mass station (structure x, m) of tank ``j`` holding ``liquid_kg``."""
+def slosh_tank(tb: np.ndarray, p: np.ndarray, j: int, liquid_kg: float) -> SloshTank:
+    """The slosh mode of tank ``j`` holding ``liquid_kg`` (kg)."""
     base = P_TANKS + j * N_TANK_FIELDS
     radius, density = p[base + K_RADIUS], p[base + K_DENSITY]
     level = max(liquid_kg, 0.0) / (density * np.pi * radius * radius)
@@ -118,7 +181,7 @@ def slosh_tank(tb: np.ndarray, p: np.ndarray, j: int, liquid_kg: float):
     zeta = (a * tb[r0 + C_ZETA] + w * tb[r1 + C_ZETA]) * p[P_ZETA_SCALE]
     mass = a * tb[r0 + C_MASS] + w * tb[r1 + C_MASS]
     height = a * tb[r0 + C_HEIGHT] + w * tb[r1 + C_HEIGHT]
-    return level, w_ref, zeta, mass, p[base + K_BOTTOM] - height
+    return SloshTank(level, w_ref, zeta, mass, p[base + K_BOTTOM] - height)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -147,24 +210,29 @@ def frequency_ratio(p: np.ndarray, fex: float, fey: float, fez: float, mass_tota
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def tank_force(x: np.ndarray, k: int, m: float, w: float, zeta: float, station: float, fx_spec: float,
-               cgx: float, cgy: float, cgz: float):
+def tank_force(x: np.ndarray, k: int, tank: SloshTank, w: float, fx_spec: float,
+               cg: tuple[float, float, float]) -> tuple[float, float, float, float, float, float]:
     """Force of one slosh mass on the vehicle (N, body) and its moment about the rigid CG
-    (N·m): states ``x[k:k+4]``, mass ``m`` (kg), ω (rad/s), ζ, station (structure x, m),
-    axial specific force ``fx_spec`` (m/s²), rigid CG (structure, m)."""
+    (N·m): states ``x[k:k+4]``, the tank's mode ``tank`` flown at the frequency ``w``
+    (rad/s), axial specific force ``fx_spec`` (m/s²), rigid CG ``cg`` (structure, m)."""
+    m, zeta = tank.mass_kg, tank.damping
+    cgx, cgy, cgz = cg
     fy = m * (w * w * x[k + S_Y] + 2.0 * zeta * w * x[k + S_YDOT])
     fz = m * (w * w * x[k + S_Z] + 2.0 * zeta * w * x[k + S_ZDOT])
     fx = -m * fx_spec
-    rx, ry, rz = -(station - cgx), x[k + S_Y] - cgy, x[k + S_Z] + cgz  # rigid CG → slosh mass, body
+    rx, ry, rz = -(tank.station_m - cgx), x[k + S_Y] - cgy, x[k + S_Z] + cgz  # rigid CG → slosh mass, body
     return fx, fy, fz, ry * fz - rz * fy, rz * fx - rx * fz, rx * fy - ry * fx
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def tank_rates(x: np.ndarray, k: int, w: float, zeta: float, station: float, cgx: float, cgy: float,
-               cgz: float, aby: float, abz: float, wx: float, wy: float, wz: float, alx: float,
-               aly: float, alz: float, xd: np.ndarray) -> None:
-    """Slosh-mass equations of one tank into ``xd[k:k+4]``: the rigid body's lateral
-    specific force ``ab`` (m/s², body), rate ω (rad/s) and angular acceleration α (rad/s²)."""
+def tank_rates(x: np.ndarray, k: int, tank: SloshTank, w: float, motion: RigidMotion, xd: np.ndarray) -> None:
+    """Slosh-mass equations of one tank into ``xd[k:k+4]``: the tank's mode ``tank`` flown
+    at the frequency ``w`` (rad/s) on the rigid part's ``motion``."""
+    zeta, station = tank.damping, tank.station_m
+    cgx, cgy, cgz = motion.cg_m
+    aby, abz = motion.lateral_specific_force_m_s2
+    wx, wy, wz = motion.rate_rad_s
+    alx, aly, alz = motion.angular_acceleration_rad_s2
     rx, ry, rz = -(station - cgx), x[k + S_Y] - cgy, x[k + S_Z] + cgz
     vy, vz = x[k + S_YDOT], x[k + S_ZDOT]
     # specific force of the point of the rigid body where the mass sits, plus Coriolis:

@@ -33,6 +33,14 @@ _AUX = blocks.DIAGNOSTICS.block("twd")
 A_MOMENT = _AUX.array("moment", 3, "N*m", "tail-wags-dog moment about the CG, body")
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def write_diagnostics(aux: np.ndarray, mx: float, my: float, mz: float) -> None:
+    """Write the tail-wags-dog moment about the CG (N·m, body axes) into ``aux``."""
+    aux[A_MOMENT] = mx
+    aux[A_MOMENT + 1] = my
+    aux[A_MOMENT + 2] = mz
+
+
 def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarray]) -> None:
     """The ``twd`` switch and the vehicle's moving-engine data."""
     p[P_ON] = 1.0 if inputs.cfg.twd.enabled else 0.0

@@ -95,6 +95,14 @@ _AUX = blocks.DIAGNOSTICS.block("winds")
 A_WIND = _AUX.array("wind_ned", 3, "m/s", "wind north, east, down (profile, shear and gust)")
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def write_diagnostics(aux: np.ndarray, wind_n: float, wind_e: float, wind_d: float) -> None:
+    """Write the wind (m/s, north, east, down) into ``aux``."""
+    aux[A_WIND] = wind_n
+    aux[A_WIND + 1] = wind_e
+    aux[A_WIND + 2] = wind_d
+
+
 def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarray]) -> None:
     """The ``winds`` group's profile and scale (a still placeholder profile when off), and
     its gust and shear."""

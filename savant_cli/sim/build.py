@@ -10,16 +10,16 @@ from pathlib import Path
 
 import numpy as np
 
-from savant_cli import constants as C
+from savant_cli import constants
 from savant_cli.config import SavantConfig
 from savant_cli.errors import ConfigError
 from savant_cli.models import PLANT_MODELS, blocks, earth, propulsion, quaternion as qt, rigid_body
 from savant_cli.models.command_schedule import SCHEDULES
 from savant_cli.models.fcs import FcsTables, fcs_tables
-from savant_cli.models.sensors import GYRO_MISALIGN, gyro_discrete, gyro_steady_state, misalignment
-from savant_cli.sim import engine as E
-from savant_cli.models import layout as L
-from savant_cli.sim.engine import GyroModel, Rates
+from savant_cli.models.guidance import SmootherGains, smoother_gains
+from savant_cli.models.sensors import GYRO_MISALIGN, GyroModel, build_gyro, gyro_steady_state, misalignment
+from savant_cli.models import layout
+from savant_cli.sim.engine import EventSchedule, Rates
 from savant_cli.flex_slosh import FlexTables, SloshData, load_flex, load_slosh
 from savant_cli.io.guidance_file import SPEED_COLUMN, GuidanceTable
 from savant_cli.io.table_order import table_key
@@ -36,16 +36,17 @@ class SimModel:
     tables: PlantTables
     fcs: FcsTables
     gyro: GyroModel
+    smoother: SmootherGains
     guidance: GuidanceTable
     rates: Rates
-    sched: np.ndarray
+    sched: EventSchedule
     x0: np.ndarray
     d0: np.ndarray
     u0: np.ndarray
     k0: int = 0  # first plant step (non-zero when starting from a staging state)
     events0: np.ndarray = field(default_factory=lambda: np.full(4, np.nan))
     info: dict = field(default_factory=dict)
-    layout: L.StateLayout = field(default_factory=L.StateLayout)
+    layout: layout.StateLayout = field(default_factory=layout.StateLayout)
 
     @property
     def packed_tables(self) -> np.ndarray:
@@ -70,7 +71,7 @@ def plant_data(cfg: SavantConfig, vehicle: Vehicle, slosh: SloshData | None = No
     """The scalar parameters ``p`` and the tables of the plant: every model of
     :data:`savant_cli.models.PLANT_MODELS` fills its own block."""
     inputs = model_inputs(cfg, vehicle, slosh, flex)
-    p = np.zeros(L.N_PARAM)
+    p = np.zeros(layout.N_PARAM)
     tables: dict[str, np.ndarray] = {}
     for model in PLANT_MODELS:
         model.build(inputs, p, tables)
@@ -91,9 +92,9 @@ def plant_tables(cfg: SavantConfig, vehicle: Vehicle, slosh: SloshData | None = 
     return plant_data(cfg, vehicle, slosh, flex)[1]
 
 
-def state_layout(cfg: SavantConfig) -> L.StateLayout:
+def state_layout(cfg: SavantConfig) -> layout.StateLayout:
     """The continuous-state layout of the models switched on in ``cfg``."""
-    return L.StateLayout(simplex=cfg.actuator.name == "simplex", slosh=cfg.slosh.enabled,
+    return layout.StateLayout(simplex=cfg.actuator.name == "simplex", slosh=cfg.slosh.enabled,
                          n_modes=cfg.flex.n_modes if cfg.flex.enabled else 0)
 
 
@@ -122,9 +123,9 @@ def target_energy(cfg: SavantConfig) -> float:
     """Specific orbital energy of the target orbit, J/kg (point-mass μ, radii from the
     WGS84 equatorial radius)."""
     t = cfg.guidance.target
-    rp = C.WGS84_A + 1e3 * t.perigee_altitude_km
-    ra = C.WGS84_A + 1e3 * t.apogee_altitude_km
-    return -C.MU_EARTH / (rp + ra)
+    rp = constants.WGS84_A + 1e3 * t.perigee_altitude_km
+    ra = constants.WGS84_A + 1e3 * t.apogee_altitude_km
+    return -constants.MU_EARTH / (rp + ra)
 
 
 def pad_state(cfg: SavantConfig, vehicle: Vehicle) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -136,8 +137,8 @@ def pad_state(cfg: SavantConfig, vehicle: Vehicle) -> tuple[np.ndarray, np.ndarr
     stack = vehicle.configurations["stack"].mass
     cg_station = stack.cg_m[-1, 0]  # full propellant is the last (ascending) row
     h_cg = ls.base_altitude_m + vehicle.length_m - cg_station
-    r = earth.geodetic_to_ecef(lat, lon, h_cg, C.WGS84_A, C.WGS84_E2)
-    v = np.cross([0.0, 0.0, C.OMEGA_EARTH], r)
+    r = earth.geodetic_to_ecef(lat, lon, h_cg, constants.WGS84_A, constants.WGS84_E2)
+    v = np.cross([0.0, 0.0, constants.OMEGA_EARTH], r)
     c_e2n = earth.dcm_ecef_to_ned(lat, lon)
     north, east, down = c_e2n[0], c_e2n[1], c_e2n[2]
     psi = np.radians(ls.pad_heading_deg)
@@ -174,59 +175,60 @@ def first_stage_profile(table: GuidanceTable, cfg: SavantConfig, t_sep: float) -
     return table._replace(speed=np.ascontiguousarray(speed))
 
 
+def event_schedule(cfg: SavantConfig, vehicle: Vehicle, rt: Rates) -> EventSchedule:
+    """The event rules and run limits of one run, from the vehicle's events and the config."""
+    ev = vehicle.events
+    return EventSchedule(
+        separation_thrust_fraction=float(ev.separation_thrust_fraction),
+        ignition_delay_s=float(ev.ignition_delay_s),
+        les_jettison_delay_s=float(ev.les_jettison_delay_s),
+        cutoff_energy_j_kg=float(target_energy(cfg)),
+        max_time_s=float(cfg.sim.max_time_s),
+        stop_at_separation=cfg.phase.stop_at == "separation",
+        max_body_rate_rad_s=float(np.radians(cfg.sim.max_body_rate_deg_s)),
+        command_delay_steps=int(round(cfg.controller.delay_s / rt.dt)),
+        profile_schedule=SCHEDULES.index(cfg.guidance.first_stage_schedule),
+        plant_step_s=float(rt.dt))
+
+
 def build_model(cfg: SavantConfig, vehicle: Vehicle, guidance: GuidanceTable) -> SimModel:
     """Numeric model of one run."""
     p, tb = plant_data(cfg, vehicle)
     ft = fcs_tables(cfg.controller)
     rt = rates(cfg)
-    ad, bd, cd, dd = gyro_discrete(cfg.sensors.rate_gyro.natural_frequency_hz,
-                                   cfg.sensors.rate_gyro.damping, rt.dt * rt.n_sensor)
-    gyro = GyroModel(ad=ad, bd=bd, cd=cd, dd=dd)
+    gyro = build_gyro(cfg.sensors.rate_gyro, rt.dt * rt.n_sensor)
 
     r0, v0, q0 = pad_state(cfg, vehicle)
-    w0 = qt.dcm(q0).T @ np.array([0.0, 0.0, C.OMEGA_EARTH])  # Earth rate, body axes
-    layout = state_layout(cfg)
-    x0 = np.zeros(layout.n)
-    x0[L.R:L.R + 3] = r0
-    x0[L.V:L.V + 3] = v0
-    x0[L.Q:L.Q + 4] = q0
-    x0[L.W:L.W + 3] = w0
-    x0[L.MFS] = vehicle.configurations["stack"].mass.propellant_kg[-1]
-    x0[L.MLOX] = vehicle.upper_stage.lox_kg
-    x0[L.MLH2] = vehicle.upper_stage.lh2_kg
+    w0 = qt.dcm(q0).T @ np.array([0.0, 0.0, constants.OMEGA_EARTH])  # Earth rate, body axes
+    x_layout = state_layout(cfg)
+    x0 = np.zeros(x_layout.n)
+    x0[layout.R:layout.R + 3] = r0
+    x0[layout.V:layout.V + 3] = v0
+    x0[layout.Q:layout.Q + 4] = q0
+    x0[layout.W:layout.W + 3] = w0
+    x0[layout.MFS] = vehicle.configurations["stack"].mass.propellant_kg[-1]
+    x0[layout.MLOX] = vehicle.upper_stage.lox_kg
+    x0[layout.MLH2] = vehicle.upper_stage.lh2_kg
     # the pad state is the whole vehicle's CG; with slosh on the state's reference point
     # is the rigid part's (the slosh masses left out): move it there
-    _, whole, rigid, _, _ = mass_state(x0, p, pack_tables(tb), L.CONFIG_STACK)
+    _, whole, rigid, _, _ = mass_state(x0, p, pack_tables(tb), layout.CONFIG_STACK)
     rigid_body.move_reference(x0, rigid[1] - whole[1], rigid[2] - whole[2], rigid[3] - whole[3])
 
-    d0 = np.zeros(L.N_DISC)
+    d0 = np.zeros(layout.N_DISC)
     d0[propulsion.D_FS_PROP_SEP] = 0.0  # set at separation (read only once the event has happened)
     for g in range(3):
         w_sensed = misalignment(p[GYRO_MISALIGN[g]:GYRO_MISALIGN[g] + 3])[1] @ w0  # in the gyro's axes
         for ax in range(3):
-            s = L.D_GYRO_X + 6 * g + 2 * ax
-            d0[s:s + 2] = gyro_steady_state(ad, bd, w_sensed[ax])
-            d0[L.D_GYRO_Y + 3 * g + ax] = w_sensed[ax]
-    u0 = np.zeros(L.N_INPUT)
-    u0[L.U_CONFIG] = L.CONFIG_STACK
-    u0[L.U_ENGINE] = L.ENGINE_FIRST
+            s = layout.D_GYRO_X + 6 * g + 2 * ax
+            d0[s:s + 2] = gyro_steady_state(gyro.ad, gyro.bd, w_sensed[ax])
+            d0[layout.D_GYRO_Y + 3 * g + ax] = w_sensed[ax]
+    u0 = np.zeros(layout.N_INPUT)
+    u0[layout.U_CONFIG] = layout.CONFIG_STACK
+    u0[layout.U_ENGINE] = layout.ENGINE_FIRST
 
-    ev = vehicle.events
-    sched = np.zeros(E.N_SCHED)
-    sched[E.S_SEP_FRACTION] = ev.separation_thrust_fraction
-    sched[E.S_T_IGN_DELAY] = ev.ignition_delay_s
-    sched[E.S_T_LES_DELAY] = ev.les_jettison_delay_s
-    sched[E.S_ENERGY_TARGET] = target_energy(cfg)
-    sched[E.S_T_MAX] = cfg.sim.max_time_s
-    sched[E.S_STOP_AT_SEP] = 1.0 if cfg.phase.stop_at == "separation" else 0.0
-    sched[E.S_SMOOTH_ZETA] = cfg.guidance.smoother.damping
-    sched[E.S_SMOOTH_WN] = cfg.guidance.smoother.natural_frequency_rad_s
-    sched[E.S_MAX_RATE] = np.radians(cfg.sim.max_body_rate_deg_s)
-    sched[E.S_DELAY_STEPS] = round(cfg.controller.delay_s / rt.dt)
-    sched[E.S_PROFILE_SCHEDULE] = SCHEDULES.index(cfg.guidance.first_stage_schedule)
-    sched[E.S_DT] = rt.dt
+    sched = event_schedule(cfg, vehicle, rt)
     t_sep_predicted = predicted_separation_time(vehicle)
     guidance = first_stage_profile(guidance, cfg, t_sep_predicted)
     info = {"predicted_separation_time_s": t_sep_predicted}
-    return SimModel(p=p, tables=tb, fcs=ft, gyro=gyro, guidance=guidance, rates=rt, sched=sched,
-                    x0=x0, d0=d0, u0=u0, info=info, layout=layout)
+    return SimModel(p=p, tables=tb, fcs=ft, gyro=gyro, smoother=smoother_gains(cfg.guidance.smoother),
+                    guidance=guidance, rates=rt, sched=sched, x0=x0, d0=d0, u0=u0, info=info, layout=x_layout)

@@ -38,9 +38,9 @@ from savant_cli.models.command_schedule import BY_TIME, D_PROFILE_OFFSET, D_PROF
 from savant_cli.models.earth import A_ALT, P_E2, P_OMEGA_E, P_RE
 from savant_cli.models.fcs import FCS_COAST, FCS_STACK, FCS_UPPER, FcsTables, fcs_step, reset_phase
 from savant_cli.models.gravity import P_MU
-from savant_cli.models.guidance import D_TG, D_VG, guidance_sample, smoother_step
+from savant_cli.models.guidance import D_TG, D_VG, SmootherGains, guidance_sample, smoother_step
 from savant_cli.models.sensors import (
-    GYRO_MISALIGN, GYRO_POINTS, IMU_GYRO, N_GYROS, P_IMU_MISALIGN, gyro_step, misalignment,
+    GYRO_MISALIGN, GYRO_POINTS, IMU_GYRO, N_GYROS, P_IMU_MISALIGN, GyroModel, gyro_step, misalignment,
 )
 from savant_cli.models.layout import (
     ACT_P, ACT_Y, CONFIG_STACK, CONFIG_UPPER, CONFIG_UPPER_LES, D_CMD_P, D_CMD_RCS, D_CMD_Y,
@@ -70,20 +70,43 @@ EV_LES = 2
 EV_CUTOFF = 3
 EVENT_NAMES = ("separation", "upper_stage_ignition", "les_jettison", "cutoff")
 
-# scheduled event times and limits in `sched`
-S_SEP_FRACTION = 0  # separation when the sensed first-stage thrust < this × its flown peak (0: never)
-S_T_IGN_DELAY = 1
-S_T_LES_DELAY = 2
-S_ENERGY_TARGET = 3  # specific orbital energy at cutoff, J/kg (point-mass μ)
-S_T_MAX = 4
-S_STOP_AT_SEP = 5  # 1: the phase ends at separation
-S_SMOOTH_ZETA = 6
-S_SMOOTH_WN = 7
-S_MAX_RATE = 8  # divergence threshold on |ω|, rad/s
-S_DELAY_STEPS = 9  # plant steps from the flight-control cycle to its commands (controller.delay_s)
-S_PROFILE_SCHEDULE = 10  # the stored profile's first-stage index (its position in command_schedule.SCHEDULES)
-S_DT = 11  # plant step, s (the first-stage impulse's trapezoid)
-N_SCHED = 12
+class EventSchedule(NamedTuple):
+    """The event rules and run limits :func:`advance` applies at step boundaries (SI).
+
+    Attributes
+    ----------
+    separation_thrust_fraction : float
+        Separation when the sensed first-stage vacuum thrust falls below this fraction
+        (1) of its own flown peak (0: never separates).
+    ignition_delay_s, les_jettison_delay_s : float
+        Upper-stage ignition after separation, LES jettison after ignition, s.
+    cutoff_energy_j_kg : float
+        The stored profile's cutoff: point-mass specific orbital energy, J/kg.
+    max_time_s : float
+        The run stops after this mission time, s.
+    stop_at_separation : bool
+        The phase ends at separation.
+    max_body_rate_rad_s : float
+        Divergence threshold on the body-rate magnitude |ω|, rad/s.
+    command_delay_steps : int
+        Plant steps from a flight-control cycle to its commands (``controller.delay_s``).
+    profile_schedule : int
+        What the stored profile's first stage is indexed by: its position in
+        ``models.command_schedule.SCHEDULES``.
+    plant_step_s : float
+        The plant step, s (the trapezoids of the sensed thrust).
+    """
+
+    separation_thrust_fraction: float
+    ignition_delay_s: float
+    les_jettison_delay_s: float
+    cutoff_energy_j_kg: float
+    max_time_s: float
+    stop_at_separation: bool
+    max_body_rate_rad_s: float
+    command_delay_steps: int
+    profile_schedule: int
+    plant_step_s: float
 
 
 class Rates(NamedTuple):
@@ -94,13 +117,6 @@ class Rates(NamedTuple):
     n_fcs: int
     n_guid: int
     n_log: int
-
-
-class GyroModel(NamedTuple):
-    ad: np.ndarray  # (2, 2)
-    bd: np.ndarray  # (2,)
-    cd: np.ndarray  # (2,)
-    dd: float
 
 
 @njit(cache=True, error_model="numpy")
@@ -154,13 +170,13 @@ def move_reference(x: np.ndarray, old: tuple[float, float, float], new: tuple[fl
 
 @njit(cache=True, error_model="numpy")
 def handle_events(t: float, x: np.ndarray, u: np.ndarray, d: np.ndarray,
-                  events: np.ndarray, sched: np.ndarray, p: np.ndarray, tb: np.ndarray) -> int:
+                  events: np.ndarray, sched: EventSchedule, p: np.ndarray, tb: np.ndarray) -> int:
     """Apply time- and condition-triggered events at a step boundary; return a stop code.
 
     Separation is decided on board: the sensed first-stage vacuum thrust at ``t``
     (``propulsion.first_stage_flow``, the motor flown so far) is compared with the
     largest value sensed so far (``d[D_FS_PEAK]``, updated here); the first step at which
-    it is below ``sched[S_SEP_FRACTION]`` of that peak separates. Until then the sensed
+    it is below ``sched.separation_thrust_fraction`` of that peak separates. Until then the sensed
     thrust's trapezoidal integral accumulates in ``d[D_FS_IMPULSE]`` (the impulse the motor
     delivered to the vehicle); the motor's propellant at separation is kept in
     ``d[D_FS_PROP_SEP]``. After the cutoff command the upper stage's sensed thrust
@@ -171,15 +187,15 @@ def handle_events(t: float, x: np.ndarray, u: np.ndarray, d: np.ndarray,
     if np.isnan(events[EV_SEPARATION]):
         f_sensed = propulsion.first_stage_flow(x, tb, p, t)[0]
         if t > 0.0:
-            d[propulsion.D_FS_IMPULSE] += 0.5 * (d[propulsion.D_FS_LAST] + f_sensed) * sched[S_DT]
+            d[propulsion.D_FS_IMPULSE] += 0.5 * (d[propulsion.D_FS_LAST] + f_sensed) * sched.plant_step_s
         d[propulsion.D_FS_LAST] = f_sensed
         if f_sensed > d[propulsion.D_FS_PEAK]:
             d[propulsion.D_FS_PEAK] = f_sensed
-        separate = f_sensed < sched[S_SEP_FRACTION] * d[propulsion.D_FS_PEAK]
+        separate = f_sensed < sched.separation_thrust_fraction * d[propulsion.D_FS_PEAK]
     if separate:
         events[EV_SEPARATION] = t
         d[propulsion.D_FS_PROP_SEP] = x[MFS]
-        if sched[S_STOP_AT_SEP] != 0.0:
+        if sched.stop_at_separation:
             return STOP_SEPARATION
         cg_stack = reference_cg(x, p, tb, np.int64(CONFIG_STACK))  # (not a literal: one compile for every config)
         u[U_CONFIG] = CONFIG_UPPER_LES
@@ -198,12 +214,12 @@ def handle_events(t: float, x: np.ndarray, u: np.ndarray, d: np.ndarray,
         move_reference(x, cg_stack, reference_cg(x, p, tb, np.int64(CONFIG_UPPER_LES)))
         reset_phase(d)
     t_sep = events[EV_SEPARATION]
-    if not np.isnan(t_sep) and np.isnan(events[EV_IGNITION]) and t >= t_sep + sched[S_T_IGN_DELAY]:
+    if not np.isnan(t_sep) and np.isnan(events[EV_IGNITION]) and t >= t_sep + sched.ignition_delay_s:
         events[EV_IGNITION] = t
         u[U_ENGINE] = ENGINE_UPPER
         u[U_T_IGN] = t  # the flight control fades its gains in from here (models/fcs.py)
     t_ign = events[EV_IGNITION]
-    if not np.isnan(t_ign) and np.isnan(events[EV_LES]) and t >= t_ign + sched[S_T_LES_DELAY]:
+    if not np.isnan(t_ign) and np.isnan(events[EV_LES]) and t >= t_ign + sched.les_jettison_delay_s:
         events[EV_LES] = t
         cg_les = reference_cg(x, p, tb, np.int64(CONFIG_UPPER_LES))
         u[U_CONFIG] = CONFIG_UPPER
@@ -212,7 +228,7 @@ def handle_events(t: float, x: np.ndarray, u: np.ndarray, d: np.ndarray,
         if u[U_T_CUT] > 0.0:  # shutdown transient: the impulse after the command (trapezoid)
             f_us = propulsion.upper_stage_thrust_vac(x, tb, p, t, u[U_T_IGN], u[U_T_CUT])
             if t > u[U_T_CUT]:
-                d[propulsion.D_US_SD_IMPULSE] += 0.5 * (d[propulsion.D_US_SD_LAST] + f_us) * sched[S_DT]
+                d[propulsion.D_US_SD_IMPULSE] += 0.5 * (d[propulsion.D_US_SD_LAST] + f_us) * sched.plant_step_s
             d[propulsion.D_US_SD_LAST] = f_us
         if x[MLOX] <= 0.0 or x[MLH2] <= 0.0:
             if np.isnan(events[EV_CUTOFF]):
@@ -223,7 +239,7 @@ def handle_events(t: float, x: np.ndarray, u: np.ndarray, d: np.ndarray,
 
 @njit(cache=True, error_model="numpy")
 def cutoff_step(t: float, dt: float, x: np.ndarray, r_nav: np.ndarray, v_nav: np.ndarray, u: np.ndarray,
-                d: np.ndarray, events: np.ndarray, sched: np.ndarray, p: np.ndarray, tb: np.ndarray,
+                d: np.ndarray, events: np.ndarray, sched: EventSchedule, p: np.ndarray, tb: np.ndarray,
                 peg_on: bool) -> int:
     """The upper-stage cutoff at a step boundary: the command (PEG's commanded cutoff time
     at the nearest plant step, or the stored profile's target energy of the navigated
@@ -234,7 +250,7 @@ def cutoff_step(t: float, dt: float, x: np.ndarray, r_nav: np.ndarray, v_nav: np
         if peg_on:  # PEG's cutoff: the plant step nearest its commanded time
             command = d[peg.D_ACTIVE] != 0.0 and t + 0.5 * dt >= d[peg.D_T_CUTOFF]
         else:
-            command = specific_energy(r_nav, v_nav, p[P_MU]) >= sched[S_ENERGY_TARGET]
+            command = specific_energy(r_nav, v_nav, p[P_MU]) >= sched.cutoff_energy_j_kg
         if not command:
             return RUNNING
         events[EV_CUTOFF] = t
@@ -278,7 +294,7 @@ def specific_energy(r_eci: np.ndarray, v_eci: np.ndarray, mu: float) -> float:
 @njit(cache=True, error_model="numpy")
 def advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0: int,
             n_steps: int, rates: Rates, p: np.ndarray, tb: np.ndarray, ft: FcsTables,
-            gyro: GyroModel, gt: GuidanceTable, sched: np.ndarray, log: np.ndarray,
+            gyro: GyroModel, smoother: SmootherGains, gt: GuidanceTable, sched: EventSchedule, log: np.ndarray,
             log_row: int, pert: np.ndarray) -> tuple[int, int, int, str]:
     """Advance the coupled plant and flight software by up to ``n_steps`` plant steps.
 
@@ -291,13 +307,14 @@ def advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0:
     work = work_array(x.size)
     # the loop runs on reference-count-free views (sim/borrow.py): every array it borrows
     # is held here, or by the caller, until it returns
-    return _advance(x, d, u, events, k0, n_steps, rates, p, tb, ft, gyro, gt, sched, log, log_row, pert, aux, work)
+    return _advance(x, d, u, events, k0, n_steps, rates, p, tb, ft, gyro, smoother, gt, sched, log, log_row, pert, aux,
+                    work)
 
 
 @njit(cache=True, error_model="numpy")
 def _advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0: int,
              n_steps: int, rates: Rates, p: np.ndarray, tb: np.ndarray, ft: FcsTables,
-             gyro: GyroModel, gt: GuidanceTable, sched: np.ndarray, log: np.ndarray,
+             gyro: GyroModel, smoother: SmootherGains, gt: GuidanceTable, sched: EventSchedule, log: np.ndarray,
              log_row: int, pert: np.ndarray, aux: np.ndarray, work: np.ndarray) -> tuple[int, int, int, str]:
     """:func:`advance` with its scratch arrays (``aux``: diagnostics, ``work``: RK4)."""
     x, d, u, p, tb, log = borrowed(x), borrowed(d), borrowed(u), borrowed(p), borrowed(tb), borrowed(log)
@@ -337,7 +354,7 @@ def _advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0
             status = cutoff_step(t, dt, x, r_nav, v_nav, u, d, events, sched, p, tb, peg_on)
             if status != RUNNING:
                 return status, j, log_row, ""
-        if t > sched[S_T_MAX]:
+        if t > sched.max_time_s:
             return STOP_TIME, j, log_row, ""
         phase = fcs_phase(events)
 
@@ -350,7 +367,7 @@ def _advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0
                 steered = d[peg.D_ACTIVE] != 0.0
                 peg.blend_with_profile(d, t, t + d[D_PROFILE_OFFSET], rates.n_guid * dt, p, gt.time, gt.quat, gt.rate)
             if not steered:
-                if sched[S_PROFILE_SCHEDULE] == BY_TIME:
+                if sched.profile_schedule == BY_TIME:
                     guidance_sample(d, t, gt.time, gt.quat, gt.rate, k == 0)
                 else:
                     ex, ey, ez = earth.earth_relative_velocity_xyz(r_nav[0], r_nav[1], v_nav[0], v_nav[1], v_nav[2],
@@ -375,7 +392,7 @@ def _advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0
                     d[D_GYRO_Y + 3 * g + ax] = gyro_step(d, s, w_in, gyro.ad, gyro.bd, gyro.cd, gyro.dd)
         if k % rates.n_fcs == 0:
             dt_fcs = rates.n_fcs * dt
-            smoother_step(d, t, dt_fcs, sched[S_SMOOTH_ZETA], sched[S_SMOOTH_WN])
+            smoother_step(d, t, dt_fcs, smoother.damping, smoother.natural_frequency_rad_s)
             sched_var = schedule_variable(t, r_nav, v_nav, phase, p)
             if has_flex:
                 flex.flex_point(x, config, p, tb, flex.PT_IMU, False, flex3)  # flex rotation at the nav unit
@@ -386,7 +403,7 @@ def _advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0
             else:  # sensed attitude q_b2i ⊗ q_s2b
                 qt.qmul_into(x[Q:Q + 4], q_imu, q_nav)
             fcs_step(d, q_nav, phase, sched_var, t - u[U_T_IGN], dt_fcs, ft)
-        command_update = (k - int(sched[S_DELAY_STEPS])) % rates.n_fcs == 0
+        command_update = (k - sched.command_delay_steps) % rates.n_fcs == 0
         if command_update:  # the commands, after the loop delay
             u[U_DPC] = d[D_CMD_P]
             u[U_DYC] = d[D_CMD_Y]
@@ -427,6 +444,6 @@ def _advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0
         if aux[A_ALT] < -50.0 and t > 1.0:
             return DIVERGED_GROUND, j + 1, log_row, "altitude below ground"
         wmag = np.sqrt(x[W] ** 2 + x[W + 1] ** 2 + x[W + 2] ** 2)
-        if wmag > sched[S_MAX_RATE]:
+        if wmag > sched.max_body_rate_rad_s:
             return DIVERGED_RATE, j + 1, log_row, "body rate magnitude beyond limit"
     return RUNNING, n_steps, log_row, ""

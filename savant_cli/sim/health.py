@@ -48,8 +48,8 @@ import numpy as np
 from savant_cli.io.record import Signal
 from savant_cli.models import actuator
 from savant_cli.models.configurations import ENGINE_FIRST
-from savant_cli.sim import engine as E
-from savant_cli.models import layout as L
+from savant_cli.sim import engine
+from savant_cli.models import layout
 from savant_cli.sim.build import SimModel
 from savant_cli.sim.oscillation import band_top_hz, find_limit_cycles, find_slow_divergence
 from savant_cli.sim.run import SimResult
@@ -103,11 +103,11 @@ class LossOfControl:
 
 def _limits(model: SimModel, stage: int) -> tuple[float, float]:
     """(rate limit rad/s, gimbal limit rad) of a stage (0 first, 1 upper)."""
-    return actuator.limits(model.p, ENGINE_FIRST if stage == 0 else L.ENGINE_UPPER)
+    return actuator.limits(model.p, ENGINE_FIRST if stage == 0 else layout.ENGINE_UPPER)
 
 
 def _stage_masks(t: np.ndarray, result: SimResult) -> list[np.ndarray]:
-    t_sep = result.events[E.EV_SEPARATION]
+    t_sep = result.events[engine.EV_SEPARATION]
     first = t < t_sep if np.isfinite(t_sep) else np.ones(t.size, bool)
     return [first, ~first]
 
@@ -115,7 +115,7 @@ def _stage_masks(t: np.ndarray, result: SimResult) -> list[np.ndarray]:
 def _quiet_pieces(t: np.ndarray, result: SimResult, quiet_s: float) -> list[tuple[str, np.ndarray]]:
     """(stage, sample indices) of each contiguous stretch of a stage that lies outside
     the ``quiet_s`` after liftoff, separation, upper-stage ignition and LES jettison."""
-    starts = [float(t[0]), result.events[E.EV_SEPARATION], result.events[E.EV_IGNITION], result.events[E.EV_LES]]
+    starts = [float(t[0]), result.events[engine.EV_SEPARATION], result.events[engine.EV_IGNITION], result.events[engine.EV_LES]]
     quiet = np.ones(t.size, bool)
     for te in starts:
         if np.isfinite(te):

@@ -3,8 +3,9 @@
 ``derivative`` is the one function the time simulation integrates and the linearization
 differentiates. It reads top to bottom: environment → mass → forces and moments →
 equations of motion → auxiliary states, each step one call into the model that owns it
-(``savant_cli/models/``). It also fills ``aux`` with diagnostics so the logger reports
-exactly what the dynamics used.
+(``savant_cli/models/``). Each model then writes its own diagnostics into ``aux``
+(its ``write_diagnostics``, beside the fields it declares), so the logger reports exactly
+what the dynamics used.
 
 The tables reach the compiled code packed into one flat array (:func:`pack_tables`):
 numba increments and decrements a reference count for every array argument of every
@@ -66,18 +67,19 @@ def mass_state(x: np.ndarray, p: np.ndarray, tb: np.ndarray, config: int):
         Ixx, Iyy, Izz, Ixy, Ixz, Iyz) of the rigid part, tank 0, tank 1)``: CGs in
         structure axes, inertia about the rigid part's CG in body axes (tensor elements);
         the rigid part leaves the slosh masses out when slosh is on (else it is the
-        whole vehicle), and each tank is ``(level m, ω rad/s, ζ, slosh mass kg, station
-        m)`` (zeros with slosh off).
+        whole vehicle), and each tank is a :class:`~savant_cli.models.slosh.SloshTank`
+        (zeros with slosh off).
     """
     prop = propulsion.propellant_remaining(x, config)
     mass, cgx, cgy, cgz, ixx, iyy, izz, ixy, ixz, iyz = mass_model.mass_properties(tb, config, prop)
     whole = (mass, cgx, cgy, cgz)
-    tank0 = tank1 = (0.0, 0.0, 0.0, 0.0, 0.0)
+    tank0 = tank1 = slosh.SloshTank(0.0, 0.0, 0.0, 0.0, 0.0)
     if int(p[slosh.P_OFFSET]) >= 0:  # the rigid part leaves the slosh masses out
         tank0 = slosh.slosh_tank(tb, p, 0, x[MLOX])
         tank1 = slosh.slosh_tank(tb, p, 1, x[MLH2])
         mass, cgx, cgy, cgz, ixx, iyy, izz, ixy, ixz, iyz = slosh.rigid_part(
-            mass, cgx, cgy, cgz, ixx, iyy, izz, ixy, ixz, iyz, tank0[3], tank0[4], tank1[3], tank1[4])
+            mass, cgx, cgy, cgz, ixx, iyy, izz, ixy, ixz, iyz, tank0.mass_kg, tank0.station_m, tank1.mass_kg,
+            tank1.station_m)
     return prop, whole, (mass, cgx, cgy, cgz, ixx, iyy, izz, ixy, ixz, iyz), tank0, tank1
 
 
@@ -147,8 +149,6 @@ def compose(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarra
     prop, whole, rigid, tank0, tank1 = mass_state(x, p, tb, config)
     mass_total, cgx_t, cgy_t, cgz_t = whole
     mass, cgx, cgy, cgz, ixx, iyy, izz, ixy, ixz, iyz = rigid
-    lvl0, ws0, zs0, ms0, xs0 = tank0
-    lvl1, ws1, zs1, ms1, xs1 = tank1
     slosh_at = int(p[slosh.P_OFFSET])  # first slosh state, −1 when slosh is off
 
     # ------------------------------------------------- forces and moments
@@ -174,15 +174,15 @@ def compose(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarra
     w_s0 = w_s1 = 0.0
     if slosh_at >= 0:
         a_ratio = slosh.frequency_ratio(p, fex, fey, fez, mass_total)
-        w_s0 = ws0 * a_ratio
-        w_s1 = ws1 * a_ratio
+        w_s0 = tank0.frequency_rad_s * a_ratio
+        w_s1 = tank1.frequency_rad_s * a_ratio
         fx_spec = fex / mass_total  # axial specific force; the masses ride axially with the tank
-        fsx0, fsy0, fsz0, mlx, mly, mlz = slosh.tank_force(x, slosh_at, ms0, w_s0, zs0, xs0, fx_spec, cgx, cgy, cgz)
+        fsx0, fsy0, fsz0, mlx, mly, mlz = slosh.tank_force(x, slosh_at, tank0, w_s0, fx_spec, (cgx, cgy, cgz))
         msx += mlx
         msy += mly
         msz += mlz
-        fsx1, fsy1, fsz1, mhx, mhy, mhz = slosh.tank_force(x, slosh_at + slosh.N_PER_TANK, ms1, w_s1, zs1, xs1,
-                                                           fx_spec, cgx, cgy, cgz)
+        fsx1, fsy1, fsz1, mhx, mhy, mhz = slosh.tank_force(x, slosh_at + slosh.N_PER_TANK, tank1, w_s1, fx_spec,
+                                                           (cgx, cgy, cgz))
         msx += mhx
         msy += mhy
         msz += mhz
@@ -218,72 +218,26 @@ def compose(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarra
 
     # ------------------------------------------------------- auxiliary states
     if slosh_at >= 0:
-        slosh.tank_rates(x, slosh_at, w_s0, zs0, xs0, cgx, cgy, cgz, aby, abz, wx, wy, wz, alx, aly, alz, xd)
-        slosh.tank_rates(x, slosh_at + slosh.N_PER_TANK, w_s1, zs1, xs1, cgx, cgy, cgz, aby, abz, wx, wy, wz,
-                         alx, aly, alz, xd)
+        motion = slosh.RigidMotion((cgx, cgy, cgz), (aby, abz), (wx, wy, wz), (alx, aly, alz))
+        slosh.tank_rates(x, slosh_at, tank0, w_s0, motion, xd)
+        slosh.tank_rates(x, slosh_at + slosh.N_PER_TANK, tank1, w_s1, motion, xd)
     flex.modal_rates(x, config, p, tb, gimbal_pt, ftx + fwx, fty + fwy, ftz + fwz, twy, twz, rcs_torque,
                      fsx0, fsy0, fsz0, fsx1, fsy1, fsz1, xd)
 
     # ------------------------------------------------------------ diagnostics
-    aux[earth.A_ALT] = alt
+    earth.write_altitude(aux, alt)
     if not diagnostics:
         return
-    lat, lon = earth.latitude_longitude(x_ecef, y_ecef, lat_num, lat_den)
-    aux[earth.A_LAT] = lat
-    aux[earth.A_LON] = lon
-    aux[earth.A_VEARTH] = np.sqrt(ex * ex + ey * ey + ez * ez)
-    aux[atmosphere.A_RHO] = rho
-    aux[atmosphere.A_PRES] = pres
-    aux[atmosphere.A_TEMP] = temp
-    aux[atmosphere.A_SOS] = sos
-    aux[aero.A_MACH] = mach
-    aux[aero.A_QBAR] = qbar
-    aux[aero.A_ALPHA] = alpha
-    aux[aero.A_BETA] = beta
-    aux[aero.A_VREL] = vair
-    aux[winds.A_WIND] = wind_n
-    aux[winds.A_WIND + 1] = wind_e
-    aux[winds.A_WIND + 2] = wind_d
-    aux[gravity.A_GRAV] = gx
-    aux[gravity.A_GRAV + 1] = gy
-    aux[gravity.A_GRAV + 2] = gz
-    aux[propulsion.A_THRUST] = thrust
-    aux[propulsion.A_THRUST_VAC] = thrust_vac
-    aux[mass_model.A_MASS] = mass_total
-    aux[mass_model.A_PROP] = prop
-    aux[mass_model.A_CG] = cgx_t
-    aux[mass_model.A_CG + 1] = cgy_t
-    aux[mass_model.A_CG + 2] = cgz_t
-    aux[aero.A_FORCE] = fax
-    aux[aero.A_FORCE + 1] = fay
-    aux[aero.A_FORCE + 2] = faz
-    aux[aero.A_MOMENT] = max_
-    aux[aero.A_MOMENT + 1] = may
-    aux[aero.A_MOMENT + 2] = maz
-    aux[propulsion.A_MOMENT] = mtx
-    aux[propulsion.A_MOMENT + 1] = mty
-    aux[propulsion.A_MOMENT + 2] = mtz
-    aux[rcs.A_TORQUE] = rcs_torque
-    aux[actuator.A_ANGLES] = dp
-    aux[actuator.A_ANGLES + 1] = dy
-    aux[actuator.A_ACCEL] = ddp
-    aux[actuator.A_ACCEL + 1] = ddy
-    aux[rigid_body.A_ACCEL] = abx
-    aux[rigid_body.A_ACCEL + 1] = aby
-    aux[rigid_body.A_ACCEL + 2] = abz
-    aux[twd.A_MOMENT] = mwx
-    aux[twd.A_MOMENT + 1] = mwy
-    aux[twd.A_MOMENT + 2] = mwz
-    aux[slosh.A_FREQUENCY] = w_s0
-    aux[slosh.A_FREQUENCY + 1] = w_s1
-    aux[slosh.A_LEVEL] = lvl0
-    aux[slosh.A_LEVEL + 1] = lvl1
-    aux[slosh.A_FORCE] = fsx0
-    aux[slosh.A_FORCE + 1] = fsy0
-    aux[slosh.A_FORCE + 2] = fsz0
-    aux[slosh.A_FORCE + 3] = fsx1
-    aux[slosh.A_FORCE + 4] = fsy1
-    aux[slosh.A_FORCE + 5] = fsz1
-    aux[flex.A_GIMBAL_ROTATION] = tgx
-    aux[flex.A_GIMBAL_ROTATION + 1] = tgy
-    aux[flex.A_GIMBAL_ROTATION + 2] = tgz
+    earth.write_diagnostics(aux, x_ecef, y_ecef, lat_num, lat_den, ex, ey, ez)
+    atmosphere.write_diagnostics(aux, rho, pres, temp, sos)
+    aero.write_diagnostics(aux, mach, qbar, alpha, beta, vair, fax, fay, faz, max_, may, maz)
+    winds.write_diagnostics(aux, wind_n, wind_e, wind_d)
+    gravity.write_diagnostics(aux, gx, gy, gz)
+    propulsion.write_diagnostics(aux, thrust, thrust_vac, mtx, mty, mtz)
+    mass_model.write_diagnostics(aux, mass_total, prop, cgx_t, cgy_t, cgz_t)
+    rcs.write_diagnostics(aux, rcs_torque)
+    actuator.write_diagnostics(aux, dp, dy, ddp, ddy)
+    rigid_body.write_diagnostics(aux, abx, aby, abz)
+    twd.write_diagnostics(aux, mwx, mwy, mwz)
+    slosh.write_diagnostics(aux, w_s0, w_s1, tank0.level_m, tank1.level_m, fsx0, fsy0, fsz0, fsx1, fsy1, fsz1)
+    flex.write_diagnostics(aux, tgx, tgy, tgz)

@@ -9,35 +9,35 @@ from dataclasses import dataclass, field
 import numpy as np
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
-from savant_cli import constants as C
+from savant_cli import constants
 from savant_cli import lifecycle
 from savant_cli.io.record import Signal
 from savant_cli.models import (
     actuator, aero, atmosphere, earth, flex, gravity, mass, navigation, peg, propulsion, quaternion as qt, rcs,
     rigid_body, slosh, twd, winds,
 )
-from savant_cli.sim import engine as E
-from savant_cli.models import layout as L
+from savant_cli.sim import engine
+from savant_cli.models import layout
 from savant_cli.sim import compile_notice, loop_perturbation
 from savant_cli.sim.build import SimModel
 from savant_cli.sim.plant import compose, derivative
 
 STOP_MESSAGES = {
-    E.STOP_CUTOFF: "cutoff: target orbital energy reached",
-    E.STOP_GUIDANCE_CUTOFF: "cutoff: PEG time to go elapsed",
-    E.STOP_DEPLETION: "cutoff: upper-stage propellant depleted before the target",
-    E.STOP_SEPARATION: "end of phase at first-stage separation",
-    E.STOP_TIME: "maximum simulation time reached",
+    engine.STOP_CUTOFF: "cutoff: target orbital energy reached",
+    engine.STOP_GUIDANCE_CUTOFF: "cutoff: PEG time to go elapsed",
+    engine.STOP_DEPLETION: "cutoff: upper-stage propellant depleted before the target",
+    engine.STOP_SEPARATION: "end of phase at first-stage separation",
+    engine.STOP_TIME: "maximum simulation time reached",
 }
-DIVERGED = (E.DIVERGED_NONFINITE, E.DIVERGED_GROUND, E.DIVERGED_RATE)
+DIVERGED = (engine.DIVERGED_NONFINITE, engine.DIVERGED_GROUND, engine.DIVERGED_RATE)
 #: Why a run stopped, as a word (:attr:`SimResult.stop_reason`; the mission outcome reads it).
 STOP_REASONS = {
-    E.STOP_CUTOFF: "cutoff_energy",
-    E.STOP_GUIDANCE_CUTOFF: "cutoff_guidance",
-    E.STOP_DEPLETION: "depletion",
-    E.STOP_SEPARATION: "separation",
-    E.STOP_TIME: "time_limit",
-    E.GUIDANCE_FAILED: "guidance_failed",
+    engine.STOP_CUTOFF: "cutoff_energy",
+    engine.STOP_GUIDANCE_CUTOFF: "cutoff_guidance",
+    engine.STOP_DEPLETION: "depletion",
+    engine.STOP_SEPARATION: "separation",
+    engine.STOP_TIME: "time_limit",
+    engine.GUIDANCE_FAILED: "guidance_failed",
     **{code: "diverged" for code in DIVERGED},
 }
 
@@ -82,7 +82,7 @@ class Snapshot:
 
 def log_columns(n_state: int) -> int:
     """Columns of a log row: time, the state, the diagnostics, the discrete state."""
-    return 1 + n_state + L.N_AUX + L.N_DISC
+    return 1 + n_state + layout.N_AUX + layout.N_DISC
 
 
 def simulate(model: SimModel, progress: bool = True, chunk_s: float = 10.0,
@@ -110,7 +110,7 @@ def simulate(model: SimModel, progress: bool = True, chunk_s: float = 10.0,
     u = src.u.copy()
     events = src.events.copy()
     pert = loop_perturbation.NONE if perturbation is None else perturbation.copy()
-    t_max = model.sched[E.S_T_MAX] if t_stop is None else min(t_stop, model.sched[E.S_T_MAX])
+    t_max = model.sched.max_time_s if t_stop is None else min(t_stop, model.sched.max_time_s)
     n_total = int(np.ceil(t_max / rt.dt)) + 1
     n_rows = (n_total - src.step) // rt.n_log + 2
     nx = x.size
@@ -121,22 +121,22 @@ def simulate(model: SimModel, progress: bool = True, chunk_s: float = 10.0,
     pending = sorted(s for s in set(snapshot_steps) if s >= k)
     snaps: dict[int, Snapshot] = {}
     row = 0
-    code = E.RUNNING
+    code = engine.RUNNING
     detail = ""
     wall = 0.0
     status = "complete"
     # the kernels compile (cold cache, said on stderr) or load here, not in the timed loop
     compile_s = compile_notice.load_kernels([
-        (E.advance, (x, d, u, events, k, 0, rt, model.p, tb, model.fcs, model.gyro, model.guidance, model.sched,
-                     log, row, pert)),
-        (derivative, (k * rt.dt, x, u, model.p, tb, np.zeros(L.N_AUX), np.zeros(nx))),
-    ], apart=(compose, (k * rt.dt, x, u, model.p, tb, np.zeros(L.N_AUX), np.zeros(nx), True)))  # the plant, in parallel
+        (engine.advance, (x, d, u, events, k, 0, rt, model.p, tb, model.fcs, model.gyro, model.smoother, model.guidance,
+                     model.sched, log, row, pert)),
+        (derivative, (k * rt.dt, x, u, model.p, tb, np.zeros(layout.N_AUX), np.zeros(nx))),
+    ], apart=(compose, (k * rt.dt, x, u, model.p, tb, np.zeros(layout.N_AUX), np.zeros(nx), True)))  # the plant, in parallel
     bar = Progress(TextColumn("[bold]flight"), BarColumn(), TextColumn("t = {task.fields[t]:6.1f} s"),
                    TimeElapsedColumn(), transient=True, disable=not progress)
     with bar:
         task = bar.add_task("flight", total=t_max, t=k * rt.dt, completed=k * rt.dt)
         try:
-            while code == E.RUNNING and k < n_total:
+            while code == engine.RUNNING and k < n_total:
                 while pending and pending[0] == k:
                     snaps[k] = Snapshot(k, k * rt.dt, x.copy(), d.copy(), u.copy(), events.copy())
                     pending.pop(0)
@@ -144,9 +144,9 @@ def simulate(model: SimModel, progress: bool = True, chunk_s: float = 10.0,
                 if pending:
                     n_next = min(n_next, pending[0] - k)
                 t0 = time.perf_counter()
-                code, done, row, detail = E.advance(
+                code, done, row, detail = engine.advance(
                     x, d, u, events, k, n_next, rt, model.p, tb,
-                    model.fcs, model.gyro, model.guidance, model.sched, log, row, pert)
+                    model.fcs, model.gyro, model.smoother, model.guidance, model.sched, log, row, pert)
                 wall += time.perf_counter() - t0
                 k += done
                 bar.update(task, completed=k * rt.dt, t=k * rt.dt)
@@ -157,26 +157,26 @@ def simulate(model: SimModel, progress: bool = True, chunk_s: float = 10.0,
             status = "interrupted"
             detail = "interrupted by the user"
     t_final = k * rt.dt
-    if code == E.RUNNING and status == "complete":
-        code = E.STOP_TIME
+    if code == engine.RUNNING and status == "complete":
+        code = engine.STOP_TIME
     if status == "interrupted":
         message = f"interrupted at t = {t_final:.2f} s"
     elif code in DIVERGED:
         status = "diverged"
         message = f"diverged at t = {t_final:.3f} s: {detail}"
-    elif code == E.GUIDANCE_FAILED:
+    elif code == engine.GUIDANCE_FAILED:
         status = "guidance_failed"
         message = f"guidance failed at t = {t_final:.3f} s: {detail}"
     else:
         message = STOP_MESSAGES.get(code, f"stopped with code {code}")
     # close the history with the final state (for summaries at cutoff)
     if row < log.shape[0] and (row == 0 or log[row - 1, 0] < t_final):
-        aux = np.zeros(L.N_AUX)
+        aux = np.zeros(layout.N_AUX)
         derivative(t_final, x, u, model.p, tb, aux, np.zeros(nx))
         log[row, 0] = t_final
         log[row, 1:1 + nx] = x
-        log[row, 1 + nx:1 + nx + L.N_AUX] = aux
-        log[row, 1 + nx + L.N_AUX:] = d
+        log[row, 1 + nx:1 + nx + layout.N_AUX] = aux
+        log[row, 1 + nx + layout.N_AUX:] = d
         row += 1
     return SimResult(log=log[:row].copy(), x=x, d=d, u=u, k_final=k, events=events, status=status, stop_code=code,
                      message=message, t_final=t_final, sim_wall_time_s=wall, snapshots=snaps,
@@ -189,16 +189,16 @@ def simulate(model: SimModel, progress: bool = True, chunk_s: float = 10.0,
 def _split(log: np.ndarray, nx: int):
     t = log[:, 0]
     x = log[:, 1:1 + nx]
-    aux = log[:, 1 + nx:1 + nx + L.N_AUX]
-    d = log[:, 1 + nx + L.N_AUX:]
+    aux = log[:, 1 + nx:1 + nx + layout.N_AUX]
+    d = log[:, 1 + nx + layout.N_AUX:]
     return t, x, aux, d
 
 
 def launch_frame(model: SimModel) -> np.ndarray:
     """ECI→launch-frame DCM: the pad's north-east-down axes frozen in inertial space at
     liftoff (the reference of the Euler-angle attitude plots)."""
-    r0 = model.x0[L.R:L.R + 3]
-    lat, lon, _ = earth.ecef_to_geodetic(r0, C.WGS84_A, C.WGS84_E2)
+    r0 = model.x0[layout.R:layout.R + 3]
+    lat, lon, _ = earth.ecef_to_geodetic(r0, constants.WGS84_A, constants.WGS84_E2)
     return earth.dcm_ecef_to_ned(lat, lon)  # ECI = ECEF at t = 0
 
 
@@ -266,21 +266,21 @@ def signals(result: SimResult, model: SimModel) -> dict[str, Signal]:
     rpy = ("roll", "pitch", "yaw")
     pq = ("pitch", "yaw")
     c_launch = launch_frame(model)
-    q = x[:, L.Q:L.Q + 4]
-    qc = d[:, L.D_QS:L.D_QS + 4]
+    q = x[:, layout.Q:layout.Q + 4]
+    qc = d[:, layout.D_QS:layout.D_QS + 4]
     euler = qt.euler_321(np.einsum("ij,njk->nik", c_launch, qt.dcm_array(q))) if len(t) else np.zeros((0, 3))
     euler_c = qt.euler_321(np.einsum("ij,njk->nik", c_launch, qt.dcm_array(qc))) if len(t) else np.zeros((0, 3))
     thrust = aux[:, propulsion.A_THRUST]
     config = np.full(len(t), 0.0)
     ev = result.events
-    if not np.isnan(ev[E.EV_SEPARATION]):
-        config[t >= ev[E.EV_SEPARATION]] = 1.0
-    if not np.isnan(ev[E.EV_LES]):
-        config[t >= ev[E.EV_LES]] = 2.0
+    if not np.isnan(ev[engine.EV_SEPARATION]):
+        config[t >= ev[engine.EV_SEPARATION]] = 1.0
+    if not np.isnan(ev[engine.EV_LES]):
+        config[t >= ev[engine.EV_LES]] = 2.0
     s = {
         "time": Signal(t, "s", "mission time from liftoff"),
-        "position_eci": Signal(x[:, L.R:L.R + 3], "m", "CG position", xyz, "ECI"),
-        "velocity_eci": Signal(x[:, L.V:L.V + 3], "m/s", "CG inertial velocity", xyz, "ECI"),
+        "position_eci": Signal(x[:, layout.R:layout.R + 3], "m", "CG position", xyz, "ECI"),
+        "velocity_eci": Signal(x[:, layout.V:layout.V + 3], "m/s", "CG inertial velocity", xyz, "ECI"),
         "gravity_eci": Signal(aux[:, gravity.A_GRAV:gravity.A_GRAV + 3], "m/s^2", "gravitational acceleration (J2-J4 zonal model)", xyz, "ECI"),
         "altitude": Signal(aux[:, earth.A_ALT], "m", "WGS84 geodetic altitude of the CG"),
         "latitude": Signal(aux[:, earth.A_LAT], "rad", "WGS84 geodetic latitude"),
@@ -295,26 +295,26 @@ def signals(result: SimResult, model: SimModel) -> dict[str, Signal]:
         "speed_of_sound": Signal(aux[:, atmosphere.A_SOS], "m/s", "speed of sound (US76)"),
         "alpha": Signal(aux[:, aero.A_ALPHA], "rad", "angle of attack"),
         "beta": Signal(aux[:, aero.A_BETA], "rad", "sideslip angle"),
-        "body_rate": Signal(x[:, L.W:L.W + 3], "rad/s", "body angular rate relative to ECI", ("p", "q", "r"), "body"),
+        "body_rate": Signal(x[:, layout.W:layout.W + 3], "rad/s", "body angular rate relative to ECI", ("p", "q", "r"), "body"),
         "quaternion": Signal(q, "1", "attitude q_b2i (body to ECI, scalar first)", ("w", "x", "y", "z"), "ECI"),
         "quaternion_command": Signal(qc, "1", "smoothed guidance command q_c2i (commanded body to ECI)", ("w", "x", "y", "z"), "ECI"),
-        "quaternion_guidance": Signal(d[:, L.D_QG:L.D_QG + 4], "1", "latest raw guidance command q_c2i", ("w", "x", "y", "z"), "ECI"),
-        "rate_command": Signal(d[:, L.D_RATE_CMD_B:L.D_RATE_CMD_B + 3], "rad/s", "smoothed rate command", ("p", "q", "r"), "body"),
-        "attitude_error": Signal(d[:, L.D_ERR:L.D_ERR + 3], "rad", "attitude error from the error quaternion (body rotated past command > 0)", rpy, "body"),
-        "rate_error": Signal(d[:, L.D_RATE_ERR:L.D_RATE_ERR + 3], "rad/s", "blended rate error", ("p", "q", "r"), "body"),
+        "quaternion_guidance": Signal(d[:, layout.D_QG:layout.D_QG + 4], "1", "latest raw guidance command q_c2i", ("w", "x", "y", "z"), "ECI"),
+        "rate_command": Signal(d[:, layout.D_RATE_CMD_B:layout.D_RATE_CMD_B + 3], "rad/s", "smoothed rate command", ("p", "q", "r"), "body"),
+        "attitude_error": Signal(d[:, layout.D_ERR:layout.D_ERR + 3], "rad", "attitude error from the error quaternion (body rotated past command > 0)", rpy, "body"),
+        "rate_error": Signal(d[:, layout.D_RATE_ERR:layout.D_RATE_ERR + 3], "rad/s", "blended rate error", ("p", "q", "r"), "body"),
         "attitude_euler": Signal(euler, "rad", "body attitude, 3-2-1 Euler angles relative to the launch frame (pad NED frozen at liftoff)", rpy, "launch"),
         "attitude_euler_command": Signal(euler_c, "rad", "smoothed command attitude, 3-2-1 Euler angles relative to the launch frame", rpy, "launch"),
         "gimbal_angle": Signal(aux[:, actuator.A_ANGLES:actuator.A_ANGLES + 2], "rad", "engine gimbal angles (limited)", pq, "body"),
-        "gimbal_command": Signal(d[:, [L.D_CMD_P, L.D_CMD_Y]], "rad", "flight-control gimbal commands", pq, "body"),
-        "gimbal_rate": Signal(x[:, [L.ACT_P + 1, L.ACT_Y + 1]], "rad/s", "nozzle angular rates", pq, "body"),
+        "gimbal_command": Signal(d[:, [layout.D_CMD_P, layout.D_CMD_Y]], "rad", "flight-control gimbal commands", pq, "body"),
+        "gimbal_rate": Signal(x[:, [layout.ACT_P + 1, layout.ACT_Y + 1]], "rad/s", "nozzle angular rates", pq, "body"),
         "gimbal_acceleration": Signal(aux[:, actuator.A_ACCEL:actuator.A_ACCEL + 2], "rad/s^2", "nozzle angular accelerations "
                                       "(zero while held at a gimbal stop)", pq, "body"),
         "twd_moment": Signal(aux[:, twd.A_MOMENT:twd.A_MOMENT + 3], "N*m", "engine-inertia (tail-wags-dog) moment about the CG "
                              "(zero with twd=off)", xyz, "body"),
-        "rcs_command": Signal(d[:, L.D_CMD_RCS], "1", "roll jet command (+1 positive roll torque, 0, -1)"),
+        "rcs_command": Signal(d[:, layout.D_CMD_RCS], "1", "roll jet command (+1 positive roll torque, 0, -1)"),
         "rcs_torque": Signal(aux[:, rcs.A_TORQUE], "N*m", "roll-jet torque about body X"),
         "mass": Signal(aux[:, mass.A_MASS], "kg", "vehicle mass"),
-        "propellant_remaining": Signal(x[:, [L.MFS, L.MLOX, L.MLH2]], "kg", "propellant remaining", ("first_stage", "lox", "lh2")),
+        "propellant_remaining": Signal(x[:, [layout.MFS, layout.MLOX, layout.MLH2]], "kg", "propellant remaining", ("first_stage", "lox", "lh2")),
         "thrust": Signal(thrust, "N", "engine thrust (vacuum minus back-pressure loss)"),
         "wind_ned": Signal(aux[:, winds.A_WIND:winds.A_WIND + 3], "m/s", "wind velocity", ("north", "east", "down"), "NED"),
         "cg_structure": Signal(aux[:, mass.A_CG:mass.A_CG + 3], "m", "CG location", xyz, "structure"),
@@ -322,21 +322,21 @@ def signals(result: SimResult, model: SimModel) -> dict[str, Signal]:
         "aero_moment": Signal(aux[:, aero.A_MOMENT:aero.A_MOMENT + 3], "N*m", "aerodynamic moment about the CG", xyz, "body"),
         "thrust_moment": Signal(aux[:, propulsion.A_MOMENT:propulsion.A_MOMENT + 3], "N*m", "thrust moment about the CG", xyz, "body"),
         "sensed_acceleration": Signal(aux[:, rigid_body.A_ACCEL:rigid_body.A_ACCEL + 3], "m/s^2", "non-gravitational acceleration", xyz, "body"),
-        "sensed_rate": Signal(d[:, L.D_GYRO_Y:L.D_GYRO_Y + 9], "rad/s", "rate-gyro outputs (rigid plus flex rate "
+        "sensed_rate": Signal(d[:, layout.D_GYRO_Y:layout.D_GYRO_Y + 9], "rad/s", "rate-gyro outputs (rigid plus flex rate "
                               "at each gyro's node, through the gyro dynamics)",
                               tuple(f"{g}_{a}" for g in ("upper", "imu", "first") for a in ("p", "q", "r")), "body"),
-        "flex_navigation_rotation": Signal(d[:, L.D_FLEX_NAV:L.D_FLEX_NAV + 3], "rad",
+        "flex_navigation_rotation": Signal(d[:, layout.D_FLEX_NAV:layout.D_FLEX_NAV + 3], "rad",
                                            "flex rotation at the navigation unit, added to the attitude errors", rpy, "body"),
-        "fcs_gains": Signal(d[:, L.D_GAINS:L.D_GAINS + 8], "1", "applied gains: scheduled, faded in over the J-2X start (Kp rad/rad, Ki 1/s, Kd s, Kir rad/rad)",
+        "fcs_gains": Signal(d[:, layout.D_GAINS:layout.D_GAINS + 8], "1", "applied gains: scheduled, faded in over the J-2X start (Kp rad/rad, Ki 1/s, Kd s, Kir rad/rad)",
                             ("pitch_kp", "pitch_ki", "pitch_kd", "pitch_kir", "yaw_kp", "yaw_ki", "yaw_kd", "yaw_kir")),
         "configuration": Signal(config, "1", "0 integrated stack, 1 upper stage with LES, 2 upper stage"),
     }
     if model.p[peg.P_ON] != 0.0:
-        s.update(guidance_signals(t, x[:, L.R:L.R + 3], d, model.p))
+        s.update(guidance_signals(t, x[:, layout.R:layout.R + 3], d, model.p))
     if model.p[navigation.P_ON] != 0.0:
         s.update(navigation_signals(d))
     if lay.simplex:
-        s["actuator_ram_position"] = Signal(x[:, [L.ACT_P + 2, L.ACT_Y + 2]], "rad",
+        s["actuator_ram_position"] = Signal(x[:, [layout.ACT_P + 2, layout.ACT_Y + 2]], "rad",
                                             "simplex ram position as an equivalent gimbal angle", pq, "body")
         s["actuator_valve_flow"] = Signal(x[:, [lay.valve, lay.valve + 2]], "rad/s",
                                           "simplex power-valve flow as no-load ram rate", pq, "body")

@@ -23,6 +23,20 @@ log = logging.getLogger(__name__)
 
 @dataclass
 class Prepared:
+    """One run made ready to fly (:func:`prepare`).
+
+    Attributes
+    ----------
+    model : SimModel
+        The numeric model (parameters, tables, schedules and the pad state, SI).
+    vehicle : Vehicle
+        The loaded vehicle data (SI).
+    vehicle_dir : Path
+        The folder the vehicle data was read from.
+    command_file : Path
+        The guidance command file read.
+    """
+
     model: SimModel
     vehicle: Vehicle
     vehicle_dir: Path

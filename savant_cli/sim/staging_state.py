@@ -22,7 +22,7 @@ import numpy as np
 
 from savant_cli.errors import ConfigError
 from savant_cli.io.atomic import write_json_atomic
-from savant_cli.models import layout as L
+from savant_cli.models import layout
 
 FORMAT = "savant-staging-state"
 FORMAT_VERSION = 1
@@ -59,7 +59,7 @@ class StagingState:
     x: np.ndarray
     d: np.ndarray
     u: np.ndarray
-    names: tuple[str, ...] = tuple(L.STATE_NAMES)  # one per element of x
+    names: tuple[str, ...] = tuple(layout.STATE_NAMES)  # one per element of x
 
 
 def write_staging_state(path: Path, state: StagingState) -> None:
@@ -81,15 +81,15 @@ def read_staging_state(path: Path, key: str = "phase.staging_state_file") -> Sta
     if doc.get("format") != FORMAT or doc.get("format_version") != FORMAT_VERSION:
         raise ConfigError(key, str(path), f"not a {FORMAT} file of version {FORMAT_VERSION}")
     names = list(doc.get("state", {}))
-    if names[:L.N_STATE] != list(L.STATE_NAMES) and names[:L.N_STATE] != list(L.StateLayout(simplex=True).names()[:L.N_STATE]):
-        raise ConfigError(key, str(path), f"the state must start with the core states {list(L.STATE_NAMES)}")
+    if names[:layout.N_STATE] != list(layout.STATE_NAMES) and names[:layout.N_STATE] != list(layout.StateLayout(simplex=True).names()[:layout.N_STATE]):
+        raise ConfigError(key, str(path), f"the state must start with the core states {list(layout.STATE_NAMES)}")
     d = np.asarray(doc["discrete"], float)
     u = np.asarray(doc["inputs"], float)
-    if d.size > L.N_DISC or u.size != L.N_INPUT:
-        raise ConfigError(key, str(path), f"needs {L.N_DISC} discrete and {L.N_INPUT} input values")
+    if d.size > layout.N_DISC or u.size != layout.N_INPUT:
+        raise ConfigError(key, str(path), f"needs {layout.N_DISC} discrete and {layout.N_INPUT} input values")
     # discrete fields are only ever appended (models/__init__.py): those a file was
     # written without start at their initial zero
-    d = np.concatenate([d, np.zeros(L.N_DISC - d.size)])
+    d = np.concatenate([d, np.zeros(layout.N_DISC - d.size)])
     x = np.array([doc["state"][n] for n in names], float)
     if not (np.all(np.isfinite(x)) and np.all(np.isfinite(d)) and np.all(np.isfinite(u))):
         raise ConfigError(key, str(path), "all values must be finite")

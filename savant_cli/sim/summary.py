@@ -5,15 +5,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from savant_cli import constants as C
+from savant_cli import constants
 from savant_cli.io.record import Signal
 from savant_cli.models import propulsion
 from savant_cli.models.layout import U_T_CUT
-from savant_cli.sim import engine as E
+from savant_cli.sim import engine
 from savant_cli.sim.run import SimResult
 
 
-def orbit_elements(r_eci: np.ndarray, v_eci: np.ndarray, mu: float = C.MU_EARTH) -> dict[str, float]:
+def orbit_elements(r_eci: np.ndarray, v_eci: np.ndarray, mu: float = constants.MU_EARTH) -> dict[str, float]:
     """Osculating two-body orbit of an inertial state.
 
     Apsis altitudes are measured from the WGS84 equatorial radius. Inclination from the
@@ -32,7 +32,7 @@ def orbit_elements(r_eci: np.ndarray, v_eci: np.ndarray, mu: float = C.MU_EARTH)
     else:
         a, rp, ra = np.inf, float(np.linalg.norm(h) ** 2 / mu / (1.0 + e)), np.inf
     return {"semi_major_axis_m": float(a), "eccentricity": e, "inclination_deg": inc,
-            "perigee_altitude_km": (rp - C.WGS84_A) / 1e3, "apogee_altitude_km": (ra - C.WGS84_A) / 1e3}
+            "perigee_altitude_km": (rp - constants.WGS84_A) / 1e3, "apogee_altitude_km": (ra - constants.WGS84_A) / 1e3}
 
 
 def _event(result: SimResult, slot: int) -> float | None:
@@ -180,7 +180,7 @@ def propulsion_keys(result: SimResult, p: np.ndarray) -> dict[str, float | str |
     the shutdown transient; None without a cutoff command)."""
     x, d = result.x, result.d
     usable, unusable, limiting = usable_propellant(x[propulsion.MLOX], x[propulsion.MLH2], p[propulsion.P_US_MR])
-    separated = not np.isnan(result.events[E.EV_SEPARATION])
+    separated = not np.isnan(result.events[engine.EV_SEPARATION])
     at_sep = d[propulsion.D_FS_PROP_SEP] if separated else np.nan
     return {"usable_propellant_remaining_kg": usable, "unusable_propellant_kg": unusable,
             "limiting_propellant": limiting,
@@ -248,10 +248,10 @@ def summarize(result: SimResult, sig: dict[str, Signal], study_wall_s: float | N
         "rms_attitude_error_deg": float(np.sqrt(np.mean(att_err * att_err))),
         "rcs_on_time_s": _on_time(t, sig["rcs_command"].data),
         "max_roll_error_deg": float(att_err_roll.max()),
-        "time_separation_s": _event(result, E.EV_SEPARATION),
-        "time_upper_stage_ignition_s": _event(result, E.EV_IGNITION),
-        "time_les_jettison_s": _event(result, E.EV_LES),
-        "time_cutoff_s": _event(result, E.EV_CUTOFF),
+        "time_separation_s": _event(result, engine.EV_SEPARATION),
+        "time_upper_stage_ignition_s": _event(result, engine.EV_IGNITION),
+        "time_les_jettison_s": _event(result, engine.EV_LES),
+        "time_cutoff_s": _event(result, engine.EV_CUTOFF),
         "final_time_s": float(t[-1]),
         "cutoff_altitude_m": float(sig["altitude"].data[-1]),
         "cutoff_inertial_velocity_mps": float(np.linalg.norm(v_f)),
@@ -266,11 +266,11 @@ def summarize(result: SimResult, sig: dict[str, Signal], study_wall_s: float | N
     })
     out.update(load_indicators(t, qbar, sig["alpha"].data, sig["beta"].data, qalpha_total, qalpha_limit))
     out.update(separation_state(t, sig["body_rate"].data, sig["attitude_error"].data, qalpha_total,
-                                _event(result, E.EV_SEPARATION)))
+                                _event(result, engine.EV_SEPARATION)))
     if p is not None:
         out.update(propulsion_keys(result, p))
     if target is not None:
-        cut = not np.isnan(result.events[E.EV_CUTOFF])
+        cut = not np.isnan(result.events[engine.EV_CUTOFF])
         out.update(insertion_errors(r_f, v_f, target) if cut else dict.fromkeys(INSERTION_KEYS))
     if "navigation_position_error" in sig:
         out.update(navigation_keys(r_f, v_f, sig))

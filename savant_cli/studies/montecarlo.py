@@ -40,7 +40,7 @@ from savant_cli.montecarlo.targets import TABLE_TARGETS
 from savant_cli.plots.montecarlo_batch import draw_figures
 from savant_cli.processes import default_workers
 from savant_cli.paths import hydra_search_dirs, resolve_data_path
-from savant_cli.sim import engine as E
+from savant_cli.sim import engine
 from savant_cli.sim.run import signals, simulate
 from savant_cli.sim.setup import prepare, start_from_staging
 
@@ -48,8 +48,7 @@ from savant_cli.sim.setup import prepare, start_from_staging
 def _history_names(model, requested: list[str]) -> list[str]:
     """Check the requested history signals on a 0.1 s flight; their column names."""
     probe = copy.copy(model)
-    probe.sched = model.sched.copy()
-    probe.sched[E.S_T_MAX] = model.k0 * model.rates.dt + 0.1
+    probe.sched = model.sched._replace(max_time_s=model.k0 * model.rates.dt + 0.1)
     sig = signals(simulate(probe, progress=False), probe)
     for i, name in enumerate(requested):
         if name not in sig or name == "time":
@@ -87,7 +86,7 @@ def _tailoff_lead(model, cfg: SavantConfig) -> float | None:
     from savant_cli.linear.point_analysis import scan_tailoff
 
     nominal = simulate(model, progress=False)
-    t_sep = float(nominal.events[E.EV_SEPARATION])
+    t_sep = float(nominal.events[engine.EV_SEPARATION])
     window, _ = scan_tailoff(model, t_sep, LinearStudyConfig(), model.rates.dt * model.rates.n_fcs, cfg.requirements)
     return None if window is None or window.start_s is None else window.separation_s - window.start_s
 

@@ -27,8 +27,8 @@ import numpy as np
 from savant_cli.models import actuator
 from savant_cli import lifecycle
 from savant_cli.processes import process_context, terminate_workers, worker_initializer
-from savant_cli.models import layout as L
-from savant_cli.sim import loop_perturbation as LP
+from savant_cli.models import layout
+from savant_cli.sim import loop_perturbation
 from savant_cli.sim.build import SimModel
 from savant_cli.sim.run import Snapshot, simulate
 from savant_cli.timedomain.growth import Growth, assess
@@ -125,7 +125,7 @@ def perturbation_of(s: Search, value: float, dt: float, excited: bool) -> np.nda
         gain = 10.0 ** (-value / 20.0)
     else:
         delay = value / 1000.0
-    return LP.perturbation(s.axis, s.start_s, s.end_s, gain, delay, s.pulse_rad if excited else 0.0, s.pulse_s, dt)
+    return loop_perturbation.perturbation(s.axis, s.start_s, s.end_s, gain, delay, s.pulse_rad if excited else 0.0, s.pulse_s, dt)
 
 
 def _saturated_s(log: np.ndarray, model: SimModel, engine: int, axis: int, after_s: float) -> float:
@@ -134,7 +134,7 @@ def _saturated_s(log: np.ndarray, model: SimModel, engine: int, axis: int, after
     stage's limits)."""
     lay = model.layout
     rate_limit, gimbal_limit = actuator.limits(model.p, engine)
-    k = (L.ACT_P, L.ACT_Y)[axis]
+    k = (layout.ACT_P, layout.ACT_Y)[axis]
     rate_col = 1 + (lay.valve + 2 * axis if lay.simplex else k + 1)
     on = (np.abs(log[:, 1 + k]) >= 0.999 * gimbal_limit) | (np.abs(log[:, rate_col]) >= 0.999 * rate_limit)
     on &= log[:, 0] >= after_s
@@ -152,11 +152,11 @@ def response(model: SimModel, snap: Snapshot, s: Search, value: float
     runs = [simulate(model, progress=False, start=snap, t_stop=s.end_s,
                      perturbation=perturbation_of(s, value, dt, excited)) for excited in (True, False)]
     n = min(r.log.shape[0] for r in runs)
-    axis = LP.AXES.index(s.axis)
+    axis = loop_perturbation.AXES.index(s.axis)
     col = 1 + model.layout.n + actuator.A_ANGLES + axis
     y = np.degrees(runs[0].log[:n, col] - runs[1].log[:n, col])
     diverged = any(r.status not in ("complete",) for r in runs)
-    engine = int(snap.u[L.U_ENGINE])
+    engine = int(snap.u[layout.U_ENGINE])
     after = s.start_s + s.settle_s
     return (runs[0].log[:n, 0], y, diverged, _saturated_s(runs[0].log[:n], model, engine, axis, after),
             _saturated_s(runs[1].log[:n], model, engine, axis, after))

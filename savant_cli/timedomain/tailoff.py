@@ -28,8 +28,8 @@ from typing import Any
 import numpy as np
 
 from savant_cli.config import RequirementSet
-from savant_cli.sim import engine as E
-from savant_cli.sim import loop_perturbation as LP
+from savant_cli.sim import engine
+from savant_cli.sim import loop_perturbation
 from savant_cli.sim.build import SimModel
 from savant_cli.sim.run import Snapshot, signals, simulate
 from savant_cli.sim.run_summary import judge_separation
@@ -83,9 +83,9 @@ def check(model: SimModel, snap: Snapshot, separation_s: float, axis: str, kind:
           gain: float, delay_s: float, req: RequirementSet, pulse_rad: float, pulse_s: float) -> TailoffCheck:
     """Fly one check from ``snap`` (the window's start) through separation."""
     t_stop = separation_s + _PAST_SEPARATION_S
-    pert = LP.perturbation(axis, snap.t, t_stop, gain, delay_s, pulse_rad, pulse_s, model.rates.dt)
+    pert = loop_perturbation.perturbation(axis, snap.t, t_stop, gain, delay_s, pulse_rad, pulse_s, model.rates.dt)
     result = simulate(model, progress=False, start=snap, t_stop=t_stop, perturbation=pert)
-    t_sep = result.events[E.EV_SEPARATION]
+    t_sep = result.events[engine.EV_SEPARATION]
     separated = bool(np.isfinite(t_sep)) and result.status not in ("diverged", "guidance_failed")
     state: dict[str, float | None] = dict.fromkeys(("separation_body_rate_deg_s", "separation_attitude_error_deg",
                                                     "separation_qalpha_Pa_deg"))
@@ -106,7 +106,7 @@ def checks(model: SimModel, snap: Snapshot, separation_s: float, crossover_hz: d
     """Every check, pitch then yaw (``crossover_hz``: each axis's rigid crossover at the
     window's start, Hz)."""
     out = []
-    for axis in LP.AXES:
+    for axis in loop_perturbation.AXES:
         for kind, value, unit, gain, delay in perturbations(req, crossover_hz.get(axis, float("nan"))):
             out.append(check(model, snap, separation_s, axis, kind, value, unit, gain, delay, req,
                              np.radians(excitation_deg), excitation_s))

@@ -1,0 +1,55 @@
+"""Each model writes its own diagnostics (issue 28 item 7): every field of the plant's
+``aux`` vector is written by the ``write_diagnostics`` of the model that declares it, the
+plant composes those calls and writes none by hand, and one full-fidelity evaluation
+fills every entry."""
+
+from __future__ import annotations
+
+import importlib
+import inspect
+import re
+
+import numpy as np
+
+import savant_cli.models  # noqa: F401  (declares every field)
+from conftest import compose_config
+from savant_cli.config import validate
+from savant_cli.models import blocks, layout
+from savant_cli.paths import hydra_search_dirs
+from savant_cli.sim import plant
+from savant_cli.sim.setup import prepare
+
+
+def test_every_model_with_diagnostics_writes_them_and_the_plant_writes_none():
+    owners = {f.model for f in blocks.DIAGNOSTICS.fields}
+    for model in owners:
+        module = importlib.import_module(f"savant_cli.models.{model}")
+        assert callable(getattr(module, "write_diagnostics", None)), f"models/{model}.py has no write_diagnostics"
+    source = inspect.getsource(plant)
+    assert not re.search(r"\baux\[", source), "sim/plant.py writes a diagnostic by hand"
+    for model in owners:
+        assert f"{'mass_model' if model == 'mass' else model}.write_diagnostics(aux" in source, model
+
+
+def test_one_evaluation_fills_every_diagnostic_and_the_state_only_path_only_the_altitude():
+    """aux starts as NaN: after one full-fidelity derivative no entry is left unwritten
+    (a field no model writes would stay NaN); the state-only derivative writes the
+    altitude alone and the same state derivative."""
+    prep = prepare(validate(compose_config(["flex=on", "flex.n_modes=2", "slosh=on", "twd=on"])),
+                   hydra_search_dirs())
+    model = prep.model
+    tb = model.packed_tables
+    x = model.x0.copy()
+    aux = np.full(layout.N_AUX, np.nan)
+    xd = np.zeros(x.size)
+    plant.derivative(0.5, x, model.u0, model.p, tb, aux, xd)
+    unwritten = [f.key for f in blocks.DIAGNOSTICS.fields if not np.all(np.isfinite(aux[f.index:f.index + f.size]))]
+    assert not unwritten, unwritten
+
+    aux_state = np.full(layout.N_AUX, np.nan)
+    xd_state = np.zeros(x.size)
+    plant.derivative_state(0.5, x, model.u0, model.p, tb, aux_state, xd_state)
+    written = np.flatnonzero(np.isfinite(aux_state))
+    altitude = blocks.DIAGNOSTICS.field("earth.altitude").index
+    assert written.tolist() == [altitude]
+    assert aux_state[altitude] == aux[altitude] and np.array_equal(xd_state, xd)
