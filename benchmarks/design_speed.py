@@ -29,9 +29,9 @@ def main() -> None:
 
     from savant_cli.config import LinearStudyConfig, validate
     from savant_cli.linear.evaluate import freeze, judge_controller
+    from savant_cli.linear.point_analysis import analyse
     from savant_cli.paths import shipped_config_dir
     from savant_cli.studies import flight as flight_mod
-    from savant_cli.linear.point_analysis import analyse
 
     with initialize_config_dir(config_dir=str(shipped_config_dir()), version_base="1.3"):
         cfg = validate(compose(config_name="config", overrides=["flex=on", "flex.n_modes=4", "slosh=on", "twd=on",

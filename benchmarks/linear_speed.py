@@ -16,8 +16,9 @@ import time
 import warnings
 from pathlib import Path
 
-import savant_cli  # noqa: F401  (first: sets one BLAS thread per process, as the CLI does)
 import numpy as np
+
+import savant_cli  # noqa: F401  (first: sets one BLAS thread per process, as the CLI does)
 
 
 def main() -> None:
@@ -27,12 +28,12 @@ def main() -> None:
     from hydra import compose, initialize_config_dir
 
     from savant_cli.config import validate
-    from savant_cli.paths import shipped_config_dir
     from savant_cli.linear.charts import point_charts
+    from savant_cli.linear.point_analysis import analyse
+    from savant_cli.paths import shipped_config_dir
     from savant_cli.plots.linear import plot_linear_point
     from savant_cli.sim.run import simulate
     from savant_cli.sim.setup import prepare
-    from savant_cli.linear.point_analysis import analyse
 
     overrides = ["study=linear", "flex=on", "flex.n_modes=4", "slosh=on", "twd=on"]
     with initialize_config_dir(config_dir=str(shipped_config_dir()), version_base="1.3"):

@@ -13,8 +13,8 @@ from pathlib import Path
 
 from rich.console import Console
 
-from savant_cli.version import __version__
 from savant_cli.errors import ConfigError, SavantError
+from savant_cli.version import __version__
 
 USAGE = """\
 usage: savant <command> [arguments]

@@ -22,7 +22,6 @@ from savant_cli.io.modal_data import ModalSet, read_modal_set
 from savant_cli.io.table_order import table_key
 from savant_cli.vehicle import Vehicle, read_table
 
-
 #: The plant's points that use mode shapes, by their key under the vehicle YAML's
 #: ``flex.nodes`` (a point may average several nodes), in the order of the shape tables'
 #: point axis (``models/flex.py``'s ``PT_*`` indices).

@@ -308,9 +308,9 @@ def shipped_defaults() -> dict[str, Any]:
 
     from omegaconf import OmegaConf
 
-    from savant_cli.version import __version__
     from savant_cli.hydra_compose import compose_config, task_config
     from savant_cli.paths import shipped_config_dir
+    from savant_cli.version import __version__
 
     root = shipped_config_dir()
     h = hashlib.sha256(__version__.encode())

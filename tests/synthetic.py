@@ -6,9 +6,8 @@ from __future__ import annotations
 import numpy as np
 
 from savant_cli import constants
-from savant_cli.models import actuator, aero as aero_model, earth, flex, gravity, propulsion, rcs, slosh
+from savant_cli.models import actuator, aero as aero_model, earth, flex, gravity, layout, propulsion, rcs, slosh
 from savant_cli.models.atmosphere import upper_atmosphere_table
-from savant_cli.models import layout
 from savant_cli.sim.plant import PlantTables
 
 
@@ -48,8 +47,8 @@ def parameters(gravity_order: int = 0, aero: bool = False, thrust: bool = False)
     p[propulsion.P_FS_GIMBAL + propulsion.GIMBAL_X] = p[propulsion.P_US_GIMBAL + propulsion.GIMBAL_X] = 10.0
     p[rcs.P_RAMP_UP] = p[rcs.P_RAMP_DOWN] = 0.05
     for base in (actuator.P_FS_THIRD, actuator.P_US_THIRD):
-        p[base + actuator.T3_WA], p[base + actuator.T3_WN] = 20.0, 60.0
-        p[base + actuator.T3_ZETA], p[base + actuator.T3_RATE] = 0.7, 1.0
+        p[base + actuator.T3_LOOP_GAIN], p[base + actuator.T3_NATURAL_FREQUENCY] = 20.0, 60.0
+        p[base + actuator.T3_DAMPING], p[base + actuator.T3_RATE_LIMIT] = 0.7, 1.0
     p[aero_model.P_ON] = 1.0 if aero else 0.0
     p[propulsion.P_ON] = 1.0 if thrust else 0.0
     p[gravity.P_ORDER] = gravity_order

@@ -10,13 +10,12 @@ import numpy as np
 import pytest
 from omegaconf import OmegaConf
 
+from conftest import compose_config
 from savant_cli.config import validate
-from savant_cli.models import actuator
+from savant_cli.models import actuator, layout
 from savant_cli.models.configurations import ENGINE_FIRST, ENGINE_UPPER
 from savant_cli.paths import hydra_search_dirs, shipped_config_dir
-from savant_cli.models import layout
 from savant_cli.sim.setup import prepare
-from conftest import compose_config
 
 DT = 1.0 / 200.0  # the default plant step
 STAGES = {ENGINE_FIRST: "first_stage", ENGINE_UPPER: "upper_stage"}
@@ -34,8 +33,8 @@ def models():
 def _rate_limit(p: np.ndarray, kind: str, engine: int) -> float:
     first = engine == ENGINE_FIRST
     if kind == "third_order":
-        return p[(actuator.P_FS_THIRD if first else actuator.P_US_THIRD) + actuator.T3_RATE]
-    return p[(actuator.P_FS_SPX if first else actuator.P_US_SPX) + actuator.SX_RATE]
+        return p[(actuator.P_FS_THIRD if first else actuator.P_US_THIRD) + actuator.T3_RATE_LIMIT]
+    return p[(actuator.P_FS_SPX if first else actuator.P_US_SPX) + actuator.SX_RATE_LIMIT]
 
 
 def fly(model, engine: int, command, t_end: float = 2.0, dt: float = DT,
@@ -55,7 +54,7 @@ def fly(model, engine: int, command, t_end: float = 2.0, dt: float = DT,
     x[layout.ACT_P], x[layout.ACT_P + 1] = start
     if vo >= 0:  # ram with the nozzle (mount unloaded but for its damping), flow = rate
         base = actuator.P_FS_SPX if engine == ENGINE_FIRST else actuator.P_US_SPX
-        x[layout.ACT_P + 2] = start[0] + p[base + actuator.SX_C] * start[1] / p[base + actuator.SX_K]
+        x[layout.ACT_P + 2] = start[0] + p[base + actuator.SX_DAMPING] * start[1] / p[base + actuator.SX_STIFFNESS]
         x[vo] = start[1]
 
     def f(xs, c):
@@ -121,7 +120,7 @@ def test_simplex_flow_holds_at_its_stop_and_the_nozzle_exceeds_it_only_through_t
     model = models["simplex"]
     p = model.p
     base = actuator.P_FS_SPX if engine == ENGINE_FIRST else actuator.P_US_SPX
-    k, c, j = p[base + actuator.SX_K], p[base + actuator.SX_C], p[base + actuator.SX_J]
+    k, c, j = p[base + actuator.SX_STIFFNESS], p[base + actuator.SX_DAMPING], p[base + actuator.SX_LOAD_INERTIA]
     zeta = c / (2.0 * np.sqrt(k * j))
     rate_limit = _rate_limit(p, "simplex", engine)
     e = _overshoot(zeta)

@@ -8,10 +8,9 @@ import control as ct
 import numpy as np
 import pytest
 
-from savant_cli.models import actuator, propulsion, twd
-from savant_cli.models import layout
-from savant_cli.sim.plant import derivative, pack_tables
 import synthetic
+from savant_cli.models import actuator, layout, propulsion, twd
+from savant_cli.sim.plant import derivative, pack_tables
 
 J_LOAD = 8125.0  # kg m²
 WN = 2 * np.pi * 15.0
@@ -22,8 +21,9 @@ C_LOAD = 2 * ZETA * np.sqrt(K_LOAD * J_LOAD)
 
 def _simplex_params(wv: float, feedback: float, leak: float = 0.0) -> np.ndarray:
     p = np.zeros(actuator.SPX.size)
-    p[[actuator.SX_KA, actuator.SX_WV, actuator.SX_ZV, actuator.SX_RATE, actuator.SX_K, actuator.SX_C, actuator.SX_J,
-       actuator.SX_LEAK, actuator.SX_FEEDBACK]] = (30.0, wv, 0.7, 10.0, K_LOAD, C_LOAD, J_LOAD, leak, feedback)
+    p[[actuator.SX_LOOP_GAIN, actuator.SX_VALVE_FREQUENCY, actuator.SX_VALVE_DAMPING, actuator.SX_RATE_LIMIT,
+       actuator.SX_STIFFNESS, actuator.SX_DAMPING, actuator.SX_LOAD_INERTIA, actuator.SX_LEAKAGE,
+       actuator.SX_NOZZLE_FEEDBACK]] = (30.0, wv, 0.7, 10.0, K_LOAD, C_LOAD, J_LOAD, leak, feedback)
     return p  # large rate limit: linear
 
 
@@ -74,7 +74,7 @@ def test_simplex_reduces_to_third_order_with_fast_valve_and_nozzle_feedback():
         x = np.array(x3, dtype=float)
         out = np.zeros(3)
         p3 = np.zeros(actuator.THIRD.size)
-        p3[[actuator.T3_WA, actuator.T3_WN, actuator.T3_ZETA, actuator.T3_RATE]] = 30.0, WN, ZETA, 10.0
+        p3[[actuator.T3_LOOP_GAIN, actuator.T3_NATURAL_FREQUENCY, actuator.T3_DAMPING, actuator.T3_RATE_LIMIT]] = 30.0, WN, ZETA, 10.0
         actuator.third_order(x, 0, u, p3, 0, 1.0, out)
         return out
 
@@ -91,15 +91,15 @@ def test_simplex_reduces_to_third_order_with_fast_valve_and_nozzle_feedback():
 def test_simplex_rate_saturates_at_the_valve_limit():
     """A large step: the spool sits on its stop and the ram moves at the flow limit."""
     sp = _simplex_params(2 * np.pi * 45.0, 0.0)
-    sp[actuator.SX_RATE] = np.radians(5.0)
+    sp[actuator.SX_RATE_LIMIT] = np.radians(5.0)
     x = np.zeros(5)
     dt = 1e-4
     for _ in range(int(0.2 / dt)):  # 0.2 s into a 0.1 rad step, still slewing
         k1 = np.zeros(5)
         actuator.simplex(x, 0, 3, 0.1, sp, 0, 1.0, k1)
         x += dt * k1
-        if x[3] > sp[actuator.SX_RATE]:  # the stop (the engine's actuator.contain)
-            x[3], x[4] = sp[actuator.SX_RATE], min(x[4], 0.0)
+        if x[3] > sp[actuator.SX_RATE_LIMIT]:  # the stop (the engine's actuator.contain)
+            x[3], x[4] = sp[actuator.SX_RATE_LIMIT], min(x[4], 0.0)
     out = np.zeros(5)
     actuator.simplex(x, 0, 3, 0.1, sp, 0, 1.0, out)
     assert x[3] == np.radians(5.0) and out[3] == 0.0 and out[4] == 0.0  # held on the stop

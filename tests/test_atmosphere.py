@@ -11,8 +11,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from savant_cli.models.atmosphere import (atmosphere, upper_atmosphere_table, us76,
-                                          us76_profile, us76_upper)
+from savant_cli.models.atmosphere import atmosphere, upper_atmosphere_table, us76, us76_profile, us76_upper
 
 R0 = 6356766.0  # m, the standard's effective Earth radius for geopotential
 

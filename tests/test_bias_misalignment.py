@@ -15,10 +15,9 @@ from conftest import compose_config
 from savant_cli.config import validate
 from savant_cli.errors import ConfigError
 from savant_cli.linear.plant import SENSOR_NAMES, linearize_plant
+from savant_cli.models import actuator, layout, propulsion, sensors
 from savant_cli.models.sensors import GyroModel, misalignment
 from savant_cli.sim import engine
-from savant_cli.models import actuator, propulsion, sensors
-from savant_cli.models import layout
 from savant_cli.sim.plant import derivative, pack_tables
 from savant_cli.sim.run import log_columns, simulate
 from savant_cli.sim.setup import prepare

@@ -4,14 +4,13 @@ outside its bound; a summary with an infinite number says why in the run's messa
 
 from __future__ import annotations
 
-
 import numpy as np
 import pytest
 
+from conftest import compose_config
 from savant_cli import config
 from savant_cli.config import validate
 from savant_cli.errors import ConfigError
-from conftest import compose_config
 
 
 def _refused(overrides: list[str]) -> ConfigError:

@@ -13,7 +13,6 @@ from savant_cli.config import LinearStudyConfig, RequirementSet
 from savant_cli.linear.evaluate import freeze, judge_controller
 from savant_cli.linear.point_analysis import analyse
 from savant_cli.models.fcs import D_GAINS, FCS_STACK
-
 from test_linear import _point
 
 DT = 0.02

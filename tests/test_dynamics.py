@@ -3,12 +3,11 @@
 import numpy as np
 import pytest
 
+import synthetic
 from savant_cli import constants
-from savant_cli.models import propulsion
-from savant_cli.models import layout
+from savant_cli.models import layout, propulsion
 from savant_cli.sim.engine import rk4, work_array
 from savant_cli.sim.plant import derivative, pack_tables
-import synthetic
 
 
 def _orbit_state(alt_m=400e3, inc_deg=51.6):

@@ -10,16 +10,13 @@ import types
 import numpy as np
 import pytest
 
+from conftest import assert_report_redraws, compose_config
 from savant_cli.config import DesignOptimizer, DesignParameter, DesignParameters, validate
 from savant_cli.datagen import fcs_gains
-from savant_cli.design import parameters as dp
-from savant_cli.design import points as dpts
-from savant_cli.design import search as ds
+from savant_cli.design import parameters as dp, points as dpts, search as ds
 from savant_cli.errors import ConfigError
 from savant_cli.linear.requirements import Check, PointVerdict
 from savant_cli.models.fcs import fcs_tables
-
-from conftest import assert_report_redraws, compose_config
 from test_end_to_end import run
 
 

@@ -7,8 +7,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import savant_cli.models  # noqa: F401  (declares every field)
-from savant_cli.models import blocks
-from savant_cli.models import layout
+from savant_cli.models import blocks, layout
 from savant_cli.models.__main__ import field_reference
 
 DOCS = Path(__file__).resolve().parents[1] / "docs" / "models.md"

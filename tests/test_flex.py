@@ -17,12 +17,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from savant_cli.models import flex, mass as mass_model, propulsion, rcs, rigid_body, twd as twd_model
-from savant_cli.models import layout
-from savant_cli.sim.engine import rk4, work_array
-from savant_cli.models.flex import flex_point
-from savant_cli.sim.plant import derivative, pack_tables
 import synthetic
+from savant_cli.models import flex, layout, mass as mass_model, propulsion, rcs, rigid_body, twd as twd_model
+from savant_cli.models.flex import flex_point
+from savant_cli.sim.engine import rk4, work_array
+from savant_cli.sim.plant import derivative, pack_tables
 
 N_SETS = len(layout.FLEX_SETS)
 
@@ -185,12 +184,11 @@ def test_engine_feeds_gyros_rigid_plus_flex_rate_and_nav_unit_flex_rotation(conf
     ω + Σ σ_i(its point) q̇_i; the navigation unit's flex rotation at the last flight-control
     cycle t_c is Σ σ_i(IMU) (q₀ᵢ + q̇ᵢ t_c)."""
     from conftest import compose_config
-
     from savant_cli.config import validate
+    from savant_cli.models.fcs import fcs_tables
     from savant_cli.models.guidance import SmootherGains
     from savant_cli.models.sensors import gyro_discrete
     from savant_cli.sim import engine, loop_perturbation
-    from savant_cli.models.fcs import fcs_tables
     from savant_cli.sim.run import log_columns
 
     rng = np.random.default_rng(4)

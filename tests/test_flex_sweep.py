@@ -10,7 +10,7 @@ import warnings
 
 import pytest
 
-from conftest import compose_config
+from conftest import assert_report_redraws, compose_config
 from savant_cli.config import LinearStudyConfig, validate
 from savant_cli.errors import ConfigError
 from savant_cli.linear.plant import linearize_plant
@@ -18,7 +18,6 @@ from savant_cli.linear.point_analysis import analyse
 from savant_cli.sim.run import simulate
 from savant_cli.sim.setup import prepare
 from savant_cli.studies.flex_sweep import variant
-from conftest import assert_report_redraws
 from test_end_to_end import run
 
 T = 55.0

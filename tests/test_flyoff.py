@@ -11,12 +11,11 @@ import h5py
 import numpy as np
 import pytest
 
-from conftest import compose_config
+from conftest import assert_report_redraws, compose_config
 from savant_cli.config import validate
 from savant_cli.errors import ConfigError
 from savant_cli.paths import shipped_config_dir
 from savant_cli.studies.flyoff import METRICS, _controllers, compare
-from conftest import assert_report_redraws
 from test_end_to_end import run
 
 

@@ -11,10 +11,8 @@ from conftest import compose_config
 from savant_cli import constants
 from savant_cli.config import validate
 from savant_cli.errors import ConfigError
-from savant_cli.models import command_schedule as cs
-from savant_cli.models import peg
+from savant_cli.models import command_schedule as cs, layout, peg
 from savant_cli.sim import engine
-from savant_cli.models import layout
 from savant_cli.sim.summary import orbit_elements
 from savant_cli.studies.flight import fly
 

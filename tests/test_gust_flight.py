@@ -200,9 +200,9 @@ def test_swept_gust_lengths_are_tuned_to_the_vehicles_modes_at_the_reference_alt
 
     import control
 
+    from savant_cli.linear.point_analysis import analyse
     from savant_cli.paths import shipped_config_dir
     from savant_cli.studies import flight as flight_mod
-    from savant_cli.linear.point_analysis import analyse
 
     cfg = validate(compose_config(FIRST + ["study=linear", "winds=design_gust", "study.times=[56.8]"]))
     lengths = validate(compose_config(["study=montecarlo", "dispersions=ares_i_gust"])).dispersions.items[

@@ -10,12 +10,12 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
+import synthetic
 from savant_cli import constants
 from savant_cli.config import validate
 from savant_cli.errors import ConfigError
 from savant_cli.models import earth, winds
 from savant_cli.sim.plant import pack_tables
-import synthetic
 
 W = constants.OMEGA_EARTH
 

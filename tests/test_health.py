@@ -10,6 +10,7 @@ import dataclasses
 import numpy as np
 import pytest
 
+from conftest import compose_config
 from health_signals import FS, oscillation, sweep_frequencies, trend
 from savant_cli.config import HealthConfig, validate
 from savant_cli.errors import ConfigError
@@ -20,7 +21,6 @@ from savant_cli.sim.health import assess
 from savant_cli.sim.oscillation import band_top_hz, find_limit_cycle, find_limit_cycles, find_slow_divergence
 from savant_cli.sim.run import SimResult
 from savant_cli.sim.setup import prepare
-from conftest import compose_config
 
 CFG = HealthConfig()
 TOP = band_top_hz(50.0, FS, CFG.min_periods)  # 22.73 Hz at the defaults
@@ -188,7 +188,7 @@ def test_limit_times_peak_rates_and_the_saturated_verdict(model):
     (yaw), a 20 deg/s body-rate peak: the times by the log spacing, the per-stage peaks,
     and the status "saturated" (2 s > max_saturation_s = 1 s)."""
     p = model.p
-    rate_fs = p[actuator.P_FS_THIRD + actuator.T3_RATE]
+    rate_fs = p[actuator.P_FS_THIRD + actuator.T3_RATE_LIMIT]
     lim_us = p[actuator.P_US_GIMBAL + actuator.G_LIMIT]
     result, sig = _history(int(300 * FS), 130.0)
     t = sig["time"].data
@@ -272,7 +272,7 @@ def test_loss_of_control_bounds_and_the_status_priority(model):
     # every verdict at once: the flags in order, the status the first
     result, sig = _history(int(400 * FS), 130.0)
     t = sig["time"].data
-    sig["gimbal_rate"].data[(t >= 50.0) & (t < 52.0), 0] = model.p[actuator.P_FS_THIRD + actuator.T3_RATE]
+    sig["gimbal_rate"].data[(t >= 50.0) & (t < 52.0), 0] = model.p[actuator.P_FS_THIRD + actuator.T3_RATE_LIMIT]
     on = (t > 160.0) & (t < 280.0)
     sig["gimbal_angle"].data[on, 0] = np.radians(0.25) * np.sin(2 * np.pi * 1.3 * t[on])
     up = t >= 151.5

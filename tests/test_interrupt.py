@@ -12,9 +12,9 @@ import time
 
 import pytest
 
+from lifecycle_helpers import Paused, after_pause
 from savant_cli.lifecycle import MARKER
 from savant_cli.run_lock import LOCK_NAME
-from lifecycle_helpers import Paused, after_pause
 
 SHORT = ["winds=none", "sim.max_time_s=40", "sim.chunk_s=5", "sim.progress=false"]
 

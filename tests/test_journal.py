@@ -19,8 +19,8 @@ from savant_cli.config import validate
 from savant_cli.errors import DamagedFileError, OutputWriteError, SavantError
 from savant_cli.montecarlo import journal as journal_mod
 from savant_cli.montecarlo.batch import RUN_STAGES, Journal, RunOutcome, read_outcome, scan_entries
-from savant_cli.montecarlo.journal import CHECKSUM_KEY, payload_digest, read_entry, write_entry
 from savant_cli.montecarlo.inventory import inventory
+from savant_cli.montecarlo.journal import CHECKSUM_KEY, payload_digest, read_entry, write_entry
 
 SHORT = ["study=montecarlo", "phase=first_stage", "study.n_runs=6"]
 

@@ -15,8 +15,7 @@ from savant_cli.config import validate
 from savant_cli.linear.loops import assemble
 from savant_cli.linear.margins import Bands, loop_margins
 from savant_cli.linear.plant import linearize_plant
-from savant_cli.models import actuator, aero, atmosphere, mass as mass_model, propulsion, rigid_body, slosh, twd
-from savant_cli.models import layout
+from savant_cli.models import actuator, aero, atmosphere, layout, mass as mass_model, propulsion, rigid_body, slosh, twd
 from savant_cli.sim.engine import rk4, work_array
 from savant_cli.sim.plant import derivative
 from savant_cli.sim.run import simulate
@@ -175,7 +174,7 @@ def test_closed_form_rigid_pitch_loop_margins(maxq):
                              + (l_ref * d_mach(4) + dx * d_mach(2)) * mach_row)) / iyy
     mu_c = thrust * (model.p[propulsion.P_FS_GIMBAL] - cg) / iyy
     third = model.p[actuator.P_FS_THIRD:actuator.P_FS_THIRD + actuator.THIRD.size]
-    wa, wn, zeta = third[actuator.T3_WA], third[actuator.T3_WN], third[actuator.T3_ZETA]
+    wa, wn, zeta = third[actuator.T3_LOOP_GAIN], third[actuator.T3_NATURAL_FREQUENCY], third[actuator.T3_DAMPING]
     # states δu, δw (inertial, frozen body axes), θ, q, δ, δ̇, δ̈
     a = np.zeros((7, 7))
     a[0, :3] = f_x + np.array([0.0, 0.0, f_bz0])  # δv̇ = δf_b + θ × f_b0

@@ -20,21 +20,15 @@ import warnings
 from pathlib import Path
 
 import control as ct
+import h5py
 import numpy as np
 import pytest
-
-import h5py
 
 from conftest import PYPLOT_STUB, imported_names
 from savant_cli.linear import charts as chart_data
 from savant_cli.linear.store import read_charts, write_charts
 from savant_cli.plots import linear
-from savant_cli.plots.linear import (
-    MarginRow,
-    plot_linear_point,
-    plot_margin_envelope,
-    point_tag,
-)
+from savant_cli.plots.linear import MarginRow, plot_linear_point, plot_margin_envelope, point_tag
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 DT = 0.02

@@ -12,8 +12,7 @@ import pytest
 
 from savant_cli.linear.margins import Bands, loop_margins
 from savant_cli.linear.modes import MarginLabeler, band_of
-from savant_cli.models import slosh as slosh_model
-from savant_cli.models import layout
+from savant_cli.models import layout, slosh as slosh_model
 from savant_cli.sim.plant import derivative
 
 DT = 0.02
@@ -54,8 +53,8 @@ def test_band_of_each_label():
 @pytest.fixture(scope="module")
 def full_fidelity_margins():
     from savant_cli.config import LinearStudyConfig
-    from test_linear import _point
     from savant_cli.linear.point_analysis import analyse
+    from test_linear import _point
 
     out = {}
     for t in (55.0, 180.0):

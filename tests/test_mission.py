@@ -12,14 +12,13 @@ import numpy as np
 import pytest
 
 import savant_cli
+from conftest import compose_config
 from savant_cli.config import validate
 from savant_cli.errors import ConfigError
 from savant_cli.io.record import FAILURE_CLASSES
 from savant_cli.montecarlo.analysis import mission_outcomes
 from savant_cli.montecarlo.results import Tables
 from savant_cli.sim.mission import Tolerance, class_mask, classes_of, classify, mission_keys
-
-from conftest import compose_config
 
 TOL = Tolerance(perigee_km=10.0, apogee_km=10.0, inclination_deg=0.1)
 ON_TARGET = {"insertion_perigee_error_km": 0.5, "insertion_apogee_error_km": -0.3,

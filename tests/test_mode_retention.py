@@ -8,10 +8,9 @@ import json
 import numpy as np
 import pytest
 
-from conftest import compose_config
+from conftest import assert_report_redraws, compose_config
 from savant_cli.config import validate
 from savant_cli.studies.mode_retention import CountResult, _config, _margin_change, _response_change, recommend
-from conftest import assert_report_redraws
 from test_end_to_end import run
 
 

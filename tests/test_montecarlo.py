@@ -272,8 +272,8 @@ def test_margins_of_every_run_and_their_spread(tmp_path):
     at max-Q among them) with their requirement checks, and the spread keeps each run's
     critical crossing per mode and counts the runs whose crossing misses its requirement."""
     from savant_cli.linear.requirements import CHECK_ARRAY_COLUMNS, mode_code
-    from savant_cli.montecarlo.batch import MARGIN_ARRAY_COLUMNS
     from savant_cli.montecarlo.analysis import margin_spread
+    from savant_cli.montecarlo.batch import MARGIN_ARRAY_COLUMNS
 
     cfg = validate(compose_config(SHORT + ["study.n_runs=3", "study.histories.signals=[]", "study.linear_times=[55]"]))
     case = make_case(cfg)[0]

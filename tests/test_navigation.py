@@ -25,8 +25,8 @@ from savant_cli.config import validate
 from savant_cli.errors import ConfigError
 from savant_cli.io.bitwise import WALL_CLOCK_KEYS
 from savant_cli.models import earth, gravity, navigation as nav, quaternion as qt
-from savant_cli.models.peg import insertion_target
 from savant_cli.models.layout import N_DISC, N_PARAM
+from savant_cli.models.peg import insertion_target
 from savant_cli.paths import hydra_search_dirs
 from savant_cli.sim.run import signals, simulate
 from savant_cli.sim.setup import prepare

@@ -11,9 +11,7 @@ from scipy.interpolate import RegularGridInterpolator
 
 from conftest import compose_config
 from savant_cli.config import validate
-from savant_cli.models import quaternion as qt
-from savant_cli.models import aero, atmosphere, earth, mass, propulsion, winds
-from savant_cli.models import layout
+from savant_cli.models import aero, atmosphere, earth, layout, mass, propulsion, quaternion as qt, winds
 from savant_cli.sim.plant import derivative, pack_tables
 from savant_cli.sim.setup import prepare
 

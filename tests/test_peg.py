@@ -11,8 +11,7 @@ import pytest
 from scipy.integrate import quad, solve_bvp
 
 from savant_cli import constants
-from savant_cli.models import gravity, peg
-from savant_cli.models import layout
+from savant_cli.models import gravity, layout, peg
 from savant_cli.sim.summary import orbit_elements
 
 VE = 448.0 * constants.G0  # J-2X-like exhaust velocity, m/s

@@ -8,11 +8,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from conftest import compose_config
 from savant_cli.config import validate
 from savant_cli.paths import hydra_search_dirs
 from savant_cli.sim.run import signals, simulate
 from savant_cli.sim.setup import prepare
-from conftest import compose_config
 
 
 def _fly(*overrides: str):

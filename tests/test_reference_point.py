@@ -9,15 +9,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from conftest import compose_config
 from savant_cli.config import validate
-from savant_cli.models import quaternion as qt
+from savant_cli.models import layout, quaternion as qt
 from savant_cli.models.configurations import CONFIG_STACK, CONFIG_UPPER, CONFIG_UPPER_LES
 from savant_cli.paths import hydra_search_dirs
 from savant_cli.sim import engine
-from savant_cli.models import layout
 from savant_cli.sim.run import simulate
 from savant_cli.sim.setup import prepare
-from conftest import compose_config
 
 NOSE = np.zeros(3)  # structure station 0 on the centerline (the LES tip, then the capsule's)
 

@@ -9,12 +9,16 @@ import numpy as np
 import pytest
 from scipy.stats import binom
 
+from conftest import compose_config
 from savant_cli.config import validate
 from savant_cli.errors import ConfigError
-from savant_cli.montecarlo.reliability import (demonstrated, lower_quantile_rank, reliability, runs_for_quantile,
-                                               runs_needed)
-
-from conftest import compose_config
+from savant_cli.montecarlo.reliability import (
+    demonstrated,
+    lower_quantile_rank,
+    reliability,
+    runs_for_quantile,
+    runs_needed,
+)
 
 
 @pytest.mark.parametrize("n", [1, 10, 852, 2000])

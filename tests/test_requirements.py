@@ -10,14 +10,20 @@ import control as ct
 import numpy as np
 import pytest
 
+from conftest import compose_config
 from savant_cli.config import FlexModeRequirement, RequirementSet, validate
 from savant_cli.errors import ConfigError
 from savant_cli.linear.margins import MarginRow
 from savant_cli.linear.modes import MarginLabeler, ModePeak
-from savant_cli.linear.requirements import (CHECK_ARRAY_COLUMNS, checks_array, evaluate_point, mode_code, mode_name,
-                                            verdict_line, verdicts_of_array)
-
-from conftest import compose_config
+from savant_cli.linear.requirements import (
+    CHECK_ARRAY_COLUMNS,
+    checks_array,
+    evaluate_point,
+    mode_code,
+    mode_name,
+    verdict_line,
+    verdicts_of_array,
+)
 from test_margin_modes import _synthetic_loop
 
 T = 55.0

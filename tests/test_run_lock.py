@@ -13,9 +13,9 @@ import textwrap
 
 import pytest
 
+from lifecycle_helpers import Paused, env, savant, tree
 from savant_cli import run_lock
 from savant_cli.errors import ConfigError
-from lifecycle_helpers import Paused, env, savant, tree
 
 SHORT = ["winds=none", "sim.max_time_s=20", "output.plots=false", "sim.progress=false"]
 

@@ -11,12 +11,12 @@ import pytest
 from conftest import compose_config
 from savant_cli.config import validate
 from savant_cli.models import propulsion
+from savant_cli.models.peg import insertion_target
 from savant_cli.paths import hydra_search_dirs
 from savant_cli.sim import engine
 from savant_cli.sim.run import signals, simulate
 from savant_cli.sim.setup import prepare
 from savant_cli.sim.summary import propulsion_keys, summarize
-from savant_cli.models.peg import insertion_target
 
 BASE = ["phase=upper_stage", "sim.log_rate_hz=200", "sim.progress=false"]
 

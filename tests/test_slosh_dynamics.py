@@ -8,11 +8,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from savant_cli.models import gravity, propulsion, slosh
-from savant_cli.models import layout
+import synthetic
+from savant_cli.models import gravity, layout, propulsion, slosh
 from savant_cli.sim.engine import rk4, work_array
 from savant_cli.sim.plant import pack_tables
-import synthetic
 
 A_REF = 9.80665
 

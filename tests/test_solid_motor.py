@@ -16,11 +16,10 @@ from conftest import compose_config
 from savant_cli import constants
 from savant_cli.config import validate
 from savant_cli.io.guidance_file import read_guidance
-from savant_cli.models import propulsion
+from savant_cli.models import layout, propulsion
 from savant_cli.montecarlo.targets import Target, apply_samples, build_dispersed
 from savant_cli.paths import hydra_search_dirs
 from savant_cli.sim import engine
-from savant_cli.models import layout
 from savant_cli.sim.run import simulate
 from savant_cli.sim.setup import prepare
 

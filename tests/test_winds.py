@@ -6,10 +6,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+import synthetic
 from savant_cli import constants
 from savant_cli.models import earth, winds
 from savant_cli.sim.plant import pack_tables
-import synthetic
 
 W = constants.OMEGA_EARTH
 

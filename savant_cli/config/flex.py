@@ -7,7 +7,6 @@ from dataclasses import dataclass, field
 from savant_cli.config.checks import non_negative, one_of, positive
 from savant_cli.errors import ConfigError
 
-
 #: ``flex.switching`` options: the modal set switched at separation, or blended by the propellant burned.
 FLEX_SWITCHINGS = ("separation", "propellant")
 

@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 from typing import Optional
 
-from savant_cli.errors import ConfigError
-import re
 from savant_cli.config.checks import non_negative, one_of, positive
+from savant_cli.errors import ConfigError
 
 
 @dataclass

@@ -26,7 +26,6 @@ from savant_cli.config.twd import TwdOffConfig, TwdOnConfig
 from savant_cli.config.winds import check_winds, check_winds_scale
 from savant_cli.errors import ConfigError
 
-
 GROUP_VARIANTS: dict[str, dict[str, type]] = {
     "actuator": {"third_order": ThirdOrderActuatorConfig, "simplex": SimplexActuatorConfig},
     "flex": {"off": FlexOffConfig, "on": FlexOnConfig},

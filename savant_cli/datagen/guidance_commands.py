@@ -45,13 +45,13 @@ from scipy.spatial.transform import Rotation
 
 from savant_cli import constants
 from savant_cli.config import SavantConfig
+from savant_cli.io.guidance_file import SPEED_COLUMN
 from savant_cli.models import aero, atmosphere as atm, earth, mass as mass_model, quaternion as qt
 from savant_cli.models.configurations import CONFIG_STACK, CONFIG_UPPER, CONFIG_UPPER_LES
 from savant_cli.models.gravity import gravity_zonal
 from savant_cli.models.peg import insertion_state
 from savant_cli.sim import build
 from savant_cli.sim.plant import PlantTables, pack_tables
-from savant_cli.io.guidance_file import SPEED_COLUMN
 from savant_cli.vehicle import Vehicle
 
 G0 = constants.G0
@@ -413,8 +413,8 @@ def main(argv: list[str] | None = None) -> None:
                     help="only add the v_rel_m_s column to the existing command file, its other bytes unchanged "
                          "(refused unless the regenerated attitudes match the file's)")
     args = ap.parse_args(argv)
-    from savant_cli.paths import resolve_data_path, shipped_config_dir
     from savant_cli.io.guidance_file import write_guidance_csv
+    from savant_cli.paths import resolve_data_path, shipped_config_dir
     from savant_cli.vehicle import load_vehicle
 
     cfg = _compose(args.overrides)

@@ -135,9 +135,8 @@ def fly(out_csv: Path) -> Path:
 
     from savant_cli.config import validate
     from savant_cli.io.atomic import write_text_atomic
-    from savant_cli.models import earth
+    from savant_cli.models import earth, layout
     from savant_cli.paths import shipped_config_dir
-    from savant_cli.models import layout
     from savant_cli.sim.setup import prepare
 
     with initialize_config_dir(config_dir=str(shipped_config_dir()), version_base="1.3"):

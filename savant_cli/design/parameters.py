@@ -28,7 +28,6 @@ from savant_cli.config import ControllerConfig, DesignParameters
 from savant_cli.datagen import fcs_gains
 from savant_cli.models.fcs import FcsTables, fcs_tables
 
-
 #: Parameters a schedule may set for itself over the spec's common value.
 SPEC_VALUES = ("kir_share", "integral_ratio", "tailoff_kp_cap", "tailoff_kd_cap")
 

@@ -20,9 +20,9 @@ from savant_cli.linear.plant import PlantLinearization, linearize_plant
 from savant_cli.linear.requirements import STAGE_OF_PHASE, PointVerdict, evaluate_point
 from savant_cli.linear.response import FastResponse
 from savant_cli.models.fcs import FcsTables, flight_gains
+from savant_cli.models.layout import U_T_IGN, R, V
 from savant_cli.sim.build import SimModel
 from savant_cli.sim.engine import schedule_variable
-from savant_cli.models.layout import R, U_T_IGN, V
 from savant_cli.sim.run import Snapshot
 
 #: Closed-loop poles slower than this (rad/s) are the frozen-time trajectory's drift, not

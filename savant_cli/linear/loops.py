@@ -26,12 +26,12 @@ import numpy as np
 from scipy.linalg import block_diag, expm
 from scipy.signal import tf2ss
 
+from savant_cli.linear.plant import SENSOR_NAMES, PlantLinearization
+from savant_cli.models import layout
 from savant_cli.models.fcs import FCS_STACK, GYRO_FIRST, GYRO_UPPER, FcsTables
 from savant_cli.sim import engine
-from savant_cli.models import layout
 from savant_cli.sim.build import SimModel
 from savant_cli.sim.run import Snapshot
-from savant_cli.linear.plant import SENSOR_NAMES, PlantLinearization
 
 AXES = ("pitch", "yaw")
 COMMANDS = ("cmd_pitch", "cmd_yaw")

@@ -23,11 +23,10 @@ from dataclasses import dataclass
 import control as ct
 import numpy as np
 
-from savant_cli.models import actuator, aero, quaternion as qt, sensors
-from savant_cli.models.sensors import misalignment
-from savant_cli.models import layout
-from savant_cli.sim.build import SimModel
+from savant_cli.models import actuator, aero, layout, quaternion as qt, sensors
 from savant_cli.models.flex import flex_point
+from savant_cli.models.sensors import misalignment
+from savant_cli.sim.build import SimModel
 from savant_cli.sim.plant import derivative
 from savant_cli.sim.run import Snapshot
 

@@ -65,7 +65,7 @@ THIRD = blocks.Record(
     ("damping", "1", "load damping ratio ζ"),
     ("rate_limit", "rad/s", "commanded-rate limit"),
 )
-T3_WA, T3_WN, T3_ZETA, T3_RATE = THIRD.offsets
+T3_LOOP_GAIN, T3_NATURAL_FREQUENCY, T3_DAMPING, T3_RATE_LIMIT = THIRD.offsets
 SPX = blocks.Record(
     "simplex actuator",
     ("loop_gain", "1/s", "position-loop gain K_a"),
@@ -78,7 +78,8 @@ SPX = blocks.Record(
     ("leakage", "rad/s/(N*m)", "leakage coefficient c_l"),
     ("nozzle_feedback", "1", "1: the loop feeds back the nozzle angle; 0: the ram LVDT"),
 )
-SX_KA, SX_WV, SX_ZV, SX_RATE, SX_K, SX_C, SX_J, SX_LEAK, SX_FEEDBACK = SPX.offsets
+(SX_LOOP_GAIN, SX_VALVE_FREQUENCY, SX_VALVE_DAMPING, SX_RATE_LIMIT, SX_STIFFNESS, SX_DAMPING, SX_LOAD_INERTIA, SX_LEAKAGE,
+ SX_NOZZLE_FEEDBACK) = SPX.offsets
 STAGE = blocks.Record(
     "gimbal",
     ("limit", "rad", "gimbal angle limit, per axis"),
@@ -129,10 +130,10 @@ def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarra
                                    stage.engine.inertia_about_gimbal_kgm2, a.leakage_rad_s_per_Nm,
                                    1.0 if a.feedback == "nozzle" else 0.0)
         else:
-            p[p3 + T3_WA] = a.loop_gain_rad_s
-            p[p3 + T3_WN] = 2.0 * np.pi * a.natural_frequency_hz
-            p[p3 + T3_ZETA] = a.damping
-            p[p3 + T3_RATE] = np.radians(a.rate_limit_deg_s)
+            p[p3 + T3_LOOP_GAIN] = a.loop_gain_rad_s
+            p[p3 + T3_NATURAL_FREQUENCY] = 2.0 * np.pi * a.natural_frequency_hz
+            p[p3 + T3_DAMPING] = a.damping
+            p[p3 + T3_RATE_LIMIT] = np.radians(a.rate_limit_deg_s)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -172,11 +173,11 @@ def third_order(x: np.ndarray, k: int, cmd: float, p: np.ndarray, base: int, lim
     ``out[k:k+3]``; ``cmd`` is δ_c (rad), ``limit`` the gimbal stop (rad); ``p[base:]`` a
     :data:`THIRD` record. Returns the nozzle angular acceleration (rad/s²): δ̈, or 0 while
     the rate limit or the stop holds the nozzle."""
-    wn = p[base + T3_WN]
-    rate_limit = p[base + T3_RATE]
+    wn = p[base + T3_NATURAL_FREQUENCY]
+    rate_limit = p[base + T3_RATE_LIMIT]
     d, rate, acc = x[k], x[k + 1], x[k + 2]
-    v = clip(p[base + T3_WA] * (cmd - d), rate_limit)
-    out[k + 2] = wn * wn * (v - rate) - 2.0 * p[base + T3_ZETA] * wn * acc
+    v = clip(p[base + T3_LOOP_GAIN] * (cmd - d), rate_limit)
+    out[k + 2] = wn * wn * (v - rate) - 2.0 * p[base + T3_DAMPING] * wn * acc
     if held(rate, rate_limit, acc):
         acc = 0.0
     return at_gimbal_stop(d, rate, acc, limit, out, k)
@@ -190,20 +191,20 @@ def simplex(x: np.ndarray, k: int, kv: int, cmd: float, p: np.ndarray, base: int
     record. Returns the nozzle angular acceleration δ̈ (rad/s²; 0 while the stop holds it)."""
     d, rate, th = x[k], x[k + 1], x[k + 2]
     r, r_dot = x[kv], x[kv + 1]
-    fb = d if p[base + SX_FEEDBACK] > 0.5 else th
-    rl = p[base + SX_RATE]
-    v = p[base + SX_KA] * (cmd - fb)
-    wv = p[base + SX_WV]
-    r_acc = wv * wv * (v - r) - 2.0 * p[base + SX_ZV] * wv * r_dot
+    fb = d if p[base + SX_NOZZLE_FEEDBACK] > 0.5 else th
+    rl = p[base + SX_RATE_LIMIT]
+    v = p[base + SX_LOOP_GAIN] * (cmd - fb)
+    wv = p[base + SX_VALVE_FREQUENCY]
+    r_acc = wv * wv * (v - r) - 2.0 * p[base + SX_VALVE_DAMPING] * wv * r_dot
     if held(r, rl, r_dot):  # the spool on its stop: the flow holds at the limit
         r_dot = 0.0
     if held(r, rl, r_acc):
         r_acc = 0.0
-    torque = p[base + SX_K] * (th - d)
-    out[k + 2] = r - p[base + SX_LEAK] * torque
+    torque = p[base + SX_STIFFNESS] * (th - d)
+    out[k + 2] = r - p[base + SX_LEAKAGE] * torque
     out[kv] = r_dot
     out[kv + 1] = r_acc
-    return at_gimbal_stop(d, rate, (torque - p[base + SX_C] * rate) / p[base + SX_J], limit, out, k)
+    return at_gimbal_stop(d, rate, (torque - p[base + SX_DAMPING] * rate) / p[base + SX_LOAD_INERTIA], limit, out, k)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -229,9 +230,9 @@ def limits(p: np.ndarray, engine: int) -> tuple[float, float]:
     flow's) and gimbal limit (rad); the upper stage's from separation on."""
     first = engine == ENGINE_FIRST
     if int(p[P_KIND]) == SIMPLEX:
-        rate = p[(P_FS_SPX if first else P_US_SPX) + SX_RATE]
+        rate = p[(P_FS_SPX if first else P_US_SPX) + SX_RATE_LIMIT]
     else:
-        rate = p[(P_FS_THIRD if first else P_US_THIRD) + T3_RATE]
+        rate = p[(P_FS_THIRD if first else P_US_THIRD) + T3_RATE_LIMIT]
     return rate, p[gimbal_stage(engine) + G_LIMIT]
 
 

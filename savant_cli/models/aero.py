@@ -25,8 +25,8 @@ from numba import njit
 
 from savant_cli.models import blocks
 from savant_cli.models.configurations import N_CONFIG
-from savant_cli.vehicle import AERO_COEFFICIENTS, CONFIG_NAMES
 from savant_cli.models.interp import locate_at, tab, tab_offset, trilinear_at
+from savant_cli.vehicle import AERO_COEFFICIENTS, CONFIG_NAMES
 
 C_CA, C_CY, C_CN, C_ROLL, C_PITCH, C_YAW = range(len(AERO_COEFFICIENTS))  # the coefficient axis
 N_COEF = len(AERO_COEFFICIENTS)

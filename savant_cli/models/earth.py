@@ -12,10 +12,9 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from savant_cli.models.fused import fma
-
 from savant_cli import constants
 from savant_cli.models import blocks
+from savant_cli.models.fused import fma
 
 _PARAMS = blocks.PARAMETERS.block("earth")
 P_RE = _PARAMS.scalar("equatorial_radius", "m", "WGS84 semi-major axis")

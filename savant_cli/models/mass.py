@@ -15,8 +15,8 @@ from numba import njit
 
 from savant_cli.models import blocks
 from savant_cli.models.configurations import N_CONFIG
-from savant_cli.vehicle import CONFIG_NAMES
 from savant_cli.models.interp import locate_at, tab, tab_offset
+from savant_cli.vehicle import CONFIG_NAMES
 
 COLUMNS = blocks.Record(
     "mass-properties row",

@@ -42,8 +42,7 @@ import numpy as np
 from numba import njit
 
 from savant_cli import constants
-from savant_cli.models import blocks
-from savant_cli.models import quaternion as qt
+from savant_cli.models import blocks, quaternion as qt
 from savant_cli.models.gravity import P_J2, P_J3, P_J4, P_MU, P_ORDER, gravity_at, gravity_zonal, gravity_zonal_xyz
 from savant_cli.models.guidance import D_QG, D_TG, D_VG, command_at
 

@@ -38,7 +38,7 @@ from savant_cli.montecarlo.targets import apply_samples, build_dispersed
 from savant_cli.processes import process_context, terminate_workers, worker_initializer
 from savant_cli.sim.build import SimModel
 from savant_cli.sim.engine import EVENT_NAMES
-from savant_cli.sim.run import simulate, signals
+from savant_cli.sim.run import signals, simulate
 from savant_cli.sim.run_summary import run_summary
 
 #: summary keys that vary from machine to machine, kept out of the run tables

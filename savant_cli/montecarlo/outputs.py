@@ -24,7 +24,6 @@ from savant_cli.montecarlo.inventory import Inventory
 from savant_cli.montecarlo.results import Tables
 from savant_cli.montecarlo.storage import write_csv, write_group, write_tables
 
-
 DrawFigures = Callable[[Path, Tables, list[dict[str, Any]], dict[str, tuple[float, float]] | None], list[Path]]
 """The batch's figure drawer: (folder, tables, dispersions, band requirements) → PNGs."""
 

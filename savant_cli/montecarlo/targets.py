@@ -37,7 +37,7 @@ from typing import Any
 import numpy as np
 from omegaconf import OmegaConf
 
-from savant_cli.config import GROUP_VARIANTS, ControllerConfig, SavantConfig, WindsConfig, has_key, check_physics
+from savant_cli.config import GROUP_VARIANTS, ControllerConfig, SavantConfig, WindsConfig, check_physics, has_key
 from savant_cli.errors import ConfigError
 from savant_cli.sim.build import SimModel, build_model
 from savant_cli.vehicle import AERO_COEFFICIENTS, MassTable, Vehicle

@@ -64,22 +64,9 @@ import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Circle, Rectangle
-from matplotlib.ticker import (
-    FormatStrFormatter,
-    LogLocator,
-    MaxNLocator,
-    MultipleLocator,
-    NullLocator,
-)
+from matplotlib.ticker import FormatStrFormatter, LogLocator, MaxNLocator, MultipleLocator, NullLocator
 
-from savant_cli.linear.charts import (
-    CommandResponses,
-    LoopResponse,
-    PointCharts,
-    PoleZeroMap,
-    RootLocus,
-    sorted_axes,
-)
+from savant_cli.linear.charts import CommandResponses, LoopResponse, PointCharts, PoleZeroMap, RootLocus, sorted_axes
 from savant_cli.linear.margins import MarginRow
 from savant_cli.plots.figure import fresh_sheets, new_figure, render, save_rendered, sheet, style_axes, write_png
 

@@ -8,8 +8,8 @@ from pathlib import Path
 
 import numpy as np
 
-from savant_cli.plots.flyoff import plot_history_overlays
 from savant_cli.plots.figure import new_figure, save_figure, style_axes
+from savant_cli.plots.flyoff import plot_history_overlays
 
 
 def plot_mode_retention(time_s: np.ndarray, responses: Mapping[str, Mapping[int, np.ndarray]],

@@ -13,19 +13,17 @@ import numpy as np
 from savant_cli import constants
 from savant_cli.config import SavantConfig
 from savant_cli.errors import ConfigError
-from savant_cli.models import PLANT_MODELS, blocks, earth, propulsion, quaternion as qt, rigid_body
+from savant_cli.flex_slosh import FlexTables, SloshData, load_flex, load_slosh
+from savant_cli.io.guidance_file import SPEED_COLUMN, GuidanceTable
+from savant_cli.io.table_order import table_key
+from savant_cli.models import PLANT_MODELS, blocks, earth, layout, propulsion, quaternion as qt, rigid_body
 from savant_cli.models.command_schedule import SCHEDULES
 from savant_cli.models.fcs import FcsTables, fcs_tables
 from savant_cli.models.guidance import SmootherGains, smoother_gains
 from savant_cli.models.sensors import GYRO_MISALIGN, GyroModel, build_gyro, gyro_steady_state, misalignment
-from savant_cli.models import layout
 from savant_cli.sim.engine import EventSchedule, Rates
-from savant_cli.flex_slosh import FlexTables, SloshData, load_flex, load_slosh
-from savant_cli.io.guidance_file import SPEED_COLUMN, GuidanceTable
-from savant_cli.io.table_order import table_key
 from savant_cli.sim.plant import PlantTables, mass_state, pack_tables
 from savant_cli.vehicle import Vehicle
-
 
 
 @dataclass

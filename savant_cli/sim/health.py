@@ -46,10 +46,9 @@ from typing import Any
 import numpy as np
 
 from savant_cli.io.record import Signal
-from savant_cli.models import actuator
+from savant_cli.models import actuator, layout
 from savant_cli.models.configurations import ENGINE_FIRST
 from savant_cli.sim import engine
-from savant_cli.models import layout
 from savant_cli.sim.build import SimModel
 from savant_cli.sim.oscillation import band_top_hz, find_limit_cycles, find_slow_divergence
 from savant_cli.sim.run import SimResult

@@ -57,10 +57,9 @@ off rises less). The growth is the ratio E(end) / min E (–).
 from __future__ import annotations
 
 from dataclasses import dataclass
-
-import numpy as np
 from functools import lru_cache
 
+import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 from scipy.special import betainccinv
 

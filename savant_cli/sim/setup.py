@@ -12,10 +12,10 @@ import numpy as np
 
 from savant_cli.config import SavantConfig
 from savant_cli.errors import ConfigError
-from savant_cli.sim.staging_state import read_staging_state
 from savant_cli.io.guidance_file import read_guidance
 from savant_cli.paths import hydra_search_dirs, resolve_data_path
 from savant_cli.sim.build import SimModel, build_model
+from savant_cli.sim.staging_state import read_staging_state
 from savant_cli.vehicle import Vehicle, load_vehicle
 
 log = logging.getLogger(__name__)

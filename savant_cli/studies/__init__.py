@@ -11,9 +11,8 @@ from __future__ import annotations
 import importlib
 from types import ModuleType
 
-from savant_cli.errors import ConfigError
-
 from savant_cli.config import STUDY_SCHEMAS
+from savant_cli.errors import ConfigError
 
 STUDIES = tuple(STUDY_SCHEMAS)
 

@@ -46,8 +46,8 @@ from rich.table import Table
 from savant_cli.config import FcsDesignStudyConfig, SavantConfig, design_controller_name, validate
 from savant_cli.datagen import fcs_gains, flex_filters
 from savant_cli.design import parameters as dp
-from savant_cli.design.pool import ScorePool
 from savant_cli.design.points import DesignPoint, point_score
+from savant_cli.design.pool import ScorePool
 from savant_cli.design.search import search
 from savant_cli.errors import ConfigError
 from savant_cli.io.atomic import write_text_atomic

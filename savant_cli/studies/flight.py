@@ -25,8 +25,8 @@ from savant_cli.io.record import FLOWN, RunRecord, Signal
 from savant_cli.sim.build import rates
 from savant_cli.sim.engine import EVENT_NAMES
 from savant_cli.sim.run import SimResult, signals, simulate
-from savant_cli.sim.setup import Prepared, prepare
 from savant_cli.sim.run_summary import run_summary
+from savant_cli.sim.setup import Prepared, prepare
 
 
 @dataclass

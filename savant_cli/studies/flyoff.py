@@ -29,9 +29,9 @@ from savant_cli.config import FlyoffStudyConfig, SavantConfig, check_physics
 from savant_cli.errors import ConfigError
 from savant_cli.io.atomic import write_json_atomic, write_text_atomic
 from savant_cli.io.console import print_verdict, study_console
-from savant_cli.io.record import FLOWN
 from savant_cli.io.hdf5 import write_study_file
 from savant_cli.io.provenance import collect_provenance
+from savant_cli.io.record import FLOWN
 from savant_cli.montecarlo.analysis import PERCENTILES
 from savant_cli.montecarlo.console_summary import print_mission
 from savant_cli.montecarlo.targets import load_group_option

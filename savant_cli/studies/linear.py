@@ -33,11 +33,11 @@ from savant_cli.config import LinearStudyConfig, SavantConfig
 from savant_cli.errors import ConfigError
 from savant_cli.io.console import print_run_summary, print_verdict, study_console
 from savant_cli.linear.charts import PointCharts, point_charts
+from savant_cli.linear.frozen_time import FrozenTimeWindow
 from savant_cli.linear.margins import MarginRow
 from savant_cli.linear.point_analysis import analyse, scan_tailoff
 from savant_cli.linear.requirements import PointVerdict, summary as requirement_summary
 from savant_cli.linear.store import write_checks_csv, write_linear_group, write_margins_csv, write_mat
-from savant_cli.linear.frozen_time import FrozenTimeWindow
 from savant_cli.studies import flight as flight_mod
 from savant_cli.timedomain.tailoff import checks as tailoff_checks, verdict_text as tailoff_verdict
 

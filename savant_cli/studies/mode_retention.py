@@ -27,8 +27,8 @@ response by at most ``study.response_tolerance`` and the margins by at most
 from __future__ import annotations
 
 import copy
-import dataclasses
 import csv
+import dataclasses
 import io
 import time
 import warnings
@@ -41,12 +41,17 @@ import numpy as np
 from omegaconf import DictConfig, OmegaConf
 from rich.table import Table
 
-from savant_cli.io.console import study_console
 from savant_cli.config import (
-    FlexOffConfig, FlexOnConfig, LinearStudyConfig, ModeRetentionStudyConfig, SavantConfig, check_physics,
+    FlexOffConfig,
+    FlexOnConfig,
+    LinearStudyConfig,
+    ModeRetentionStudyConfig,
+    SavantConfig,
+    check_physics,
 )
 from savant_cli.errors import ConfigError
 from savant_cli.io.atomic import write_json_atomic, write_text_atomic
+from savant_cli.io.console import study_console
 from savant_cli.io.hdf5 import write_study_file
 from savant_cli.io.provenance import collect_provenance
 from savant_cli.linear.point_analysis import analyse

@@ -25,21 +25,31 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
 from savant_cli import lifecycle
-from savant_cli.io.console import study_console
 from savant_cli.config import MonteCarloStudyConfig, SavantConfig, validate
 from savant_cli.errors import ConfigError, DamagedFileError, OutputWriteError, RunInterrupted
+from savant_cli.io.console import study_console
 from savant_cli.io.guidance_file import read_guidance
 from savant_cli.io.provenance import collect_provenance
 from savant_cli.io.record import FLOWN
-from savant_cli.montecarlo.batch import (BatchStop, Case, Journal, RunOutcome, execute, fingerprint, fly_run,
-                                         history_columns, read_outcome, shard_runs)
+from savant_cli.montecarlo.batch import (
+    BatchStop,
+    Case,
+    Journal,
+    RunOutcome,
+    execute,
+    fingerprint,
+    fly_run,
+    history_columns,
+    read_outcome,
+    shard_runs,
+)
 from savant_cli.montecarlo.inventory import inventory, ranges_text
 from savant_cli.montecarlo.outputs import write_outputs
 from savant_cli.montecarlo.spec import DispersionSet, parse
 from savant_cli.montecarlo.targets import TABLE_TARGETS
+from savant_cli.paths import hydra_search_dirs, resolve_data_path
 from savant_cli.plots.montecarlo_batch import draw_figures
 from savant_cli.processes import default_workers
-from savant_cli.paths import hydra_search_dirs, resolve_data_path
 from savant_cli.sim import engine
 from savant_cli.sim.run import signals, simulate
 from savant_cli.sim.setup import prepare, start_from_staging

@@ -11,8 +11,8 @@ from savant_cli.config import SavantConfig
 from savant_cli.errors import RunInterrupted
 from savant_cli.io.console import print_run_summary, study_console
 from savant_cli.io.record import RunRecord
-from savant_cli.sim.staging_state import StagingState, write_staging_state
 from savant_cli.sim.engine import STOP_SEPARATION
+from savant_cli.sim.staging_state import StagingState, write_staging_state
 from savant_cli.studies import flight as flight_mod
 
 

@@ -24,10 +24,9 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from savant_cli.models import actuator
 from savant_cli import lifecycle
+from savant_cli.models import actuator, layout
 from savant_cli.processes import process_context, terminate_workers, worker_initializer
-from savant_cli.models import layout
 from savant_cli.sim import loop_perturbation
 from savant_cli.sim.build import SimModel
 from savant_cli.sim.run import Snapshot, simulate

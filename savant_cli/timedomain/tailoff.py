@@ -28,8 +28,7 @@ from typing import Any
 import numpy as np
 
 from savant_cli.config import RequirementSet
-from savant_cli.sim import engine
-from savant_cli.sim import loop_perturbation
+from savant_cli.sim import engine, loop_perturbation
 from savant_cli.sim.build import SimModel
 from savant_cli.sim.run import Snapshot, signals, simulate
 from savant_cli.sim.run_summary import judge_separation

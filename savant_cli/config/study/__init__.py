@@ -21,7 +21,6 @@ from savant_cli.config.study.nominal import StudyConfig
 from savant_cli.config.study.time_margins import TimeMarginsStudyConfig, check_time_margins
 from savant_cli.errors import ConfigError
 
-
 #: Each study's physical checks, by name (``nominal`` has none).
 STUDY_CHECKS: dict[str, Callable[[Any], None]] = {
     "nominal": lambda s: None, "linear": check_linear, "montecarlo": check_montecarlo, "flex_sweep": check_flex_sweep,

@@ -6,7 +6,6 @@ import numpy as np
 
 from savant_cli.errors import ConfigError
 
-
 #: The loops a study judges (``study.axes``, ``study.chart_axes``).
 LOOP_AXES = ("pitch", "yaw")
 

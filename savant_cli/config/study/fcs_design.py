@@ -12,7 +12,6 @@ from savant_cli.config.checks import non_negative, one_of, positive
 from savant_cli.config.study.common import LOOP_AXES, MAX_WORKERS, WORKERS_ALLOWED
 from savant_cli.errors import ConfigError
 
-
 #: ``study.optimizer.method`` options (``scipy.optimize.minimize``).
 OPTIMIZER_METHODS = ("nelder-mead", "cobyla")
 

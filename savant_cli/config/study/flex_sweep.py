@@ -10,7 +10,6 @@ from savant_cli.config.checks import non_negative, one_of
 from savant_cli.config.study.common import LOOP_AXES, flight_times
 from savant_cli.errors import ConfigError
 
-
 #: ``study.parameters`` options: what is scaled.
 SWEEP_PARAMETERS = ("frequency", "shape")
 

@@ -8,7 +8,6 @@ from savant_cli.config.checks import non_negative, one_of, positive
 from savant_cli.config.study.common import JACOBIANS, flight_times
 from savant_cli.errors import ConfigError
 
-
 #: ``study.frozen_time.criteria`` options (``linear/frozen_time.py``).
 FROZEN_TIME_CRITERIA = ("period", "control_power")
 

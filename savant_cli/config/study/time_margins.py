@@ -8,7 +8,6 @@ from savant_cli.config.checks import non_negative, one_of, positive
 from savant_cli.config.study.common import JACOBIANS, LOOP_AXES, MAX_WORKERS, WORKERS_ALLOWED, flight_times
 from savant_cli.errors import ConfigError
 
-
 MARGIN_KINDS = ("gain_high", "gain_low", "delay")
 
 
