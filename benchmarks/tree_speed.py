@@ -67,7 +67,8 @@ def main() -> None:
         finally:
             subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force", str(ref)], capture_output=True)
     med = {k: statistics.median(v) for k, v in rtf.items()}
-    print(f"rigid nominal flight, medians of {len(rtf['ref'])}: {args.ref} {med['ref']:,.0f}x, this checkout "
+    flight = "nominal flight" + (f" ({' '.join(args.overrides)})" if args.overrides else " (rigid)")
+    print(f"{flight}, medians of {len(rtf['ref'])}: {args.ref} {med['ref']:,.0f}x, this checkout "
           f"{med['this']:,.0f}x real time; ratio {med['this'] / med['ref']:.3f}")
 
 

@@ -19,14 +19,8 @@ from conftest import compose_config
 from savant_cli.config import validate
 from savant_cli.errors import ConfigError
 from savant_cli.io.console import (
-    CONSOLE_MODES,
-    HEADLINE_KEYS,
-    format_sig,
-    live_display_ok,
-    print_quiet_lines,
-    print_run_summary,
-    readable_name,
-    study_console,
+    CONSOLE_MODES, HEADLINE_KEYS, format_sig, live_display_ok, print_quiet_lines, print_run_summary, readable_name,
+    study_console
 )
 from savant_cli.montecarlo.console_summary import print_tables
 

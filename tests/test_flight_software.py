@@ -10,15 +10,7 @@ from scipy import signal
 
 from savant_cli.models import quaternion as qt
 from savant_cli.models.fcs import (
-    FCS_COAST,
-    FCS_STACK,
-    FCS_UPPER,
-    FcsTables,
-    df2t,
-    engagement,
-    fcs_step,
-    filter_pair,
-    roll_phase_plane,
+    FCS_COAST, FCS_STACK, FCS_UPPER, FcsTables, df2t, engagement, fcs_step, filter_pair, roll_phase_plane
 )
 from savant_cli.models.guidance import command_at, guidance_sample, smoother_step
 from savant_cli.models.layout import D_CMD_P, D_GAINS, D_INT_ATT, D_QS, D_VS, N_DISC

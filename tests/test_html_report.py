@@ -16,13 +16,7 @@ import savant_cli
 from browser import check_page, clipped_labels, find_chromium, is_blank, overlapping_labels
 from conftest import assert_report_page, assert_report_redraws
 from savant_cli.html_report import (
-    LABEL_CHAR_W,
-    TIMELINE_LEFT,
-    TIMELINE_WIDTH,
-    WORST_PREFIX,
-    config_diff,
-    timeline_layout,
-    verdicts,
+    LABEL_CHAR_W, TIMELINE_LEFT, TIMELINE_WIDTH, WORST_PREFIX, config_diff, timeline_layout, verdicts
 )
 from savant_cli.html_tables import summary_tables, worst_offender
 

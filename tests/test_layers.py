@@ -59,20 +59,20 @@ def test_an_upward_import_breaks_the_contract(linter, tmp_path):
     assert "savant_cli.models.aero -> savant_cli.cli" in broken.stdout
 
 
-RUFF = Path(sys.executable).with_name("ruff")
+ISORT = Path(sys.executable).with_name("isort")
 ROOT = PYPROJECT.parent
 
 
-def _ruff(cwd: Path, *paths: str) -> subprocess.CompletedProcess:
-    """``ruff check`` (the import order of ``cwd/pyproject.toml``), no cache written."""
-    if not RUFF.is_file():
-        pytest.fail(f"{RUFF} missing: the test extra installs ruff")
-    return subprocess.run([str(RUFF), "check", "--no-cache", *paths], cwd=cwd, capture_output=True, text=True,
+def _isort(cwd: Path, *paths: str) -> subprocess.CompletedProcess:
+    """``isort --check-only`` with the settings of ``cwd/pyproject.toml``."""
+    if not ISORT.is_file():
+        pytest.fail(f"{ISORT} missing: the test extra installs isort")
+    return subprocess.run([str(ISORT), "--check-only", "--diff", *paths], cwd=cwd, capture_output=True, text=True,
                           timeout=300)
 
 
 def test_imports_are_ordered():
-    proc = _ruff(ROOT, "savant_cli", "tests", "benchmarks")
+    proc = _isort(ROOT, "savant_cli", "tests", "benchmarks")
     assert proc.returncode == 0, proc.stdout + proc.stderr
 
 
@@ -80,6 +80,6 @@ def test_the_import_order_check_fails_on_imports_out_of_order(tmp_path):
     shutil.copy(PYPROJECT, tmp_path / "pyproject.toml")
     (tmp_path / "ordered.py").write_text("import os\nimport sys\n\nprint(os, sys)\n")
     (tmp_path / "unordered.py").write_text("import sys\nimport os\n\nprint(os, sys)\n")
-    assert _ruff(tmp_path, "ordered.py").returncode == 0
-    proc = _ruff(tmp_path, "unordered.py")
-    assert proc.returncode == 1 and "I001" in proc.stdout, proc.stdout + proc.stderr
+    assert _isort(tmp_path, "ordered.py").returncode == 0
+    proc = _isort(tmp_path, "unordered.py")
+    assert proc.returncode == 1 and "unordered.py" in proc.stdout + proc.stderr, proc.stdout + proc.stderr

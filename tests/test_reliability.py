@@ -13,11 +13,7 @@ from conftest import compose_config
 from savant_cli.config import validate
 from savant_cli.errors import ConfigError
 from savant_cli.montecarlo.reliability import (
-    demonstrated,
-    lower_quantile_rank,
-    reliability,
-    runs_for_quantile,
-    runs_needed,
+    demonstrated, lower_quantile_rank, reliability, runs_for_quantile, runs_needed
 )
 
 

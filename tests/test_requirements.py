@@ -16,13 +16,7 @@ from savant_cli.errors import ConfigError
 from savant_cli.linear.margins import MarginRow
 from savant_cli.linear.modes import MarginLabeler, ModePeak
 from savant_cli.linear.requirements import (
-    CHECK_ARRAY_COLUMNS,
-    checks_array,
-    evaluate_point,
-    mode_code,
-    mode_name,
-    verdict_line,
-    verdicts_of_array,
+    CHECK_ARRAY_COLUMNS, checks_array, evaluate_point, mode_code, mode_name, verdict_line, verdicts_of_array
 )
 from test_margin_modes import _synthetic_loop
 

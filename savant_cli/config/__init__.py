@@ -19,60 +19,25 @@ and ``validation`` (:func:`validate`). Each schema's checks follow it in its mod
 from __future__ import annotations
 
 from savant_cli.config.actuator import (
-    ActuatorStageCommon,
-    SimplexActuatorConfig,
-    SimplexStage,
-    ThirdOrderActuatorConfig,
-    ThirdOrderStage,
-    check_actuator,
+    ActuatorStageCommon, SimplexActuatorConfig, SimplexStage, ThirdOrderActuatorConfig, ThirdOrderStage, check_actuator
 )
 from savant_cli.config.controller import (
-    AxisGains,
-    Blending,
-    ControllerConfig,
-    ControllerDesign,
-    FilterSection,
-    FilterSet,
-    FilterSets,
-    GainTable,
-    GainTables,
-    IgnitionFade,
-    RollControl,
-    check_delay,
+    AxisGains, Blending, ControllerConfig, ControllerDesign, FilterSection, FilterSet, FilterSets, GainTable,
+    GainTables, IgnitionFade, RollControl, check_delay
 )
 from savant_cli.config.dispersions import CorrelationGroup, DispersionSetConfig, DispersionSpec
 from savant_cli.config.flex import FlexOffConfig, FlexOnConfig, check_flex
 from savant_cli.config.guidance import (
-    GuidanceConfig,
-    InsertionTolerance,
-    LaunchSite,
-    OrbitTarget,
-    PegConfig,
-    SmootherConfig,
-    check_peg,
-    check_target,
+    GuidanceConfig, InsertionTolerance, LaunchSite, OrbitTarget, PegConfig, SmootherConfig, check_peg, check_target
 )
 from savant_cli.config.navigation import (
-    NAVIGATION_BOUNDS,
-    AccelerometerErrorsConfig,
-    GyroErrorsConfig,
-    NavigationInertialConfig,
-    NavigationPerfectConfig,
-    check_navigation,
+    NAVIGATION_BOUNDS, AccelerometerErrorsConfig, GyroErrorsConfig, NavigationInertialConfig, NavigationPerfectConfig,
+    check_navigation
 )
 from savant_cli.config.output import OutputConfig
 from savant_cli.config.requirements import (
-    STABILIZATIONS,
-    AeroRequirement,
-    FlexModeRequirement,
-    FlexRequirement,
-    FlexStageRequirement,
-    MissionRequirement,
-    RequirementSet,
-    RigidRequirement,
-    SeparationRequirement,
-    SloshRequirement,
-    check_requirements,
+    STABILIZATIONS, AeroRequirement, FlexModeRequirement, FlexRequirement, FlexStageRequirement, MissionRequirement,
+    RequirementSet, RigidRequirement, SeparationRequirement, SloshRequirement, check_requirements
 )
 from savant_cli.config.run import MAX_LOG_ROWS, SIM_BOUNDS, EnvironmentConfig, HealthConfig, PhaseConfig, SimConfig
 from savant_cli.config.savant import SavantConfig, check_vehicle_match
@@ -81,41 +46,23 @@ from savant_cli.config.slosh import SloshOffConfig, SloshOnConfig, check_slosh
 from savant_cli.config.study import STUDY_SCHEMAS, check_study_times
 from savant_cli.config.study.common import MAX_WORKERS, WORKERS_ALLOWED
 from savant_cli.config.study.fcs_design import (
-    DESIGN_SCHEDULES,
-    STACK_ONLY_PARAMETERS,
-    DesignOptimizer,
-    DesignParameter,
-    DesignParameters,
-    FcsDesignStudyConfig,
-    ScheduleParameters,
-    design_controller_name,
+    DESIGN_SCHEDULES, STACK_ONLY_PARAMETERS, DesignOptimizer, DesignParameter, DesignParameters, FcsDesignStudyConfig,
+    ScheduleParameters, design_controller_name
 )
 from savant_cli.config.study.flex_sweep import FlexSweepStudyConfig
 from savant_cli.config.study.flyoff import FlyoffStudyConfig
 from savant_cli.config.study.linear import FrozenTimeSpec, LinearStudyConfig, check_frozen_time
 from savant_cli.config.study.mode_retention import ModeRetentionStudyConfig
 from savant_cli.config.study.montecarlo import (
-    MAX_HISTORY_SAMPLES,
-    MAX_N_RUNS,
-    MAX_SHARDS,
-    HistoriesSpec,
-    MonteCarloStudyConfig,
-    ReliabilitySpec,
+    MAX_HISTORY_SAMPLES, MAX_N_RUNS, MAX_SHARDS, HistoriesSpec, MonteCarloStudyConfig, ReliabilitySpec
 )
 from savant_cli.config.study.nominal import StudyConfig
 from savant_cli.config.study.time_margins import MARGIN_KINDS, TimeMarginsStudyConfig
 from savant_cli.config.twd import TwdOffConfig, TwdOnConfig
 from savant_cli.config.validation import GROUP_VARIANTS, check_physics, group_option, has_key, validate
 from savant_cli.config.winds import (
-    GUST_FRAMES,
-    GUST_ONSETS,
-    MAX_WINDS_SCALE,
-    SHEAR_SHAPES,
-    GustConfig,
-    ShearConfig,
-    WindProfile,
-    WindsConfig,
-    check_gust_shear,
+    GUST_FRAMES, GUST_ONSETS, MAX_WINDS_SCALE, SHEAR_SHAPES, GustConfig, ShearConfig, WindProfile, WindsConfig,
+    check_gust_shear
 )
 
 __all__ = [

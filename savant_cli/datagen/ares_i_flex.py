@@ -37,17 +37,8 @@ from scipy.linalg import cho_factor, cho_solve, eigh
 
 from savant_cli.constants import IN, LBF
 from savant_cli.datagen.ares_i_tables import (
-    J2X_LENGTH_M,
-    LAYOUT,
-    LENGTH_M,
-    M_FS_PROP,
-    M_LH2,
-    M_LOX,
-    Layout,
-    Segment,
-    configuration_segments,
-    derived_figures,
-    stations,
+    J2X_LENGTH_M, LAYOUT, LENGTH_M, M_FS_PROP, M_LH2, M_LOX, Layout, Segment, configuration_segments, derived_figures,
+    stations
 )
 
 MASS_UNIT_KG = LBF / IN            # 1 lbf s^2/in = 175.126835 kg

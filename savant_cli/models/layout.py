@@ -23,51 +23,26 @@ from __future__ import annotations
 
 from savant_cli.flex_slosh import FLEX_SETS  # noqa: F401  (the modal sets, in table order)
 from savant_cli.models import blocks
-from savant_cli.models.actuator import ACT_P, ACT_Y, N_VALVE, STATE_NAMES as _ACTUATOR_NAMES  # noqa: F401  (re-exported state indices)
+from savant_cli.models.actuator import (  # noqa: F401  (re-exported state indices)
+    ACT_P, ACT_Y, N_VALVE, STATE_NAMES as _ACTUATOR_NAMES
+)
 from savant_cli.models.configurations import (  # noqa: F401
-    CONFIG_STACK,
-    CONFIG_UPPER,
-    CONFIG_UPPER_LES,
-    ENGINE_FIRST,
-    ENGINE_OFF,
-    ENGINE_UPPER,
+    CONFIG_STACK, CONFIG_UPPER, CONFIG_UPPER_LES, ENGINE_FIRST, ENGINE_OFF, ENGINE_UPPER
 )
 from savant_cli.models.fcs import (  # noqa: F401  (discrete-state indices)
-    D_CMD_P,
-    D_CMD_RCS,
-    D_CMD_Y,
-    D_ERR,
-    D_FILT,
-    D_FLEX_NAV,
-    D_GAINS,
-    D_INT_ATT,
-    D_INT_RATE,
-    D_RATE_CMD_B,
-    D_RATE_ERR,
-    D_ROLL_FILT,
+    D_CMD_P, D_CMD_RCS, D_CMD_Y, D_ERR, D_FILT, D_FLEX_NAV, D_GAINS, D_INT_ATT, D_INT_RATE, D_RATE_CMD_B, D_RATE_ERR,
+    D_ROLL_FILT
 )
 from savant_cli.models.flex import (  # noqa: F401
-    FIRST_STAGE_POINTS,
-    N_POINTS,
-    POINT_KEYS,
-    PT_GIMBAL_FS,
-    PT_GIMBAL_US,
-    PT_GYRO_FS,
-    PT_GYRO_US,
-    PT_IMU,
-    PT_RCS,
-    PT_SLOSH_LH2,
-    PT_SLOSH_LOX,
+    FIRST_STAGE_POINTS, N_POINTS, POINT_KEYS, PT_GIMBAL_FS, PT_GIMBAL_US, PT_GYRO_FS, PT_GYRO_US, PT_IMU, PT_RCS,
+    PT_SLOSH_LH2, PT_SLOSH_LOX
 )
 from savant_cli.models.guidance import D_QG, D_QS, D_TG, D_VG, D_VS  # noqa: F401
 from savant_cli.models.propulsion import MFS, MLH2, MLOX, STATE_NAMES as _PROPULSION_NAMES  # noqa: F401
 from savant_cli.models.rcs import RCS_NEG, RCS_POS, STATE_NAMES as _RCS_NAMES  # noqa: F401
 from savant_cli.models.rigid_body import STATE_NAMES as _RIGID_NAMES, Q, R, V, W  # noqa: F401
 from savant_cli.models.sensors import D_GYRO_X, D_GYRO_Y, GYRO_MISALIGN, GYRO_POINTS  # noqa: F401
-from savant_cli.models.slosh import (
-    N_PER_TANK as N_SLOSH_PER_TANK,  # noqa: F401
-    N_TANKS,
-)
+from savant_cli.models.slosh import N_PER_TANK as N_SLOSH_PER_TANK, N_TANKS  # noqa: F401
 
 N_STATE = blocks.STATE.size  # the core states; optional blocks follow
 N_PARAM = blocks.PARAMETERS.size

@@ -34,16 +34,7 @@ from numba import njit
 
 from savant_cli.io.guidance_file import GuidanceTable
 from savant_cli.models import (
-    actuator,
-    earth,
-    flex,
-    navigation,
-    peg,
-    propulsion,
-    quaternion as qt,
-    rcs,
-    rigid_body,
-    slosh,
+    actuator, earth, flex, navigation, peg, propulsion, quaternion as qt, rcs, rigid_body, slosh
 )
 from savant_cli.models.command_schedule import BY_TIME, D_PROFILE_OFFSET, D_PROFILE_RATE, profile_time
 from savant_cli.models.earth import A_ALT, P_E2, P_OMEGA_E, P_RE
@@ -51,47 +42,12 @@ from savant_cli.models.fcs import FCS_COAST, FCS_STACK, FCS_UPPER, FcsTables, fc
 from savant_cli.models.gravity import P_MU
 from savant_cli.models.guidance import D_TG, D_VG, SmootherGains, guidance_sample, smoother_step
 from savant_cli.models.layout import (
-    ACT_P,
-    ACT_Y,
-    CONFIG_STACK,
-    CONFIG_UPPER,
-    CONFIG_UPPER_LES,
-    D_CMD_P,
-    D_CMD_RCS,
-    D_CMD_Y,
-    D_FLEX_NAV,
-    D_GYRO_X,
-    D_GYRO_Y,
-    ENGINE_OFF,
-    ENGINE_UPPER,
-    MFS,
-    MLH2,
-    MLOX,
-    N_AUX,
-    N_STATE,
-    RCS_NEG,
-    RCS_POS,
-    U_CONFIG,
-    U_DPC,
-    U_DYC,
-    U_ENGINE,
-    U_RCS,
-    U_T_CUT,
-    U_T_IGN,
-    Q,
-    R,
-    V,
-    W,
+    ACT_P, ACT_Y, CONFIG_STACK, CONFIG_UPPER, CONFIG_UPPER_LES, D_CMD_P, D_CMD_RCS, D_CMD_Y, D_FLEX_NAV, D_GYRO_X,
+    D_GYRO_Y, ENGINE_OFF, ENGINE_UPPER, MFS, MLH2, MLOX, N_AUX, N_STATE, RCS_NEG, RCS_POS, U_CONFIG, U_DPC, U_DYC,
+    U_ENGINE, U_RCS, U_T_CUT, U_T_IGN, Q, R, V, W
 )
 from savant_cli.models.sensors import (
-    GYRO_MISALIGN,
-    GYRO_POINTS,
-    IMU_GYRO,
-    N_GYROS,
-    P_IMU_MISALIGN,
-    GyroModel,
-    gyro_step,
-    misalignment,
+    GYRO_MISALIGN, GYRO_POINTS, IMU_GYRO, N_GYROS, P_IMU_MISALIGN, GyroModel, gyro_step, misalignment
 )
 from savant_cli.sim import loop_perturbation
 from savant_cli.sim.borrow import borrowed

@@ -21,41 +21,12 @@ import numpy as np
 from numba import njit
 
 from savant_cli.models import (
-    actuator,
-    aero,
-    atmosphere,
-    blocks,
-    earth,
-    flex,
-    gravity,
-    mass as mass_model,
-    propulsion,
-    quaternion as qt,
-    rcs,
-    rigid_body,
-    slosh,
-    twd,
-    winds,
+    actuator, aero, atmosphere, blocks, earth, flex, gravity, mass as mass_model, propulsion, quaternion as qt, rcs,
+    rigid_body, slosh, twd, winds
 )
 from savant_cli.models.configurations import ENGINE_FIRST
 from savant_cli.models.layout import (
-    MFS,
-    MLH2,
-    MLOX,
-    RCS_NEG,
-    RCS_POS,
-    U_CONFIG,
-    U_DPC,
-    U_DYC,
-    U_ENGINE,
-    U_GUST,
-    U_RCS,
-    U_T_CUT,
-    U_T_IGN,
-    Q,
-    R,
-    V,
-    W,
+    MFS, MLH2, MLOX, RCS_NEG, RCS_POS, U_CONFIG, U_DPC, U_DYC, U_ENGINE, U_GUST, U_RCS, U_T_CUT, U_T_IGN, Q, R, V, W
 )
 
 #: Tabular data of the plant by name (SI, contiguous arrays); the fields are the tables

@@ -12,23 +12,8 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from savant_cli import constants, lifecycle
 from savant_cli.io.record import Signal
 from savant_cli.models import (
-    actuator,
-    aero,
-    atmosphere,
-    earth,
-    flex,
-    gravity,
-    layout,
-    mass,
-    navigation,
-    peg,
-    propulsion,
-    quaternion as qt,
-    rcs,
-    rigid_body,
-    slosh,
-    twd,
-    winds,
+    actuator, aero, atmosphere, earth, flex, gravity, layout, mass, navigation, peg, propulsion, quaternion as qt, rcs,
+    rigid_body, slosh, twd, winds
 )
 from savant_cli.sim import compile_notice, engine, loop_perturbation
 from savant_cli.sim.build import SimModel

@@ -42,12 +42,7 @@ from omegaconf import DictConfig, OmegaConf
 from rich.table import Table
 
 from savant_cli.config import (
-    FlexOffConfig,
-    FlexOnConfig,
-    LinearStudyConfig,
-    ModeRetentionStudyConfig,
-    SavantConfig,
-    check_physics,
+    FlexOffConfig, FlexOnConfig, LinearStudyConfig, ModeRetentionStudyConfig, SavantConfig, check_physics
 )
 from savant_cli.errors import ConfigError
 from savant_cli.io.atomic import write_json_atomic, write_text_atomic

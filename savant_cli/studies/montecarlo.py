@@ -32,16 +32,7 @@ from savant_cli.io.guidance_file import read_guidance
 from savant_cli.io.provenance import collect_provenance
 from savant_cli.io.record import FLOWN
 from savant_cli.montecarlo.batch import (
-    BatchStop,
-    Case,
-    Journal,
-    RunOutcome,
-    execute,
-    fingerprint,
-    fly_run,
-    history_columns,
-    read_outcome,
-    shard_runs,
+    BatchStop, Case, Journal, RunOutcome, execute, fingerprint, fly_run, history_columns, read_outcome, shard_runs
 )
 from savant_cli.montecarlo.inventory import inventory, ranges_text
 from savant_cli.montecarlo.outputs import write_outputs
