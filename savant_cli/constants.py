@@ -43,5 +43,5 @@ FT: float = 0.3048                              # m per foot
 IN: float = 0.0254                              # m per inch
 LBF: float = 4.4482216152605                    # N per pound-force
 LBM: float = 0.45359237                         # kg per pound-mass
-SLUG: float = 14.593902937                      # kg per slug
+SLUG: float = LBF / FT                          # kg per slug (1 lbf·s²/ft, exactly; 14.5939029372 kg)
 DEG: float = math.pi / 180.0                    # rad per degree

@@ -147,8 +147,10 @@ def test_body_rotation_is_the_slope_of_body_displacement(imported):
 
 
 def _write_set(folder: Path, name: str, units: tuple[str, str], freq_hz, gmass, stations, shapes,
-               masses=None, inertias=None) -> None:
-    """Write a set in the shipped format; ``shapes`` (n_modes, n_nodes, 6) structure frame."""
+               masses=None, inertias=None, node_units: tuple[str, str] | None = None) -> None:
+    """Write a set in the shipped format; ``shapes`` (n_modes, n_nodes, 6) structure frame;
+    the nodes file's mass and inertia suffixes ``node_units``, by default the declared
+    system's force·s²/length and force·length·s²."""
     lu, fu = units
     folder.mkdir(parents=True, exist_ok=True)
     lines = ["# hand-made test set", "mode,frequency_hz,generalized_mass"]
@@ -161,7 +163,8 @@ def _write_set(folder: Path, name: str, units: tuple[str, str], freq_hz, gmass, 
                                   + [repr(float(v)) for v in shapes[i, j]]))
     (folder / f"{name}_shapes.csv").write_text("\n".join(lines) + "\n")
     if masses is not None:
-        lines = ["node,station_" + lu + ",mass_x,rotary_inertia_x"]
+        mu, iu = node_units or (f"{fu}_s2_per_{lu}", f"{fu}_{lu}_s2")
+        lines = [f"node,station_{lu},mass_{mu},rotary_inertia_{iu}"]
         lines += [f"{100 + j},{float(stations[j])!r},{float(masses[j])!r},{float(inertias[j])!r}"
                   for j in range(len(stations))]
         (folder / f"{name}_nodes.csv").write_text("\n".join(lines) + "\n")
@@ -230,6 +233,41 @@ def test_same_physical_mode_in_feet_and_pounds_reads_back_to_the_same_si_shape(t
     g = np.einsum("n,ink->i", b.node_mass_kg, b.shapes[:, :, :3] ** 2) + np.einsum(
         "n,ink->i", b.node_inertia_kgm2, b.shapes[:, :, 3:] ** 2)
     np.testing.assert_allclose(g, 1.0, rtol=1e-12)
+
+
+def test_node_masses_read_in_the_units_their_suffixes_name(tmp_path):
+    """The same lumped masses in kg and kg·m², in slug and lbf·in·s², and in the declared
+    system's lbf·s²/in (converted by hand from the exact inch and pound-force) read to the
+    same SI values, whatever the set's declared (length, force) system."""
+    rng = np.random.default_rng(12)
+    stations = np.array([0.0, 1.0, 2.0])
+    shapes = rng.standard_normal((1, 3, 6))
+    mass = rng.uniform(100.0, 500.0, 3)  # kg
+    inertia = rng.uniform(10.0, 50.0, 3)  # kg·m²
+    slug = LBF_N / FT_M  # kg per lbf·s²/ft
+    cases = {"si": (("m", "N"), mass, inertia, ("kg", "kgm2")),
+             "slug": (("m", "N"), mass / slug, inertia / (LBF_N * IN_M), ("slug", "lbf_in_s2")),
+             "inch": (("in", "lbf"), mass / (LBF_N / IN_M), inertia / (LBF_N * IN_M), None)}
+    for case, (units, m, j, node_units) in cases.items():
+        _write_set(tmp_path / case, "n", units, [1.0], [1.0], stations / (IN_M if units[0] == "in" else 1.0),
+                   shapes, m, j, node_units)
+        ms = read_modal_set(tmp_path / case, "n", units, "test")
+        np.testing.assert_allclose(ms.node_mass_kg, mass, rtol=1e-12, err_msg=case)
+        np.testing.assert_allclose(ms.node_inertia_kgm2, inertia, rtol=1e-12, err_msg=case)
+
+
+@pytest.mark.parametrize("column, suffix, dimension", [("mass", "in", "mass"), ("mass", "x", "mass"),
+                                                        ("rotary_inertia", "lbf_s2_per_in", "inertia")])
+def test_a_node_column_without_a_unit_of_its_dimension_is_refused(tmp_path, column, suffix, dimension):
+    units = {"mass": ("kg", "kgm2"), "rotary_inertia": ("kg", "kgm2")}[column]
+    units = (suffix, units[1]) if column == "mass" else (units[0], suffix)
+    _write_set(tmp_path, "a", ("m", "N"), [1.0], [1.0], np.array([0.0, 1.0]), np.ones((1, 2, 6)),
+               [1.0, 2.0], [1.0, 1.0], units)
+    with pytest.raises(ConfigError) as exc:
+        read_modal_set(tmp_path, "a", ("m", "N"), "vehicle.flex set a")
+    assert exc.value.key.endswith(f"/a_nodes.csv:{column}_{suffix}") and exc.value.value == suffix
+    assert f"needs a {dimension} unit suffix" in exc.value.allowed
+    assert ("lbf_s2_per_in" if dimension == "mass" else "lbf_in_s2") in exc.value.allowed
 
 
 @pytest.mark.parametrize("bad_id", [999, 50])

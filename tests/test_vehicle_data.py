@@ -346,7 +346,8 @@ def test_converts_units_from_header_suffixes(copy):
     lines = path.read_text().splitlines()
     h = _header_index(lines)
     data = np.loadtxt(lines[h + 1:], delimiter=",")
-    lbm, ft, slug = 0.45359237, 0.3048, 14.593902937
+    lbm, ft = 0.45359237, 0.3048
+    slug = lbm * 9.80665 / ft  # 1 lbf·s²/ft, exactly (NIST SP 811)
     factors = np.array([lbm, lbm, ft, ft, ft] + [slug * ft**2] * 6)
     header = ("propellant_remaining_lbm,mass_lbm,cg_x_ft,cg_y_ft,cg_z_ft,ixx_slugft2,iyy_slugft2,izz_slugft2,"
               "ixy_slugft2,ixz_slugft2,iyz_slugft2")

@@ -17,6 +17,7 @@ from savant_cli.config import validate
 from savant_cli.errors import ConfigError
 from savant_cli.flex_slosh import load_slosh
 from savant_cli.io.modal_data import read_modal_set
+from savant_cli.io.units import UNITS, split_unit
 from savant_cli.paths import shipped_config_dir
 from savant_cli.vehicle import load_vehicle
 
@@ -128,3 +129,21 @@ def test_a_bad_modal_cell_names_file_column_row_and_line(copy, cell, allowed):
         read_modal_set(copy / "flex", SET, DECLARED, "vehicle.flex")
     assert info.value.key == f"flex/{SET}_modes.csv:frequency_hz"
     assert info.value.allowed == allowed.format(line=i + 1)
+
+
+@pytest.mark.parametrize("column, base, unit", [
+    ("mass_lbf_s2_per_in", "mass", "lbf_s2_per_in"), ("rotary_inertia_lbf_in_s2", "rotary_inertia", "lbf_in_s2"),
+    ("mass_N_s2_per_m", "mass", "N_s2_per_m"), ("dx_in", "dx", "in"), ("thrust_vac_N", "thrust_vac", "N"),
+    ("generalized_mass", "generalized_mass", None), ("mass_per_in", "mass_per", "in")])
+def test_a_compound_suffix_is_read_whole(column, base, unit):
+    assert split_unit(column) == (base, unit)
+
+
+def test_compound_units_by_hand():
+    """lbf·s²/in and lbf·in·s² from the exact pound-force (avoirdupois pound × standard
+    gravity) and inch."""
+    lbf = POUND_KG * 9.80665
+    assert UNITS["lbf_s2_per_in"] == ("mass", pytest.approx(lbf / INCH_M, rel=1e-15))
+    assert UNITS["lbf_s2_per_ft"] == ("mass", pytest.approx(lbf / FOOT_M, rel=1e-15))
+    assert UNITS["lbf_in_s2"] == ("inertia", pytest.approx(lbf * INCH_M, rel=1e-15))
+    assert UNITS["lbf_ft_s2"] == ("inertia", pytest.approx(lbf * FOOT_M, rel=1e-15))

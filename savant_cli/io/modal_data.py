@@ -9,8 +9,10 @@ A set is three CSV files in the vehicle's flex folder (``#`` comment lines, then
   suffixes are units of :data:`savant_cli.io.units.UNITS`: a displacement column in
   another length unit than the declared one is taken to the declared unit first, a
   rotation in ``deg`` to rad;
-* ``<set>_nodes.csv`` (optional) — ``node, station_<len>, mass_*, rotary_inertia_*``:
-  the lumped masses, only used to check generalized-mass consistency.
+* ``<set>_nodes.csv`` (optional) — ``node, station_<len>, mass_<mass>,
+  rotary_inertia_<inertia>``: the lumped masses and rotary inertias, each column in the
+  unit its suffix names (``kg``, ``slug``, ``lbf_s2_per_in``, …; ``kgm2``, ``lbf_in_s2``,
+  …), kept in SI for checks of the generalized mass.
 
 Unit conversion follows the source paper (§III.K). With unit generalized mass in a
 consistent (length, force, second) system, a change of units keeps the generalized mass
@@ -218,9 +220,10 @@ def read_modal_set(folder: Path, name: str, units: tuple[str, str], key: str) ->
         if once.size != nn.size:
             i = int(np.setdiff1d(np.arange(nn.size), once)[0])
             raise ConfigError(_ckey(npath, nh, "node"), int(nn[i]), f"{row_text(i, nlines)}: node listed twice")
-        m, _ = _column(nh, nd, "mass", npath, key)
-        j, _ = _column(nh, nd, "rotary_inertia", npath, key)
-        c_l, c_f = LENGTH_TO_M[length_unit], FORCE_TO_N[force_unit]
+        m, m_unit = _column(nh, nd, "mass", npath, key)
+        j, j_unit = _column(nh, nd, "rotary_inertia", npath, key)
+        to_kg = _unit_factor(_ckey(npath, nh, "mass"), m_unit, "mass")
+        to_kgm2 = _unit_factor(_ckey(npath, nh, "rotary_inertia"), j_unit, "inertia")
         node_mass = np.zeros(n_n)
         node_inertia = np.zeros(n_n)
         unknown = ~np.isin(nn, nodes)
@@ -229,7 +232,7 @@ def read_modal_set(folder: Path, name: str, units: tuple[str, str], key: str) ->
             raise ConfigError(_ckey(npath, nh, "node"), int(nn[i]),
                               f"{row_text(i, nlines)}: node is not in the shapes file ({spath.name})")
         idx = np.array([int(np.nonzero(nodes == n)[0][0]) for n in nn], dtype=int)
-        node_mass[idx] = m * c_f / c_l  # force·s²/length → kg
-        node_inertia[idx] = j * c_f * c_l  # force·length·s² → kg m²
+        node_mass[idx] = m * to_kg
+        node_inertia[idx] = j * to_kgm2
     return ModalSet(name=name, frequency_rad_s=2.0 * np.pi * freq_hz, nodes=nodes, station_m=stations,
                     shapes=shapes, node_mass_kg=node_mass, node_inertia_kgm2=node_inertia)

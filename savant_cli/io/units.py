@@ -23,7 +23,13 @@ UNITS: dict[str, tuple[str, float]] = {
     "Pa": ("pressure", 1.0), "psf": ("pressure", LBF / FT**2),
     "mps": ("speed", 1.0), "fps": ("speed", FT),
     "hz": ("frequency", 1.0), "Hz": ("frequency", 1.0),
+    # compound units of a (force, length, second) system, as structural models write lumped
+    # masses (force·s²/length) and rotary inertias (force·length·s²)
+    "lbf_s2_per_in": ("mass", LBF / IN), "lbf_s2_per_ft": ("mass", LBF / FT), "N_s2_per_m": ("mass", 1.0),
+    "lbf_in_s2": ("inertia", LBF * IN), "lbf_ft_s2": ("inertia", LBF * FT), "N_m_s2": ("inertia", 1.0),
 }
+#: The suffixes made of several ``_``-separated words, longest first (matched before the last word).
+_COMPOUND = sorted((u for u in UNITS if "_" in u), key=len, reverse=True)
 
 
 def split_unit(name: str) -> tuple[str, str | None]:
@@ -39,8 +45,12 @@ def split_unit(name: str) -> tuple[str, str | None]:
     base : str
         The name without its unit (``thrust_vac``), or the whole name when it has none.
     unit : str or None
-        The suffix after the last ``_`` when it is a key of :data:`UNITS`, else ``None``.
+        The suffix when it is a key of :data:`UNITS` (a compound one such as
+        ``lbf_s2_per_in`` whole, else the word after the last ``_``), else ``None``.
     """
+    for unit in _COMPOUND:
+        if name.endswith("_" + unit) and len(name) > len(unit) + 1:
+            return name[:-len(unit) - 1], unit
     base, sep, unit = name.rpartition("_")
     if sep and base and unit in UNITS:
         return base, unit
