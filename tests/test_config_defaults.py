@@ -112,10 +112,10 @@ def test_the_actuator_values_live_in_the_yaml_only():
 
 def test_the_rule_sees_a_duplicate(tmp_path):
     """The check itself: a YAML repeating its schema's default is found."""
-    (tmp_path / "slosh").mkdir()
-    (tmp_path / "slosh" / "on.yaml").write_text("name: 'on'\nenabled: true\nfrequency_scale: 2.0\ndamping_scale: 1.0\n")
+    (tmp_path / "flex").mkdir()
+    (tmp_path / "flex" / "on.yaml").write_text("name: 'on'\nenabled: true\nfrequency_scale: 2.0\nshape_scale: 1.0\n")
     (tmp_path / "config.yaml").write_text("defaults: []\n")
-    assert duplicates(tmp_path) == {"slosh/on.yaml: slosh.enabled = True", "slosh/on.yaml: slosh.damping_scale = 1.0"}
+    assert duplicates(tmp_path) == {"flex/on.yaml: flex.enabled = True", "flex/on.yaml: flex.shape_scale = 1.0"}
 
 
 def test_a_missing_actuator_value_and_a_bad_choice_are_refused_clearly():

@@ -6,6 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from omegaconf import MISSING
 
 from savant_cli.config.checks import increasing, non_negative, one_of
 from savant_cli.config.run import SimConfig
@@ -107,7 +108,7 @@ class GainTable:
     pitch, yaw : AxisGains
         Each axis's gains at the breakpoints."""
 
-    schedule: str = "altitude_m"
+    schedule: str = MISSING
     breakpoints: list[float] = field(default_factory=list)
     pitch: AxisGains = field(default_factory=AxisGains)
     yaw: AxisGains = field(default_factory=AxisGains)
@@ -144,8 +145,8 @@ class RollControl:
     lead_time_s : float
         Lead time of the switching line (s)."""
 
-    attitude_deadband_deg: float = 1.0
-    rate_deadband_deg_s: float = 1.0
+    attitude_deadband_deg: float = MISSING
+    rate_deadband_deg_s: float = MISSING
     lead_time_s: float = 1.0
 
 
@@ -157,8 +158,8 @@ class IgnitionFade:
     integrators are held until ``start_s``. The design rules write the engine's thrust
     build-up: its last zero-thrust time and the time it reaches rated thrust."""
 
-    start_s: float = 0.3
-    end_s: float = 2.8
+    start_s: float = MISSING
+    end_s: float = MISSING
 
 
 @dataclass
@@ -202,7 +203,7 @@ class ControllerConfig:
 
     name: str = "msfc_pid"
     vehicle: str = ""  # the vehicle the design is for ("": any); another is refused ...
-    allow_other_vehicle: bool = False  # ... unless this is true
+    allow_other_vehicle: bool = MISSING  # ... unless this is true
     blending: Blending = field(default_factory=Blending)
     flex_filters: FilterSets = field(default_factory=FilterSets)
     gains: GainTables = field(default_factory=GainTables)
@@ -211,7 +212,7 @@ class ControllerConfig:
     # transport delay from the sensor sample to the actuator command (s): a whole number
     # of plant steps, shorter than the control period; the same in the time run and the
     # linear model
-    delay_s: float = 0.005
+    delay_s: float = MISSING
     design: ControllerDesign = field(default_factory=ControllerDesign)
 
 

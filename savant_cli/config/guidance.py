@@ -5,6 +5,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, Optional
 
+from omegaconf import MISSING
+
 from savant_cli.config.checks import non_negative, one_of, positive
 from savant_cli.config.run import SimConfig
 from savant_cli.errors import ConfigError
@@ -25,8 +27,8 @@ class LaunchSite:
     pad_heading_deg : float
         Heading of the vehicle's reference axis on the pad (deg)."""
 
-    latitude_deg: float = 28.627
-    longitude_deg: float = -80.621
+    latitude_deg: float = MISSING
+    longitude_deg: float = MISSING
     base_altitude_m: float = 0.0
     pad_heading_deg: float = 0.0
 
@@ -38,9 +40,9 @@ class InsertionTolerance:
     Defaults: the 3σ LEO injection accuracies launcher users' guides quote (e.g. ±10 km
     in each apsis altitude, ±0.1° in inclination) [E]."""
 
-    perigee_km: float = 10.0
-    apogee_km: float = 10.0
-    inclination_deg: float = 0.1
+    perigee_km: float = MISSING
+    apogee_km: float = MISSING
+    inclination_deg: float = MISSING
 
 
 @dataclass
@@ -122,13 +124,13 @@ class GuidanceConfig:
 
     name: str = ""
     vehicle: str = ""  # the vehicle the command file was generated for ("": any); another is refused ...
-    allow_other_vehicle: bool = False  # ... unless this is true
+    allow_other_vehicle: bool = MISSING  # ... unless this is true
     command_file: str = ""
     launch_site: LaunchSite = field(default_factory=LaunchSite)
     target: OrbitTarget = field(default_factory=OrbitTarget)
     smoother: SmootherConfig = field(default_factory=SmootherConfig)
     generator: dict[str, Any] = field(default_factory=dict)
-    first_stage_schedule: str = "time"  # the stored profile's index in the first stage: time | relative_velocity
+    first_stage_schedule: str = MISSING  # the stored profile's index in the first stage: time | relative_velocity
     peg: PegConfig = field(default_factory=PegConfig)
 
 

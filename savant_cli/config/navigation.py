@@ -6,6 +6,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from omegaconf import MISSING
 
 from savant_cli.errors import ConfigError
 
@@ -23,18 +24,18 @@ class NavigationPerfectConfig:
 class GyroErrorsConfig:
     """The IMU gyro triad's errors (body x, y, z)."""
 
-    bias_deg_per_h: list[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])
-    scale_factor_ppm: list[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])
-    misalignment_arcsec: list[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])
+    bias_deg_per_h: list[float] = MISSING
+    scale_factor_ppm: list[float] = MISSING
+    misalignment_arcsec: list[float] = MISSING
 
 
 @dataclass
 class AccelerometerErrorsConfig:
     """The IMU accelerometer triad's errors (body x, y, z)."""
 
-    bias_micro_g: list[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])
-    scale_factor_ppm: list[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])
-    misalignment_arcsec: list[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])
+    bias_micro_g: list[float] = MISSING
+    scale_factor_ppm: list[float] = MISSING
+    misalignment_arcsec: list[float] = MISSING
 
 
 @dataclass
@@ -45,7 +46,7 @@ class NavigationInertialConfig:
     name: str = "inertial"
     gyro: GyroErrorsConfig = field(default_factory=GyroErrorsConfig)
     accelerometer: AccelerometerErrorsConfig = field(default_factory=AccelerometerErrorsConfig)
-    alignment_arcsec: list[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])
+    alignment_arcsec: list[float] = MISSING
 
 
 #: Bounds of the inertial-navigation errors, ``key: (limit, units)``. The error model is

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from omegaconf import MISSING
+
 from savant_cli.config.checks import one_of
 
 
@@ -20,9 +22,9 @@ class OutputConfig:
     console : str
         What the console shows, one of :data:`CONSOLE_MODES`."""
 
-    hdf5: bool = True
-    plots: bool = True
-    console: str = "full"  # full | summary | quiet (savant_cli.io.console.CONSOLE_MODES)
+    hdf5: bool = MISSING
+    plots: bool = MISSING
+    console: str = MISSING  # full | summary | quiet (savant_cli.io.console.CONSOLE_MODES)
 
 
 #: ``output.console`` options (``savant_cli.io.console.CONSOLE_MODES``).

@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 from typing import Optional
 
 import numpy as np
+from omegaconf import MISSING
 
 from savant_cli.config.checks import non_negative, one_of, positive
 from savant_cli.errors import ConfigError
@@ -84,15 +85,15 @@ class SimConfig:
     health : HealthConfig
         When a run that flew to its end is not a clean ``complete``."""
 
-    plant_rate_hz: float = 200.0
-    sensor_rate_hz: float = 200.0
-    fcs_rate_hz: float = 50.0
-    guidance_rate_hz: float = 1.0
-    log_rate_hz: float = 50.0
-    max_time_s: float = 800.0
-    chunk_s: float = 10.0
-    progress: bool = True
-    max_body_rate_deg_s: float = 60.0
+    plant_rate_hz: float = MISSING
+    sensor_rate_hz: float = MISSING
+    fcs_rate_hz: float = MISSING
+    guidance_rate_hz: float = MISSING
+    log_rate_hz: float = MISSING
+    max_time_s: float = MISSING
+    chunk_s: float = MISSING
+    progress: bool = MISSING
+    max_body_rate_deg_s: float = MISSING
     health: HealthConfig = field(default_factory=HealthConfig)
 
 
@@ -142,9 +143,9 @@ class EnvironmentConfig:
     thrust : bool
         Propulsion forces and moments."""
 
-    gravity_order: int = 4
-    aero: bool = True
-    thrust: bool = True
+    gravity_order: int = MISSING
+    aero: bool = MISSING
+    thrust: bool = MISSING
 
 
 @dataclass
@@ -164,9 +165,9 @@ class PhaseConfig:
         ``<config dir>/phase/``)."""
 
     name: str = "ascent"
-    start: str = "liftoff"  # liftoff | staging (from staging_state_file)
-    stop_at: str = "cutoff"
-    staging_state_file: str = ""
+    start: str = MISSING  # liftoff | staging (from staging_state_file)
+    stop_at: str = MISSING
+    staging_state_file: str = MISSING
 
 
 #: ``environment.gravity_order`` options: the highest zonal harmonic (0: point mass).

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from omegaconf import MISSING
+
 from savant_cli.config.checks import positive, small_angles
 from savant_cli.config.run import SimConfig
 from savant_cli.errors import ConfigError
@@ -20,8 +22,8 @@ class RateGyroConfig:
     damping : float
         Damping ratio (–)."""
 
-    natural_frequency_hz: float = 25.0
-    damping: float = 0.7
+    natural_frequency_hz: float = MISSING
+    damping: float = MISSING
 
 
 @dataclass
@@ -29,9 +31,9 @@ class SensorMisalignment:
     """Mounting misalignment of each sensor package: a small rotation vector from the body
     axes to the sensor's axes (x, y, z body axes, deg)."""
 
-    imu: list[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])
-    rate_gyro_upper_stage: list[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])
-    rate_gyro_first_stage: list[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])
+    imu: list[float] = MISSING
+    rate_gyro_upper_stage: list[float] = MISSING
+    rate_gyro_first_stage: list[float] = MISSING
 
 
 @dataclass

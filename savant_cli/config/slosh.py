@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from omegaconf import MISSING
+
 from savant_cli.config.checks import non_negative, positive
 
 
@@ -12,7 +14,7 @@ class SloshOffConfig:
     """``slosh=off``: no propellant slosh."""
 
     name: str = "off"
-    enabled: bool = False
+    enabled: bool = MISSING
 
 
 @dataclass
@@ -20,9 +22,9 @@ class SloshOnConfig:
     """``slosh=on``: LOX and LH2 spring-mass slosh from the vehicle's tables."""
 
     name: str = "on"
-    enabled: bool = True
-    frequency_scale: float = 1.0
-    damping_scale: float = 1.0
+    enabled: bool = MISSING
+    frequency_scale: float = MISSING
+    damping_scale: float = MISSING
 
 
 def check_slosh(s: SloshOffConfig | SloshOnConfig) -> None:

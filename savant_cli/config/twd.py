@@ -4,13 +4,15 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from omegaconf import MISSING
+
 
 @dataclass
 class TwdOffConfig:
     """``twd=off``: no engine-inertia reaction."""
 
     name: str = "off"
-    enabled: bool = False
+    enabled: bool = MISSING
 
 
 @dataclass
@@ -18,4 +20,4 @@ class TwdOnConfig:
     """``twd=on``: the engine-inertia reaction (data: the vehicle's engines)."""
 
     name: str = "on"
-    enabled: bool = True
+    enabled: bool = MISSING

@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 from typing import Any, Optional
 
 import numpy as np
+from omegaconf import MISSING
 
 from savant_cli.config.checks import non_negative, one_of, positive
 from savant_cli.config.study.common import LOOP_AXES, MAX_WORKERS, WORKERS_ALLOWED
@@ -84,15 +85,15 @@ class FcsDesignStudyConfig:
     write the controller config (docs/design_studies.md)."""
 
     name: str = "fcs_design"
-    design: str = "msfc_pid"  # design rules it starts from (savant_cli/datagen/fcs_gains.py CONTROLLERS)
-    controller_name: str = ""  # name of the controller written ("": <design>_tuned, or <design> with install)
-    install: bool = False  # also write conf/controller/<name>.yaml of the shipped config tree
-    schedules: list[str] = field(default_factory=lambda: ["stack", "upper"])  # tuned in turn
-    every_s: dict[str, float] = field(default_factory=lambda: {"stack": 10.0, "upper": 30.0})  # design points
-    verify_every_s: float = 5.0  # the before/after envelope
-    event_window_s: float = 2.0  # points this close to an event are skipped
-    axes: list[str] = field(default_factory=lambda: ["pitch"])  # loops judged in the search (both verified)
-    workers: int = 0  # processes judging a candidate's points; 0: all cores
+    design: str = MISSING  # design rules it starts from (savant_cli/datagen/fcs_gains.py CONTROLLERS)
+    controller_name: str = MISSING  # name of the controller written ("": <design>_tuned, or <design> with install)
+    install: bool = MISSING  # also write conf/controller/<name>.yaml of the shipped config tree
+    schedules: list[str] = MISSING  # tuned in turn
+    every_s: dict[str, float] = MISSING  # design points
+    verify_every_s: float = MISSING  # the before/after envelope
+    event_window_s: float = MISSING  # points this close to an event are skipped
+    axes: list[str] = MISSING  # loops judged in the search (both verified)
+    workers: int = MISSING  # processes judging a candidate's points; 0: all cores
     corners: dict[str, dict[str, Any]] = field(default_factory=dict)  # name → {config key: value}
     parameters: DesignParameters = field(default_factory=DesignParameters)
     optimizer: DesignOptimizer = field(default_factory=DesignOptimizer)

@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
+from omegaconf import MISSING
 
 from savant_cli.config.checks import non_negative, one_of
 from savant_cli.config.study.common import LOOP_AXES, flight_times
@@ -20,13 +21,13 @@ class FlexSweepStudyConfig:
     separately the mode-shape magnitudes, scaled over a grid (the GVT decision study)."""
 
     name: str = "flex_sweep"
-    times: list[float] = field(default_factory=lambda: [55.0, 130.0, 180.0, 230.0])
-    parameters: list[str] = field(default_factory=lambda: ["frequency", "shape"])  # frequency | shape
-    levels: list[float] = field(default_factory=lambda: [0.7, 0.8, 0.9, 1.0, 1.1, 1.2, 1.3])
-    modes: list[int] = field(default_factory=list)  # 1-based retained modes varied; empty: all
-    chart_axes: list[str] = field(default_factory=lambda: ["pitch"])  # loops overlaid in the Nichols charts
-    event_clearance_s: float = 0.1
-    exclusion_zones: bool = True
+    times: list[float] = MISSING
+    parameters: list[str] = MISSING  # frequency | shape
+    levels: list[float] = MISSING
+    modes: list[int] = MISSING  # 1-based retained modes varied; empty: all
+    chart_axes: list[str] = MISSING  # loops overlaid in the Nichols charts
+    event_clearance_s: float = MISSING
+    exclusion_zones: bool = MISSING
 
 
 def check_flex_sweep(s: FlexSweepStudyConfig) -> None:

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
+
+from omegaconf import MISSING
 
 from savant_cli.config.study.montecarlo import MonteCarloStudyConfig, check_montecarlo
 from savant_cli.errors import ConfigError
@@ -14,7 +16,7 @@ class FlyoffStudyConfig(MonteCarloStudyConfig):
     dispersed runs (the Monte Carlo keys apply to each), compared metric by metric."""
 
     name: str = "flyoff"
-    controllers: list[str] = field(default_factory=lambda: ["msfc_pid", "larc_pd"])
+    controllers: list[str] = MISSING
 
 
 def check_flyoff(s: FlyoffStudyConfig) -> None:

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
+
+from omegaconf import MISSING
 
 from savant_cli.config.checks import positive
 from savant_cli.config.study.common import flight_times
@@ -15,13 +17,13 @@ class ModeRetentionStudyConfig:
     the margins stop changing."""
 
     name: str = "mode_retention"
-    times: list[float] = field(default_factory=lambda: [55.0, 180.0, 230.0])
-    step: int = 1  # modes added per step (2: a bending mode in both planes)
-    max_modes: int = 0  # 0: as many as the modal data and the plant rate allow
-    response_duration_s: float = 5.0  # closed-loop attitude-command step responses compared
-    response_tolerance: float = 0.05  # of the response's peak
-    margin_tolerance_dB: float = 0.5
-    margin_tolerance_deg: float = 2.0
+    times: list[float] = MISSING
+    step: int = MISSING  # modes added per step (2: a bending mode in both planes)
+    max_modes: int = MISSING  # 0: as many as the modal data and the plant rate allow
+    response_duration_s: float = MISSING  # closed-loop attitude-command step responses compared
+    response_tolerance: float = MISSING  # of the response's peak
+    margin_tolerance_dB: float = MISSING
+    margin_tolerance_deg: float = MISSING
 
 
 def check_mode_retention(s: ModeRetentionStudyConfig) -> None:

@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from omegaconf import MISSING
 
 from savant_cli.config.checks import positive
 from savant_cli.config.study.common import MAX_WORKERS, WORKERS_ALLOWED
@@ -16,7 +17,7 @@ class HistoriesSpec:
     """Decimated time histories kept for every run (empty list: none)."""
 
     signals: list[str] = field(default_factory=list)
-    rate_hz: float = 5.0
+    rate_hz: float = MISSING
 
 
 @dataclass
@@ -53,13 +54,13 @@ class MonteCarloStudyConfig:
     """``study=montecarlo``: dispersed full-fidelity ascents."""
 
     name: str = "montecarlo"
-    n_runs: int = 1000  # run 0 is the nominal
-    seed: int = 20261123  # master seed; run i uses SeedSequence(seed).spawn(n)[i]
-    workers: int = 0  # processes; 0: all cores
-    shards: int = 1  # split the batch into this many shards …
-    shard: int = 0  # … and fly this one (Hydra multirun: study.shard='range(0,N)')
+    n_runs: int = MISSING  # run 0 is the nominal
+    seed: int = MISSING  # master seed; run i uses SeedSequence(seed).spawn(n)[i]
+    workers: int = MISSING  # processes; 0: all cores
+    shards: int = MISSING  # split the batch into this many shards …
+    shard: int = MISSING  # … and fly this one (Hydra multirun: study.shard='range(0,N)')
     histories: HistoriesSpec = field(default_factory=HistoriesSpec)
-    linear_times: list[float] = field(default_factory=list)  # s: margins of every run at these times
+    linear_times: list[float] = MISSING  # s: margins of every run at these times
     reliability: ReliabilitySpec = field(default_factory=ReliabilitySpec)
 
 
