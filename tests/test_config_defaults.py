@@ -20,10 +20,13 @@ from __future__ import annotations
 import dataclasses
 from pathlib import Path
 
+import pytest
 import yaml
 from omegaconf import MISSING, OmegaConf
 
-from savant_cli.config import GROUP_VARIANTS, STUDY_SCHEMAS, SavantConfig
+from savant_cli.config import GROUP_VARIANTS, STUDY_SCHEMAS, SavantConfig, validate
+from savant_cli.errors import ConfigError
+from savant_cli.hydra_compose import compose_config, task_config
 from savant_cli.paths import shipped_config_dir
 
 KNOWN = set((Path(__file__).parent / "config_default_duplicates.txt").read_text().split("\n")) - {""}
@@ -138,3 +141,25 @@ def test_a_missing_actuator_value_and_a_bad_choice_are_refused_clearly():
         with pytest.raises(ConfigError) as exc:
             validate(compose_config(overrides))
         assert (exc.value.key, exc.value.value, exc.value.allowed) == (key, value, allowed)
+
+
+@pytest.mark.parametrize("group, option, key", [("guidance", "ares_i_peg", "allow_other_vehicle"),
+                                                ("actuator", "third_order", "first_stage.natural_frequency_hz")])
+def test_a_user_option_file_without_a_required_key_is_refused_naming_it(tmp_path, group, option, key):
+    """A key whose one default is the shipped YAML's (the schema says MISSING) is required
+    of a user's own option file: leaving it out is refused naming the key (exit 2), not a
+    traceback."""
+    node = yaml.safe_load((shipped_config_dir() / group / f"{option}.yaml").read_text())
+    mine = tmp_path / group / "mine.yaml"
+    mine.parent.mkdir()
+    mine.write_text(yaml.safe_dump(node))
+    validate(task_config(compose_config([f"{group}=mine"], tmp_path)))  # the user's folder is read: the whole copy passes
+    parent, leaf = node, key.split(".")
+    for part in leaf[:-1]:
+        parent = parent[part]
+    assert leaf[-1] in parent, f"conf/{group}/{option}.yaml no longer sets {key}"
+    del parent[leaf[-1]]
+    mine.write_text(yaml.safe_dump(node))
+    with pytest.raises(ConfigError) as exc:  # the copy without the key is refused
+        validate(task_config(compose_config([f"{group}=mine"], tmp_path)))
+    assert exc.value.key == f"{group}.{key}" and "required" in exc.value.allowed

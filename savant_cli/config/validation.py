@@ -8,7 +8,7 @@ import dataclasses
 from typing import Any
 
 from omegaconf import DictConfig, OmegaConf
-from omegaconf.errors import OmegaConfBaseException
+from omegaconf.errors import MissingMandatoryValue, OmegaConfBaseException
 
 from savant_cli.config.actuator import SimplexActuatorConfig, ThirdOrderActuatorConfig, check_actuator
 from savant_cli.config.controller import check_controller, check_delay
@@ -89,7 +89,14 @@ def validate(cfg: DictConfig) -> SavantConfig:
         Naming the key, the value and what is allowed.
     """
     merged = _strict_merge(cfg)
-    typed = OmegaConf.to_object(merged)
+    try:
+        typed = OmegaConf.to_object(merged)
+    except MissingMandatoryValue as exc:  # a key the schema leaves to the YAML, which is silent
+        key = str(getattr(exc, "full_key", None) or "?")
+        group = key.split(".")[0]
+        raise ConfigError(key, "???", f"is required: the schema has no default for it; the selected {group} "
+                                      f"option file must give it (as the shipped ones in conf/{group}/ do), "
+                                      f"or set it on the command line") from None
     typed.study = study_option(typed.study)
     for group in GROUP_VARIANTS:
         setattr(typed, group, group_option(group, getattr(typed, group)))
