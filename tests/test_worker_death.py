@@ -71,7 +71,7 @@ def wait_gone(pids: list[int], timeout_s: float) -> list[int]:
 OWNER = textwrap.dedent("""
     import sys, time
     from concurrent.futures import ProcessPoolExecutor
-    import savant_cli.processes
+    from savant_cli import processes
 
     if sys.argv[1] == "watchdog":  # a platform without prctl
         processes._set_parent_death_signal = lambda sig: False
