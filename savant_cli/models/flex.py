@@ -24,6 +24,8 @@ SAVANT §III, "Flexible body"; the default modal data come from a beam model
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from numba import njit
 
@@ -175,17 +177,41 @@ def point_work(tb: np.ndarray, base_a: int, base_b: int, w: float, pt: int, f0: 
             + ((1.0 - w) * tb[ia + SIGMA_Z] + w * tb[ib + SIGMA_Z]) * m2)
 
 
+class StructuralLoads(NamedTuple):
+    """The loads the structure carries at the flex points (body axes).
+
+    Attributes
+    ----------
+    gimbal_force_n : tuple of 3 float
+        Thrust and engine-inertia reaction force at the active gimbal, N.
+    gimbal_torque_nm : tuple of 2 float
+        The engine-inertia reaction torque about body y and z at the gimbal, N·m.
+    rcs_torque_nm : float
+        Roll-jet torque about body x at the jets, N·m.
+    lox_slosh_force_n, lh2_slosh_force_n : tuple of 3 float
+        Force of each tank's slosh mass on the structure, N.
+    """
+
+    gimbal_force_n: tuple[float, float, float]
+    gimbal_torque_nm: tuple[float, float]
+    rcs_torque_nm: float
+    lox_slosh_force_n: tuple[float, float, float]
+    lh2_slosh_force_n: tuple[float, float, float]
+
+
 @njit(cache=True, error_model="numpy", inline="always")
 def modal_rates(x: np.ndarray, config: int, p: np.ndarray, tb: np.ndarray, gimbal_pt: int,
-                fgx: float, fgy: float, fgz: float, tgy: float, tgz: float, rcs_torque: float,
-                f_lox_x: float, f_lox_y: float, f_lox_z: float, f_lh2_x: float, f_lh2_y: float, f_lh2_z: float,
-                xd: np.ndarray) -> None:
-    """Modal equations into ``xd``: the force ``fg`` (N) and torque ``(0, tgy, tgz)`` (N·m)
-    at the active gimbal point, the roll-jet torque (N·m) at the jets and the slosh
-    forces (N) at the slosh masses, all body axes. Nothing when flex is off."""
+                loads: StructuralLoads, xd: np.ndarray) -> None:
+    """Modal equations into ``xd`` under the ``loads`` at the flex points (the active
+    gimbal point ``gimbal_pt``, the jets, the slosh masses). Nothing when flex is off."""
     fo = int(p[P_OFFSET])
     if fo < 0:
         return
+    fgx, fgy, fgz = loads.gimbal_force_n
+    tgy, tgz = loads.gimbal_torque_nm
+    rcs_torque = loads.rcs_torque_nm
+    f_lox_x, f_lox_y, f_lox_z = loads.lox_slosh_force_n
+    f_lh2_x, f_lh2_y, f_lh2_z = loads.lh2_slosh_force_n
     nmod = int(p[P_N_MODES])
     sa, sb, w = flex_sets(x, config, p)
     o_sh = tab_offset(tb, T_SHAPE)

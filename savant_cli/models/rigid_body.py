@@ -63,17 +63,19 @@ def solve_sym3(a00, a11, a22, a01, a02, a12, b0, b1, b2):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def angular_acceleration(ixx, iyy, izz, ixy, ixz, iyz, wx, wy, wz, mx, my, mz):
+def angular_acceleration(inertia_kgm2: tuple[float, float, float, float, float, float],
+                         rate_rad_s: tuple[float, float, float],
+                         moment_nm: tuple[float, float, float]) -> tuple[float, float, float]:
     """Euler's equation ``ω̇ = I⁻¹ (M − ω × I ω)``, body axes.
 
     Parameters
     ----------
-    ixx, iyy, izz, ixy, ixz, iyz : float
-        Inertia tensor about the CG, body axes, kg·m² (off-diagonal: tensor elements,
-        the negative products of inertia).
-    wx, wy, wz : float
-        Body rate, rad/s.
-    mx, my, mz : float
+    inertia_kgm2 : tuple of 6 float
+        ``(Ixx, Iyy, Izz, Ixy, Ixz, Iyz)``: the inertia tensor about the CG, body axes,
+        kg·m² (off-diagonal: tensor elements, the negative products of inertia).
+    rate_rad_s : tuple of 3 float
+        Body rate ω, rad/s.
+    moment_nm : tuple of 3 float
         External moment about the CG, body axes, N·m.
 
     Returns
@@ -81,6 +83,9 @@ def angular_acceleration(ixx, iyy, izz, ixy, ixz, iyz, wx, wy, wz, mx, my, mz):
     tuple of float
         ω̇, rad/s².
     """
+    ixx, iyy, izz, ixy, ixz, iyz = inertia_kgm2
+    wx, wy, wz = rate_rad_s
+    mx, my, mz = moment_nm
     hx = ixx * wx + ixy * wy + ixz * wz
     hy = ixy * wx + iyy * wy + iyz * wz
     hz = ixz * wx + iyz * wy + izz * wz

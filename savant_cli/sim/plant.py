@@ -195,8 +195,8 @@ def compose(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarra
                                                      abx, aby, abz, gx, gy, gz)
     dq0, dq1, dq2, dq3 = qt.rate_xyz(q0, q1, q2, q3, wx, wy, wz)
     alx, aly, alz = rigid_body.angular_acceleration(
-        ixx, iyy, izz, ixy, ixz, iyz, wx, wy, wz, max_ + mtx + mwx + msx + rcs_torque, may + mty + mwy + msy,
-        maz + mtz + mwz + msz)
+        (ixx, iyy, izz, ixy, ixz, iyz), (wx, wy, wz),
+        (max_ + mtx + mwx + msx + rcs_torque, may + mty + mwy + msy, maz + mtz + mwz + msz))
     dm_fs, dm_lox, dm_lh2 = propulsion.propellant_rates(p, mdot_fs, mdot_us)
     # (one store per element: a tuple unpacked into array items compiles to slower code)
     xd[R] = vx
@@ -221,8 +221,9 @@ def compose(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarra
         motion = slosh.RigidMotion((cgx, cgy, cgz), (aby, abz), (wx, wy, wz), (alx, aly, alz))
         slosh.tank_rates(x, slosh_at, tank0, w_s0, motion, xd)
         slosh.tank_rates(x, slosh_at + slosh.N_PER_TANK, tank1, w_s1, motion, xd)
-    flex.modal_rates(x, config, p, tb, gimbal_pt, ftx + fwx, fty + fwy, ftz + fwz, twy, twz, rcs_torque,
-                     fsx0, fsy0, fsz0, fsx1, fsy1, fsz1, xd)
+    loads = flex.StructuralLoads((ftx + fwx, fty + fwy, ftz + fwz), (twy, twz), rcs_torque, (fsx0, fsy0, fsz0),
+                                 (fsx1, fsy1, fsz1))
+    flex.modal_rates(x, config, p, tb, gimbal_pt, loads, xd)
 
     # ------------------------------------------------------------ diagnostics
     earth.write_altitude(aux, alt)
