@@ -37,8 +37,9 @@ class LaunchSite:
 class InsertionTolerance:
     """``guidance.target.tolerance``: the largest |error| of the cut-off orbit against the
     target that is still a successful insertion (mission class ``insertion_tolerance``).
-    Defaults: the 3σ LEO injection accuracies launcher users' guides quote (e.g. ±10 km
-    in each apsis altitude, ±0.1° in inclination) [E]."""
+    No schema default: each guidance option gives its own; the shipped ones give the 3σ
+    LEO injection accuracies launcher users' guides quote (±10 km in each apsis altitude,
+    ±0.1° in inclination) [E]."""
 
     perigee_km: float = MISSING
     apogee_km: float = MISSING
