@@ -119,7 +119,7 @@ def _first_cycle(model, w0=None) -> np.ndarray:
         x[layout.W:layout.W + 3] = w0
     log = np.empty((1, log_columns(x.size)))
     engine.advance(x, d, u, ev, model.k0, 1, model.rates, model.p, model.packed_tables, model.fcs, model.gyro,
-              model.smoother, model.guidance, model.sched, log, 0, loop_perturbation.NONE)
+                   model.smoother, model.guidance, model.sched, log, 0, loop_perturbation.NONE)
     return d
 
 

@@ -214,17 +214,17 @@ def test_engine_feeds_gyros_rigid_plus_flex_rate_and_nav_unit_flex_rotation(conf
     gyro = gyro_discrete(25.0, 0.7, dt)
     smoother = SmootherGains(damping=0.8, natural_frequency_rad_s=1.0)
     gt = engine.GuidanceTable(time=np.array([0.0, 1.0e4]), quat=np.tile([1.0, 0.0, 0.0, 0.0], (2, 1)),
-                         rate=np.zeros((2, 3)), speed=np.zeros(0))
+                              rate=np.zeros((2, 3)), speed=np.zeros(0))
     ft = fcs_tables(validate(compose_config()).controller)
     sched = engine.EventSchedule(separation_thrust_fraction=0.0, ignition_delay_s=0.0, les_jettison_delay_s=0.0,
-                            cutoff_energy_j_kg=1.0e12, max_time_s=1.0e9, stop_at_separation=False,
-                            max_body_rate_rad_s=10.0, command_delay_steps=0, profile_schedule=0, plant_step_s=dt)
+                                 cutoff_energy_j_kg=1.0e12, max_time_s=1.0e9, stop_at_separation=False,
+                                 max_body_rate_rad_s=10.0, command_delay_steps=0, profile_schedule=0, plant_step_s=dt)
     d = np.zeros(layout.N_DISC)
     events = np.full(4, np.nan)
     n = 400
     log = np.empty((n // rates.n_log + 2, log_columns(lay.n)))
-    status, done, _, detail = engine.advance(x, d, u, events, 0, n, rates, p, tb, ft, gyro, smoother, gt, sched, log, 0,
-                                        loop_perturbation.NONE)
+    status, done, _, detail = engine.advance(x, d, u, events, 0, n, rates, p, tb, ft, gyro, smoother, gt, sched,
+                                             log, 0, loop_perturbation.NONE)
     assert status == engine.RUNNING and done == n, detail
 
     np.testing.assert_allclose(x[layout.W:layout.W + 3], w_body, rtol=1e-12)  # torque-free sphere

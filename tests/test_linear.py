@@ -249,8 +249,8 @@ def _closed_loop_gust_response(model, snap, gust: float, seconds: float) -> np.n
     out, k, row = [x[layout.ACT_P]], snap.step, 0
     for _ in range(int(round(seconds / (rt.dt * rt.n_fcs)))):
         status, done, row, _ = engine.advance(x, d, u, ev, k, rt.n_fcs, rt, model.p, model.packed_tables, model.fcs,
-                                         model.gyro, model.smoother, model.guidance, model.sched, log, row,
-                                         loop_perturbation.NONE)
+                                              model.gyro, model.smoother, model.guidance, model.sched, log, row,
+                                              loop_perturbation.NONE)
         assert status == engine.RUNNING and done == rt.n_fcs
         k += done
         out.append(x[layout.ACT_P])

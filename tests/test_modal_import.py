@@ -257,7 +257,7 @@ def test_node_masses_read_in_the_units_their_suffixes_name(tmp_path):
 
 
 @pytest.mark.parametrize("column, suffix, dimension", [("mass", "in", "mass"), ("mass", "x", "mass"),
-                                                        ("rotary_inertia", "lbf_s2_per_in", "inertia")])
+                                                       ("rotary_inertia", "lbf_s2_per_in", "inertia")])
 def test_a_node_column_without_a_unit_of_its_dimension_is_refused(tmp_path, column, suffix, dimension):
     units = {"mass": ("kg", "kgm2"), "rotary_inertia": ("kg", "kgm2")}[column]
     units = (suffix, units[1]) if column == "mass" else (units[0], suffix)

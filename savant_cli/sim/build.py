@@ -93,7 +93,7 @@ def plant_tables(cfg: SavantConfig, vehicle: Vehicle, slosh: SloshData | None = 
 def state_layout(cfg: SavantConfig) -> layout.StateLayout:
     """The continuous-state layout of the models switched on in ``cfg``."""
     return layout.StateLayout(simplex=cfg.actuator.name == "simplex", slosh=cfg.slosh.enabled,
-                         n_modes=cfg.flex.n_modes if cfg.flex.enabled else 0)
+                              n_modes=cfg.flex.n_modes if cfg.flex.enabled else 0)
 
 
 def rates(cfg: SavantConfig) -> Rates:

@@ -124,8 +124,8 @@ def simulate(model: SimModel, progress: bool = True, chunk_s: float = 10.0,
     status = "complete"
     # the kernels compile (cold cache, said on stderr) or load here, not in the timed loop
     compile_s = compile_notice.load_kernels([
-        (engine.advance, (x, d, u, events, k, 0, rt, model.p, tb, model.fcs, model.gyro, model.smoother, model.guidance,
-                     model.sched, log, row, pert)),
+        (engine.advance, (x, d, u, events, k, 0, rt, model.p, tb, model.fcs, model.gyro, model.smoother,
+                          model.guidance, model.sched, log, row, pert)),
         (derivative, (k * rt.dt, x, u, model.p, tb, np.zeros(layout.N_AUX), np.zeros(nx))),
     ], apart=(compose, (k * rt.dt, x, u, model.p, tb, np.zeros(layout.N_AUX), np.zeros(nx), True)))  # the plant, in parallel
     bar = Progress(TextColumn("[bold]flight"), BarColumn(), TextColumn("t = {task.fields[t]:6.1f} s"),
