@@ -163,3 +163,15 @@ def test_a_user_option_file_without_a_required_key_is_refused_naming_it(tmp_path
     with pytest.raises(ConfigError) as exc:  # the copy without the key is refused
         validate(task_config(compose_config([f"{group}=mine"], tmp_path)))
     assert exc.value.key == f"{group}.{key}" and "required" in exc.value.allowed
+
+
+def test_a_run_level_key_left_out_names_the_top_level_config():
+    """A ``sim`` key (its one default in ``conf/config.yaml``, no ``conf/sim/`` folder) left
+    unset is refused naming the key and the file that holds it."""
+    cfg = compose_config(["study=nominal"], None)
+    cfg = task_config(cfg)
+    OmegaConf.update(cfg, "sim.fcs_rate_hz", "???")
+    with pytest.raises(ConfigError) as exc:
+        validate(cfg)
+    assert exc.value.key == "sim.fcs_rate_hz" and "conf/config.yaml" in exc.value.allowed
+    assert "conf/sim/" not in exc.value.allowed

@@ -25,6 +25,7 @@ from savant_cli.config.study import check_study_times, study_option
 from savant_cli.config.twd import TwdOffConfig, TwdOnConfig
 from savant_cli.config.winds import check_winds, check_winds_scale
 from savant_cli.errors import ConfigError
+from savant_cli.paths import shipped_config_dir
 
 GROUP_VARIANTS: dict[str, dict[str, type]] = {
     "actuator": {"third_order": ThirdOrderActuatorConfig, "simplex": SimplexActuatorConfig},
@@ -94,8 +95,10 @@ def validate(cfg: DictConfig) -> SavantConfig:
     except MissingMandatoryValue as exc:  # a key the schema leaves to the YAML, which is silent
         key = str(getattr(exc, "full_key", None) or "?")
         group = key.split(".")[0]
-        raise ConfigError(key, "???", f"is required: the schema has no default for it; the selected {group} "
-                                      f"option file must give it (as the shipped ones in conf/{group}/ do), "
+        where = (f"the selected {group} option file must give it (as the shipped ones in conf/{group}/ do)"
+                 if (shipped_config_dir() / group).is_dir() else
+                 "the top-level config.yaml must give it (as the shipped conf/config.yaml does)")
+        raise ConfigError(key, "???", f"is required: the schema has no default for it; {where}, "
                                       f"or set it on the command line") from None
     typed.study = study_option(typed.study)
     for group in GROUP_VARIANTS:
