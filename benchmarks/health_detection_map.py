@@ -21,7 +21,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
 from health_signals import FS, oscillation, trend  # noqa: E402
-from savant_cli.config import HealthConfig  # noqa: E402
+from savant_cli.config import shipped_option  # noqa: E402
 from savant_cli.sim.oscillation import band_top_hz, find_limit_cycles  # noqa: E402
 
 FREQUENCIES = (0.05, 0.1, 0.175, 0.225, 0.3, 0.5, 1.0, 2.0, 5.0, 10.0, 15.0, 20.0, 22.7)
@@ -48,7 +48,7 @@ def _rows(amps: np.ndarray, noise_deg: float) -> tuple[np.ndarray, np.ndarray, l
 
 def detection_map(noise_deg: float) -> np.ndarray:
     """Smallest detected amplitude (deg) per (frequency, periods), NaN when not found."""
-    cfg = HealthConfig()
+    cfg = shipped_option("sim").health  # the shipped detector settings
     top = band_top_hz(50.0, FS, cfg.min_periods)
     m = len(FREQUENCIES) * len(PERIODS)
     lo, hi = np.full(m, np.log(0.01)), np.full(m, np.log(10.0))

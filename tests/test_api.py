@@ -89,16 +89,25 @@ def test_a_string_or_a_flag_is_not_an_override_list(tmp_path):
 
 
 def test_a_user_config_dir_overrides_the_shipped_tree(tmp_path):
-    """``config_dir`` replaces conf/ with the shipped groups behind it (``savant run -cd``)."""
+    """``config_dir`` replaces conf/ with the shipped groups behind it (``savant run -cd``).
+    A user's wind takes the keys it leaves out (gust, shear) from a shipped option named
+    in its defaults list; without one they are required, and refused naming the key."""
     conf = tmp_path / "conf" / "winds"
     conf.mkdir(parents=True)
-    (conf / "calm_test.yaml").write_text("name: calm_test\nenabled: true\nscale: 1.0\n"
-                                         "profile: {altitude_m: [0, 100000], north_mps: [0, 0], east_mps: [3, 3]}\n")
-    r = savant_cli.run(["winds=calm_test", "sim.max_time_s=5", "sim.progress=false", "output.plots=false"],
-                       config_dir=tmp_path / "conf", out_dir=tmp_path / "run")
-    assert r.config.winds.name == "calm_test"
+    profile = "name: calm_test\nenabled: true\nscale: 1.0\n" \
+              "profile: {altitude_m: [0, 100000], north_mps: [0, 0], east_mps: [3, 3]}\n"
+    (conf / "calm_test.yaml").write_text("defaults: [none, _self_]\n" + profile)
+    r = savant_cli.run(["winds=calm_test", "sim.max_time_s=5", "sim.progress=false", "output.plots=false",
+                        "winds.gust.amplitude_mps=4"], config_dir=tmp_path / "conf", out_dir=tmp_path / "run")
+    assert r.config.winds.name == "calm_test" and r.config.winds.enabled
+    assert not r.config.winds.gust.enabled and r.config.winds.gust.amplitude_mps == 4.0  # none's gust, overridden
+    assert r.config.winds.shear.direction_deg == 90.0  # none's shear
     east = r.history["wind_ned"].sel(wind_ned_axis=r.history["wind_ned_axis"].values[1])
     assert float(east.max()) == pytest.approx(3.0)
+    (conf / "calm_test.yaml").write_text(profile)
+    with pytest.raises(ConfigError) as err:
+        savant_cli.run(["winds=calm_test", "sim.max_time_s=5"], config_dir=tmp_path / "conf", out_dir=tmp_path / "r2")
+    assert err.value.key.startswith(("winds.gust.", "winds.shear.")) and "required" in err.value.allowed
 
 
 @pytest.fixture(scope="module")

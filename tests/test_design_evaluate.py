@@ -9,13 +9,15 @@ import warnings
 import numpy as np
 import pytest
 
-from savant_cli.config import LinearStudyConfig, RequirementSet
+from conftest import linear_settings
+from savant_cli.config import shipped_option
 from savant_cli.linear.evaluate import freeze, judge_controller
 from savant_cli.linear.point_analysis import analyse
 from savant_cli.models.fcs import D_GAINS, FCS_STACK
 from test_linear import _point
 
 DT = 0.02
+ARES_I = shipped_option("requirements", "ares_i")
 
 
 @pytest.fixture(scope="module")
@@ -24,7 +26,7 @@ def max_q():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         point = freeze(model, snap, DT)
-        reference = analyse(model, snap, LinearStudyConfig(times=[55.0]), DT, RequirementSet())
+        reference = analyse(model, snap, linear_settings([55.0]), DT, ARES_I)
     return model, snap, point, reference
 
 
@@ -33,7 +35,7 @@ def test_a_frozen_point_judges_the_shipped_controller_as_the_linear_study(max_q)
     assert point.phase == FCS_STACK and point.phase_name == "stack"
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        rows, peaks, v = judge_controller(point, model.fcs, DT, RequirementSet(), gains=snap.d[D_GAINS:D_GAINS + 8])
+        rows, peaks, v = judge_controller(point, model.fcs, DT, ARES_I, gains=snap.d[D_GAINS:D_GAINS + 8])
     # with the snapshot's gains: the very same loops, hence the same numbers
     assert [(r.axis, r.kind, r.mode) for r in rows] == [(r.axis, r.kind, r.mode) for r in ref.rows]
     np.testing.assert_allclose([r.value for r in rows], [r.value for r in ref.rows], rtol=1e-9, atol=1e-9)
@@ -46,7 +48,7 @@ def test_a_frozen_point_judges_the_shipped_controller_as_the_linear_study(max_q)
     # gains, 20 ms earlier): the same margins to well within their printed precision
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        rows2, _, v2 = judge_controller(point, model.fcs, DT, RequirementSet())
+        rows2, _, v2 = judge_controller(point, model.fcs, DT, ARES_I)
     assert [(r.axis, r.kind, r.mode) for r in rows2] == [(r.axis, r.kind, r.mode) for r in ref.rows]
     for a, b in zip(rows2, ref.rows):
         assert a.value == pytest.approx(b.value, abs=0.01 if a.kind == "gain" else 0.05)
@@ -66,7 +68,7 @@ def test_a_candidate_changes_the_loop_it_should(max_q):
     candidate = ft._replace(gain_data=data)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        rows, _, _ = judge_controller(point, candidate, DT, RequirementSet())
+        rows, _, _ = judge_controller(point, candidate, DT, ARES_I)
     base = [r for r in ref.rows if r.mode == "aero" and r.axis == "pitch"][0]
     new = [r for r in rows if r.mode == "aero" and r.axis == "pitch"][0]
     kp, kir = snap.d[D_GAINS], snap.d[D_GAINS + 3]

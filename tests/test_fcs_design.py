@@ -4,6 +4,7 @@ end to end into a controller config that loads and flies."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import types
 
@@ -11,7 +12,7 @@ import numpy as np
 import pytest
 
 from conftest import assert_report_redraws, compose_config
-from savant_cli.config import DesignOptimizer, DesignParameter, DesignParameters, validate
+from savant_cli.config import DesignParameter, DesignParameters, shipped_option, validate
 from savant_cli.datagen import fcs_gains
 from savant_cli.design import parameters as dp, points as dpts, search as ds
 from savant_cli.errors import ConfigError
@@ -93,6 +94,11 @@ def test_ignition_fade_is_the_engines_thrust_build_up():
         assert not any(any(getattr(cfg.controller.gains.coast.pitch, g)) for g in ("kp", "ki", "kd", "kir"))
 
 
+def _optimizer(**settings):
+    """The shipped ``study=fcs_design`` optimizer with ``settings`` in place."""
+    return dataclasses.replace(shipped_option("study", "fcs_design").optimizer, **settings)
+
+
 def _verdict(ratio: float) -> PointVerdict:
     # an attenuation check: its ratio keeps its sign (a margin's is its magnitude's)
     c = Check(0.0, "pitch", "flex_1", "attenuation", 6.0 * ratio, 6.0, "dB", 1.0, ratio >= 1.0)
@@ -112,7 +118,7 @@ def test_search_climbs_to_the_known_max_min(monkeypatch, method):
 
     monkeypatch.setattr(dpts, "judge_all", fake_judge)
     res = ds.search(params, lambda v: v, [None, None], 0.02,
-                    DesignOptimizer(method=method, max_evaluations=400, tolerance=1e-6, initial_step=0.2), ("pitch",))
+                    _optimizer(method=method, max_evaluations=400, tolerance=1e-6, initial_step=0.2), ("pitch",))
     assert res.values[("stack", "x")] == pytest.approx(0.5, abs=0.01)
     assert res.values[("stack", "y")] == pytest.approx(0.0, abs=0.02)
     assert res.score == pytest.approx(1.96, abs=1e-3) and res.initial_score < res.score
@@ -131,7 +137,7 @@ def test_an_unfixable_point_does_not_stop_the_search_fixing_the_others(monkeypat
 
     monkeypatch.setattr(dpts, "judge_all", fake_judge)
     res = ds.search(params, lambda v: v, [None] * 3, 0.02,
-                    DesignOptimizer(max_evaluations=200, tolerance=1e-6, initial_step=0.1), ("pitch",))
+                    _optimizer(max_evaluations=200, tolerance=1e-6, initial_step=0.1), ("pitch",))
     x = res.values[("stack", "x")]
     assert 1.5 - 4.0 * (x - 0.8) ** 2 >= 1.0 and res.score == pytest.approx(-0.5)
     assert ds.objective(np.array([1.2, 1.5])) == 1.2 and ds.objective(np.array([0.5, 2.0, -0.4])) == pytest.approx(-1.9)
@@ -218,10 +224,9 @@ def test_tailoff_gains_are_capped_pole_placements_without_integral():
 
 
 def test_corner_requirements_scale_every_margin():
-    from savant_cli.config import RequirementSet
     from savant_cli.studies.fcs_design import corner_requirements
 
-    r = RequirementSet(name="set")
+    r = dataclasses.replace(shipped_option("requirements", "ares_i"), name="set")
     out = corner_requirements(r, {"a": {"flex.damping": 0.002}, "b": {"requirement_fraction": 0.25},
                                   "c": {"requirement_fraction": 0}})
     assert out["a"] is r and out["b"].name == "set × 0.25" and out["c"].name == "set × 0"

@@ -10,8 +10,8 @@ import warnings
 
 import pytest
 
-from conftest import assert_report_redraws, compose_config
-from savant_cli.config import LinearStudyConfig, validate
+from conftest import assert_report_redraws, compose_config, linear_settings
+from savant_cli.config import validate
 from savant_cli.errors import ConfigError
 from savant_cli.linear.plant import linearize_plant
 from savant_cli.linear.point_analysis import analyse
@@ -60,7 +60,7 @@ def test_scaled_models_change_exactly_the_modal_terms(flex_point):
 def test_vanishing_mode_shapes_give_the_rigid_margins(flex_point):
     model, snap = flex_point
     rigid_model, rigid_snap = _point([])
-    lin = LinearStudyConfig(times=[T])
+    lin = linear_settings([T])
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         rows_flex = analyse(variant(model, "shape", 1e-6, []), snap, lin, 0.02).rows

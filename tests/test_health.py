@@ -12,7 +12,7 @@ import pytest
 
 from conftest import compose_config
 from health_signals import FS, oscillation, sweep_frequencies, trend
-from savant_cli.config import HealthConfig, validate
+from savant_cli.config import shipped_option, validate
 from savant_cli.errors import ConfigError
 from savant_cli.io.record import FLOWN, STATUSES, Signal
 from savant_cli.models import actuator
@@ -22,7 +22,7 @@ from savant_cli.sim.oscillation import band_top_hz, find_limit_cycle, find_limit
 from savant_cli.sim.run import SimResult
 from savant_cli.sim.setup import prepare
 
-CFG = HealthConfig()
+CFG = shipped_option("sim").health  # the shipped detector settings
 TOP = band_top_hz(50.0, FS, CFG.min_periods)  # 22.73 Hz at the defaults
 F_TOL = 0.02  # relative frequency tolerance of a detection
 A_TOL = 0.10  # relative amplitude tolerance (issue 26)

@@ -52,7 +52,7 @@ def test_band_of_each_label():
 
 @pytest.fixture(scope="module")
 def full_fidelity_margins():
-    from savant_cli.config import LinearStudyConfig
+    from conftest import linear_settings
     from savant_cli.linear.point_analysis import analyse
     from test_linear import _point
 
@@ -61,7 +61,7 @@ def full_fidelity_margins():
         model, snap = _point(["flex=on", "flex.n_modes=4", "slosh=on", "twd=on"], t)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            a = analyse(model, snap, LinearStudyConfig(times=[t]), DT)
+            a = analyse(model, snap, linear_settings([t]), DT)
         rows, extra = a.rows, a.scalars
         aux = np.zeros(layout.N_AUX)
         derivative(snap.t, snap.x, snap.u, model.p, model.packed_tables, aux, np.zeros(snap.x.size))

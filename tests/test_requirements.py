@@ -4,6 +4,7 @@ python-control's own frequency response, and the ``requirements`` config group."
 
 from __future__ import annotations
 
+import dataclasses
 import warnings
 
 import control as ct
@@ -11,7 +12,7 @@ import numpy as np
 import pytest
 
 from conftest import compose_config
-from savant_cli.config import FlexModeRequirement, RequirementSet, validate
+from savant_cli.config import FlexModeOverride, FlexModeRequirement, shipped_option, validate
 from savant_cli.errors import ConfigError
 from savant_cli.linear.margins import MarginRow
 from savant_cli.linear.modes import MarginLabeler, ModePeak
@@ -23,17 +24,22 @@ from test_margin_modes import _synthetic_loop
 T = 55.0
 
 
+def _ares_i():
+    """A fresh copy of the shipped Ares I requirement set (``conf/requirements/ares_i.yaml``)."""
+    return shipped_option("requirements", "ares_i")
+
+
 def _row(kind: str, value: float, f: float, mode: str, axis: str = "pitch") -> MarginRow:
     band = "slosh" if mode.startswith("slosh") else "flex" if mode.startswith("flex") else "rigid/aero"
     return MarginRow(T, axis, kind, value, f, band, mode)
 
 
 def _verdict(rows, peaks=(), stage="first_stage", stable=True, req=None):
-    return evaluate_point(T, stage, list(rows), list(peaks), stable, -0.1 if stable else 0.2, req or RequirementSet())
+    return evaluate_point(T, stage, list(rows), list(peaks), stable, -0.1 if stable else 0.2, req or _ares_i())
 
 
 def test_rigid_aero_integrator_and_slosh_margins_against_their_own_requirements():
-    req = RequirementSet()
+    req = _ares_i()
     req.rigid.gain_dB, req.rigid.gain_reduction_dB, req.rigid.phase_deg = 6.0, 4.0, 30.0
     req.aero.gain_dB, req.slosh.gain_dB, req.slosh.phase_deg = 5.0, 3.0, 20.0
     rows = [_row("gain", 5.9, 1.1, "rigid"), _row("gain", -5.5, 0.09, "aero"), _row("gain", -4.5, 0.05, "integrator"),
@@ -57,8 +63,8 @@ def test_a_lost_closed_loop_fails_the_point_and_is_its_worst_offender():
 
 
 def test_the_fastest_lost_closed_loop_is_the_worst_offender():
-    slow = evaluate_point(10.0, "first_stage", [], [], False, 1e-4, RequirementSet())
-    fast = evaluate_point(130.0, "first_stage", [], [], False, 0.05, RequirementSet())
+    slow = evaluate_point(10.0, "first_stage", [], [], False, 1e-4, _ares_i())
+    fast = evaluate_point(130.0, "first_stage", [], [], False, 0.05, _ares_i())
     margin = _verdict([_row("phase", 5.0, 0.3, "rigid")])
     line = verdict_line([("", [slow]), ("", [margin]), ("", [fast])], "ares_i")
     assert line.endswith("worst: 130.0 s closed loop UNSTABLE (largest real part 0.05 1/s)")
@@ -85,7 +91,7 @@ def _peak(peak_dB: float, mode: str = "flex_1", axis: str = "pitch") -> ModePeak
     ("either", -3.0, [("gain", 4.0)], False, "attenuation"),
 ])
 def test_bending_mode_stabilization(stabilization, peak_dB, rows, passed, judged_by):
-    req = RequirementSet()
+    req = _ares_i()
     req.flex.first_stage.default = FlexModeRequirement(stabilization, 6.0, 30.0)
     v = _verdict([_row(kind, value, 1.0 + 0.01 * i, "flex_1") for i, (kind, value) in enumerate(rows)],
                  [_peak(peak_dB)], req=req)
@@ -107,9 +113,9 @@ def test_per_stage_and_per_mode_requirements():
     """The Ares I choice (shared/data/ares_i_public_data.md): the first stage
     phase-stabilizes its first bending mode and gain-stabilizes the others; the upper
     stage gain-stabilizes all."""
-    req = RequirementSet()
+    req = _ares_i()
     req.flex.first_stage.default = FlexModeRequirement("gain", 6.0, 30.0)
-    req.flex.first_stage.modes = {"flex_1": FlexModeRequirement("phase", 6.0, 30.0)}
+    req.flex.first_stage.modes = {"flex_1": FlexModeOverride("phase", 6.0, 30.0)}
     req.flex.upper_stage.default = FlexModeRequirement("gain", 10.0, 30.0)
     rows = [_row("phase", 40.0, 1.0, "flex_1")]
     peaks = [_peak(2.0, "flex_1"), _peak(-8.0, "flex_3")]
@@ -124,7 +130,7 @@ def test_per_stage_and_per_mode_requirements():
 def test_verdict_line_names_the_worst_offender_of_its_group():
     good = _verdict([_row("gain", 12.0, 1.1, "rigid")])
     bad = evaluate_point(180.0, "upper_stage", [MarginRow(180.0, "yaw", "phase", 22.0, 0.3, "rigid/aero", "rigid")],
-                         [], True, -0.1, RequirementSet(name="crew"))
+                         [], True, -0.1, dataclasses.replace(_ares_i(), name="crew"))
     assert verdict_line([("", [good]), ("", [bad])], "crew") == (
         "requirements crew: FAIL, 1 of 2 points pass; worst: 180.0 s yaw rigid phase margin 22.0 deg < 30 deg at 0.3 Hz")
     assert verdict_line([("run 3", [good, bad]), ("run 4", [good])], "crew", "runs").startswith(
@@ -171,6 +177,24 @@ def test_the_vehicle_selects_its_requirement_set():
     over = validate(compose_config(["+requirements.flex.first_stage.modes.flex_1.stabilization=phase"]))
     assert over.requirements.flex_mode("first_stage", "flex_1").stabilization == "phase"
     assert over.requirements.flex_mode("first_stage", "flex_3").stabilization == "either"
+
+
+def test_a_per_mode_override_replaces_only_the_keys_it_gives():
+    """``modes.flex_1: {stabilization: phase}`` over a stage default of 8 dB / 35 deg:
+    flex_1 is phase-stabilized and keeps the default's 8 dB and 35 deg (not the
+    shipped file's 6 dB / 30 deg); a mode without an entry is the default itself."""
+    cfg = validate(compose_config(["requirements.flex.first_stage.default.gain_dB=8",
+                                   "requirements.flex.first_stage.default.phase_deg=35",
+                                   "+requirements.flex.first_stage.modes.flex_1.stabilization=phase",
+                                   "+requirements.flex.first_stage.modes.flex_2.gain_dB=12"]))
+    req = cfg.requirements
+    assert req.flex_mode("first_stage", "flex_1") == FlexModeRequirement("phase", 8.0, 35.0)
+    assert req.flex_mode("first_stage", "flex_2") == FlexModeRequirement("either", 12.0, 35.0)
+    assert req.flex_mode("first_stage", "flex_3") == FlexModeRequirement("either", 8.0, 35.0)
+    assert req.flex_mode("upper_stage", "flex_1") == FlexModeRequirement("either", 6.0, 30.0)
+    rows = [_row("phase", 34.0, 1.0, "flex_1")]  # 34 deg: short of the inherited 35 deg
+    assert not _verdict(rows, [_peak(2.0, "flex_1")], req=req).passed
+    assert _verdict([_row("phase", 36.0, 1.0, "flex_1")], [_peak(2.0, "flex_1")], req=req).passed
 
 
 @pytest.mark.parametrize("override, key", [

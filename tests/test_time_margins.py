@@ -17,7 +17,7 @@ import pytest
 from scipy import optimize, signal
 
 from conftest import assert_report_redraws, compose_config
-from savant_cli.config import TimeMarginsStudyConfig, validate
+from savant_cli.config import shipped_option, validate
 from savant_cli.errors import ConfigError
 from savant_cli.linear.margins import MarginRow
 from savant_cli.linear.point_analysis import analyse
@@ -42,7 +42,7 @@ def delay_loop(k: float, tau: float, t_end: float = 60.0, dt: float = 1e-3) -> t
     return np.arange(n) * dt, y
 
 
-ZETA = TimeMarginsStudyConfig().min_damping_ratio  # the shipped threshold, 0.01
+ZETA = shipped_option("study", "time_margins").min_damping_ratio  # the shipped threshold, 0.01
 
 
 def delay_margin_at_damping(k: float, zeta: float) -> tuple[float, float]:
@@ -230,7 +230,7 @@ def test_frequency_margin_picks_the_nearest_crossings():
 
 
 def test_window_stretches_and_keeps_clear_of_events():
-    s = TimeMarginsStudyConfig()  # lead 10, window 20, 3 periods, up to 60 s, clearance 0.2
+    s = shipped_option("study", "time_margins")  # lead 10, window 20, 3 periods, up to 60 s, clearance 0.2
     assert window(55.0, 1.0, s, [130.5], 500.0)[:2] == (45.0, 65.0)
     start, end, notes = window(55.0, 0.0638, s, [130.5], 500.0)  # 3/0.0638 = 47.0 s, lead 23.5 s
     assert (start, end) == pytest.approx((55.0 - 23.51, 55.0 + 23.51), abs=0.01) and "stretched" in notes[0]

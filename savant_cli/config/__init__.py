@@ -36,12 +36,13 @@ from savant_cli.config.navigation import (
 )
 from savant_cli.config.output import OutputConfig
 from savant_cli.config.requirements import (
-    STABILIZATIONS, AeroRequirement, FlexModeRequirement, FlexRequirement, FlexStageRequirement, MissionRequirement,
-    RequirementSet, RigidRequirement, SeparationRequirement, SloshRequirement, check_requirements
+    STABILIZATIONS, AeroRequirement, FlexModeOverride, FlexModeRequirement, FlexRequirement, FlexStageRequirement,
+    MissionRequirement, RequirementSet, RigidRequirement, SeparationRequirement, SloshRequirement, check_requirements
 )
 from savant_cli.config.run import MAX_LOG_ROWS, SIM_BOUNDS, EnvironmentConfig, HealthConfig, PhaseConfig, SimConfig
 from savant_cli.config.savant import SavantConfig, check_vehicle_match
 from savant_cli.config.sensors import RateGyroConfig, SensorMisalignment, SensorsConfig
+from savant_cli.config.shipped import shipped_option
 from savant_cli.config.slosh import SloshOffConfig, SloshOnConfig, check_slosh
 from savant_cli.config.study import STUDY_SCHEMAS, check_study_times
 from savant_cli.config.study.common import MAX_WORKERS, WORKERS_ALLOWED
@@ -69,7 +70,7 @@ __all__ = [
     "AccelerometerErrorsConfig", "ActuatorStageCommon", "AeroRequirement", "AxisGains", "Blending",
     "ControllerConfig", "ControllerDesign", "CorrelationGroup", "DESIGN_SCHEDULES", "DesignOptimizer",
     "DesignParameter", "DesignParameters", "DispersionSetConfig", "DispersionSpec", "EnvironmentConfig",
-    "FcsDesignStudyConfig", "FilterSection", "FilterSet", "FilterSets", "FlexModeRequirement", "FlexOffConfig",
+    "FcsDesignStudyConfig", "FilterSection", "FilterSet", "FilterSets", "FlexModeOverride", "FlexModeRequirement", "FlexOffConfig",
     "FlexOnConfig", "FlexRequirement", "FlexStageRequirement", "FlexSweepStudyConfig", "FlyoffStudyConfig",
     "FrozenTimeSpec", "GROUP_VARIANTS", "GUST_FRAMES", "GUST_ONSETS", "GainTable", "GainTables", "GuidanceConfig",
     "GustConfig", "GyroErrorsConfig", "HealthConfig", "HistoriesSpec", "IgnitionFade", "InsertionTolerance",
@@ -85,5 +86,5 @@ __all__ = [
     "WORKERS_ALLOWED", "WindProfile", "WindsConfig", "check_actuator", "check_delay", "check_flex",
     "check_frozen_time", "check_gust_shear", "check_navigation", "check_peg", "check_physics", "check_requirements",
     "check_slosh", "check_study_times", "check_target", "check_vehicle_match", "design_controller_name",
-    "group_option", "has_key", "validate",
+    "group_option", "has_key", "shipped_option", "validate",
 ]

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
+
+from omegaconf import MISSING
 
 from savant_cli.config.checks import non_negative, one_of, positive
 from savant_cli.errors import ConfigError
@@ -16,7 +18,7 @@ class FlexOffConfig:
     """``flex=off``: the rigid vehicle."""
 
     name: str = "off"
-    enabled: bool = False
+    enabled: bool = MISSING
 
 
 @dataclass
@@ -24,13 +26,13 @@ class FlexOnConfig:
     """``flex=on``: retained bending modes from the vehicle's modal data."""
 
     name: str = "on"
-    enabled: bool = True
-    n_modes: int = 4  # retained modes, lowest first
-    damping: float = 0.005  # structural damping ratio of every retained mode
-    damping_per_mode: list[float] = field(default_factory=list)  # overrides `damping` when given
-    switching: str = "separation"  # separation | propellant
-    frequency_scale: float = 1.0
-    shape_scale: float = 1.0
+    enabled: bool = MISSING
+    n_modes: int = MISSING  # retained modes, lowest first
+    damping: float = MISSING  # structural damping ratio of every retained mode
+    damping_per_mode: list[float] = MISSING  # overrides `damping` when given
+    switching: str = MISSING  # separation | propellant
+    frequency_scale: float = MISSING
+    shape_scale: float = MISSING
 
 
 def check_flex(f: FlexOffConfig | FlexOnConfig) -> None:

@@ -65,19 +65,19 @@ class OrbitTarget:
 class PegConfig:
     """``guidance.peg``: closed-loop upper-stage guidance (``models/peg.py``)."""
 
-    enabled: bool = False
-    start_after_ignition_s: float = 40.0  # engages this long after upper-stage ignition
-    isp_vac_s: Optional[float] = None  # guidance's value of the engine's Isp (an I-load), s
-    convergence_tolerance: float = 0.01  # largest relative change of t_go of a converged cycle
-    terminal_time_to_go_s: float = 10.0  # steering frozen below this time to go
-    max_iterations: int = 50  # passes allowed at engagement
-    steering_tolerance_deg: float = 0.01  # engagement: thrust-direction change between passes of a converged solution
-    blend_s: float = 10.0  # the command turns from the stored profile to PEG's over this time
-    max_unconverged_cycles: int = 5  # consecutive unconverged cycles that stop the run
-    gravity_steps: int = 20  # RK4 steps of the gravity prediction over the time to go
+    enabled: bool = MISSING
+    start_after_ignition_s: float = MISSING  # engages this long after upper-stage ignition
+    isp_vac_s: Optional[float] = MISSING  # guidance's value of the engine's Isp (an I-load), s
+    convergence_tolerance: float = MISSING  # largest relative change of t_go of a converged cycle
+    terminal_time_to_go_s: float = MISSING  # steering frozen below this time to go
+    max_iterations: int = MISSING  # passes allowed at engagement
+    steering_tolerance_deg: float = MISSING  # engagement: thrust-direction change between passes of a converged solution
+    blend_s: float = MISSING  # the command turns from the stored profile to PEG's over this time
+    max_unconverged_cycles: int = MISSING  # consecutive unconverged cycles that stop the run
+    gravity_steps: int = MISSING  # RK4 steps of the gravity prediction over the time to go
     # the nominal engine shutdown impulse in seconds of rated thrust, I_sd / F_vac (an I-load):
     # the cutoff is commanded this much before t_go runs out, so the tail-off completes the burn
-    shutdown_impulse_time_s: float = 0.0
+    shutdown_impulse_time_s: float = MISSING
 
 
 @dataclass
@@ -120,8 +120,9 @@ class GuidanceConfig:
         How the command file was generated (provenance).
     first_stage_schedule : str
         The stored profile's first-stage index, one of :data:`FIRST_STAGE_SCHEDULES`.
-    peg : PegConfig
-        Closed-loop upper-stage guidance."""
+    peg : PegConfig or None
+        Closed-loop upper-stage guidance; ``None`` (the stored-profile options, which
+        have no ``peg`` section): the stored profile flies to cutoff."""
 
     name: str = ""
     vehicle: str = ""  # the vehicle the command file was generated for ("": any); another is refused ...
@@ -132,7 +133,7 @@ class GuidanceConfig:
     smoother: SmootherConfig = field(default_factory=SmootherConfig)
     generator: dict[str, Any] = field(default_factory=dict)
     first_stage_schedule: str = MISSING  # the stored profile's index in the first stage: time | relative_velocity
-    peg: PegConfig = field(default_factory=PegConfig)
+    peg: Optional[PegConfig] = None  # None: no PEG section (the stored profile flies to cutoff)
 
 
 def check_target(g: GuidanceConfig) -> None:
@@ -161,9 +162,9 @@ def check_target(g: GuidanceConfig) -> None:
         positive(f"guidance.target.tolerance.{name}", getattr(t.tolerance, name))
 
 
-def check_peg(peg: PegConfig, sim: SimConfig) -> None:
-    """``guidance.peg``: its I-loads and tunings (checked only when enabled)."""
-    if not peg.enabled:
+def check_peg(peg: PegConfig | None, sim: SimConfig) -> None:
+    """``guidance.peg``: its I-loads and tunings (checked only when given and enabled)."""
+    if peg is None or not peg.enabled:
         return
     if peg.start_after_ignition_s < 0.0:
         raise ConfigError("guidance.peg.start_after_ignition_s", peg.start_after_ignition_s,

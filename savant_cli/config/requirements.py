@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from typing import Optional
+
+from omegaconf import MISSING
 
 from savant_cli.config.checks import non_negative, one_of, positive
 from savant_cli.errors import ConfigError
@@ -17,24 +19,24 @@ class RigidRequirement:
     aerodynamic instability (the integrator's conditional stability, dB), and the phase
     margin at the bandwidth (deg)."""
 
-    gain_dB: float = 6.0
-    gain_reduction_dB: float = 6.0
-    phase_deg: float = 30.0
+    gain_dB: float = MISSING
+    gain_reduction_dB: float = MISSING
+    phase_deg: float = MISSING
 
 
 @dataclass
 class AeroRequirement:
     """Gain-reduction margin of the aerodynamically unstable vehicle (dB)."""
 
-    gain_dB: float = 6.0
+    gain_dB: float = MISSING
 
 
 @dataclass
 class SloshRequirement:
     """Margins of the crossings a propellant-slosh mode makes (dB, deg)."""
 
-    gain_dB: float = 6.0
-    phase_deg: float = 30.0
+    gain_dB: float = MISSING
+    phase_deg: float = MISSING
 
 
 #: How a bending mode is required to be stabilized (``linear/requirements.py``).
@@ -47,18 +49,36 @@ class FlexModeRequirement:
     ``gain_dB`` below 0 dB), ``phase``-stabilized (every crossing it makes: phase margin
     at least ``phase_deg``, gain margin at least ``gain_dB``) or ``either``."""
 
-    stabilization: str = "either"
-    gain_dB: float = 6.0
-    phase_deg: float = 30.0
+    stabilization: str = MISSING
+    gain_dB: float = MISSING
+    phase_deg: float = MISSING
+
+
+@dataclass
+class FlexModeOverride:
+    """A bending mode's departures from its stage's ``default`` (``modes.flex_<n>``): each
+    key given replaces the default's, each left out (None) keeps it."""
+
+    stabilization: Optional[str] = None
+    gain_dB: Optional[float] = None
+    phase_deg: Optional[float] = None
 
 
 @dataclass
 class FlexStageRequirement:
     """A stage's bending-mode requirements: ``default`` for every mode, ``modes`` (keys
-    ``flex_<n>``, the 1-based retained mode) for the modes that differ."""
+    ``flex_<n>``, the 1-based retained mode) for the modes that differ, key by key."""
 
     default: FlexModeRequirement = field(default_factory=FlexModeRequirement)
-    modes: dict[str, FlexModeRequirement] = field(default_factory=dict)
+    modes: dict[str, FlexModeOverride] = field(default_factory=dict)
+
+    def mode(self, mode: str) -> FlexModeRequirement:
+        """The requirement of bending mode ``mode`` (``flex_<n>``): the default with the
+        mode's own keys in place of the default's."""
+        given = self.modes.get(mode)
+        if given is None:
+            return self.default
+        return replace(self.default, **{k: v for k, v in asdict(given).items() if v is not None})
 
 
 @dataclass
@@ -89,9 +109,10 @@ class SeparationRequirement:
 @dataclass
 class MissionRequirement:
     """Which mission failure classes (``savant_cli/sim/mission.py``) count as a failed
-    mission: a run succeeds when none of its classes is listed. All, by default."""
+    mission: a run succeeds when none of its classes is listed (the shipped sets list
+    every class)."""
 
-    failure_classes: list[str] = field(default_factory=lambda: list(_failure_classes()))
+    failure_classes: list[str] = MISSING
 
 
 def _failure_classes() -> tuple[str, ...]:
@@ -118,8 +139,7 @@ class RequirementSet:
     def flex_mode(self, stage: str, mode: str) -> FlexModeRequirement:
         """The requirement of bending mode ``mode`` (``flex_<n>``) in ``stage``
         (``first_stage`` or ``upper_stage``)."""
-        st = getattr(self.flex, stage)
-        return st.modes.get(mode, st.default)
+        return getattr(self.flex, stage).mode(mode)
 
     def by_band(self) -> dict[str, tuple[float, float]]:
         """Band → (gain margin dB, phase margin deg) the charts mark: the rigid body's,
@@ -138,7 +158,7 @@ def check_requirements(r: RequirementSet) -> None:
         non_negative(f"requirements.{key}", value)
     for stage in ("first_stage", "upper_stage"):
         st = getattr(r.flex, stage)
-        for name, m in [("default", st.default)] + [(f"modes.{k}", v) for k, v in st.modes.items()]:
+        for name, m in [("default", st.default)] + [(f"modes.{k}", st.mode(k)) for k in st.modes]:
             key = f"requirements.flex.{stage}.{name}"
             if name != "default" and not re.fullmatch(r"modes\.flex_[1-9][0-9]*", name):
                 raise ConfigError(key, name.split(".", 1)[1], "a bending mode is named flex_<n> (1-based retained mode)")

@@ -18,17 +18,17 @@ class HealthConfig:
     """``sim.health``: when a run that flew to its end is not a clean ``complete``
     (``savant_cli/sim/health.py``)."""
 
-    max_saturation_s: float = 1.0  # s on a rate limit or gimbal stop (per stage) → "saturated"
-    min_amplitude_deg: float = 0.1  # limit cycle, slow divergence: smallest amplitude (gimbal angle, attitude error)
-    min_periods: float = 5.0  # limit cycle: the oscillation holds for at least this many periods
-    tonal_fraction: float = 0.5  # limit cycle: share of the detrended variance in the periodic part
-    max_damping_ratio: float = 0.005  # limit cycle: an envelope decaying (or growing) this fast is not sustained
-    event_quiet_s: float = 20.0  # limit cycle, slow divergence: s left out after each event
-    divergence_growth: float = 10.0  # slow divergence: attitude-error envelope growth (–) to the stage's end
-    divergence_min_amplitude_deg: float = 1.0  # slow divergence: ... reaching this (deg): 1/10 of the LOC bound
-    max_attitude_error_deg: float = 10.0  # loss of control: pitch/yaw attitude-error magnitude bound
-    max_alpha_deg: Optional[float] = None  # loss of control: total angle-of-attack bound (None: off)
-    alpha_min_dynamic_pressure_Pa: float = 1000.0  # the α bound applies from this dynamic pressure on
+    max_saturation_s: float = MISSING  # s on a rate limit or gimbal stop (per stage) → "saturated"
+    min_amplitude_deg: float = MISSING  # limit cycle, slow divergence: smallest amplitude (gimbal angle, attitude error)
+    min_periods: float = MISSING  # limit cycle: the oscillation holds for at least this many periods
+    tonal_fraction: float = MISSING  # limit cycle: share of the detrended variance in the periodic part
+    max_damping_ratio: float = MISSING  # limit cycle: an envelope decaying (or growing) this fast is not sustained
+    event_quiet_s: float = MISSING  # limit cycle, slow divergence: s left out after each event
+    divergence_growth: float = MISSING  # slow divergence: attitude-error envelope growth (–) to the stage's end
+    divergence_min_amplitude_deg: float = MISSING  # slow divergence: ... reaching this (deg): 1/10 of the LOC bound
+    max_attitude_error_deg: float = MISSING  # loss of control: pitch/yaw attitude-error magnitude bound
+    max_alpha_deg: Optional[float] = MISSING  # loss of control: total angle-of-attack bound (None: off)
+    alpha_min_dynamic_pressure_Pa: float = MISSING  # the α bound applies from this dynamic pressure on
 
 
 def check_health(sim: SimConfig) -> None:

@@ -95,7 +95,9 @@ def validate(cfg: DictConfig) -> SavantConfig:
     except MissingMandatoryValue as exc:  # a key the schema leaves to the YAML, which is silent
         key = str(getattr(exc, "full_key", None) or "?")
         group = key.split(".")[0]
-        where = (f"the selected {group} option file must give it (as the shipped ones in conf/{group}/ do)"
+        where = (f"the selected {group} option file must give it (as the shipped ones in conf/{group}/ do; "
+                 f"a file of your own takes the keys it leaves out from a shipped option it names first: "
+                 f"defaults: [<option>, _self_])"
                  if (shipped_config_dir() / group).is_dir() else
                  "the top-level config.yaml must give it (as the shipped conf/config.yaml does)")
         raise ConfigError(key, "???", f"is required: the schema has no default for it; {where}, "

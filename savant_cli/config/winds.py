@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from omegaconf import MISSING
 
 from savant_cli.config.checks import finite, increasing, non_negative, one_of, positive
 from savant_cli.errors import ConfigError
@@ -36,28 +37,28 @@ SHEAR_SHAPES = ("linear", "cosine")
 class GustConfig:
     """``winds.gust``: a discrete 1 − cos gust (``models/winds.py``, docs/models.md)."""
 
-    enabled: bool = False
-    amplitude_mps: float = 9.0  # peak speed A, reached at mid-length
-    onset: str = "altitude"  # altitude | time: what the gust coordinate s runs in
-    onset_altitude_m: float = 12000.0  # onset: altitude: where the gust starts (geodetic)
-    length_m: float = 240.0  # onset: altitude: full thickness d (build-up d/2, peak at d/2)
-    onset_time_s: float = 60.0  # onset: time: when the gust starts (mission time)
-    duration_s: float = 1.0  # onset: time: full duration d
-    frame: str = "flight_path"  # ned: horizontal toward direction_deg; flight_path: across the path
-    direction_deg: float = 0.0  # ned: azimuth from north; flight_path: clock angle (0 up: +alpha, 90 left: +beta)
+    enabled: bool = MISSING
+    amplitude_mps: float = MISSING  # peak speed A, reached at mid-length
+    onset: str = MISSING  # altitude | time: what the gust coordinate s runs in
+    onset_altitude_m: float = MISSING  # onset: altitude: where the gust starts (geodetic)
+    length_m: float = MISSING  # onset: altitude: full thickness d (build-up d/2, peak at d/2)
+    onset_time_s: float = MISSING  # onset: time: when the gust starts (mission time)
+    duration_s: float = MISSING  # onset: time: full duration d
+    frame: str = MISSING  # ned: horizontal toward direction_deg; flight_path: across the path
+    direction_deg: float = MISSING  # ned: azimuth from north; flight_path: clock angle (0 up: +alpha, 90 left: +beta)
 
 
 @dataclass
 class ShearConfig:
     """``winds.shear``: a build-up of the horizontal wind by ``delta_mps`` over an altitude band."""
 
-    enabled: bool = False
-    delta_mps: float = 0.0  # Δv over the band (m/s, may be negative)
-    base_altitude_m: float = 9000.0  # bottom of the band (geodetic)
-    thickness_m: float = 1000.0  # band thickness Δh
-    return_thickness_m: float = 0.0  # > 0: Δv is removed again over this thickness above the band
-    shape: str = "linear"  # linear | cosine ramp
-    direction_deg: float = 90.0  # azimuth the added wind blows toward, from north
+    enabled: bool = MISSING
+    delta_mps: float = MISSING  # Δv over the band (m/s, may be negative)
+    base_altitude_m: float = MISSING  # bottom of the band (geodetic)
+    thickness_m: float = MISSING  # band thickness Δh
+    return_thickness_m: float = MISSING  # > 0: Δv is removed again over this thickness above the band
+    shape: str = MISSING  # linear | cosine ramp
+    direction_deg: float = MISSING  # azimuth the added wind blows toward, from north
 
 
 @dataclass
@@ -80,8 +81,8 @@ class WindsConfig:
         Wind shear over an altitude band."""
 
     name: str = "none"
-    enabled: bool = False
-    scale: float = 1.0
+    enabled: bool = MISSING
+    scale: float = MISSING
     profile: WindProfile = field(default_factory=WindProfile)
     gust: GustConfig = field(default_factory=GustConfig)
     shear: ShearConfig = field(default_factory=ShearConfig)

@@ -110,7 +110,7 @@ def failure_message(code: int) -> str:
 def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarray]) -> None:
     """PEG's target and tunings (``guidance.peg``, ``guidance.target``); zero when off."""
     g = inputs.cfg.guidance
-    if not g.peg.enabled:
+    if g.peg is None or not g.peg.enabled:
         p[P_ON] = 0.0
         return
     tgt = insertion_target(g)

@@ -60,7 +60,9 @@ class Case:
     dispersions: DispersionSet
     history_signals: list[str]
     history_time: np.ndarray
-    linear_times: list[float]
+    # the margins of every run: study=linear's settings (conf/study/linear.yaml) at the
+    # study's linear_times; None: no margins
+    linear: LinearStudyConfig | None
     staging: Callable | None = None
     # the nominal's first-stage tail-off window, as its lead before separation (s; None:
     # no window): each run's window is its own separation less this
@@ -128,7 +130,7 @@ def _margins(case: Case, model: SimModel, result, sig: dict) -> tuple[np.ndarray
 
     rows, verdicts = [], []
     dt_fcs = model.rates.dt * model.rates.n_fcs
-    lin_cfg = LinearStudyConfig(times=list(case.linear_times))
+    lin_cfg = case.linear
     t_sep = float(result.events[EVENT_NAMES.index("separation")])
     window = (t_sep - case.tailoff_lead_s, t_sep) if case.tailoff_lead_s is not None and np.isfinite(t_sep) else None
     for k, snap in sorted(result.snapshots.items()):
@@ -165,7 +167,7 @@ def fly_run(case: Case, run: int, keep: bool = False):
                                 case.dispersions.group_sections)
         model = build_dispersed(applied, case.guidance, case.staging)
         rt = model.rates
-        steps = tuple(int(round(t / (rt.dt * rt.n_fcs))) * rt.n_fcs for t in case.linear_times)
+        steps = tuple(int(round(t / (rt.dt * rt.n_fcs))) * rt.n_fcs for t in case.linear.times) if case.linear else ()
         lap(0)
         result = simulate(model, progress=False, snapshot_steps=steps)
         lap(1)
@@ -176,7 +178,7 @@ def fly_run(case: Case, run: int, keep: bool = False):
         lap(2)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            margins, checks = _margins(case, model, result, sig) if case.linear_times else (None, None)
+            margins, checks = _margins(case, model, result, sig) if case.linear else (None, None)
         lap(3)
         outcome = RunOutcome(run, result.status, result.message, float(result.t_final), 0.0, values, keys,
                              np.array([float(summ[k]) for k in keys]), np.asarray(result.events, float),

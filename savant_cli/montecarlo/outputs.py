@@ -31,21 +31,20 @@ DrawFigures = Callable[[Path, Tables, list[dict[str, Any]], dict[str, tuple[floa
 def write_outputs(out_dir: Path, inv: Inventory, expected: list[int], dispersions: list[dict[str, Any]],
                   config_yaml: str, provenance: dict[str, str], history_names: list[str],
                   history_time: np.ndarray, requirements: RequirementSet | None,
-                  draw: DrawFigures | None, console: Console | None = None,
-                  reliability_spec: ReliabilitySpec | None = None) -> dict[str, Any]:
+                  draw: DrawFigures | None, console: Console | None = None, *,
+                  reliability_spec: ReliabilitySpec) -> dict[str, Any]:
     """Write every batch output into ``out_dir``; returns the ``summary.json`` content.
     ``requirements``: the set the runs' margins were judged against (its band values
     mark the margin-spread plot); ``draw``: draws the figures into ``out_dir/plots``
     after the files are written (None: no plots); ``reliability_spec``: the demonstrated success's
-    confidence, target and success statuses (``study.reliability``; its defaults when
-    None).
+    confidence, target and success statuses (``study.reliability``).
 
     An output that cannot be written (disk full, folder not writable) raises
     :class:`~savant_cli.errors.OutputWriteError` after the console summary has been
     printed (from the journal, when ``savant.h5`` itself failed); every file written
     before it stays whole, and the failed one keeps its previous content or does not
     exist (atomic writes)."""
-    spec = reliability_spec or ReliabilitySpec()
+    spec = reliability_spec
     runs = sorted(r for r in expected if r in inv.files)
     missing = inv.missing(expected)
     bands = requirements.by_band() if requirements is not None else {}

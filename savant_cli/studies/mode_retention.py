@@ -41,9 +41,7 @@ import numpy as np
 from omegaconf import DictConfig, OmegaConf
 from rich.table import Table
 
-from savant_cli.config import (
-    FlexOffConfig, FlexOnConfig, LinearStudyConfig, ModeRetentionStudyConfig, SavantConfig, check_physics
-)
+from savant_cli.config import ModeRetentionStudyConfig, SavantConfig, check_physics, shipped_option
 from savant_cli.errors import ConfigError
 from savant_cli.io.atomic import write_json_atomic, write_text_atomic
 from savant_cli.io.console import study_console
@@ -70,8 +68,8 @@ def _config(cfg: SavantConfig, n: int) -> SavantConfig:
     """``cfg`` with ``n`` retained modes (``flex=off`` for none; the other flex keys of
     ``cfg``'s own ``flex=on`` section are kept)."""
     c = copy.deepcopy(cfg)
-    on = c.flex if c.flex.enabled else FlexOnConfig()
-    c.flex = dataclasses.replace(on, n_modes=n) if n > 0 else FlexOffConfig()
+    on = c.flex if c.flex.enabled else shipped_option("flex", "on")
+    c.flex = dataclasses.replace(on, n_modes=n) if n > 0 else shipped_option("flex", "off")
     check_physics(c)
     return c
 
@@ -84,7 +82,7 @@ def _fly(cfg: SavantConfig, n: int, study: ModeRetentionStudyConfig) -> CountRes
     res = simulate(model, progress=False, snapshot_steps=steps)
     t_resp = np.arange(0.0, study.response_duration_s + 0.5 * dt, dt)
     out = CountResult(n, t_resp, {})
-    lin = LinearStudyConfig(times=list(study.times))
+    lin = dataclasses.replace(shipped_option("study", "linear"), times=list(study.times))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         for k in steps:

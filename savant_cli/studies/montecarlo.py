@@ -12,6 +12,7 @@ with its whole time history.
 from __future__ import annotations
 
 import copy
+import dataclasses
 import json
 import time
 from functools import partial
@@ -25,7 +26,7 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
 from savant_cli import lifecycle
-from savant_cli.config import MonteCarloStudyConfig, SavantConfig, validate
+from savant_cli.config import MonteCarloStudyConfig, SavantConfig, shipped_option, validate
 from savant_cli.errors import ConfigError, DamagedFileError, OutputWriteError, RunInterrupted
 from savant_cli.io.console import study_console
 from savant_cli.io.guidance_file import read_guidance
@@ -73,22 +74,23 @@ def make_case(cfg: SavantConfig, search_dirs: list[Path] | None = None) -> tuple
     grid = np.arange(0.0, cfg.sim.max_time_s + 1e-9, 1.0 / study.histories.rate_hz)
     case = Case(cfg=cfg, vehicle=prep.vehicle, guidance=read_guidance(prep.command_file), dispersions=dset,
                 history_signals=list(study.histories.signals), history_time=grid,
-                linear_times=sorted(study.linear_times), staging=staging,
+                linear=(dataclasses.replace(shipped_option("study", "linear"), times=sorted(study.linear_times))
+                        if study.linear_times else None), staging=staging,
                 tailoff_lead_s=_tailoff_lead(prep.model, cfg) if study.linear_times else None)
     return case, names
 
 
 def _tailoff_lead(model, cfg: SavantConfig) -> float | None:
-    """The nominal flight's first-stage tail-off window (``study=linear``'s default
-    criteria, ``linear/frozen_time.py``) as its lead before separation (s; None: no
-    window). A dispersed motor's tail-off scales with its burn rate (a few per cent), so
+    """The nominal flight's first-stage tail-off window (the criteria of
+    ``conf/study/linear.yaml``, ``linear/frozen_time.py``) as its lead before separation
+    (s; None: no window). A dispersed motor's tail-off scales with its burn rate (a few per cent), so
     each run's window is its own separation less this lead."""
-    from savant_cli.config import LinearStudyConfig
     from savant_cli.linear.point_analysis import scan_tailoff
 
     nominal = simulate(model, progress=False)
     t_sep = float(nominal.events[engine.EV_SEPARATION])
-    window, _ = scan_tailoff(model, t_sep, LinearStudyConfig(), model.rates.dt * model.rates.n_fcs, cfg.requirements)
+    window, _ = scan_tailoff(model, t_sep, shipped_option("study", "linear"), model.rates.dt * model.rates.n_fcs,
+                             cfg.requirements)
     return None if window is None or window.start_s is None else window.separation_s - window.start_s
 
 
@@ -167,7 +169,7 @@ def fly_batch(cfg: SavantConfig, config_yaml: str, out_dir: Path, console: Conso
         summary = write_outputs(out_dir, inv, list(mine), dispersion_table(case.dispersions),
                                 config_yaml, collect_provenance(), names, case.history_time, cfg.requirements,
                                 draw_figures if cfg.output.plots else None, console if print_tables else None,
-                                cfg.study.reliability)
+                                reliability_spec=cfg.study.reliability)
     except OutputWriteError:
         if stop.reason == "write failed":  # said before the outputs' own failure
             console.print(f"[bold red]batch stopped[/]: {stop.detail}", highlight=False)
@@ -362,7 +364,7 @@ def collect(folder: Path, console: Console | None = None, allow_missing: bool = 
     write_outputs(folder, inv, expected, dispersion_table(case.dispersions), OmegaConf.to_yaml(raw, resolve=True),
                   collect_provenance(), names, case.history_time, cfg.requirements,
                   draw_figures if cfg.output.plots else None, console,
-                  cfg.study.reliability)
+                  reliability_spec=cfg.study.reliability)
     console.print(f"collected {len(inv.files)} runs from {len(run_dirs)} shard folder(s) into {folder}")
     if missing:
         console.print(f"[bold red]PARTIAL result[/] (--allow-missing): {len(missing)} of {len(expected)} runs "

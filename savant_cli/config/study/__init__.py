@@ -40,13 +40,16 @@ def study_option(node: Any) -> Any:
     if name not in STUDY_SCHEMAS:
         raise ConfigError("study.name", name, f"must be one of {', '.join(STUDY_SCHEMAS)}")
     try:
-        merged = OmegaConf.merge(OmegaConf.structured(STUDY_SCHEMAS[name]), node)
+        study = OmegaConf.to_object(OmegaConf.merge(OmegaConf.structured(STUDY_SCHEMAS[name]), node))
     except OmegaConfBaseException as exc:
         key = "study." + str(getattr(exc, "full_key", None) or "?")
         msg = str(exc).splitlines()[0]
-        allowed = "unknown key; see `savant run --cfg job`" if "not in" in msg else msg
+        if "missing mandatory value" in msg.lower():
+            allowed = (f"is required: study={name} has no default for it (the shipped conf/study/{name}.yaml "
+                       f"gives one)")
+        else:
+            allowed = "unknown key; see `savant run --cfg job`" if "not in" in msg else msg
         raise ConfigError(key, getattr(exc, "value", None), allowed) from None
-    study = OmegaConf.to_object(merged)
     STUDY_CHECKS[name](study)
     return study
 

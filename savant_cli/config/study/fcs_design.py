@@ -70,12 +70,12 @@ class DesignParameters:
 class DesignOptimizer:
     """The search of ``study=fcs_design`` (``scipy.optimize.minimize``)."""
 
-    method: str = "nelder-mead"  # nelder-mead (goal attainment, then max-min) | cobyla (margins as constraints)
-    max_evaluations: int = 300  # per schedule
-    tolerance: float = 1e-3  # on the normalized parameters and the ratio
-    initial_step: float = 0.1  # first simplex / trust radius, fraction of each parameter's range
-    stop_ratio: float = 0.0  # > 0: stop a schedule's search once every point's ratio reaches it
-    restarts: int = 2  # fresh starts from the best point after a search converges (budget permitting)
+    method: str = MISSING  # nelder-mead (goal attainment, then max-min) | cobyla (margins as constraints)
+    max_evaluations: int = MISSING  # per schedule
+    tolerance: float = MISSING  # on the normalized parameters and the ratio
+    initial_step: float = MISSING  # first simplex / trust radius, fraction of each parameter's range
+    stop_ratio: float = MISSING  # > 0: stop a schedule's search once every point's ratio reaches it
+    restarts: int = MISSING  # fresh starts from the best point after a search converges (budget permitting)
 
 
 @dataclass

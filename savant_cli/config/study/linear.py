@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from omegaconf import MISSING
+
 from savant_cli.config.checks import non_negative, one_of, positive
 from savant_cli.config.study.common import JACOBIANS, flight_times
 from savant_cli.errors import ConfigError
@@ -23,11 +25,11 @@ class FrozenTimeSpec:
 
     # period: crossover period >= time to separation; control_power: the control power
     # falls within one period by the rigid gain requirement; []: no window, judge every point
-    criteria: list[str] = field(default_factory=lambda: ["period", "control_power"])
-    scan_s: float = 20.0  # s before the flown separation scanned for the criteria
-    step_s: float = 0.5  # s between scan points
-    excitation_deg: float = 0.5  # time-domain checks: doublet at the gimbal command, deg ...
-    excitation_s: float = 0.4  # ... and its duration, s
+    criteria: list[str] = MISSING
+    scan_s: float = MISSING  # s before the flown separation scanned for the criteria
+    step_s: float = MISSING  # s between scan points
+    excitation_deg: float = MISSING  # time-domain checks: doublet at the gimbal command, deg ...
+    excitation_s: float = MISSING  # ... and its duration, s
 
 
 def check_frozen_time(f: FrozenTimeSpec, key: str) -> None:
@@ -50,16 +52,16 @@ class LinearStudyConfig:
     """``study=linear``: frozen-time linearization and stability margins."""
 
     name: str = "linear"
-    times: list[float] = field(default_factory=lambda: [55.0, 130.0, 180.0, 230.0])
-    every: float = 0.0  # > 0: points every `every` s over the whole flight instead of `times`
-    event_clearance_s: float = 0.1  # a time this close to an event is refused (skipped with `every`)
+    times: list[float] = MISSING
+    every: float = MISSING  # > 0: points every `every` s over the whole flight instead of `times`
+    event_clearance_s: float = MISSING  # a time this close to an event is refused (skipped with `every`)
     # the first-stage tail-off window: points in it are analysed and reported but judged
     # in the time domain (separation state with the required margins inserted)
     frozen_time: FrozenTimeSpec = field(default_factory=FrozenTimeSpec)
-    jacobian: str = "auto"  # auto: per-state steps; fixed: one user step
-    jacobian_step: float = 1e-6  # the fixed step, as an attitude perturbation in rad
-    charts: str = "auto"  # all | none | auto (per-point charts up to 20 points)
-    exclusion_zones: bool = True  # Nichols exclusion zones
+    jacobian: str = MISSING  # auto: per-state steps; fixed: one user step
+    jacobian_step: float = MISSING  # the fixed step, as an attitude perturbation in rad
+    charts: str = MISSING  # all | none | auto (per-point charts up to 20 points)
+    exclusion_zones: bool = MISSING  # Nichols exclusion zones
 
 
 def check_linear(s: LinearStudyConfig) -> None:

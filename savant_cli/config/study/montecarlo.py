@@ -24,11 +24,11 @@ class HistoriesSpec:
 class ReliabilitySpec:
     """The success probability a batch demonstrates (``montecarlo/reliability.py``)."""
 
-    confidence: float = 0.9  # one-sided confidence level of the demonstrated probability
-    target_probability: float = 0.9973  # the success probability the batch is to demonstrate
+    confidence: float = MISSING  # one-sided confidence level of the demonstrated probability
+    target_probability: float = MISSING  # the success probability the batch is to demonstrate
     # the flight-performance reserve covers this fraction of dispersed flights, at
     # ``confidence`` (montecarlo/insertion.py): 99.865 %, the 3-sigma-low flight
-    reserve_probability: float = 0.99865
+    reserve_probability: float = MISSING
 
 
 #: Most runs of a Monte Carlo batch. A batch without a failure demonstrates a success

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
+
+from omegaconf import MISSING
 
 from savant_cli.config.checks import non_negative, one_of, positive
 from savant_cli.config.study.common import JACOBIANS, LOOP_AXES, MAX_WORKERS, WORKERS_ALLOWED, flight_times
@@ -17,26 +19,26 @@ class TimeMarginsStudyConfig:
     simulation, beside the frequency-domain ones (docs/design_studies.md)."""
 
     name: str = "time_margins"
-    times: list[float] = field(default_factory=lambda: [55.0, 130.0, 180.0, 230.0])
-    axes: list[str] = field(default_factory=lambda: ["pitch", "yaw"])
-    kinds: list[str] = field(default_factory=lambda: list(MARGIN_KINDS))
-    lead_s: float = 10.0  # the perturbation starts this long before the point
-    window_s: float = 20.0  # and is held this long
-    min_periods: float = 3.0  # the window stretched to hold this many periods of the frequency-domain crossing
-    max_window_s: float = 60.0  # longest stretched window
-    event_clearance_s: float = 0.2  # the window keeps this far from events
-    gain_bound_dB: float = 20.0  # search bound of the gain margins
-    delay_bound_ms: float = 1000.0  # search bound of the delay margin
-    gain_tolerance_dB: float = 0.1  # bisection tolerance
-    delay_tolerance_ms: float = 2.0
-    scan_points: int = 8  # coarse scan before the bisection
-    excitation_deg: float = 0.5  # doublet amplitude at the gimbal command
-    excitation_s: float = 0.4  # doublet duration
-    settle_s: float = 2.0  # left out of the growth analysis after the window starts
-    min_damping_ratio: float = 0.01  # stable only when the envelope decays per period as a mode of this damping
-    workers: int = 0  # processes; 0: all cores
-    jacobian: str = "auto"  # of the frequency-domain side (as study=linear)
-    jacobian_step: float = 1e-6
+    times: list[float] = MISSING
+    axes: list[str] = MISSING
+    kinds: list[str] = MISSING
+    lead_s: float = MISSING  # the perturbation starts this long before the point
+    window_s: float = MISSING  # and is held this long
+    min_periods: float = MISSING  # the window stretched to hold this many periods of the frequency-domain crossing
+    max_window_s: float = MISSING  # longest stretched window
+    event_clearance_s: float = MISSING  # the window keeps this far from events
+    gain_bound_dB: float = MISSING  # search bound of the gain margins
+    delay_bound_ms: float = MISSING  # search bound of the delay margin
+    gain_tolerance_dB: float = MISSING  # bisection tolerance
+    delay_tolerance_ms: float = MISSING
+    scan_points: int = MISSING  # coarse scan before the bisection
+    excitation_deg: float = MISSING  # doublet amplitude at the gimbal command
+    excitation_s: float = MISSING  # doublet duration
+    settle_s: float = MISSING  # left out of the growth analysis after the window starts
+    min_damping_ratio: float = MISSING  # stable only when the envelope decays per period as a mode of this damping
+    workers: int = MISSING  # processes; 0: all cores
+    jacobian: str = MISSING  # of the frequency-domain side (as study=linear)
+    jacobian_step: float = MISSING
 
 
 def check_time_margins(s: TimeMarginsStudyConfig) -> None:
