@@ -151,10 +151,11 @@ def test_shipped_staging_state_flies_to_orbit(tmp_path):
 
 def test_user_config_dir_layers_over_the_shipped_tree(tmp_path):
     """`-cd DIR` with only one group file: that group comes from the user, all others from
-    the shipped tree (the search-path plugin)."""
+    the shipped tree (the search-path plugin); the keys it leaves out (gust, shear) from
+    the shipped option it names first."""
     (tmp_path / "mine" / "winds").mkdir(parents=True)
     (tmp_path / "mine" / "winds" / "calm.yaml").write_text(
-        "name: calm\nenabled: true\nscale: 0.5\nprofile:\n  altitude_m: [0, 20000]\n"
+        "defaults: [none, _self_]\nname: calm\nenabled: true\nscale: 0.5\nprofile:\n  altitude_m: [0, 20000]\n"
         "  north_mps: [0, 0]\n  east_mps: [2, 10]\n")
     proc = run(["run", "-cd", str(tmp_path / "mine"), "winds=calm", "phase=first_stage", "output.plots=false",
                 f"hydra.run.dir={tmp_path}/run", "sim.progress=false"], cwd=tmp_path)

@@ -106,7 +106,7 @@ def _verdict(ratio: float) -> PointVerdict:
                                                       float("nan"), True)), ())
 
 
-@pytest.mark.parametrize("method", ["nelder-mead", "cobyla"])
+@pytest.mark.parametrize("method", ["nelder_mead", "cobyla"])
 def test_search_climbs_to_the_known_max_min(monkeypatch, method):
     """Two 'points' whose ratios are 2 − (x − 0.3)² − y² and 2 − (x − 0.7)² − y²: the
     smallest is largest at x = 0.5, y = 0, where it is 1.96 (the x range 0–1, y −1–1)."""

@@ -19,16 +19,20 @@ and ``validation`` (:func:`validate`). Each schema's checks follow it in its mod
 from __future__ import annotations
 
 from savant_cli.config.actuator import (
-    ActuatorStageCommon, SimplexActuatorConfig, SimplexStage, ThirdOrderActuatorConfig, ThirdOrderStage, check_actuator
+    ActuatorStageCommon, SimplexActuatorConfig, SimplexFeedback, SimplexStage, ThirdOrderActuatorConfig,
+    ThirdOrderStage, check_actuator
 )
 from savant_cli.config.controller import (
     AxisGains, Blending, ControllerConfig, ControllerDesign, FilterSection, FilterSet, FilterSets, GainTable,
     GainTables, IgnitionFade, RollControl, check_delay
 )
-from savant_cli.config.dispersions import CorrelationGroup, DispersionSetConfig, DispersionSpec
-from savant_cli.config.flex import FlexOffConfig, FlexOnConfig, check_flex
+from savant_cli.config.dispersions import (
+    CorrelationGroup, DispersionApply, DispersionDist, DispersionSetConfig, DispersionSpec
+)
+from savant_cli.config.flex import FlexOffConfig, FlexOnConfig, FlexSwitching, check_flex
 from savant_cli.config.guidance import (
-    GuidanceConfig, InsertionTolerance, LaunchSite, OrbitTarget, PegConfig, SmootherConfig, check_peg, check_target
+    FirstStageSchedule, GuidanceConfig, InsertionTolerance, LaunchSite, OrbitTarget, PegConfig, SmootherConfig,
+    check_peg, check_target
 )
 from savant_cli.config.navigation import (
     NAVIGATION_BOUNDS, AccelerometerErrorsConfig, GyroErrorsConfig, NavigationInertialConfig, NavigationPerfectConfig,
@@ -36,54 +40,61 @@ from savant_cli.config.navigation import (
 )
 from savant_cli.config.output import OutputConfig
 from savant_cli.config.requirements import (
-    STABILIZATIONS, AeroRequirement, FlexModeOverride, FlexModeRequirement, FlexRequirement, FlexStageRequirement,
-    MissionRequirement, RequirementSet, RigidRequirement, SeparationRequirement, SloshRequirement, check_requirements
+    AeroRequirement, FailureClass, FlexModeOverride, FlexModeRequirement, FlexRequirement, FlexStageRequirement,
+    MissionRequirement, RequirementSet, RigidRequirement, SeparationRequirement, SloshRequirement, Stabilization,
+    check_requirements
 )
-from savant_cli.config.run import MAX_LOG_ROWS, SIM_BOUNDS, EnvironmentConfig, HealthConfig, PhaseConfig, SimConfig
+from savant_cli.config.run import (
+    MAX_LOG_ROWS, SIM_BOUNDS, EnvironmentConfig, HealthConfig, PhaseConfig, PhaseStart, PhaseStop, SimConfig
+)
 from savant_cli.config.savant import SavantConfig, check_vehicle_match
 from savant_cli.config.sensors import RateGyroConfig, SensorMisalignment, SensorsConfig
 from savant_cli.config.shipped import shipped_option
 from savant_cli.config.slosh import SloshOffConfig, SloshOnConfig, check_slosh
 from savant_cli.config.study import STUDY_SCHEMAS, check_study_times
-from savant_cli.config.study.common import MAX_WORKERS, WORKERS_ALLOWED
+from savant_cli.config.study.common import MAX_WORKERS, WORKERS_ALLOWED, Jacobian, LoopAxis
 from savant_cli.config.study.fcs_design import (
-    DESIGN_SCHEDULES, STACK_ONLY_PARAMETERS, DesignOptimizer, DesignParameter, DesignParameters, FcsDesignStudyConfig,
-    ScheduleParameters, design_controller_name
+    DESIGN_SCHEDULES, STACK_ONLY_PARAMETERS, DesignOptimizer, DesignParameter, DesignParameters, DesignSchedule,
+    FcsDesignStudyConfig, OptimizerMethod, ScheduleParameters, design_controller_name
 )
-from savant_cli.config.study.flex_sweep import FlexSweepStudyConfig
+from savant_cli.config.study.flex_sweep import FlexSweepStudyConfig, SweepParameter
 from savant_cli.config.study.flyoff import FlyoffStudyConfig
-from savant_cli.config.study.linear import FrozenTimeSpec, LinearStudyConfig, check_frozen_time
+from savant_cli.config.study.linear import (
+    ChartMode, FrozenTimeCriterion, FrozenTimeSpec, LinearStudyConfig, check_frozen_time
+)
 from savant_cli.config.study.mode_retention import ModeRetentionStudyConfig
 from savant_cli.config.study.montecarlo import (
     MAX_HISTORY_SAMPLES, MAX_N_RUNS, MAX_SHARDS, HistoriesSpec, MonteCarloStudyConfig, ReliabilitySpec
 )
 from savant_cli.config.study.nominal import StudyConfig
-from savant_cli.config.study.time_margins import MARGIN_KINDS, TimeMarginsStudyConfig
+from savant_cli.config.study.time_margins import MARGIN_KINDS, MarginKind, TimeMarginsStudyConfig
 from savant_cli.config.twd import TwdOffConfig, TwdOnConfig
 from savant_cli.config.validation import GROUP_VARIANTS, check_physics, group_option, has_key, validate
 from savant_cli.config.winds import (
-    GUST_FRAMES, GUST_ONSETS, MAX_WINDS_SCALE, SHEAR_SHAPES, GustConfig, ShearConfig, WindProfile, WindsConfig,
+    MAX_WINDS_SCALE, GustConfig, GustFrame, GustOnset, ShearConfig, ShearShape, WindProfile, WindsConfig,
     check_gust_shear
 )
 
 __all__ = [
-    "AccelerometerErrorsConfig", "ActuatorStageCommon", "AeroRequirement", "AxisGains", "Blending",
+    "AccelerometerErrorsConfig", "ActuatorStageCommon", "AeroRequirement", "AxisGains", "Blending", "ChartMode",
     "ControllerConfig", "ControllerDesign", "CorrelationGroup", "DESIGN_SCHEDULES", "DesignOptimizer",
-    "DesignParameter", "DesignParameters", "DispersionSetConfig", "DispersionSpec", "EnvironmentConfig",
-    "FcsDesignStudyConfig", "FilterSection", "FilterSet", "FilterSets", "FlexModeOverride", "FlexModeRequirement", "FlexOffConfig",
-    "FlexOnConfig", "FlexRequirement", "FlexStageRequirement", "FlexSweepStudyConfig", "FlyoffStudyConfig",
-    "FrozenTimeSpec", "GROUP_VARIANTS", "GUST_FRAMES", "GUST_ONSETS", "GainTable", "GainTables", "GuidanceConfig",
-    "GustConfig", "GyroErrorsConfig", "HealthConfig", "HistoriesSpec", "IgnitionFade", "InsertionTolerance",
-    "LaunchSite", "LinearStudyConfig", "MARGIN_KINDS", "MAX_HISTORY_SAMPLES", "MAX_LOG_ROWS", "MAX_N_RUNS",
-    "MAX_SHARDS", "MAX_WINDS_SCALE", "MAX_WORKERS", "MissionRequirement", "ModeRetentionStudyConfig",
-    "MonteCarloStudyConfig", "NAVIGATION_BOUNDS", "NavigationInertialConfig", "NavigationPerfectConfig",
-    "OrbitTarget", "OutputConfig", "PegConfig", "PhaseConfig", "RateGyroConfig", "ReliabilitySpec",
-    "RequirementSet", "RigidRequirement", "RollControl", "SHEAR_SHAPES", "SIM_BOUNDS", "STABILIZATIONS",
-    "STACK_ONLY_PARAMETERS", "STUDY_SCHEMAS", "SavantConfig", "ScheduleParameters", "SensorMisalignment",
-    "SensorsConfig", "SeparationRequirement", "ShearConfig", "SimConfig", "SimplexActuatorConfig", "SimplexStage",
-    "SloshOffConfig", "SloshOnConfig", "SloshRequirement", "SmootherConfig", "StudyConfig",
-    "ThirdOrderActuatorConfig", "ThirdOrderStage", "TimeMarginsStudyConfig", "TwdOffConfig", "TwdOnConfig",
-    "WORKERS_ALLOWED", "WindProfile", "WindsConfig", "check_actuator", "check_delay", "check_flex",
+    "DesignParameter", "DesignParameters", "DesignSchedule", "DispersionApply", "DispersionDist",
+    "DispersionSetConfig", "DispersionSpec", "EnvironmentConfig", "FailureClass", "FcsDesignStudyConfig",
+    "FilterSection", "FilterSet", "FilterSets", "FirstStageSchedule", "FlexModeOverride", "FlexModeRequirement",
+    "FlexOffConfig", "FlexOnConfig", "FlexRequirement", "FlexStageRequirement", "FlexSweepStudyConfig",
+    "FlexSwitching", "FlyoffStudyConfig", "FrozenTimeCriterion", "FrozenTimeSpec", "GROUP_VARIANTS", "GainTable",
+    "GainTables", "GuidanceConfig", "GustConfig", "GustFrame", "GustOnset", "GyroErrorsConfig", "HealthConfig",
+    "HistoriesSpec", "IgnitionFade", "InsertionTolerance", "Jacobian", "LaunchSite", "LinearStudyConfig", "LoopAxis",
+    "MARGIN_KINDS", "MAX_HISTORY_SAMPLES", "MAX_LOG_ROWS", "MAX_N_RUNS", "MAX_SHARDS", "MAX_WINDS_SCALE",
+    "MAX_WORKERS", "MarginKind", "MissionRequirement", "ModeRetentionStudyConfig", "MonteCarloStudyConfig",
+    "NAVIGATION_BOUNDS", "NavigationInertialConfig", "NavigationPerfectConfig", "OptimizerMethod", "OrbitTarget",
+    "OutputConfig", "PegConfig", "PhaseConfig", "PhaseStart", "PhaseStop", "RateGyroConfig", "ReliabilitySpec",
+    "RequirementSet", "RigidRequirement", "RollControl", "SIM_BOUNDS", "STACK_ONLY_PARAMETERS", "STUDY_SCHEMAS",
+    "SavantConfig", "ScheduleParameters", "SensorMisalignment", "SensorsConfig", "SeparationRequirement",
+    "ShearConfig", "ShearShape", "SimConfig", "SimplexActuatorConfig", "SimplexFeedback", "SimplexStage",
+    "SloshOffConfig", "SloshOnConfig", "SloshRequirement", "SmootherConfig", "Stabilization", "StudyConfig",
+    "SweepParameter", "ThirdOrderActuatorConfig", "ThirdOrderStage", "TimeMarginsStudyConfig", "TwdOffConfig",
+    "TwdOnConfig", "WORKERS_ALLOWED", "WindProfile", "WindsConfig", "check_actuator", "check_delay", "check_flex",
     "check_frozen_time", "check_gust_shear", "check_navigation", "check_peg", "check_physics", "check_requirements",
     "check_slosh", "check_study_times", "check_target", "check_vehicle_match", "design_controller_name",
     "group_option", "has_key", "shipped_option", "validate",

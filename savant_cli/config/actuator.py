@@ -3,10 +3,11 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from enum import StrEnum
 
 from omegaconf import MISSING
 
-from savant_cli.config.checks import non_negative, one_of, positive, small_angles
+from savant_cli.config.checks import non_negative, positive, small_angles
 from savant_cli.errors import ConfigError
 
 
@@ -47,8 +48,12 @@ class ThirdOrderStage(ActuatorStageCommon):
     damping: float = MISSING
 
 
-#: ``actuator.<stage>.feedback`` options of ``actuator=simplex``: the ram's LVDT or the nozzle angle.
-SIMPLEX_FEEDBACKS = ("piston", "nozzle")
+class SimplexFeedback(StrEnum):
+    """``actuator.<stage>.feedback`` of ``actuator=simplex``: the position loop is closed
+    on the ram's LVDT (``piston``) or on the nozzle angle (``nozzle``)."""
+
+    piston = "piston"
+    nozzle = "nozzle"
 
 
 @dataclass
@@ -68,8 +73,8 @@ class SimplexStage(ActuatorStageCommon):
         Nozzle-mount damping C (N·m·s/rad).
     leakage_rad_s_per_Nm : float
         Ram leakage: rate lost per load torque (rad/s per N·m; 0: none).
-    feedback : str
-        What the position loop is closed on, one of :data:`SIMPLEX_FEEDBACKS`.
+    feedback : SimplexFeedback
+        What the position loop is closed on, the ram's LVDT or the nozzle angle.
     """
 
     valve_frequency_hz: float = MISSING
@@ -77,7 +82,7 @@ class SimplexStage(ActuatorStageCommon):
     stiffness_Nm_per_rad: float = MISSING
     damping_Nms_per_rad: float = MISSING
     leakage_rad_s_per_Nm: float = MISSING
-    feedback: str = MISSING
+    feedback: SimplexFeedback = MISSING
 
 
 @dataclass
@@ -110,7 +115,6 @@ def check_actuator(a: ThirdOrderActuatorConfig | SimplexActuatorConfig, plant_ra
         small_angles(f"actuator.{stage}.null_bias_deg", st.null_bias_deg, 2, 2.0, "pitch, yaw")
         if a.name == "simplex":
             non_negative(f"actuator.{stage}.leakage_rad_s_per_Nm", st.leakage_rad_s_per_Nm)
-            one_of(f"actuator.{stage}.feedback", st.feedback, SIMPLEX_FEEDBACKS)
             # the valve is integrated by the plant's RK4: keep it well inside its stability
             nyq = 0.25 * plant_rate_hz
             if st.valve_frequency_hz >= nyq:

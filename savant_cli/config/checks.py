@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import re
 from typing import Any
 
 import numpy as np
@@ -28,6 +29,22 @@ def no_negative_entries(key: str, values: np.ndarray, what: str) -> None:
     """No entry of the array ``values`` may be negative; the first one that is is named."""
     if np.any(values < 0.0):
         raise ConfigError(key, float(values[np.argmax(values < 0.0)]), f"{what} must not be negative")
+
+
+#: OmegaConf's refusal of a value (or dict key) outside a choice's ``Enum`` type.
+_ENUM_REFUSAL = re.compile(r"^(?:Invalid value '.*', expected one of|Key '.*' is incompatible with the enum type "
+                           r"'\w+', valid:) \[(?P<allowed>[^\]]*)\]")
+
+
+def allowed_of(message: str) -> str:
+    """What is allowed, from the first line of an OmegaConf merge error: a choice (an
+    ``Enum``-typed key) refused reads ``must be one of a, b`` as :func:`one_of` words
+    it; any other message is returned as it is."""
+    m = _ENUM_REFUSAL.match(message)
+    if not m:
+        return message
+    subject = "its keys " if message.startswith("Key ") else ""  # a dict keyed by a choice
+    return f"{subject}must be one of {m.group('allowed')}"
 
 
 def one_of(key: str, value: Any, allowed: tuple) -> None:

@@ -4,7 +4,27 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from enum import StrEnum
 from typing import Any
+
+
+class DispersionApply(StrEnum):
+    """``apply``: the sample multiplies (``scale``), is added to (``offset``) or replaces
+    (``value``) the nominal."""
+
+    scale = "scale"
+    offset = "offset"
+    value = "value"
+
+
+class DispersionDist(StrEnum):
+    """``dist``: the distribution a dispersion is drawn from (docs/montecarlo.md)."""
+
+    normal = "normal"
+    uniform = "uniform"
+    triangular = "triangular"
+    choice = "choice"
+    constant = "constant"
 
 
 @dataclass
@@ -18,8 +38,8 @@ class DispersionSpec:
     (``value``) the nominal."""
 
     target: str = ""
-    apply: str = "scale"  # scale | offset | value
-    dist: str = "normal"  # normal | uniform | triangular | choice | constant
+    apply: DispersionApply = DispersionApply.scale
+    dist: DispersionDist = DispersionDist.normal
     mean: Any = None  # normal; default 1 for scale, 0 for offset
     sigma: float = 0.0  # normal
     truncate_sigma: float = 0.0  # normal: > 0 truncates at ± this many σ

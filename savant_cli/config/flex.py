@@ -3,14 +3,20 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from enum import StrEnum
 
 from omegaconf import MISSING
 
-from savant_cli.config.checks import non_negative, one_of, positive
+from savant_cli.config.checks import non_negative, positive
 from savant_cli.errors import ConfigError
 
-#: ``flex.switching`` options: the modal set switched at separation, or blended by the propellant burned.
-FLEX_SWITCHINGS = ("separation", "propellant")
+
+class FlexSwitching(StrEnum):
+    """``flex.switching``: the modal set switched at separation, or blended by the
+    propellant burned."""
+
+    separation = "separation"
+    propellant = "propellant"
 
 
 @dataclass
@@ -30,7 +36,7 @@ class FlexOnConfig:
     n_modes: int = MISSING  # retained modes, lowest first
     damping: float = MISSING  # structural damping ratio of every retained mode
     damping_per_mode: list[float] = MISSING  # overrides `damping` when given
-    switching: str = MISSING  # separation | propellant
+    switching: FlexSwitching = MISSING
     frequency_scale: float = MISSING
     shape_scale: float = MISSING
 
@@ -47,6 +53,5 @@ def check_flex(f: FlexOffConfig | FlexOnConfig) -> None:
     if f.damping_per_mode and len(f.damping_per_mode) < f.n_modes:
         raise ConfigError("flex.damping_per_mode", list(f.damping_per_mode),
                           f"must give at least flex.n_modes = {f.n_modes} values, or be empty")
-    one_of("flex.switching", f.switching, FLEX_SWITCHINGS)
     positive("flex.frequency_scale", f.frequency_scale)
     non_negative("flex.shape_scale", f.shape_scale)

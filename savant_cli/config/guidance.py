@@ -3,14 +3,22 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from enum import StrEnum
 from typing import Any, Optional
 
 from omegaconf import MISSING
 
-from savant_cli.config.checks import non_negative, one_of, positive
+from savant_cli.config.checks import non_negative, positive
 from savant_cli.config.run import SimConfig
 from savant_cli.errors import ConfigError
 
+
+class FirstStageSchedule(StrEnum):
+    """``guidance.first_stage_schedule``: what indexes the stored profile in the first
+    stage, mission time (s) or the speed relative to the atmosphere (m/s)."""
+
+    time = "time"
+    relative_velocity = "relative_velocity"
 
 @dataclass
 class LaunchSite:
@@ -118,8 +126,8 @@ class GuidanceConfig:
         The command smoother (–, rad/s).
     generator : dict
         How the command file was generated (provenance).
-    first_stage_schedule : str
-        The stored profile's first-stage index, one of :data:`FIRST_STAGE_SCHEDULES`.
+    first_stage_schedule : FirstStageSchedule
+        The stored profile's first-stage index.
     peg : PegConfig or None
         Closed-loop upper-stage guidance; ``None`` (the stored-profile options, which
         have no ``peg`` section): the stored profile flies to cutoff."""
@@ -132,7 +140,7 @@ class GuidanceConfig:
     target: OrbitTarget = field(default_factory=OrbitTarget)
     smoother: SmootherConfig = field(default_factory=SmootherConfig)
     generator: dict[str, Any] = field(default_factory=dict)
-    first_stage_schedule: str = MISSING  # the stored profile's index in the first stage: time | relative_velocity
+    first_stage_schedule: FirstStageSchedule = MISSING  # the stored profile's index in the first stage
     peg: Optional[PegConfig] = None  # None: no PEG section (the stored profile flies to cutoff)
 
 
@@ -186,10 +194,6 @@ def check_peg(peg: PegConfig | None, sim: SimConfig) -> None:
                           f"must be at least one guidance cycle (1 / sim.guidance_rate_hz = {1.0 / sim.guidance_rate_hz:g} s)")
 
 
-#: ``guidance.first_stage_schedule`` options: the stored profile's first-stage index.
-FIRST_STAGE_SCHEDULES = ("time", "relative_velocity")
-
-
 def check_guidance(g: GuidanceConfig, sim: SimConfig) -> None:
     """A command file, a launch site on the Earth, the target (:func:`check_target`), the
     schedule from its list, PEG (:func:`check_peg`) and a positive smoother."""
@@ -201,7 +205,6 @@ def check_guidance(g: GuidanceConfig, sim: SimConfig) -> None:
     if not -180.0 <= ls.longitude_deg <= 360.0:
         raise ConfigError("guidance.launch_site.longitude_deg", ls.longitude_deg, "must be within [-180, 360]")
     check_target(g)
-    one_of("guidance.first_stage_schedule", g.first_stage_schedule, FIRST_STAGE_SCHEDULES)
     check_peg(g.peg, sim)
     positive("guidance.smoother.damping", g.smoother.damping)
     positive("guidance.smoother.natural_frequency_rad_s", g.smoother.natural_frequency_rad_s)

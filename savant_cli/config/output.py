@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 from omegaconf import MISSING
 
-from savant_cli.config.checks import one_of
+from savant_cli.io.console import ConsoleMode
 
 
 @dataclass
@@ -19,18 +19,9 @@ class OutputConfig:
         Write ``savant.h5``.
     plots : bool
         Draw PNG figures into ``plots/``.
-    console : str
-        What the console shows, one of :data:`CONSOLE_MODES`."""
+    console : ConsoleMode
+        What the console shows: ``full``, ``summary`` or ``quiet``."""
 
     hdf5: bool = MISSING
     plots: bool = MISSING
-    console: str = MISSING  # full | summary | quiet (savant_cli.io.console.CONSOLE_MODES)
-
-
-#: ``output.console`` options (``savant_cli.io.console.CONSOLE_MODES``).
-CONSOLE_MODES = ("full", "summary", "quiet")
-
-
-def check_output(o: OutputConfig) -> None:
-    """``output.console`` one of :data:`CONSOLE_MODES`."""
-    one_of("output.console", o.console, CONSOLE_MODES)
+    console: ConsoleMode = MISSING

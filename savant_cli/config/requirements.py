@@ -4,12 +4,14 @@ from __future__ import annotations
 
 import re
 from dataclasses import asdict, dataclass, field, replace
+from enum import StrEnum
 from typing import Optional
 
 from omegaconf import MISSING
 
-from savant_cli.config.checks import non_negative, one_of, positive
+from savant_cli.config.checks import non_negative, positive
 from savant_cli.errors import ConfigError
+from savant_cli.io.record import FAILURE_CLASSES
 
 
 @dataclass
@@ -39,8 +41,17 @@ class SloshRequirement:
     phase_deg: float = MISSING
 
 
-#: How a bending mode is required to be stabilized (``linear/requirements.py``).
-STABILIZATIONS = ("gain", "phase", "either")
+class Stabilization(StrEnum):
+    """How a bending mode is required to be stabilized (``linear/requirements.py``)."""
+
+    gain = "gain"
+    phase = "phase"
+    either = "either"
+
+
+#: A mission failure class (``savant_cli/sim/mission.py``), named as the record names it.
+FailureClass = StrEnum("FailureClass", [(c, c) for c in FAILURE_CLASSES])
+FailureClass.__doc__ = "A mission failure class (``savant_cli/sim/mission.py``; ``io/record.FAILURE_CLASSES``)."
 
 
 @dataclass
@@ -49,7 +60,7 @@ class FlexModeRequirement:
     ``gain_dB`` below 0 dB), ``phase``-stabilized (every crossing it makes: phase margin
     at least ``phase_deg``, gain margin at least ``gain_dB``) or ``either``."""
 
-    stabilization: str = MISSING
+    stabilization: Stabilization = MISSING
     gain_dB: float = MISSING
     phase_deg: float = MISSING
 
@@ -59,7 +70,7 @@ class FlexModeOverride:
     """A bending mode's departures from its stage's ``default`` (``modes.flex_<n>``): each
     key given replaces the default's, each left out (None) keeps it."""
 
-    stabilization: Optional[str] = None
+    stabilization: Optional[Stabilization] = None
     gain_dB: Optional[float] = None
     phase_deg: Optional[float] = None
 
@@ -112,13 +123,7 @@ class MissionRequirement:
     mission: a run succeeds when none of its classes is listed (the shipped sets list
     every class)."""
 
-    failure_classes: list[str] = MISSING
-
-
-def _failure_classes() -> tuple[str, ...]:
-    from savant_cli.io.record import FAILURE_CLASSES
-
-    return FAILURE_CLASSES
+    failure_classes: list[FailureClass] = MISSING
 
 
 @dataclass
@@ -150,8 +155,8 @@ class RequirementSet:
 
 
 def check_requirements(r: RequirementSet) -> None:
-    """Margins are non-negative finite numbers; stabilizations one of
-    :data:`STABILIZATIONS`; per-mode keys ``flex_<n>``."""
+    """Margins are non-negative finite numbers; per-mode keys ``flex_<n>``; the failure
+    classes each named once (their names and the stabilizations are typed by the schema)."""
     for key, value in (("rigid.gain_dB", r.rigid.gain_dB), ("rigid.gain_reduction_dB", r.rigid.gain_reduction_dB),
                        ("rigid.phase_deg", r.rigid.phase_deg), ("aero.gain_dB", r.aero.gain_dB),
                        ("slosh.gain_dB", r.slosh.gain_dB), ("slosh.phase_deg", r.slosh.phase_deg)):
@@ -162,16 +167,12 @@ def check_requirements(r: RequirementSet) -> None:
             key = f"requirements.flex.{stage}.{name}"
             if name != "default" and not re.fullmatch(r"modes\.flex_[1-9][0-9]*", name):
                 raise ConfigError(key, name.split(".", 1)[1], "a bending mode is named flex_<n> (1-based retained mode)")
-            one_of(f"{key}.stabilization", m.stabilization, STABILIZATIONS)
             non_negative(f"{key}.gain_dB", m.gain_dB)
             non_negative(f"{key}.phase_deg", m.phase_deg)
     for name in ("max_body_rate_deg_s", "max_attitude_error_deg", "max_qalpha_Pa_deg"):
         value = getattr(r.separation, name)
         if value is not None:
             positive(f"requirements.separation.{name}", value)
-    allowed = _failure_classes()
-    for i, c in enumerate(r.mission.failure_classes):
-        one_of(f"requirements.mission.failure_classes[{i}]", c, allowed)
     if len(set(r.mission.failure_classes)) != len(r.mission.failure_classes):
         raise ConfigError("requirements.mission.failure_classes", list(r.mission.failure_classes),
                           "names each class at most once")

@@ -4,6 +4,7 @@ switches and the phase of flight flown."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from enum import StrEnum
 from typing import Optional
 
 import numpy as np
@@ -148,6 +149,20 @@ class EnvironmentConfig:
     thrust: bool = MISSING
 
 
+class PhaseStart(StrEnum):
+    """``phase.start``: at liftoff, or at staging from ``phase.staging_state_file``."""
+
+    liftoff = "liftoff"
+    staging = "staging"
+
+
+class PhaseStop(StrEnum):
+    """``phase.stop_at``: upper-stage cutoff, or first-stage separation."""
+
+    cutoff = "cutoff"
+    separation = "separation"
+
+
 @dataclass
 class PhaseConfig:
     """``phase``: the part of the flight flown.
@@ -157,16 +172,16 @@ class PhaseConfig:
     name : str
         The phase's name.
     start : str
-        One of :data:`PHASE_STARTS`: ``liftoff``, or ``staging`` from ``staging_state_file``.
-    stop_at : str
-        One of :data:`PHASE_STOPS`.
+        ``liftoff``, or ``staging`` from ``staging_state_file``.
+    stop_at : PhaseStop
+        ``cutoff`` or ``separation``.
     staging_state_file : str
         The staging state a phase starting at staging starts from (looked up in
         ``<config dir>/phase/``)."""
 
     name: str = "ascent"
-    start: str = MISSING  # liftoff | staging (from staging_state_file)
-    stop_at: str = MISSING
+    start: PhaseStart = MISSING
+    stop_at: PhaseStop = MISSING
     staging_state_file: str = MISSING
 
 
@@ -179,16 +194,8 @@ def check_environment(e: EnvironmentConfig) -> None:
     one_of("environment.gravity_order", e.gravity_order, GRAVITY_ORDERS)
 
 
-#: ``phase.stop_at`` and ``phase.start`` options.
-PHASE_STOPS = ("cutoff", "separation")
-PHASE_STARTS = ("liftoff", "staging")
-
-
 def check_phase(p: PhaseConfig) -> None:
-    """Start and stop from their lists; a phase starting at staging names its staging-state
-    file and stops at cutoff."""
-    one_of("phase.stop_at", p.stop_at, PHASE_STOPS)
-    one_of("phase.start", p.start, PHASE_STARTS)
+    """A phase starting at staging names its staging-state file and stops at cutoff."""
     if p.start == "staging" and p.stop_at == "separation":
         raise ConfigError("phase.stop_at", p.stop_at, "a phase starting at staging must stop at cutoff")
     if p.start == "staging" and not p.staging_state_file:

@@ -11,11 +11,11 @@ from omegaconf import DictConfig, OmegaConf
 from omegaconf.errors import MissingMandatoryValue, OmegaConfBaseException
 
 from savant_cli.config.actuator import SimplexActuatorConfig, ThirdOrderActuatorConfig, check_actuator
+from savant_cli.config.checks import allowed_of
 from savant_cli.config.controller import check_controller, check_delay
 from savant_cli.config.flex import FlexOffConfig, FlexOnConfig, check_flex
 from savant_cli.config.guidance import check_guidance
 from savant_cli.config.navigation import NavigationInertialConfig, NavigationPerfectConfig, check_navigation
-from savant_cli.config.output import check_output
 from savant_cli.config.requirements import check_requirements
 from savant_cli.config.run import check_environment, check_phase, check_sim
 from savant_cli.config.savant import SavantConfig, check_vehicle_match
@@ -50,7 +50,7 @@ def _strict_merge(cfg: DictConfig) -> DictConfig:
         if "not in struct" in msg or "Key '" in msg and "not in" in msg:
             allowed = "unknown key; see `savant run --cfg job` for the known keys"
         else:
-            allowed = msg
+            allowed = allowed_of(msg)
         raise ConfigError(key, value, allowed) from None
     return merged
 
@@ -61,7 +61,6 @@ def check_physics(cfg: SavantConfig) -> None:
     check_sim(cfg.sim)
     check_environment(cfg.environment)
     check_phase(cfg.phase)
-    check_output(cfg.output)
     check_actuator(cfg.actuator, cfg.sim.plant_rate_hz)
     check_delay(cfg.controller.delay_s, cfg.sim)
     check_flex(cfg.flex)
@@ -145,7 +144,7 @@ def group_option(group: str, node: Any) -> Any:
         elif "missing mandatory value" in msg.lower():
             allowed = f"is required: {group}={name} has no default for it (conf/{group}/{name}.yaml gives one)"
         else:
-            allowed = msg
+            allowed = allowed_of(msg)
         value = node
         for part in sub.split("."):
             value = value.get(part) if isinstance(value, dict) else None

@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from enum import StrEnum
 
 import numpy as np
 from omegaconf import MISSING
 
-from savant_cli.config.checks import finite, increasing, non_negative, one_of, positive
+from savant_cli.config.checks import finite, increasing, non_negative, positive
 from savant_cli.errors import ConfigError
 
 
@@ -27,10 +28,27 @@ class WindProfile:
     east_mps: list[float] = field(default_factory=list)
 
 
-#: ``winds.gust.onset``, ``winds.gust.frame`` and ``winds.shear.shape`` options.
-GUST_ONSETS = ("altitude", "time")
-GUST_FRAMES = ("ned", "flight_path")
-SHEAR_SHAPES = ("linear", "cosine")
+class GustOnset(StrEnum):
+    """``winds.gust.onset``: what the gust coordinate runs in, geodetic altitude (m) or
+    mission time (s)."""
+
+    altitude = "altitude"
+    time = "time"
+
+
+class GustFrame(StrEnum):
+    """``winds.gust.frame``: ``ned``, horizontal toward an azimuth; ``flight_path``,
+    across the flight path at a clock angle."""
+
+    ned = "ned"
+    flight_path = "flight_path"
+
+
+class ShearShape(StrEnum):
+    """``winds.shear.shape``: the build-up across the band, a linear or a cosine ramp."""
+
+    linear = "linear"
+    cosine = "cosine"
 
 
 @dataclass
@@ -39,12 +57,12 @@ class GustConfig:
 
     enabled: bool = MISSING
     amplitude_mps: float = MISSING  # peak speed A, reached at mid-length
-    onset: str = MISSING  # altitude | time: what the gust coordinate s runs in
+    onset: GustOnset = MISSING  # what the gust coordinate s runs in
     onset_altitude_m: float = MISSING  # onset: altitude: where the gust starts (geodetic)
     length_m: float = MISSING  # onset: altitude: full thickness d (build-up d/2, peak at d/2)
     onset_time_s: float = MISSING  # onset: time: when the gust starts (mission time)
     duration_s: float = MISSING  # onset: time: full duration d
-    frame: str = MISSING  # ned: horizontal toward direction_deg; flight_path: across the path
+    frame: GustFrame = MISSING  # ned: horizontal toward direction_deg; flight_path: across the path
     direction_deg: float = MISSING  # ned: azimuth from north; flight_path: clock angle (0 up: +alpha, 90 left: +beta)
 
 
@@ -57,7 +75,7 @@ class ShearConfig:
     base_altitude_m: float = MISSING  # bottom of the band (geodetic)
     thickness_m: float = MISSING  # band thickness Δh
     return_thickness_m: float = MISSING  # > 0: Δv is removed again over this thickness above the band
-    shape: str = MISSING  # linear | cosine ramp
+    shape: ShearShape = MISSING
     direction_deg: float = MISSING  # azimuth the added wind blows toward, from north
 
 
@@ -96,12 +114,10 @@ MAX_WINDS_SCALE = 5.0
 
 def check_gust_shear(w: WindsConfig) -> None:
     """``winds.gust`` and ``winds.shear`` (checked whether enabled or not, so a switched-off
-    gust is ready to fly): options from their lists, a gust amplitude within ±50 m/s, a
+    gust is ready to fly): a gust amplitude within ±50 m/s, a
     positive length (``onset: altitude``) or duration (``onset: time``), an onset above
     the ground or after liftoff, a shear of at most ±100 m/s over a positive band."""
     g = w.gust
-    one_of("winds.gust.onset", g.onset, GUST_ONSETS)
-    one_of("winds.gust.frame", g.frame, GUST_FRAMES)
     if not (np.isfinite(g.amplitude_mps) and abs(g.amplitude_mps) <= 50.0):
         raise ConfigError("winds.gust.amplitude_mps", g.amplitude_mps, "must be a finite speed within ±50 m/s")
     finite("winds.gust.direction_deg", g.direction_deg)
@@ -112,7 +128,6 @@ def check_gust_shear(w: WindsConfig) -> None:
         non_negative("winds.gust.onset_time_s", g.onset_time_s)
         positive("winds.gust.duration_s", g.duration_s)
     s = w.shear
-    one_of("winds.shear.shape", s.shape, SHEAR_SHAPES)
     if not (np.isfinite(s.delta_mps) and abs(s.delta_mps) <= 100.0):
         raise ConfigError("winds.shear.delta_mps", s.delta_mps, "must be a finite speed within ±100 m/s")
     finite("winds.shear.base_altitude_m", s.base_altitude_m)

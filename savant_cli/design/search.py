@@ -9,7 +9,7 @@ fix does not stop the search from fixing the others, as a bare max-min would.
 
 Two methods (``study.optimizer.method``):
 
-- ``nelder-mead``: maximize :func:`objective`, bounded simplex search on the normalized
+- ``nelder_mead``: maximize :func:`objective`, bounded simplex search on the normalized
   parameters;
 - ``cobyla``: the margins as constraints: maximize ``t`` subject to every point's ratio
   ``≥ t`` (the epigraph form), a linear-approximation trust region.
@@ -117,7 +117,7 @@ def search(params: list[FreeParameter], tables_of: Callable[[dict[tuple[str, str
             if left <= len(params) + 1:
                 break
             start, before = best[1].copy(), best[0]
-            if opt.method == "nelder-mead":
+            if opt.method == "nelder_mead":
                 simplex = [start] + [np.clip(start + opt.initial_step * np.eye(len(params))[i]
                                              * (1.0 if start[i] + opt.initial_step <= 1.0 else -1.0), 0.0, 1.0)
                                      for i in range(len(params))]

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from enum import StrEnum
 from typing import Any
 
 from rich.console import Console
@@ -36,7 +37,15 @@ _STATUS_KEYS = ("status", "message", "mission_verdict", "mission_class_mask")
 #: study's tables and verdict lines, a flight's summary cut to :data:`HEADLINE_KEYS`;
 #: ``quiet``: one status line and the study's verdict line (no progress bar, no table);
 #: errors are printed on stderr in every mode.
-CONSOLE_MODES = ("full", "summary", "quiet")
+class ConsoleMode(StrEnum):
+    """``output.console``: ``full``, ``summary`` or ``quiet`` (above)."""
+
+    full = "full"
+    summary = "summary"
+    quiet = "quiet"
+
+
+CONSOLE_MODES = tuple(ConsoleMode)
 
 #: The rows of a flight's summary under ``output.console=summary`` (those present).
 HEADLINE_KEYS = (

@@ -22,13 +22,13 @@ from typing import Any
 import numpy as np
 from scipy.special import ndtr, ndtri
 
-from savant_cli.config import DispersionSetConfig, DispersionSpec, SavantConfig
+from savant_cli.config import DispersionApply, DispersionDist, DispersionSetConfig, DispersionSpec, SavantConfig
 from savant_cli.errors import ConfigError
 from savant_cli.montecarlo.targets import TABLE_TARGETS, Target, apply_samples, load_group_option, resolve
 from savant_cli.vehicle import Vehicle
 
-APPLY = ("scale", "offset", "value")
-DISTS = ("normal", "uniform", "triangular", "choice", "constant")
+APPLY = tuple(DispersionApply)
+DISTS = tuple(DispersionDist)
 #: fields each distribution reads (any other field set away from its default is refused)
 DIST_FIELDS = {"normal": ("mean", "sigma", "truncate_sigma"), "uniform": ("low", "high"),
                "triangular": ("low", "mode", "high"), "choice": ("values", "weights"), "constant": ("value",)}

@@ -155,7 +155,9 @@ def write_group(g: h5py.Group, tb: Tables, an: Analysis, inv: Inventory, expecte
     dg = g.create_group("dispersions", track_order=True)
     for j, d in enumerate(dispersions):
         ds = dg.create_dataset(d["name"], data=tb.values[:, j])
-        ds.attrs.update({k: json.dumps(v) if isinstance(v, (list, tuple)) else v for k, v in d.items() if k != "name"})
+        # lists as JSON; the choices (apply, dist: StrEnum) as plain str, which h5py takes
+        ds.attrs.update({k: json.dumps(v) if isinstance(v, (list, tuple)) else str(v) if isinstance(v, str) else v
+                         for k, v in d.items() if k != "name"})
     sg = g.create_group("summary", track_order=True)
     for j, k in enumerate(tb.summary_keys):
         sg.create_dataset(k, data=tb.summary[:, j])

@@ -145,7 +145,7 @@ def write_group(f: h5py.File, rows: list[dict], charts: dict[tuple[float, str, s
     ng = g.create_group("nichols", track_order=True)
     for n, ((t, prm, axis), loops) in enumerate(charts.items()):
         chart = ng.create_group(f"{n:03d}", track_order=True)
-        chart.attrs.update({"time_s": t, "parameter": prm, "axis": axis})
+        chart.attrs.update({"time_s": t, "parameter": str(prm), "axis": str(axis)})  # StrEnum → str for h5py
         for k, lp in enumerate(loops):
             write_loop_response(chart.create_group(f"loop_{k:02d}"), lp)
 

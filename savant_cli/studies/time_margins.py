@@ -302,8 +302,9 @@ def write_group(f: h5py.File, results: list[SearchResult]) -> None:
     for i, res in enumerate(results):
         s = res.search
         g = root.create_group(f"{i:03d}_{s.time_s:g}s_{s.axis}_{s.kind}")
-        for key in _SEARCH_ATTRS:
-            g.attrs[key] = getattr(s, key)
+        for key in _SEARCH_ATTRS:  # the choices (axis, kind: StrEnum) as plain str, which h5py takes
+            value = getattr(s, key)
+            g.attrs[key] = str(value) if isinstance(value, str) else value
         g.attrs["margin"] = res.margin
         g.attrs["unit"] = UNITS[s.kind]
         g.attrs["oscillation_hz"] = res.frequency_hz

@@ -10,6 +10,7 @@ from typing import Any
 from omegaconf import OmegaConf
 from omegaconf.errors import OmegaConfBaseException
 
+from savant_cli.config.checks import allowed_of
 from savant_cli.config.savant import SavantConfig
 from savant_cli.config.study.fcs_design import FcsDesignStudyConfig, check_fcs_design
 from savant_cli.config.study.flex_sweep import FlexSweepStudyConfig, check_flex_sweep
@@ -48,7 +49,7 @@ def study_option(node: Any) -> Any:
             allowed = (f"is required: study={name} has no default for it (the shipped conf/study/{name}.yaml "
                        f"gives one)")
         else:
-            allowed = "unknown key; see `savant run --cfg job`" if "not in" in msg else msg
+            allowed = "unknown key; see `savant run --cfg job`" if "not in" in msg else allowed_of(msg)
         raise ConfigError(key, getattr(exc, "value", None), allowed) from None
     STUDY_CHECKS[name](study)
     return study

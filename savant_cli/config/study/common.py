@@ -2,15 +2,26 @@
 
 from __future__ import annotations
 
+from enum import StrEnum
+
 import numpy as np
 
 from savant_cli.errors import ConfigError
 
-#: The loops a study judges (``study.axes``, ``study.chart_axes``).
-LOOP_AXES = ("pitch", "yaw")
 
-#: ``study.jacobian`` options: per-state steps, or one fixed step (``study.jacobian_step``).
-JACOBIANS = ("auto", "fixed")
+class LoopAxis(StrEnum):
+    """A loop a study judges (``study.axes``, ``study.chart_axes``)."""
+
+    pitch = "pitch"
+    yaw = "yaw"
+
+
+class Jacobian(StrEnum):
+    """``study.jacobian``: per-state steps (``auto``), or one fixed step
+    (``study.jacobian_step``, rad)."""
+
+    auto = "auto"
+    fixed = "fixed"
 
 
 #: Most worker processes of a study: each holds a copy of the built model and its

@@ -4,17 +4,31 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field
+from enum import StrEnum
 from typing import Any, Optional
 
 import numpy as np
 from omegaconf import MISSING
 
-from savant_cli.config.checks import non_negative, one_of, positive
-from savant_cli.config.study.common import LOOP_AXES, MAX_WORKERS, WORKERS_ALLOWED
+from savant_cli.config.checks import non_negative, positive
+from savant_cli.config.study.common import MAX_WORKERS, WORKERS_ALLOWED, LoopAxis
 from savant_cli.errors import ConfigError
 
-#: ``study.optimizer.method`` options (``scipy.optimize.minimize``).
-OPTIMIZER_METHODS = ("nelder-mead", "cobyla")
+
+class OptimizerMethod(StrEnum):
+    """``study.optimizer.method`` (``scipy.optimize.minimize``): ``nelder_mead``, goal
+    attainment then max-min on the normalized parameters; ``cobyla``, the margins as
+    constraints."""
+
+    nelder_mead = "nelder_mead"
+    cobyla = "cobyla"
+
+
+class DesignSchedule(StrEnum):
+    """A gain schedule ``study=fcs_design`` tunes: the stack's or the upper stage's."""
+
+    stack = "stack"
+    upper = "upper"
 
 
 @dataclass
@@ -70,7 +84,7 @@ class DesignParameters:
 class DesignOptimizer:
     """The search of ``study=fcs_design`` (``scipy.optimize.minimize``)."""
 
-    method: str = MISSING  # nelder-mead (goal attainment, then max-min) | cobyla (margins as constraints)
+    method: OptimizerMethod = MISSING
     max_evaluations: int = MISSING  # per schedule
     tolerance: float = MISSING  # on the normalized parameters and the ratio
     initial_step: float = MISSING  # first simplex / trust radius, fraction of each parameter's range
@@ -88,19 +102,19 @@ class FcsDesignStudyConfig:
     design: str = MISSING  # design rules it starts from (savant_cli/datagen/fcs_gains.py CONTROLLERS)
     controller_name: str = MISSING  # name of the controller written ("": <design>_tuned, or <design> with install)
     install: bool = MISSING  # also write conf/controller/<name>.yaml of the shipped config tree
-    schedules: list[str] = MISSING  # tuned in turn
-    every_s: dict[str, float] = MISSING  # design points
+    schedules: list[DesignSchedule] = MISSING  # tuned in turn
+    every_s: dict[DesignSchedule, float] = MISSING  # design points
     verify_every_s: float = MISSING  # the before/after envelope
     event_window_s: float = MISSING  # points this close to an event are skipped
-    axes: list[str] = MISSING  # loops judged in the search (both verified)
+    axes: list[LoopAxis] = MISSING  # loops judged in the search (both verified)
     workers: int = MISSING  # processes judging a candidate's points; 0: all cores
     corners: dict[str, dict[str, Any]] = field(default_factory=dict)  # name → {config key: value}
     parameters: DesignParameters = field(default_factory=DesignParameters)
     optimizer: DesignOptimizer = field(default_factory=DesignOptimizer)
 
 
-#: The gain schedules ``study=fcs_design`` tunes.
-DESIGN_SCHEDULES = ("stack", "upper")
+#: The gain schedules ``study=fcs_design`` tunes, in order.
+DESIGN_SCHEDULES = tuple(DesignSchedule)
 
 
 def design_controller_name(s: FcsDesignStudyConfig) -> str:
@@ -119,10 +133,7 @@ def check_fcs_design(s: FcsDesignStudyConfig) -> None:
                           "names a shipped controller, which would shadow the run folder's copy "
                           "(--config-dir is searched after the shipped configs): choose another name, "
                           "or set study.install=true to replace the shipped file")
-    for i, name in enumerate(s.schedules):
-        one_of(f"study.schedules[{i}]", name, DESIGN_SCHEDULES)
     for name, step in s.every_s.items():
-        one_of("study.every_s", name, DESIGN_SCHEDULES)
         positive(f"study.every_s.{name}", step)
     for name in s.schedules:
         if name not in s.every_s:
@@ -131,11 +142,9 @@ def check_fcs_design(s: FcsDesignStudyConfig) -> None:
     non_negative("study.event_window_s", s.event_window_s)
     if not 0 <= s.workers <= MAX_WORKERS:
         raise ConfigError("study.workers", s.workers, WORKERS_ALLOWED)
-    for i, axis in enumerate(s.axes):
-        one_of(f"study.axes[{i}]", axis, LOOP_AXES)
     if not s.axes:
         raise ConfigError("study.axes", [], "must name at least one loop (pitch, yaw)")
-    for sched in DESIGN_SCHEDULES:
+    for sched in DesignSchedule:
         params = getattr(s.parameters, sched)
         for name, why in STACK_ONLY_PARAMETERS.items():
             if sched != "stack" and getattr(params, name) is not None:
@@ -150,7 +159,6 @@ def check_fcs_design(s: FcsDesignStudyConfig) -> None:
             if prm.initial is not None and not prm.low <= prm.initial <= prm.high:
                 raise ConfigError(f"{key}.initial", prm.initial, f"must lie within [{prm.low}, {prm.high}]")
     o = s.optimizer
-    one_of("study.optimizer.method", o.method, OPTIMIZER_METHODS)
     if o.max_evaluations < 1:
         raise ConfigError("study.optimizer.max_evaluations", o.max_evaluations, "must be a positive count")
     positive("study.optimizer.tolerance", o.tolerance)

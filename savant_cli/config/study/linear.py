@@ -3,18 +3,29 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from enum import StrEnum
 
 from omegaconf import MISSING
 
-from savant_cli.config.checks import non_negative, one_of, positive
-from savant_cli.config.study.common import JACOBIANS, flight_times
+from savant_cli.config.checks import non_negative, positive
+from savant_cli.config.study.common import Jacobian, flight_times
 from savant_cli.errors import ConfigError
 
-#: ``study.frozen_time.criteria`` options (``linear/frozen_time.py``).
-FROZEN_TIME_CRITERIA = ("period", "control_power")
 
-#: ``study.charts`` options: per-point charts for every point, none, or up to 20 points.
-CHART_MODES = ("auto", "all", "none")
+class FrozenTimeCriterion(StrEnum):
+    """``study.frozen_time.criteria``: what opens the tail-off window
+    (``linear/frozen_time.py``)."""
+
+    period = "period"
+    control_power = "control_power"
+
+
+class ChartMode(StrEnum):
+    """``study.charts``: per-point charts for every point, none, or up to 20 points."""
+
+    auto = "auto"
+    all = "all"
+    none = "none"
 
 
 @dataclass
@@ -25,7 +36,7 @@ class FrozenTimeSpec:
 
     # period: crossover period >= time to separation; control_power: the control power
     # falls within one period by the rigid gain requirement; []: no window, judge every point
-    criteria: list[str] = MISSING
+    criteria: list[FrozenTimeCriterion] = MISSING
     scan_s: float = MISSING  # s before the flown separation scanned for the criteria
     step_s: float = MISSING  # s between scan points
     excitation_deg: float = MISSING  # time-domain checks: doublet at the gimbal command, deg ...
@@ -33,10 +44,8 @@ class FrozenTimeSpec:
 
 
 def check_frozen_time(f: FrozenTimeSpec, key: str) -> None:
-    """Criteria among ``period``, ``control_power`` (each once); positive scan span and
-    step, the step at most the span; a positive excitation."""
-    for i, c in enumerate(f.criteria):
-        one_of(f"{key}.criteria[{i}]", c, FROZEN_TIME_CRITERIA)
+    """Each criterion once; positive scan span and step, the step at most the span; a
+    positive excitation."""
     if len(set(f.criteria)) != len(f.criteria):
         raise ConfigError(f"{key}.criteria", list(f.criteria), "names each criterion at most once")
     positive(f"{key}.scan_s", f.scan_s)
@@ -58,9 +67,9 @@ class LinearStudyConfig:
     # the first-stage tail-off window: points in it are analysed and reported but judged
     # in the time domain (separation state with the required margins inserted)
     frozen_time: FrozenTimeSpec = field(default_factory=FrozenTimeSpec)
-    jacobian: str = MISSING  # auto: per-state steps; fixed: one user step
+    jacobian: Jacobian = MISSING  # auto: per-state steps; fixed: one user step
     jacobian_step: float = MISSING  # the fixed step, as an attitude perturbation in rad
-    charts: str = MISSING  # all | none | auto (per-point charts up to 20 points)
+    charts: ChartMode = MISSING
     exclusion_zones: bool = MISSING  # Nichols exclusion zones
 
 
@@ -71,6 +80,4 @@ def check_linear(s: LinearStudyConfig) -> None:
         flight_times(s.times)
     non_negative("study.event_clearance_s", s.event_clearance_s)
     check_frozen_time(s.frozen_time, "study.frozen_time")
-    one_of("study.jacobian", s.jacobian, JACOBIANS)
     positive("study.jacobian_step", s.jacobian_step)
-    one_of("study.charts", s.charts, CHART_MODES)

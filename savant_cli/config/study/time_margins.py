@@ -3,14 +3,25 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from enum import StrEnum
 
 from omegaconf import MISSING
 
-from savant_cli.config.checks import non_negative, one_of, positive
-from savant_cli.config.study.common import JACOBIANS, LOOP_AXES, MAX_WORKERS, WORKERS_ALLOWED, flight_times
+from savant_cli.config.checks import non_negative, positive
+from savant_cli.config.study.common import MAX_WORKERS, WORKERS_ALLOWED, Jacobian, LoopAxis, flight_times
 from savant_cli.errors import ConfigError
 
-MARGIN_KINDS = ("gain_high", "gain_low", "delay")
+
+class MarginKind(StrEnum):
+    """``study.kinds``: the gain-increase (``gain_high``), gain-reduction (``gain_low``)
+    and delay margin measured in the time domain (``timedomain/search.py``)."""
+
+    gain_high = "gain_high"
+    gain_low = "gain_low"
+    delay = "delay"
+
+
+MARGIN_KINDS = tuple(MarginKind)
 
 
 @dataclass
@@ -20,8 +31,8 @@ class TimeMarginsStudyConfig:
 
     name: str = "time_margins"
     times: list[float] = MISSING
-    axes: list[str] = MISSING
-    kinds: list[str] = MISSING
+    axes: list[LoopAxis] = MISSING
+    kinds: list[MarginKind] = MISSING
     lead_s: float = MISSING  # the perturbation starts this long before the point
     window_s: float = MISSING  # and is held this long
     min_periods: float = MISSING  # the window stretched to hold this many periods of the frequency-domain crossing
@@ -37,7 +48,7 @@ class TimeMarginsStudyConfig:
     settle_s: float = MISSING  # left out of the growth analysis after the window starts
     min_damping_ratio: float = MISSING  # stable only when the envelope decays per period as a mode of this damping
     workers: int = MISSING  # processes; 0: all cores
-    jacobian: str = MISSING  # of the frequency-domain side (as study=linear)
+    jacobian: Jacobian = MISSING  # of the frequency-domain side (as study=linear)
     jacobian_step: float = MISSING
 
 
@@ -45,12 +56,8 @@ def check_time_margins(s: TimeMarginsStudyConfig) -> None:
     flight_times(s.times)
     if not s.axes:
         raise ConfigError("study.axes", [], "must name at least one loop (pitch, yaw)")
-    for i, axis in enumerate(s.axes):
-        one_of(f"study.axes[{i}]", axis, LOOP_AXES)
     if not s.kinds:
         raise ConfigError("study.kinds", [], f"must name at least one of {', '.join(MARGIN_KINDS)}")
-    for i, kind in enumerate(s.kinds):
-        one_of(f"study.kinds[{i}]", kind, MARGIN_KINDS)
     for key in ("window_s", "max_window_s", "gain_bound_dB", "delay_bound_ms", "gain_tolerance_dB",
                 "delay_tolerance_ms", "excitation_deg", "excitation_s"):
         positive(f"study.{key}", getattr(s, key))
@@ -70,5 +77,4 @@ def check_time_margins(s: TimeMarginsStudyConfig) -> None:
                           "reach (0 would leave the verdict on a neutral oscillation to round-off)")
     if not 0 <= s.workers <= MAX_WORKERS:
         raise ConfigError("study.workers", s.workers, WORKERS_ALLOWED)
-    one_of("study.jacobian", s.jacobian, JACOBIANS)
     positive("study.jacobian_step", s.jacobian_step)
