@@ -34,6 +34,7 @@ from savant_cli.config.guidance import (
     FirstStageSchedule, GuidanceConfig, InsertionTolerance, LaunchSite, OrbitTarget, PegConfig, SmootherConfig,
     check_peg, check_target
 )
+from savant_cli.config.model_group import ModelGroup
 from savant_cli.config.navigation import (
     NAVIGATION_BOUNDS, AccelerometerErrorsConfig, GyroErrorsConfig, NavigationInertialConfig, NavigationPerfectConfig,
     check_navigation
@@ -47,7 +48,7 @@ from savant_cli.config.requirements import (
 from savant_cli.config.run import (
     MAX_LOG_ROWS, SIM_BOUNDS, EnvironmentConfig, HealthConfig, PhaseConfig, PhaseStart, PhaseStop, SimConfig
 )
-from savant_cli.config.savant import SavantConfig, check_vehicle_match
+from savant_cli.config.savant import GROUP_VARIANTS, MODEL_GROUPS, SavantConfig, check_vehicle_match
 from savant_cli.config.sensors import RateGyroConfig, SensorMisalignment, SensorsConfig
 from savant_cli.config.shipped import shipped_option
 from savant_cli.config.slosh import SloshOffConfig, SloshOnConfig, check_slosh
@@ -69,7 +70,7 @@ from savant_cli.config.study.montecarlo import (
 from savant_cli.config.study.nominal import StudyConfig
 from savant_cli.config.study.time_margins import MARGIN_KINDS, MarginKind, TimeMarginsStudyConfig
 from savant_cli.config.twd import TwdOffConfig, TwdOnConfig
-from savant_cli.config.validation import GROUP_VARIANTS, check_physics, group_option, has_key, validate
+from savant_cli.config.validation import check_physics, group_option, has_key, validate
 from savant_cli.config.winds import (
     MAX_WINDS_SCALE, GustConfig, GustFrame, GustOnset, ShearConfig, ShearShape, WindProfile, WindsConfig,
     check_gust_shear
@@ -86,16 +87,16 @@ __all__ = [
     "GainTables", "GuidanceConfig", "GustConfig", "GustFrame", "GustOnset", "GyroErrorsConfig", "HealthConfig",
     "HistoriesSpec", "IgnitionFade", "InsertionTolerance", "Jacobian", "LaunchSite", "LinearStudyConfig", "LoopAxis",
     "MARGIN_KINDS", "MAX_HISTORY_SAMPLES", "MAX_LOG_ROWS", "MAX_N_RUNS", "MAX_SHARDS", "MAX_WINDS_SCALE",
-    "MAX_WORKERS", "MarginKind", "MissionRequirement", "ModeRetentionStudyConfig", "MonteCarloStudyConfig",
-    "NAVIGATION_BOUNDS", "NavigationInertialConfig", "NavigationPerfectConfig", "OptimizerMethod", "OrbitTarget",
-    "OutputConfig", "PegConfig", "PhaseConfig", "PhaseStart", "PhaseStop", "RateGyroConfig", "ReliabilitySpec",
-    "RequirementSet", "RigidRequirement", "RollControl", "SIM_BOUNDS", "STACK_ONLY_PARAMETERS", "STUDY_SCHEMAS",
-    "SavantConfig", "ScheduleParameters", "SensorMisalignment", "SensorsConfig", "SeparationRequirement",
-    "ShearConfig", "ShearShape", "SimConfig", "SimplexActuatorConfig", "SimplexFeedback", "SimplexStage",
-    "SloshOffConfig", "SloshOnConfig", "SloshRequirement", "SmootherConfig", "Stabilization", "StudyConfig",
-    "SweepParameter", "ThirdOrderActuatorConfig", "ThirdOrderStage", "TimeMarginsStudyConfig", "TwdOffConfig",
-    "TwdOnConfig", "WORKERS_ALLOWED", "WindProfile", "WindsConfig", "check_actuator", "check_delay", "check_flex",
-    "check_frozen_time", "check_gust_shear", "check_navigation", "check_peg", "check_physics", "check_requirements",
-    "check_slosh", "check_study_times", "check_target", "check_vehicle_match", "design_controller_name",
-    "group_option", "has_key", "shipped_option", "validate",
+    "MAX_WORKERS", "MODEL_GROUPS", "MarginKind", "MissionRequirement", "ModeRetentionStudyConfig", "ModelGroup",
+    "MonteCarloStudyConfig", "NAVIGATION_BOUNDS", "NavigationInertialConfig", "NavigationPerfectConfig",
+    "OptimizerMethod", "OrbitTarget", "OutputConfig", "PegConfig", "PhaseConfig", "PhaseStart", "PhaseStop",
+    "RateGyroConfig", "ReliabilitySpec", "RequirementSet", "RigidRequirement", "RollControl", "SIM_BOUNDS",
+    "STACK_ONLY_PARAMETERS", "STUDY_SCHEMAS", "SavantConfig", "ScheduleParameters", "SensorMisalignment",
+    "SensorsConfig", "SeparationRequirement", "ShearConfig", "ShearShape", "SimConfig", "SimplexActuatorConfig",
+    "SimplexFeedback", "SimplexStage", "SloshOffConfig", "SloshOnConfig", "SloshRequirement", "SmootherConfig",
+    "Stabilization", "StudyConfig", "SweepParameter", "ThirdOrderActuatorConfig", "ThirdOrderStage",
+    "TimeMarginsStudyConfig", "TwdOffConfig", "TwdOnConfig", "WORKERS_ALLOWED", "WindProfile", "WindsConfig",
+    "check_actuator", "check_delay", "check_flex", "check_frozen_time", "check_gust_shear", "check_navigation",
+    "check_peg", "check_physics", "check_requirements", "check_slosh", "check_study_times", "check_target",
+    "check_vehicle_match", "design_controller_name", "group_option", "has_key", "shipped_option", "validate",
 ]

@@ -8,6 +8,7 @@ from enum import StrEnum
 from omegaconf import MISSING
 
 from savant_cli.config.checks import non_negative, positive, small_angles
+from savant_cli.config.model_group import ModelGroup
 from savant_cli.errors import ConfigError
 
 
@@ -120,3 +121,7 @@ def check_actuator(a: ThirdOrderActuatorConfig | SimplexActuatorConfig, plant_ra
             if st.valve_frequency_hz >= nyq:
                 raise ConfigError(f"actuator.{stage}.valve_frequency_hz", st.valve_frequency_hz,
                                   f"must be below a quarter of sim.plant_rate_hz ({nyq} Hz) for RK4 stability")
+
+
+GROUP = ModelGroup("actuator", {"third_order": ThirdOrderActuatorConfig, "simplex": SimplexActuatorConfig},
+                   lambda a, cfg: check_actuator(a, cfg.sim.plant_rate_hz))

@@ -8,6 +8,7 @@ from enum import StrEnum
 from omegaconf import MISSING
 
 from savant_cli.config.checks import non_negative, positive
+from savant_cli.config.model_group import ModelGroup
 from savant_cli.errors import ConfigError
 
 
@@ -55,3 +56,6 @@ def check_flex(f: FlexOffConfig | FlexOnConfig) -> None:
                           f"must give at least flex.n_modes = {f.n_modes} values, or be empty")
     positive("flex.frequency_scale", f.frequency_scale)
     non_negative("flex.shape_scale", f.shape_scale)
+
+
+GROUP = ModelGroup("flex", {"off": FlexOffConfig, "on": FlexOnConfig}, lambda f, cfg: check_flex(f))

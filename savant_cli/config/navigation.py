@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 from omegaconf import MISSING
 
+from savant_cli.config.model_group import ModelGroup
 from savant_cli.errors import ConfigError
 
 
@@ -83,3 +84,7 @@ def check_navigation(n: NavigationPerfectConfig | NavigationInertialConfig) -> N
             if not (isinstance(v, (int, float)) and np.isfinite(v) and abs(v) <= limit):
                 raise ConfigError(f"{key}[{i}]", v, f"must be a finite value within ±{limit:g} {units} (the first-order "
                                                     "error model's range, config.NAVIGATION_BOUNDS)")
+
+
+GROUP = ModelGroup("navigation", {"perfect": NavigationPerfectConfig, "inertial": NavigationInertialConfig},
+                   lambda n, cfg: check_navigation(n))

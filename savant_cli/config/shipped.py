@@ -16,9 +16,8 @@ from typing import Any
 from omegaconf import OmegaConf
 from omegaconf.errors import InterpolationResolutionError
 
-from savant_cli.config.savant import SavantConfig
+from savant_cli.config.savant import GROUP_VARIANTS, SavantConfig
 from savant_cli.config.study import STUDY_SCHEMAS
-from savant_cli.config.validation import GROUP_VARIANTS
 from savant_cli.paths import shipped_config_dir
 
 

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 from omegaconf import MISSING
 
 from savant_cli.config.checks import non_negative, positive
+from savant_cli.config.model_group import ModelGroup
 
 
 @dataclass
@@ -32,3 +33,6 @@ def check_slosh(s: SloshOffConfig | SloshOnConfig) -> None:
     if s.enabled:
         positive("slosh.frequency_scale", s.frequency_scale)
         non_negative("slosh.damping_scale", s.damping_scale)
+
+
+GROUP = ModelGroup("slosh", {"off": SloshOffConfig, "on": SloshOnConfig}, lambda s, cfg: check_slosh(s))

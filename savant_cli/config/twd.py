@@ -6,6 +6,8 @@ from dataclasses import dataclass
 
 from omegaconf import MISSING
 
+from savant_cli.config.model_group import ModelGroup
+
 
 @dataclass
 class TwdOffConfig:
@@ -21,3 +23,6 @@ class TwdOnConfig:
 
     name: str = "on"
     enabled: bool = MISSING
+
+
+GROUP = ModelGroup("twd", {"off": TwdOffConfig, "on": TwdOnConfig}, lambda t, cfg: None)  # no keys to check

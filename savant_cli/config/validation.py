@@ -1,6 +1,5 @@
-"""The validation entry: a composed config merged onto the schema (:func:`validate`),
-the groups whose options carry different keys (:data:`GROUP_VARIANTS`), the physical
-checks of every group (:func:`check_physics`)."""
+"""The validation entry: a composed config merged onto the schema (:func:`validate`) and
+the physical checks of every group (:func:`check_physics`)."""
 
 from __future__ import annotations
 
@@ -10,30 +9,17 @@ from typing import Any
 from omegaconf import DictConfig, OmegaConf
 from omegaconf.errors import MissingMandatoryValue, OmegaConfBaseException
 
-from savant_cli.config.actuator import SimplexActuatorConfig, ThirdOrderActuatorConfig, check_actuator
 from savant_cli.config.checks import allowed_of
 from savant_cli.config.controller import check_controller, check_delay
-from savant_cli.config.flex import FlexOffConfig, FlexOnConfig, check_flex
 from savant_cli.config.guidance import check_guidance
-from savant_cli.config.navigation import NavigationInertialConfig, NavigationPerfectConfig, check_navigation
 from savant_cli.config.requirements import check_requirements
 from savant_cli.config.run import check_environment, check_phase, check_sim
-from savant_cli.config.savant import SavantConfig, check_vehicle_match
+from savant_cli.config.savant import GROUP_VARIANTS, MODEL_GROUPS, SavantConfig, check_vehicle_match
 from savant_cli.config.sensors import check_sensors
-from savant_cli.config.slosh import SloshOffConfig, SloshOnConfig, check_slosh
 from savant_cli.config.study import check_study_times, study_option
-from savant_cli.config.twd import TwdOffConfig, TwdOnConfig
 from savant_cli.config.winds import check_winds, check_winds_scale
 from savant_cli.errors import ConfigError
 from savant_cli.paths import shipped_config_dir
-
-GROUP_VARIANTS: dict[str, dict[str, type]] = {
-    "actuator": {"third_order": ThirdOrderActuatorConfig, "simplex": SimplexActuatorConfig},
-    "flex": {"off": FlexOffConfig, "on": FlexOnConfig},
-    "slosh": {"off": SloshOffConfig, "on": SloshOnConfig},
-    "twd": {"off": TwdOffConfig, "on": TwdOnConfig},
-    "navigation": {"perfect": NavigationPerfectConfig, "inertial": NavigationInertialConfig},
-}
 
 
 def _strict_merge(cfg: DictConfig) -> DictConfig:
@@ -61,11 +47,9 @@ def check_physics(cfg: SavantConfig) -> None:
     check_sim(cfg.sim)
     check_environment(cfg.environment)
     check_phase(cfg.phase)
-    check_actuator(cfg.actuator, cfg.sim.plant_rate_hz)
+    for group in MODEL_GROUPS:
+        group.check(getattr(cfg, group.name), cfg)
     check_delay(cfg.controller.delay_s, cfg.sim)
-    check_flex(cfg.flex)
-    check_slosh(cfg.slosh)
-    check_navigation(cfg.navigation)
     check_requirements(cfg.requirements)
     check_sensors(cfg.sensors, cfg.sim)
     check_winds_scale(cfg.winds)
@@ -122,7 +106,7 @@ def has_key(schema: type, path: list[str]) -> bool:
 
 
 def group_option(group: str, node: Any) -> Any:
-    """The section of a group with per-option schemas (:data:`GROUP_VARIANTS`), merged onto
+    """The section of a group with per-option schemas (:data:`~savant_cli.config.savant.GROUP_VARIANTS`), merged onto
     its option's schema: a key of another option, or of a model that is switched off, is
     refused naming the options where it exists."""
     variants = GROUP_VARIANTS[group]
