@@ -53,3 +53,43 @@ def test_one_evaluation_fills_every_diagnostic_and_the_state_only_path_only_the_
     altitude = blocks.DIAGNOSTICS.field("earth.altitude").index
     assert written.tolist() == [altitude]
     assert aux_state[altitude] == aux[altitude] and np.array_equal(xd_state, xd)
+
+
+def _short_flight(overrides):
+    from savant_cli.sim.run import signals, simulate
+
+    prep = prepare(validate(compose_config(overrides + ["sim.max_time_s=2", "sim.progress=false"])), hydra_search_dirs())
+    result = simulate(prep.model, progress=False)
+    return prep.model, result, signals(result, prep.model)
+
+
+def test_a_logged_diagnostic_is_a_signal_of_every_run_where_its_model_is_on():
+    """Each field declared with ``blocks.Logged`` is a time history with the field's units
+    and description, the declaration's columns and frame, and the logged ``aux`` entries
+    as data; a field whose model is off (``when`` false: slosh, flex) is left out."""
+    from savant_cli.sim.run import _split
+
+    logged = [f for f in blocks.DIAGNOSTICS.fields if f.logged is not None]
+    assert {"dynamic_pressure", "wind_ned", "twd_moment", "liquid_level", "flex_gimbal_rotation"} <= \
+        {f.logged.name for f in logged}
+    model, result, sig = _short_flight(["flex=on", "flex.n_modes=2", "slosh=on", "twd=on"])
+    aux = _split(result.log, model.layout.n)[2]
+    for f in logged:
+        s = sig[f.logged.name]
+        declared = (f.units, f.description, f.logged.columns, f.logged.frame)
+        assert (s.units, s.description, s.columns, s.frame) == declared
+        assert np.array_equal(s.data, aux[:, f.index] if f.size == 1 else aux[:, f.index:f.index + f.size])
+    _, _, rigid = _short_flight([])
+    conditional = {f.logged.name for f in logged if f.logged.when is not None}
+    assert conditional == {"liquid_level", "slosh_force", "flex_gimbal_rotation"}
+    assert not conditional & set(rigid) and {f.logged.name for f in logged} - conditional <= set(rigid)
+
+
+def test_a_logged_field_needs_one_column_name_per_entry():
+    import pytest
+
+    vec = blocks.Vector("aux_test", "a scratch vector")
+    with pytest.raises(ValueError, match="columns"):
+        vec.block("m").array("v", 3, "m/s", "a vector", blocks.Logged("v", ("x", "y")))
+    with pytest.raises(ValueError, match="columns"):
+        vec.block("m").scalar("s", "m", "a scalar", blocks.Logged("s", ("x",)))

@@ -13,12 +13,16 @@ def field_reference() -> str:
     -------
     str
         One row per field: vector, key, size (``table`` for packed tables), SI units and
-        description, in declaration order.
+        description (with the frame and the signal name of a logged diagnostic), in
+        declaration order.
     """
     lines = ["| vector | field | size | units | description |", "|---|---|---|---|---|"]
     for f in layout.all_fields():
         size = "table" if f.vector == "tb" else str(f.size)
-        lines.append(f"| `{f.vector}` | `{f.key}` | {size} | {f.units} | {f.description} |")
+        text = f.description
+        if f.logged is not None:
+            text += (f", {f.logged.frame}" if f.logged.frame else "") + f"; logged as `{f.logged.name}`"
+        lines.append(f"| `{f.vector}` | `{f.key}` | {size} | {f.units} | {text} |")
     return "\n".join(lines)
 
 

@@ -98,8 +98,10 @@ P_US_THIRD = _PARAMS.record("upper_stage.third_order", THIRD, "upper-stage third
 P_FS_SPX = _PARAMS.record("first_stage.simplex", SPX, "first-stage simplex actuator")
 P_US_SPX = _PARAMS.record("upper_stage.simplex", SPX, "upper-stage simplex actuator")
 _AUX = blocks.DIAGNOSTICS.block("actuator")
-A_ANGLES = _AUX.array("angles", 2, "rad", "limited actuator angles pitch, yaw (null bias not included)")
-A_ACCEL = _AUX.array("accelerations", 2, "rad/s^2", "nozzle angular accelerations pitch, yaw")
+A_ANGLES = _AUX.array("angles", 2, "rad", "engine gimbal angles (limited)",  # null bias not included
+                      blocks.Logged("gimbal_angle", ("pitch", "yaw"), "body"))
+A_ACCEL = _AUX.array("accelerations", 2, "rad/s^2", "nozzle angular accelerations (zero while held at a gimbal stop)",
+                     blocks.Logged("gimbal_acceleration", ("pitch", "yaw"), "body"))
 
 
 @njit(cache=True, error_model="numpy", inline="always")

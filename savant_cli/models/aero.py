@@ -55,13 +55,16 @@ T_BASE_TIME = _TABLES.table("base_time", "s", "(3, nb) base-force time axis per 
 T_BASE_FORCE = _TABLES.table("base_force", "N", "(3, nb) base force along body X")
 T_BASE_LEN = _TABLES.table("base_len", "1", "(3,) valid rows of each base-force table")
 _AUX = blocks.DIAGNOSTICS.block("aero")
-A_MACH = _AUX.scalar("mach", "1", "Mach number")
-A_QBAR = _AUX.scalar("dynamic_pressure", "Pa", "dynamic pressure")
-A_ALPHA = _AUX.scalar("alpha", "rad", "angle of attack")
-A_BETA = _AUX.scalar("beta", "rad", "sideslip angle")
-A_VREL = _AUX.scalar("air_speed", "m/s", "air-relative speed")
-A_FORCE = _AUX.array("force", 3, "N", "aerodynamic force incl. base force, body")
-A_MOMENT = _AUX.array("moment", 3, "N*m", "aerodynamic moment about the CG, body")
+A_MACH = _AUX.scalar("mach", "1", "Mach number", blocks.Logged("mach"))
+A_QBAR = _AUX.scalar("dynamic_pressure", "Pa", "dynamic pressure", blocks.Logged("dynamic_pressure"))
+A_ALPHA = _AUX.scalar("alpha", "rad", "angle of attack", blocks.Logged("alpha"))
+A_BETA = _AUX.scalar("beta", "rad", "sideslip angle", blocks.Logged("beta"))
+A_VREL = _AUX.scalar("air_speed", "m/s", "air-relative speed (Earth-relative minus wind)",
+                     blocks.Logged("velocity_relative"))
+A_FORCE = _AUX.array("force", 3, "N", "aerodynamic force incl. base force",
+                     blocks.Logged("aero_force", ("x", "y", "z"), "body"))
+A_MOMENT = _AUX.array("moment", 3, "N*m", "aerodynamic moment about the CG",
+                      blocks.Logged("aero_moment", ("x", "y", "z"), "body"))
 
 
 @njit(cache=True, error_model="numpy", inline="always")

@@ -60,10 +60,10 @@ T_ALT = _TABLES.table("atm_alt", "m", "geometric altitudes of the 86–1000 km t
 T_LNP = _TABLES.table("atm_lnp", "ln Pa", "natural log of pressure at T_ALT")
 T_LNRHO = _TABLES.table("atm_lnrho", "ln(kg/m^3)", "natural log of density at T_ALT")
 _AUX = blocks.DIAGNOSTICS.block("atmosphere")
-A_RHO = _AUX.scalar("density", "kg/m^3", "air density")
-A_PRES = _AUX.scalar("pressure", "Pa", "static pressure")
-A_TEMP = _AUX.scalar("temperature", "K", "kinetic temperature")
-A_SOS = _AUX.scalar("speed_of_sound", "m/s", "speed of sound")
+A_RHO = _AUX.scalar("density", "kg/m^3", "air density (US76)", blocks.Logged("density"))
+A_PRES = _AUX.scalar("pressure", "Pa", "static pressure (US76)", blocks.Logged("pressure"))
+A_TEMP = _AUX.scalar("temperature", "K", "kinetic temperature (US76)", blocks.Logged("temperature"))
+A_SOS = _AUX.scalar("speed_of_sound", "m/s", "speed of sound (US76)", blocks.Logged("speed_of_sound"))
 
 
 @njit(cache=True, error_model="numpy", inline="always")

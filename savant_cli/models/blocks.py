@@ -24,6 +24,7 @@ test checks that each one is documented there.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -35,8 +36,33 @@ if TYPE_CHECKING:  # pragma: no cover
 
 
 @dataclass(frozen=True)
+class Logged:
+    """A diagnostic logged as a named time history (``sim/run.py::signals``, the dataset
+    ``time_history/<name>`` of ``savant.h5``), with the field's units and description.
+
+    Attributes
+    ----------
+    name : str
+        The signal's name.
+    columns : tuple of str
+        Names of the columns of a field of more than one entry.
+    frame : str
+        Reference frame of a vector (``"body"``, ``"ECI"``, ``"NED"``); empty for scalars.
+    when : callable or None
+        ``when(model)`` (the built :class:`savant_cli.sim.setup.SimModel`) is true when
+        the field means something in the run (its model is on); None: always logged.
+    """
+
+    name: str
+    columns: tuple[str, ...] = ()
+    frame: str = ""
+    when: Callable[[Any], bool] | None = None
+
+
+@dataclass(frozen=True)
 class Field:
-    """One named field of a vector: ``size`` consecutive entries from ``index``."""
+    """One named field of a vector: ``size`` consecutive entries from ``index``; a
+    diagnostic with ``logged`` set is a time history of every run."""
 
     vector: str
     model: str
@@ -45,6 +71,7 @@ class Field:
     size: int
     units: str
     description: str
+    logged: Logged | None = None
 
     @property
     def key(self) -> str:
@@ -86,13 +113,17 @@ class Vector:
         """The fields of ``model`` in this vector (declared through the returned block)."""
         return Block(self, model)
 
-    def _add(self, model: str, name: str, size: int, units: str, description: str) -> int:
+    def _add(self, model: str, name: str, size: int, units: str, description: str,
+             logged: Logged | None = None) -> int:
         if not units:
             raise ValueError(f"{self.name}: field {model}.{name} needs units ('1' when dimensionless)")
         if any(f.model == model and f.name == name for f in self.fields):
             raise ValueError(f"{self.name}: field {model}.{name} declared twice")
+        if logged is not None and len(logged.columns) != (0 if size == 1 else size):
+            raise ValueError(f"{self.name}: field {model}.{name} of {size} entries logged with columns "
+                             f"{logged.columns}")
         index = self.size
-        self.fields.append(Field(self.name, model, name, index, size, units, description))
+        self.fields.append(Field(self.name, model, name, index, size, units, description, logged))
         self.size += size
         return index
 
@@ -111,13 +142,14 @@ class Block:
         self.vector = vector
         self.model = model
 
-    def scalar(self, name: str, units: str, description: str) -> int:
-        """One entry; returns its index."""
-        return self.vector._add(self.model, name, 1, units, description)
+    def scalar(self, name: str, units: str, description: str, logged: Logged | None = None) -> int:
+        """One entry; returns its index. ``logged``: a time history of every run."""
+        return self.vector._add(self.model, name, 1, units, description, logged)
 
-    def array(self, name: str, size: int, units: str, description: str) -> int:
-        """``size`` consecutive entries of one quantity; returns the first index."""
-        return self.vector._add(self.model, name, size, units, description)
+    def array(self, name: str, size: int, units: str, description: str, logged: Logged | None = None) -> int:
+        """``size`` consecutive entries of one quantity; returns the first index.
+        ``logged``: a time history of every run."""
+        return self.vector._add(self.model, name, size, units, description, logged)
 
     def record(self, name: str, layout: Record, description: str) -> int:
         """One :class:`Record`; returns its first index (add the record's offsets)."""

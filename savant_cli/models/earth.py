@@ -21,10 +21,11 @@ P_RE = _PARAMS.scalar("equatorial_radius", "m", "WGS84 semi-major axis")
 P_E2 = _PARAMS.scalar("eccentricity_squared", "1", "WGS84 first eccentricity squared")
 P_OMEGA_E = _PARAMS.scalar("rotation_rate", "rad/s", "Earth rotation rate about ECI Z")
 _AUX = blocks.DIAGNOSTICS.block("earth")
-A_ALT = _AUX.scalar("altitude", "m", "WGS84 geodetic altitude of the CG")
-A_LAT = _AUX.scalar("latitude", "rad", "geodetic latitude")
-A_LON = _AUX.scalar("longitude", "rad", "longitude, east positive")
-A_VEARTH = _AUX.scalar("earth_relative_speed", "m/s", "Earth-relative speed (no wind)")
+A_ALT = _AUX.scalar("altitude", "m", "WGS84 geodetic altitude of the CG", blocks.Logged("altitude"))
+A_LAT = _AUX.scalar("latitude", "rad", "WGS84 geodetic latitude", blocks.Logged("latitude"))
+A_LON = _AUX.scalar("longitude", "rad", "longitude (east positive)", blocks.Logged("longitude"))
+A_VEARTH = _AUX.scalar("earth_relative_speed", "m/s", "Earth-relative speed, no wind",
+                       blocks.Logged("velocity_earth_relative"))
 
 
 @njit(cache=True, error_model="numpy", inline="always")

@@ -72,7 +72,9 @@ T_FREQ = _TABLES.table("flex_freq", "rad/s", "(4 FLEX_SETS, n_modes) modal frequ
 T_ZETA = _TABLES.table("flex_zeta", "1", "(n_modes,) modal damping ratios")
 T_SHAPE = _TABLES.table("flex_shape", "SI", "(4, n_modes, N_POINTS, SHAPE) mode shapes at the points, body axes")
 _AUX = blocks.DIAGNOSTICS.block("flex")
-A_GIMBAL_ROTATION = _AUX.array("gimbal_rotation", 3, "rad", "flex rotation at the active gimbal, body")
+A_GIMBAL_ROTATION = _AUX.array("gimbal_rotation", 3, "rad", "flex rotation at the active gimbal (turns the thrust)",
+                               blocks.Logged("flex_gimbal_rotation", ("roll", "pitch", "yaw"), "body",
+                                             lambda model: model.layout.n_modes > 0))
 
 
 @njit(cache=True, error_model="numpy", inline="always")

@@ -29,7 +29,8 @@ P_J3 = _PARAMS.scalar("j3", "1", "unnormalised zonal coefficient J3 (EGM2008)")
 P_J4 = _PARAMS.scalar("j4", "1", "unnormalised zonal coefficient J4 (EGM2008)")
 P_ORDER = _PARAMS.scalar("order", "1", "highest zonal term used: 0 point mass, 2, 3 or 4")
 _AUX = blocks.DIAGNOSTICS.block("gravity")
-A_GRAV = _AUX.array("acceleration", 3, "m/s^2", "gravitational acceleration, ECI")
+A_GRAV = _AUX.array("acceleration", 3, "m/s^2", "gravitational acceleration (J2-J4 zonal model)",
+                    blocks.Logged("gravity_eci", ("x", "y", "z"), "ECI"))
 
 
 @njit(cache=True, error_model="numpy", inline="always")

@@ -39,8 +39,9 @@ T_PROP = _TABLES.table("mass_prop", "kg", "(3 configurations, n) propellant rema
 T_DATA = _TABLES.table("mass_data", "kg, m, kg*m^2", "(3, n, COLUMNS) mass-properties rows")
 T_LEN = _TABLES.table("mass_len", "1", "(3,) valid rows per configuration")
 _AUX = blocks.DIAGNOSTICS.block("mass")
-A_MASS = _AUX.scalar("mass", "kg", "vehicle mass (slosh masses included)")
-A_CG = _AUX.array("cg", 3, "m", "vehicle CG, structure frame (slosh masses included)")
+A_MASS = _AUX.scalar("mass", "kg", "vehicle mass", blocks.Logged("mass"))  # slosh masses included
+A_CG = _AUX.array("cg", 3, "m", "CG location",  # slosh masses included
+                  blocks.Logged("cg_structure", ("x", "y", "z"), "structure"))
 A_PROP = _AUX.scalar("propellant", "kg", "propellant remaining of the burning configuration")
 
 

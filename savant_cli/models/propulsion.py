@@ -76,7 +76,7 @@ T_FS_THRUST = _TABLES.table("fs_thrust", "N", "first-stage vacuum thrust at T_FS
 T_US_START_TIME = _TABLES.table("us_start_time", "s", "upper-stage start transient, time since ignition")
 T_US_START_FRAC = _TABLES.table("us_start_frac", "1", "fraction of rated thrust at T_US_START_TIME")
 _AUX = blocks.DIAGNOSTICS.block("propulsion")
-A_THRUST = _AUX.scalar("thrust", "N", "delivered thrust")
+A_THRUST = _AUX.scalar("thrust", "N", "engine thrust (vacuum minus back-pressure loss)", blocks.Logged("thrust"))
 A_THRUST_VAC = _AUX.scalar("thrust_vac", "N", "vacuum thrust of the burning engine (the sensed thrust)")
 _DISCRETE = blocks.DISCRETE.block("propulsion")
 D_FS_PEAK = _DISCRETE.scalar("first_stage_peak_thrust", "N",
@@ -90,7 +90,8 @@ D_US_SD_IMPULSE = _DISCRETE.scalar("shutdown_impulse", "N*s", "upper-stage vacuu
                                    "command (trapezoid of the sensed thrust)")
 D_FS_PROP_SEP = _DISCRETE.scalar("first_stage_propellant_at_separation", "kg",
                                  "first-stage propellant left in the motor at separation (0 before)")
-A_MOMENT = _AUX.array("moment", 3, "N*m", "thrust moment about the CG, body")
+A_MOMENT = _AUX.array("moment", 3, "N*m", "thrust moment about the CG",
+                      blocks.Logged("thrust_moment", ("x", "y", "z"), "body"))
 
 
 @njit(cache=True, error_model="numpy", inline="always")

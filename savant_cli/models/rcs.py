@@ -34,7 +34,7 @@ _TABLES = blocks.TABLES.block("rcs")
 T_ALT = _TABLES.table("rcs_alt", "m", "altitudes of the jet thrust table")
 T_THRUST = _TABLES.table("rcs_thrust", "N", "vacuum thrust of one jet at T_ALT")
 _AUX = blocks.DIAGNOSTICS.block("rcs")
-A_TORQUE = _AUX.scalar("torque", "N*m", "roll-jet torque about body X")
+A_TORQUE = _AUX.scalar("torque", "N*m", "roll-jet torque about body X", blocks.Logged("rcs_torque"))
 
 
 @njit(cache=True, error_model="numpy", inline="always")

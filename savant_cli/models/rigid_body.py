@@ -31,7 +31,8 @@ V = _STATE.array("velocity", 3, "m/s", "CG inertial velocity, ECI")
 Q = _STATE.array("attitude", 4, "1", "attitude quaternion q_b2i (body→ECI, scalar first)")
 W = _STATE.array("body_rate", 3, "rad/s", "body angular rate relative to ECI, body axes")
 _AUX = blocks.DIAGNOSTICS.block("rigid_body")
-A_ACCEL = _AUX.array("sensed_acceleration", 3, "m/s^2", "non-gravitational acceleration of the rigid part, body")
+A_ACCEL = _AUX.array("sensed_acceleration", 3, "m/s^2", "non-gravitational acceleration",  # of the rigid part
+                     blocks.Logged("sensed_acceleration", ("x", "y", "z"), "body"))
 
 
 @njit(cache=True, error_model="numpy", inline="always")

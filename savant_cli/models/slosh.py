@@ -76,8 +76,11 @@ T_DATA = _TABLES.table("slosh_data", "rad/s, 1, kg, m", "(2, n, COLUMNS) slosh p
 T_LEN = _TABLES.table("slosh_len", "1", "(2,) valid rows per tank")
 _AUX = blocks.DIAGNOSTICS.block("slosh")
 A_FREQUENCY = _AUX.array("frequency", 2, "rad/s", "slosh frequency per tank")
-A_LEVEL = _AUX.array("level", 2, "m", "liquid level per tank")
-A_FORCE = _AUX.array("force", 6, "N", "force of each slosh mass on the vehicle, body (LOX xyz, LH2 xyz)")
+A_LEVEL = _AUX.array("level", 2, "m", "liquid level above the tank bottom",
+                     blocks.Logged("liquid_level", ("lox", "lh2"), "", lambda model: model.layout.slosh))
+A_FORCE = _AUX.array("force", 6, "N", "force of the slosh masses on the vehicle",
+                     blocks.Logged("slosh_force", ("lox_x", "lox_y", "lox_z", "lh2_x", "lh2_y", "lh2_z"), "body",
+                                   lambda model: model.layout.slosh))
 
 
 @njit(cache=True, error_model="numpy", inline="always")

@@ -30,7 +30,8 @@ P_ON = _PARAMS.scalar("on", "1", "1: the engine-inertia reaction is applied (twd
 P_FS_ENGINE = _PARAMS.record("first_stage", ENGINE, "first-stage moving engine")
 P_US_ENGINE = _PARAMS.record("upper_stage", ENGINE, "upper-stage moving engine")
 _AUX = blocks.DIAGNOSTICS.block("twd")
-A_MOMENT = _AUX.array("moment", 3, "N*m", "tail-wags-dog moment about the CG, body")
+A_MOMENT = _AUX.array("moment", 3, "N*m", "engine-inertia (tail-wags-dog) moment about the CG (zero with twd=off)",
+                      blocks.Logged("twd_moment", ("x", "y", "z"), "body"))
 
 
 @njit(cache=True, error_model="numpy", inline="always")

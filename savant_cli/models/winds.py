@@ -92,7 +92,8 @@ T_ALT = _TABLES.table("wind_alt", "m", "geodetic altitudes of the wind profile, 
 T_NORTH = _TABLES.table("wind_north", "m/s", "wind toward north at T_ALT")
 T_EAST = _TABLES.table("wind_east", "m/s", "wind toward east at T_ALT")
 _AUX = blocks.DIAGNOSTICS.block("winds")
-A_WIND = _AUX.array("wind_ned", 3, "m/s", "wind north, east, down (profile, shear and gust)")
+A_WIND = _AUX.array("wind_ned", 3, "m/s", "wind velocity",  # profile, shear and gust
+                    blocks.Logged("wind_ned", ("north", "east", "down"), "NED"))
 
 
 @njit(cache=True, error_model="numpy", inline="always")

@@ -11,10 +11,7 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
 from savant_cli import constants, lifecycle
 from savant_cli.io.record import Signal
-from savant_cli.models import (
-    actuator, aero, atmosphere, earth, flex, gravity, layout, mass, navigation, peg, propulsion, quaternion as qt, rcs,
-    rigid_body, slosh, twd, winds
-)
+from savant_cli.models import blocks, earth, layout, navigation, peg, quaternion as qt, slosh
 from savant_cli.sim import compile_notice, engine, loop_perturbation
 from savant_cli.sim.build import SimModel
 from savant_cli.sim.plant import compose, derivative
@@ -255,6 +252,27 @@ def guidance_signals(t: np.ndarray, r: np.ndarray, d: np.ndarray, p: np.ndarray)
     }
 
 
+def logged_diagnostics(aux: np.ndarray, model: SimModel) -> dict[str, Signal]:
+    """The time histories of the diagnostics the models declare logged
+    (:class:`savant_cli.models.blocks.Logged`), in declaration order: the field's units
+    and description, the declaration's name, columns and frame; a field whose ``when``
+    is false for ``model`` (its model off) is left out.
+
+    Parameters
+    ----------
+    aux : numpy.ndarray
+        The logged diagnostics, one row per sample.
+    model : SimModel
+        The built model that flew."""
+    out = {}
+    for f in blocks.DIAGNOSTICS.fields:
+        lg = f.logged
+        if lg is not None and (lg.when is None or lg.when(model)):
+            data = aux[:, f.index] if f.size == 1 else aux[:, f.index:f.index + f.size]
+            out[lg.name] = Signal(data, f.units, f.description, lg.columns, lg.frame)
+    return out
+
+
 def signals(result: SimResult, model: SimModel) -> dict[str, Signal]:
     """Named time histories with units, frames and column names."""
     lay = model.layout
@@ -267,7 +285,6 @@ def signals(result: SimResult, model: SimModel) -> dict[str, Signal]:
     qc = d[:, layout.D_QS:layout.D_QS + 4]
     euler = qt.euler_321(np.einsum("ij,njk->nik", c_launch, qt.dcm_array(q))) if len(t) else np.zeros((0, 3))
     euler_c = qt.euler_321(np.einsum("ij,njk->nik", c_launch, qt.dcm_array(qc))) if len(t) else np.zeros((0, 3))
-    thrust = aux[:, propulsion.A_THRUST]
     config = np.full(len(t), 0.0)
     ev = result.events
     if not np.isnan(ev[engine.EV_SEPARATION]):
@@ -278,20 +295,6 @@ def signals(result: SimResult, model: SimModel) -> dict[str, Signal]:
         "time": Signal(t, "s", "mission time from liftoff"),
         "position_eci": Signal(x[:, layout.R:layout.R + 3], "m", "CG position", xyz, "ECI"),
         "velocity_eci": Signal(x[:, layout.V:layout.V + 3], "m/s", "CG inertial velocity", xyz, "ECI"),
-        "gravity_eci": Signal(aux[:, gravity.A_GRAV:gravity.A_GRAV + 3], "m/s^2", "gravitational acceleration (J2-J4 zonal model)", xyz, "ECI"),
-        "altitude": Signal(aux[:, earth.A_ALT], "m", "WGS84 geodetic altitude of the CG"),
-        "latitude": Signal(aux[:, earth.A_LAT], "rad", "WGS84 geodetic latitude"),
-        "longitude": Signal(aux[:, earth.A_LON], "rad", "longitude (east positive)"),
-        "velocity_relative": Signal(aux[:, aero.A_VREL], "m/s", "air-relative speed (Earth-relative minus wind)"),
-        "velocity_earth_relative": Signal(aux[:, earth.A_VEARTH], "m/s", "Earth-relative speed, no wind"),
-        "mach": Signal(aux[:, aero.A_MACH], "1", "Mach number"),
-        "dynamic_pressure": Signal(aux[:, aero.A_QBAR], "Pa", "dynamic pressure"),
-        "density": Signal(aux[:, atmosphere.A_RHO], "kg/m^3", "air density (US76)"),
-        "pressure": Signal(aux[:, atmosphere.A_PRES], "Pa", "static pressure (US76)"),
-        "temperature": Signal(aux[:, atmosphere.A_TEMP], "K", "kinetic temperature (US76)"),
-        "speed_of_sound": Signal(aux[:, atmosphere.A_SOS], "m/s", "speed of sound (US76)"),
-        "alpha": Signal(aux[:, aero.A_ALPHA], "rad", "angle of attack"),
-        "beta": Signal(aux[:, aero.A_BETA], "rad", "sideslip angle"),
         "body_rate": Signal(x[:, layout.W:layout.W + 3], "rad/s", "body angular rate relative to ECI", ("p", "q", "r"), "body"),
         "quaternion": Signal(q, "1", "attitude q_b2i (body to ECI, scalar first)", ("w", "x", "y", "z"), "ECI"),
         "quaternion_command": Signal(qc, "1", "smoothed guidance command q_c2i (commanded body to ECI)", ("w", "x", "y", "z"), "ECI"),
@@ -301,24 +304,10 @@ def signals(result: SimResult, model: SimModel) -> dict[str, Signal]:
         "rate_error": Signal(d[:, layout.D_RATE_ERR:layout.D_RATE_ERR + 3], "rad/s", "blended rate error", ("p", "q", "r"), "body"),
         "attitude_euler": Signal(euler, "rad", "body attitude, 3-2-1 Euler angles relative to the launch frame (pad NED frozen at liftoff)", rpy, "launch"),
         "attitude_euler_command": Signal(euler_c, "rad", "smoothed command attitude, 3-2-1 Euler angles relative to the launch frame", rpy, "launch"),
-        "gimbal_angle": Signal(aux[:, actuator.A_ANGLES:actuator.A_ANGLES + 2], "rad", "engine gimbal angles (limited)", pq, "body"),
         "gimbal_command": Signal(d[:, [layout.D_CMD_P, layout.D_CMD_Y]], "rad", "flight-control gimbal commands", pq, "body"),
         "gimbal_rate": Signal(x[:, [layout.ACT_P + 1, layout.ACT_Y + 1]], "rad/s", "nozzle angular rates", pq, "body"),
-        "gimbal_acceleration": Signal(aux[:, actuator.A_ACCEL:actuator.A_ACCEL + 2], "rad/s^2", "nozzle angular accelerations "
-                                      "(zero while held at a gimbal stop)", pq, "body"),
-        "twd_moment": Signal(aux[:, twd.A_MOMENT:twd.A_MOMENT + 3], "N*m", "engine-inertia (tail-wags-dog) moment about the CG "
-                             "(zero with twd=off)", xyz, "body"),
         "rcs_command": Signal(d[:, layout.D_CMD_RCS], "1", "roll jet command (+1 positive roll torque, 0, -1)"),
-        "rcs_torque": Signal(aux[:, rcs.A_TORQUE], "N*m", "roll-jet torque about body X"),
-        "mass": Signal(aux[:, mass.A_MASS], "kg", "vehicle mass"),
         "propellant_remaining": Signal(x[:, [layout.MFS, layout.MLOX, layout.MLH2]], "kg", "propellant remaining", ("first_stage", "lox", "lh2")),
-        "thrust": Signal(thrust, "N", "engine thrust (vacuum minus back-pressure loss)"),
-        "wind_ned": Signal(aux[:, winds.A_WIND:winds.A_WIND + 3], "m/s", "wind velocity", ("north", "east", "down"), "NED"),
-        "cg_structure": Signal(aux[:, mass.A_CG:mass.A_CG + 3], "m", "CG location", xyz, "structure"),
-        "aero_force": Signal(aux[:, aero.A_FORCE:aero.A_FORCE + 3], "N", "aerodynamic force incl. base force", xyz, "body"),
-        "aero_moment": Signal(aux[:, aero.A_MOMENT:aero.A_MOMENT + 3], "N*m", "aerodynamic moment about the CG", xyz, "body"),
-        "thrust_moment": Signal(aux[:, propulsion.A_MOMENT:propulsion.A_MOMENT + 3], "N*m", "thrust moment about the CG", xyz, "body"),
-        "sensed_acceleration": Signal(aux[:, rigid_body.A_ACCEL:rigid_body.A_ACCEL + 3], "m/s^2", "non-gravitational acceleration", xyz, "body"),
         "sensed_rate": Signal(d[:, layout.D_GYRO_Y:layout.D_GYRO_Y + 9], "rad/s", "rate-gyro outputs (rigid plus flex rate "
                               "at each gyro's node, through the gyro dynamics)",
                               tuple(f"{g}_{a}" for g in ("upper", "imu", "first") for a in ("p", "q", "r")), "body"),
@@ -328,6 +317,7 @@ def signals(result: SimResult, model: SimModel) -> dict[str, Signal]:
                             ("pitch_kp", "pitch_ki", "pitch_kd", "pitch_kir", "yaw_kp", "yaw_ki", "yaw_kd", "yaw_kir")),
         "configuration": Signal(config, "1", "0 integrated stack, 1 upper stage with LES, 2 upper stage"),
     }
+    s.update(logged_diagnostics(aux, model))
     if model.p[peg.P_ON] != 0.0:
         s.update(guidance_signals(t, x[:, layout.R:layout.R + 3], d, model.p))
     if model.p[navigation.P_ON] != 0.0:
@@ -348,15 +338,9 @@ def signals(result: SimResult, model: SimModel) -> dict[str, Signal]:
                                      yz, "body")
         s["slosh_frequency"] = Signal(aux[:, slosh.A_FREQUENCY:slosh.A_FREQUENCY + 2] / (2.0 * np.pi), "Hz",
                                       "slosh natural frequency at the current acceleration", ("lox", "lh2"))
-        s["liquid_level"] = Signal(aux[:, slosh.A_LEVEL:slosh.A_LEVEL + 2], "m", "liquid level above the tank bottom",
-                                   ("lox", "lh2"))
-        s["slosh_force"] = Signal(aux[:, slosh.A_FORCE:slosh.A_FORCE + 6], "N", "force of the slosh masses on the vehicle",
-                                  ("lox_x", "lox_y", "lox_z", "lh2_x", "lh2_y", "lh2_z"), "body")
     if lay.n_modes:
         fo, n = lay.flex, lay.n_modes
         modes = tuple(f"mode_{i + 1}" for i in range(n))
         s["flex_q"] = Signal(x[:, fo:fo + n], "kg^0.5*m", "modal coordinates (unit generalized mass)", modes)
         s["flex_qdot"] = Signal(x[:, fo + n:fo + 2 * n], "kg^0.5*m/s", "modal velocities", modes)
-        s["flex_gimbal_rotation"] = Signal(aux[:, flex.A_GIMBAL_ROTATION:flex.A_GIMBAL_ROTATION + 3], "rad",
-                                           "flex rotation at the active gimbal (turns the thrust)", rpy, "body")
     return s
