@@ -389,7 +389,6 @@ def test_thrust_and_engine_reaction_act_at_the_displaced_gimbal(engine):
     rng = np.random.default_rng(21 + engine)
     tables, shapes, w, zeta, thrust, p, lay, u, x = _thrust_setup(engine, rng, nm=1, twd=True)
     pg = layout.PT_GIMBAL_FS if engine == layout.ENGINE_FIRST else layout.PT_GIMBAL_US
-    sa = 0 if engine == layout.ENGINE_FIRST else 2
     shapes[...] = 0.0
     phi_x, phi_z, sigma_y = 4.0e-4, 2.5e-3, -3.0e-4
     shapes[:, 0, pg, flex.PHI_X], shapes[:, 0, pg, flex.PHI_Z], shapes[:, 0, pg, flex.SIGMA_Y] = phi_x, phi_z, sigma_y

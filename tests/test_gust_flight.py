@@ -40,7 +40,7 @@ def test_gust_at_max_q_moves_alpha_by_the_quasi_steady_gust_over_v(still_air, ph
     aerodynamically unstable vehicle turns into the gust before the control catches it,
     measured 1.083). The flight is bit for bit the still-air one until the onset."""
     sig0 = still_air.signals
-    t, q, h = sig0["time"].data, sig0["dynamic_pressure"].data, sig0["altitude"].data
+    q, h = sig0["dynamic_pressure"].data, sig0["altitude"].data
     h_q = float(h[np.argmax(q)])
     g = _fly(["winds=none", "winds.gust.enabled=true", f"winds.gust.amplitude_mps={A}",
               f"winds.gust.direction_deg={phi}", f"winds.gust.onset_altitude_m={h_q - length / 2}",
