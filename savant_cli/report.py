@@ -91,38 +91,10 @@ def report(run_dir: Path | str, console: Console | None = None) -> list[Path]:
         paths += plot_ascent(record, folder)
     elif fmt != STUDY_FORMAT and "montecarlo" not in groups:
         raise RunFileError(f"{h5} is not a savant run file (format attribute {fmt!r})")
-    if "linear" in groups:
-        from savant_cli.linear.store import read_linear_group
-        from savant_cli.studies.linear import draw_linear
+    from savant_cli.studies.redraw import STUDY_GROUPS, draw_groups
 
-        charts, rows, requirements, zones, failed = read_linear_group(h5)
-        paths += draw_linear(charts, rows, requirements, zones, folder, failed)
-    if "flex_sweep" in groups:
-        from savant_cli.studies import flex_sweep
-
-        paths += flex_sweep.draw(*flex_sweep.read_group(h5), folder)
-    if "montecarlo" in groups:
-        from savant_cli.plots.montecarlo_batch import redraw
-
-        paths += redraw(run_dir)
-    if "flyoff" in groups:
-        from savant_cli.studies import flyoff
-
-        paths += flyoff.draw(*flyoff.read_group(h5), folder)
-    if "mode_retention" in groups:
-        from savant_cli.studies import mode_retention
-
-        paths += mode_retention.draw(mode_retention.read_group(h5), folder)
-    if "fcs_design" in groups:
-        from savant_cli.studies import fcs_design
-
-        paths += fcs_design.draw(*fcs_design.read_group(h5), folder)
-    if "time_margins" in groups:
-        from savant_cli.studies import time_margins
-
-        paths += time_margins.draw(time_margins.read_group(h5), folder)
-    studies = sorted(groups & {"linear", "flex_sweep", "montecarlo", "flyoff", "mode_retention", "fcs_design",
-                               "time_margins"})
+    paths += draw_groups(h5, groups, folder)
+    studies = sorted(groups & set(STUDY_GROUPS))
     if studies:
         console.print(f"redrawn from {RUN_FILE}: {', '.join(studies)}")
     from savant_cli.html_report import write_report_or_say

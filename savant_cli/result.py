@@ -36,6 +36,7 @@ if TYPE_CHECKING:  # imported when used: pandas, xarray and python-control are s
     from matplotlib.figure import Figure
 
 RUN_FILE = "savant.h5"
+PLOTS_DIR = "plots"
 SUMMARY_FILE = "summary.json"
 #: Linear-chart names :meth:`Result.plot` draws for one point (``time=`` required).
 LINEAR_CHARTS = ("bode", "nichols", "nyquist", "rootlocus", "pzmap", "response")
@@ -281,13 +282,30 @@ class Result:
                                 statistics=stats.set_index("variable") if "variable" in stats else stats)
 
     def figure_names(self) -> list[str]:
-        """The names :meth:`plot` draws for this study."""
+        """The names :meth:`plot` draws for this study: the ascent figures, a linear
+        study's charts, and every other figure the study drew, by its file under
+        ``plots/`` without ``.png`` (``time_margins/t55_pitch_delay``,
+        ``histograms_01``, ``flex_sweep/nichols_pitch_frequency_t0055.0`` …)."""
         from savant_cli.plots.ascent import figure_names
 
         names = figure_names(self._record) if self._record is not None else []
         if "linear" in self._groups():
             names += [*LINEAR_CHARTS, "margin_envelope"]
-        return names
+        return names + [n for n in self._study_figures if n not in names]
+
+    @cached_property
+    def _study_figures(self) -> dict[str, "Figure"]:
+        """The figures of the study groups other than ``linear`` (which :meth:`plot` draws
+        by chart and point), drawn once by the code ``savant report`` writes them with,
+        kept instead of written (:func:`savant_cli.plots.figure.capture_figures`)."""
+        from savant_cli.plots.figure import capture_figures
+        from savant_cli.studies.redraw import draw_groups
+
+        folder = self.run_dir / PLOTS_DIR
+        groups = self._groups() - {"linear"}
+        with capture_figures() as kept:
+            draw_groups(self.h5, groups, folder)
+        return {path.relative_to(folder).with_suffix("").as_posix(): fig for path, fig in kept.items()}
 
     def plot(self, name: str, time: float | None = None) -> "Figure":
         """Draw one figure now, from the stored data, and return it (a matplotlib
@@ -297,9 +315,12 @@ class Result:
         ----------
         name : str
             An ascent figure (``alpha_beta``, ``body_rates``, ``gimbal`` …, the PNG
-            names of ``plots/`` without ``.png``), or for a linear study one of
+            names of ``plots/`` without ``.png``); for a linear study one of
             ``bode``, ``nichols``, ``nyquist``, ``rootlocus``, ``pzmap``, ``response``
-            (with ``time``) or ``margin_envelope``. :meth:`figure_names` lists them.
+            (with ``time``) or ``margin_envelope``; for the other studies a figure's
+            file under ``plots/`` without ``.png`` (drawn once, on the first call of
+            :meth:`figure_names` or :meth:`plot`, and the same figure returned after).
+            :meth:`figure_names` lists them.
         time : float, optional
             The linear point (s) of a linear chart.
 
@@ -326,6 +347,8 @@ class Result:
                 raise KeyError(f"no chart data at t = {time} s; points with charts: {[c.time_s for c in charts]}")
             pts = [r for r in rows if math.isclose(r.time_s, match[0].time_s, abs_tol=5e-4)]
             return chart_figure(name, match[0], pts, zones)
+        if name in self._study_figures:
+            return self._study_figures[name]
         from savant_cli.plots.ascent import figure
 
         return figure(self._record, name)

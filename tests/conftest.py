@@ -77,9 +77,40 @@ def assert_report_redraws(run_dir) -> list[str]:
         assert sorted(str(p.relative_to(run_dir / "plots")) for p in paths) == drawn
         for name in drawn:
             assert (first / name).read_bytes() == (run_dir / "plots" / name).read_bytes(), name
+        assert_result_plots(run_dir, drawn)
         return drawn
     finally:
         shutil.rmtree(first, ignore_errors=True)
+
+
+def assert_result_plots(run_dir, drawn: list[str]) -> None:
+    """``Result.plot`` returns every figure the study drew: each PNG outside ``linear/``
+    (whose charts it draws by chart name and time) is one of ``figure_names()``, and the
+    figure ``plot`` returns for the first and the last of the study's own, written by the
+    drawing base as ``savant report`` writes that PNG (``Figure.savefig``, or rendered
+    and encoded without alpha), is the same file byte for byte."""
+    import io
+    import tempfile
+    from pathlib import Path
+
+    from savant_cli.plots.figure import DPI, PNG_LEVEL, render, write_png
+    from savant_cli.result import load
+
+    result = load(run_dir)
+    names = set(result.figure_names())
+    stems = [n[:-len(".png")] for n in drawn if not n.startswith("linear/")]
+    assert not [s for s in stems if s not in names], sorted(set(stems) - names)
+    own = [s for s in stems if s in result._study_figures]
+    for stem in own[:1] + own[-1:]:
+        fig, png = result.plot(stem), (Path(run_dir) / "plots" / f"{stem}.png").read_bytes()
+        if png[25] == 2:  # IHDR colour type 2, RGB: rendered and encoded without alpha (save_rendered)
+            with tempfile.TemporaryDirectory() as tmp:
+                again = write_png(render(fig), Path(tmp) / "fig.png").read_bytes()
+        else:  # colour type 6, RGBA: Figure.savefig (save_figure)
+            buf = io.BytesIO()
+            fig.savefig(buf, format="png", dpi=DPI, pil_kwargs={"compress_level": PNG_LEVEL})
+            again = buf.getvalue()
+        assert again == png, stem
 
 
 def assert_report_page(run_dir) -> None:

@@ -202,3 +202,27 @@ def test_report_without_savant_h5(tmp_path: Path) -> None:
         report(tmp_path)
     with pytest.raises(FileNotFoundError, match="does not exist"):
         report(tmp_path / "missing")
+
+
+def test_captured_figures_are_kept_not_written(tmp_path):
+    """Inside ``capture_figures`` both writers keep the figure by its path (nothing on
+    disk, no folder made, the figure not cleared) and every sheet is new; outside, they
+    write again."""
+    from savant_cli.plots.figure import capture_figures, new_figure, save_figure, save_rendered, sheet
+
+    def layout():
+        fig = new_figure(3.0, 2.0)
+        return fig, [fig.add_subplot(1, 1, 1)]
+
+    with capture_figures() as kept:
+        a, b = new_figure(3.0, 2.0), new_figure(3.0, 2.0)
+        a.add_subplot(1, 1, 1).plot([0, 1], [1, 2])
+        b.add_subplot(1, 1, 1)
+        assert save_figure(a, tmp_path / "sub" / "a.png") == tmp_path / "sub" / "a.png"
+        save_rendered(b, tmp_path / "b.png")
+        first, _ = sheet(("capture-test",), layout)
+        second, _ = sheet(("capture-test",), layout)
+    assert kept == {tmp_path / "sub" / "a.png": a, tmp_path / "b.png": b}
+    assert list(tmp_path.iterdir()) == [] and len(a.axes[0].lines) == 1 and first is not second
+    save_figure(a, tmp_path / "a.png")
+    assert (tmp_path / "a.png").read_bytes().startswith(b"\x89PNG") and not a.axes  # written, then cleared

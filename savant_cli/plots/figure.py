@@ -35,8 +35,8 @@ from PIL import Image
 
 from savant_cli.io.atomic import atomic_path
 
-__all__ = ["DPI", "MAX_BINS", "PNG_LEVEL", "bin_count", "file_stem", "fresh_sheets", "new_figure", "render",
-           "save_figure", "save_rendered", "sheet", "style_axes", "write_png"]
+__all__ = ["DPI", "MAX_BINS", "PNG_LEVEL", "bin_count", "capture_figures", "file_stem", "fresh_sheets", "new_figure",
+           "render", "save_figure", "save_rendered", "sheet", "style_axes", "write_png"]
 
 #: Resolution of every PNG (dots per inch).
 DPI = 120
@@ -140,6 +140,37 @@ def fresh_sheets() -> Iterator[None]:
         _SHEETS.fresh = False
 
 
+@contextmanager
+def capture_figures() -> Iterator[dict[Path, Figure]]:
+    """A block in which :func:`save_figure` and :func:`save_rendered` write nothing: they
+    keep each figure, by the path it would have been written to, in the dict yielded, and
+    :func:`sheet` makes a new figure on every call (:func:`fresh_sheets`). How
+    ``savant_cli.Result.plot`` returns a study's figure: the drawing code that writes the
+    PNG, run with its figures kept.
+
+    Yields
+    ------
+    dict of Path → Figure
+        The figures drawn inside, by path, in drawing order; the caller's to keep.
+    """
+    captured: dict[Path, Figure] = {}
+    _SHEETS.captured = captured
+    try:
+        with fresh_sheets():
+            yield captured
+    finally:
+        _SHEETS.captured = None
+
+
+def _kept(fig: Figure, path: Path) -> bool:
+    """Keep ``fig`` instead of writing it, inside :func:`capture_figures`."""
+    captured = getattr(_SHEETS, "captured", None)
+    if captured is None:
+        return False
+    captured[Path(path)] = fig
+    return True
+
+
 def style_axes(ax: Axes, nbins_x: int | None = None, nbins_y: int | None = None, labelsize: float = 7.0) -> None:
     """A light grid, small tick labels and optionally few ticks (text is most of the
     drawing time).
@@ -177,6 +208,8 @@ def save_figure(fig: Figure, path: Path) -> Path:
     Path
         ``path``.
     """
+    if _kept(fig, path):
+        return path
     try:
         with atomic_path(path) as tmp:
             fig.savefig(tmp, format="png", dpi=DPI, pil_kwargs={"compress_level": PNG_LEVEL})
@@ -243,6 +276,8 @@ def save_rendered(fig: Figure, path: Path) -> Path:
     Path
         The file written.
     """
+    if _kept(fig, path):
+        return path
     return write_png(render(fig), path)
 
 
