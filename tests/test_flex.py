@@ -218,7 +218,7 @@ def test_engine_feeds_gyros_rigid_plus_flex_rate_and_nav_unit_flex_rotation(conf
     ft = fcs_tables(validate(compose_config()).controller)
     sched = engine.EventSchedule(separation_thrust_fraction=0.0, ignition_delay_s=0.0, les_jettison_delay_s=0.0,
                                  cutoff_energy_j_kg=1.0e12, max_time_s=1.0e9, stop_at_separation=False,
-                                 max_body_rate_rad_s=10.0, command_delay_steps=0, profile_schedule=0, plant_step_s=dt)
+                                 max_body_rate_rad_s=10.0, command_delay_steps=0, profile_schedule=0)
     d = np.zeros(layout.N_DISC)
     events = np.full(4, np.nan)
     n = 400

@@ -106,9 +106,10 @@ def has_key(schema: type, path: list[str]) -> bool:
 
 
 def group_option(group: str, node: Any) -> Any:
-    """The section of a group with per-option schemas (:data:`~savant_cli.config.savant.GROUP_VARIANTS`), merged onto
-    its option's schema: a key of another option, or of a model that is switched off, is
-    refused naming the options where it exists."""
+    """The section of a group with per-option schemas
+    (:data:`~savant_cli.config.savant.GROUP_VARIANTS`), merged onto its option's schema: a
+    key of another option, or of a model that is switched off, is refused naming the
+    options where it exists."""
     variants = GROUP_VARIANTS[group]
     if dataclasses.is_dataclass(node):
         node = OmegaConf.to_container(OmegaConf.structured(node))

@@ -185,8 +185,7 @@ def event_schedule(cfg: SavantConfig, vehicle: Vehicle, rt: Rates) -> EventSched
         stop_at_separation=cfg.phase.stop_at == "separation",
         max_body_rate_rad_s=float(np.radians(cfg.sim.max_body_rate_deg_s)),
         command_delay_steps=int(round(cfg.controller.delay_s / rt.dt)),
-        profile_schedule=SCHEDULES.index(cfg.guidance.first_stage_schedule),
-        plant_step_s=float(rt.dt))
+        profile_schedule=SCHEDULES.index(cfg.guidance.first_stage_schedule))
 
 
 def build_model(cfg: SavantConfig, vehicle: Vehicle, guidance: GuidanceTable) -> SimModel:

@@ -95,8 +95,6 @@ class EventSchedule(NamedTuple):
     profile_schedule : int
         What the stored profile's first stage is indexed by: its position in
         ``models.command_schedule.SCHEDULES``.
-    plant_step_s : float
-        The plant step, s (the trapezoids of the sensed thrust).
     """
 
     separation_thrust_fraction: float
@@ -108,7 +106,6 @@ class EventSchedule(NamedTuple):
     max_body_rate_rad_s: float
     command_delay_steps: int
     profile_schedule: int
-    plant_step_s: float
 
 
 class Rates(NamedTuple):
@@ -171,7 +168,7 @@ def move_reference(x: np.ndarray, old: tuple[float, float, float], new: tuple[fl
 
 
 @njit(cache=True, error_model="numpy")
-def handle_events(t: float, x: np.ndarray, u: np.ndarray, d: np.ndarray,
+def handle_events(t: float, dt: float, x: np.ndarray, u: np.ndarray, d: np.ndarray,
                   events: np.ndarray, sched: EventSchedule, p: np.ndarray, tb: np.ndarray) -> int:
     """Apply time- and condition-triggered events at a step boundary; return a stop code.
 
@@ -184,12 +181,13 @@ def handle_events(t: float, x: np.ndarray, u: np.ndarray, d: np.ndarray,
     ``d[D_FS_PROP_SEP]``. After the cutoff command the upper stage's sensed thrust
     accumulates the same way in ``d[D_US_SD_IMPULSE]``. At separation and at LES jettison
     the state's reference point moves to the new configuration's CG (position and velocity
-    of every structural point unchanged)."""
+    of every structural point unchanged). ``dt`` is the plant step (s), the trapezoids'
+    width."""
     separate = False
     if np.isnan(events[EV_SEPARATION]):
         f_sensed = propulsion.first_stage_flow(x, tb, p, t)[0]
         if t > 0.0:
-            d[propulsion.D_FS_IMPULSE] += 0.5 * (d[propulsion.D_FS_LAST] + f_sensed) * sched.plant_step_s
+            d[propulsion.D_FS_IMPULSE] += 0.5 * (d[propulsion.D_FS_LAST] + f_sensed) * dt
         d[propulsion.D_FS_LAST] = f_sensed
         if f_sensed > d[propulsion.D_FS_PEAK]:
             d[propulsion.D_FS_PEAK] = f_sensed
@@ -230,7 +228,7 @@ def handle_events(t: float, x: np.ndarray, u: np.ndarray, d: np.ndarray,
         if u[U_T_CUT] > 0.0:  # shutdown transient: the impulse after the command (trapezoid)
             f_us = propulsion.upper_stage_thrust_vac(x, tb, p, t, u[U_T_IGN], u[U_T_CUT])
             if t > u[U_T_CUT]:
-                d[propulsion.D_US_SD_IMPULSE] += 0.5 * (d[propulsion.D_US_SD_LAST] + f_us) * sched.plant_step_s
+                d[propulsion.D_US_SD_IMPULSE] += 0.5 * (d[propulsion.D_US_SD_LAST] + f_us) * dt
             d[propulsion.D_US_SD_LAST] = f_us
         if x[MLOX] <= 0.0 or x[MLH2] <= 0.0:
             if np.isnan(events[EV_CUTOFF]):
@@ -341,7 +339,7 @@ def _advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0
     for j in range(n_steps):
         k = k0 + j
         t = k * dt
-        status = handle_events(t, x, u, d, events, sched, p, tb)
+        status = handle_events(t, dt, x, u, d, events, sched, p, tb)
         if status != RUNNING:
             return status, j, log_row, ""
         if nav_on:  # the IMU sample, then the navigated state (true plus the navigation errors)
