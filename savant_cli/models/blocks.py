@@ -49,7 +49,7 @@ class Logged:
     frame : str
         Reference frame of a vector (``"body"``, ``"ECI"``, ``"NED"``); empty for scalars.
     when : callable or None
-        ``when(model)`` (the built :class:`savant_cli.sim.setup.SimModel`) is true when
+        ``when(model)`` (the built :class:`savant_cli.sim.build.SimModel`) is true when
         the field means something in the run (its model is on); None: always logged.
     """
 
