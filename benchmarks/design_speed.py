@@ -25,11 +25,9 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--repeats", type=int, default=20)
     args = ap.parse_args()
-    import dataclasses
-
     from hydra import compose, initialize_config_dir
 
-    from savant_cli.config import shipped_option, validate
+    from savant_cli.config import linear_settings, validate
     from savant_cli.linear.evaluate import freeze, judge_controller
     from savant_cli.linear.point_analysis import analyse
     from savant_cli.paths import shipped_config_dir
@@ -53,8 +51,7 @@ def main() -> None:
             judge.append(time.perf_counter() - t0)
         for _ in range(max(3, args.repeats // 4)):
             t0 = time.perf_counter()
-            analyse(model, snap, dataclasses.replace(shipped_option("study", "linear"), times=[snap.t]), dt,
-                    cfg.requirements)
+            analyse(model, snap, linear_settings([snap.t]), dt, cfg.requirements)
             full.append(time.perf_counter() - t0)
         print(f"t = {snap.t:5.1f} s ({point.phase_name}, {point.plant.nstates} plant states): "
               f"judge_controller {1e3 * statistics.median(judge):.1f} ms (median of {len(judge)}), "

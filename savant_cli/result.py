@@ -286,12 +286,18 @@ class Result:
         study's charts, and every other figure the study drew, by its file under
         ``plots/`` without ``.png`` (``time_margins/t55_pitch_delay``,
         ``histograms_01``, ``flex_sweep/nichols_pitch_frequency_t0055.0`` …)."""
+        names = self._chart_names()
+        return names + [n for n in self._study_figures if n not in names]
+
+    def _chart_names(self) -> list[str]:
+        """The ascent figures and a linear study's charts: drawn by name when asked for,
+        without drawing the study's other figures."""
         from savant_cli.plots.ascent import figure_names
 
         names = figure_names(self._record) if self._record is not None else []
         if "linear" in self._groups():
             names += [*LINEAR_CHARTS, "margin_envelope"]
-        return names + [n for n in self._study_figures if n not in names]
+        return names
 
     @cached_property
     def _study_figures(self) -> dict[str, "Figure"]:
@@ -318,8 +324,9 @@ class Result:
             names of ``plots/`` without ``.png``); for a linear study one of
             ``bode``, ``nichols``, ``nyquist``, ``rootlocus``, ``pzmap``, ``response``
             (with ``time``) or ``margin_envelope``; for the other studies a figure's
-            file under ``plots/`` without ``.png`` (drawn once, on the first call of
-            :meth:`figure_names` or :meth:`plot`, and the same figure returned after).
+            file under ``plots/`` without ``.png`` (drawn all at once, on the first call of
+            :meth:`figure_names` or of :meth:`plot` for one of them, and the same figure
+            returned after; an ascent or linear figure does not draw them).
             :meth:`figure_names` lists them.
         time : float, optional
             The linear point (s) of a linear chart.
@@ -330,9 +337,9 @@ class Result:
             An unknown name, listing the known ones; a linear chart of a point that
             has no chart data.
         """
-        known = self.figure_names()
-        if name not in known:
-            raise KeyError(f"no figure {name!r} for this {self.study} study; known: {', '.join(known)}")
+        charts = self._chart_names()
+        if name not in charts and name not in self._study_figures:
+            raise KeyError(f"no figure {name!r} for this {self.study} study; known: {', '.join(self.figure_names())}")
         if name in LINEAR_CHARTS or name == "margin_envelope":
             from savant_cli.linear.store import read_linear_group
             from savant_cli.plots.linear import chart_figure, envelope_figure
@@ -347,7 +354,7 @@ class Result:
                 raise KeyError(f"no chart data at t = {time} s; points with charts: {[c.time_s for c in charts]}")
             pts = [r for r in rows if math.isclose(r.time_s, match[0].time_s, abs_tol=5e-4)]
             return chart_figure(name, match[0], pts, zones)
-        if name in self._study_figures:
+        if name not in charts:
             return self._study_figures[name]
         from savant_cli.plots.ascent import figure
 

@@ -2,12 +2,10 @@
 
 from __future__ import annotations
 
-import dataclasses
-
 import pytest
 from hydra import compose, initialize_config_dir
 
-from savant_cli.config import LinearStudyConfig, shipped_option
+from savant_cli.config import linear_settings  # noqa: F401  (the tests import it from here)
 from savant_cli.paths import shipped_config_dir
 
 
@@ -15,11 +13,6 @@ def compose_config(overrides: list[str] | None = None):
     """The raw composed config (DictConfig) for the given overrides."""
     with initialize_config_dir(config_dir=str(shipped_config_dir()), version_base="1.3"):
         return compose(config_name="config", overrides=list(overrides or []))
-
-
-def linear_settings(times) -> LinearStudyConfig:
-    """The shipped ``study=linear`` settings (``conf/study/linear.yaml``) at ``times`` (s)."""
-    return dataclasses.replace(shipped_option("study", "linear"), times=[float(t) for t in times])
 
 
 @pytest.fixture

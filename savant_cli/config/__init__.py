@@ -50,13 +50,13 @@ from savant_cli.config.run import (
 )
 from savant_cli.config.savant import GROUP_VARIANTS, MODEL_GROUPS, SavantConfig, check_vehicle_match
 from savant_cli.config.sensors import RateGyroConfig, SensorMisalignment, SensorsConfig
-from savant_cli.config.shipped import shipped_option
+from savant_cli.config.shipped import linear_settings, shipped_option
 from savant_cli.config.slosh import SloshOffConfig, SloshOnConfig, check_slosh
 from savant_cli.config.study import STUDY_SCHEMAS, check_study_times
 from savant_cli.config.study.common import MAX_WORKERS, WORKERS_ALLOWED, Jacobian, LoopAxis
 from savant_cli.config.study.fcs_design import (
-    DESIGN_SCHEDULES, STACK_ONLY_PARAMETERS, DesignOptimizer, DesignParameter, DesignParameters, DesignSchedule,
-    FcsDesignStudyConfig, OptimizerMethod, ScheduleParameters, design_controller_name
+    STACK_ONLY_PARAMETERS, DesignOptimizer, DesignParameter, DesignParameters, DesignSchedule, FcsDesignStudyConfig,
+    OptimizerMethod, ScheduleParameters, design_controller_name
 )
 from savant_cli.config.study.flex_sweep import FlexSweepStudyConfig, SweepParameter
 from savant_cli.config.study.flyoff import FlyoffStudyConfig
@@ -68,7 +68,7 @@ from savant_cli.config.study.montecarlo import (
     MAX_HISTORY_SAMPLES, MAX_N_RUNS, MAX_SHARDS, HistoriesSpec, MonteCarloStudyConfig, ReliabilitySpec
 )
 from savant_cli.config.study.nominal import StudyConfig
-from savant_cli.config.study.time_margins import MARGIN_KINDS, MarginKind, TimeMarginsStudyConfig
+from savant_cli.config.study.time_margins import MarginKind, TimeMarginsStudyConfig
 from savant_cli.config.twd import TwdOffConfig, TwdOnConfig
 from savant_cli.config.validation import check_physics, group_option, has_key, validate
 from savant_cli.config.winds import (
@@ -78,25 +78,25 @@ from savant_cli.config.winds import (
 
 __all__ = [
     "AccelerometerErrorsConfig", "ActuatorStageCommon", "AeroRequirement", "AxisGains", "Blending", "ChartMode",
-    "ControllerConfig", "ControllerDesign", "CorrelationGroup", "DESIGN_SCHEDULES", "DesignOptimizer",
-    "DesignParameter", "DesignParameters", "DesignSchedule", "DispersionApply", "DispersionDist",
-    "DispersionSetConfig", "DispersionSpec", "EnvironmentConfig", "FailureClass", "FcsDesignStudyConfig",
-    "FilterSection", "FilterSet", "FilterSets", "FirstStageSchedule", "FlexModeOverride", "FlexModeRequirement",
-    "FlexOffConfig", "FlexOnConfig", "FlexRequirement", "FlexStageRequirement", "FlexSweepStudyConfig",
-    "FlexSwitching", "FlyoffStudyConfig", "FrozenTimeCriterion", "FrozenTimeSpec", "GROUP_VARIANTS", "GainTable",
-    "GainTables", "GuidanceConfig", "GustConfig", "GustFrame", "GustOnset", "GyroErrorsConfig", "HealthConfig",
-    "HistoriesSpec", "IgnitionFade", "InsertionTolerance", "Jacobian", "LaunchSite", "LinearStudyConfig", "LoopAxis",
-    "MARGIN_KINDS", "MAX_HISTORY_SAMPLES", "MAX_LOG_ROWS", "MAX_N_RUNS", "MAX_SHARDS", "MAX_WINDS_SCALE",
-    "MAX_WORKERS", "MODEL_GROUPS", "MarginKind", "MissionRequirement", "ModeRetentionStudyConfig", "ModelGroup",
-    "MonteCarloStudyConfig", "NAVIGATION_BOUNDS", "NavigationInertialConfig", "NavigationPerfectConfig",
-    "OptimizerMethod", "OrbitTarget", "OutputConfig", "PegConfig", "PhaseConfig", "PhaseStart", "PhaseStop",
-    "RateGyroConfig", "ReliabilitySpec", "RequirementSet", "RigidRequirement", "RollControl", "SIM_BOUNDS",
-    "STACK_ONLY_PARAMETERS", "STUDY_SCHEMAS", "SavantConfig", "ScheduleParameters", "SensorMisalignment",
-    "SensorsConfig", "SeparationRequirement", "ShearConfig", "ShearShape", "SimConfig", "SimplexActuatorConfig",
-    "SimplexFeedback", "SimplexStage", "SloshOffConfig", "SloshOnConfig", "SloshRequirement", "SmootherConfig",
-    "Stabilization", "StudyConfig", "SweepParameter", "ThirdOrderActuatorConfig", "ThirdOrderStage",
-    "TimeMarginsStudyConfig", "TwdOffConfig", "TwdOnConfig", "WORKERS_ALLOWED", "WindProfile", "WindsConfig",
-    "check_actuator", "check_delay", "check_flex", "check_frozen_time", "check_gust_shear", "check_navigation",
-    "check_peg", "check_physics", "check_requirements", "check_slosh", "check_study_times", "check_target",
-    "check_vehicle_match", "design_controller_name", "group_option", "has_key", "shipped_option", "validate",
+    "ControllerConfig", "ControllerDesign", "CorrelationGroup", "DesignOptimizer", "DesignParameter",
+    "DesignParameters", "DesignSchedule", "DispersionApply", "DispersionDist", "DispersionSetConfig",
+    "DispersionSpec", "EnvironmentConfig", "FailureClass", "FcsDesignStudyConfig", "FilterSection", "FilterSet",
+    "FilterSets", "FirstStageSchedule", "FlexModeOverride", "FlexModeRequirement", "FlexOffConfig", "FlexOnConfig",
+    "FlexRequirement", "FlexStageRequirement", "FlexSweepStudyConfig", "FlexSwitching", "FlyoffStudyConfig",
+    "FrozenTimeCriterion", "FrozenTimeSpec", "GROUP_VARIANTS", "GainTable", "GainTables", "GuidanceConfig",
+    "GustConfig", "GustFrame", "GustOnset", "GyroErrorsConfig", "HealthConfig", "HistoriesSpec", "IgnitionFade",
+    "InsertionTolerance", "Jacobian", "LaunchSite", "LinearStudyConfig", "LoopAxis", "MAX_HISTORY_SAMPLES",
+    "MAX_LOG_ROWS", "MAX_N_RUNS", "MAX_SHARDS", "MAX_WINDS_SCALE", "MAX_WORKERS", "MODEL_GROUPS", "MarginKind",
+    "MissionRequirement", "ModeRetentionStudyConfig", "ModelGroup", "MonteCarloStudyConfig", "NAVIGATION_BOUNDS",
+    "NavigationInertialConfig", "NavigationPerfectConfig", "OptimizerMethod", "OrbitTarget", "OutputConfig",
+    "PegConfig", "PhaseConfig", "PhaseStart", "PhaseStop", "RateGyroConfig", "ReliabilitySpec", "RequirementSet",
+    "RigidRequirement", "RollControl", "SIM_BOUNDS", "STACK_ONLY_PARAMETERS", "STUDY_SCHEMAS", "SavantConfig",
+    "ScheduleParameters", "SensorMisalignment", "SensorsConfig", "SeparationRequirement", "ShearConfig", "ShearShape",
+    "SimConfig", "SimplexActuatorConfig", "SimplexFeedback", "SimplexStage", "SloshOffConfig", "SloshOnConfig",
+    "SloshRequirement", "SmootherConfig", "Stabilization", "StudyConfig", "SweepParameter",
+    "ThirdOrderActuatorConfig", "ThirdOrderStage", "TimeMarginsStudyConfig", "TwdOffConfig", "TwdOnConfig",
+    "WORKERS_ALLOWED", "WindProfile", "WindsConfig", "check_actuator", "check_delay", "check_flex",
+    "check_frozen_time", "check_gust_shear", "check_navigation", "check_peg", "check_physics", "check_requirements",
+    "check_slosh", "check_study_times", "check_target", "check_vehicle_match", "design_controller_name",
+    "group_option", "has_key", "linear_settings", "shipped_option", "validate",
 ]

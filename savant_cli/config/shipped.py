@@ -18,6 +18,7 @@ from omegaconf.errors import InterpolationResolutionError
 
 from savant_cli.config.savant import GROUP_VARIANTS, SavantConfig
 from savant_cli.config.study import STUDY_SCHEMAS
+from savant_cli.config.study.linear import LinearStudyConfig
 from savant_cli.paths import shipped_config_dir
 
 
@@ -79,3 +80,10 @@ def shipped_option(group: str, option: str | None = None) -> Any:
         raise ValueError(f"{group}/{option}.yaml interpolates the composed config ({exc}): "
                          "compose it with Hydra") from exc
     return OmegaConf.to_object(OmegaConf.merge(OmegaConf.structured(schema), plain))
+
+
+def linear_settings(times) -> LinearStudyConfig:
+    """The shipped ``study=linear`` settings (``conf/study/linear.yaml``: the Jacobian, the
+    tail-off window criteria …) at the flight times ``times`` (s): how another study
+    analyses its points as ``study=linear`` would."""
+    return dataclasses.replace(shipped_option("study", "linear"), times=[float(t) for t in times])

@@ -44,7 +44,6 @@ def write_outputs(out_dir: Path, inv: Inventory, expected: list[int], dispersion
     printed (from the journal, when ``savant.h5`` itself failed); every file written
     before it stays whole, and the failed one keeps its previous content or does not
     exist (atomic writes)."""
-    spec = reliability_spec
     runs = sorted(r for r in expected if r in inv.files)
     missing = inv.missing(expected)
     bands = requirements.by_band() if requirements is not None else {}
@@ -57,7 +56,7 @@ def write_outputs(out_dir: Path, inv: Inventory, expected: list[int], dispersion
         with atomic_h5(out_dir / "savant.h5") as f:
             g = f.create_group("montecarlo")
             tb = done["tb"] = write_tables(g, inv, runs, history_names, history_time)
-            an = done["an"] = analyse(tb, expected, missing, dispersions, requirements, spec)
+            an = done["an"] = analyse(tb, expected, missing, dispersions, requirements, reliability_spec)
             write_group(g, tb, an, inv, expected, dispersions, config_yaml, provenance, requirements)
         write_csv(out_dir / "minmax.csv", [{k: r[k] for k in ("variable", "max", "max_run", "min", "min_run")}
                                            for r in an.stats])
@@ -75,7 +74,7 @@ def write_outputs(out_dir: Path, inv: Inventory, expected: list[int], dispersion
     except OutputWriteError:
         if console is not None:  # the summary still reaches the console
             tb = done.get("tb") or write_tables(None, inv, runs, [], history_time)
-            an = done.get("an") or analyse(tb, expected, missing, dispersions, requirements, spec)
+            an = done.get("an") or analyse(tb, expected, missing, dispersions, requirements, reliability_spec)
             print_analysis(console, tb, an)
         raise
     if console is not None:

@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import copy
 import csv
-import dataclasses
 import io
 import time
 import warnings
@@ -32,7 +31,7 @@ from omegaconf import DictConfig
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from savant_cli.config import FlexSweepStudyConfig, SavantConfig, shipped_option
+from savant_cli.config import FlexSweepStudyConfig, SavantConfig, linear_settings
 from savant_cli.errors import ConfigError
 from savant_cli.io.atomic import write_text_atomic
 from savant_cli.io.console import print_verdict, study_console
@@ -84,7 +83,7 @@ def run(cfg: SavantConfig, raw_cfg: DictConfig, out_dir: Path) -> int:
     dt = rt.dt * rt.n_fcs
     events = dict(flight_mod.events_of(result))
     times = check_times(sorted({k * rt.dt for k in steps}), result.t_final, events, study, skip=False)
-    lin = dataclasses.replace(shipped_option("study", "linear"), times=times)  # its Jacobian settings
+    lin = linear_settings(times)  # study=linear's Jacobian settings
     cases = [(t, prm, lvl) for t in times for prm in study.parameters for lvl in study.levels]
     rows, charts, stable, verdicts = [], {}, {}, {}
     bar = Progress(TextColumn("[bold]flex sweep"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),

@@ -41,7 +41,7 @@ import numpy as np
 from omegaconf import DictConfig, OmegaConf
 from rich.table import Table
 
-from savant_cli.config import ModeRetentionStudyConfig, SavantConfig, check_physics, shipped_option
+from savant_cli.config import ModeRetentionStudyConfig, SavantConfig, check_physics, linear_settings, shipped_option
 from savant_cli.errors import ConfigError
 from savant_cli.io.atomic import write_json_atomic, write_text_atomic
 from savant_cli.io.console import study_console
@@ -82,7 +82,7 @@ def _fly(cfg: SavantConfig, n: int, study: ModeRetentionStudyConfig) -> CountRes
     res = simulate(model, progress=False, snapshot_steps=steps)
     t_resp = np.arange(0.0, study.response_duration_s + 0.5 * dt, dt)
     out = CountResult(n, t_resp, {})
-    lin = dataclasses.replace(shipped_option("study", "linear"), times=list(study.times))
+    lin = linear_settings(study.times)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         for k in steps:

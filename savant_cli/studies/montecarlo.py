@@ -12,7 +12,6 @@ with its whole time history.
 from __future__ import annotations
 
 import copy
-import dataclasses
 import json
 import time
 from functools import partial
@@ -26,7 +25,7 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
 from savant_cli import lifecycle
-from savant_cli.config import MonteCarloStudyConfig, SavantConfig, shipped_option, validate
+from savant_cli.config import MonteCarloStudyConfig, SavantConfig, linear_settings, shipped_option, validate
 from savant_cli.errors import ConfigError, DamagedFileError, OutputWriteError, RunInterrupted
 from savant_cli.io.console import study_console
 from savant_cli.io.guidance_file import read_guidance
@@ -74,8 +73,7 @@ def make_case(cfg: SavantConfig, search_dirs: list[Path] | None = None) -> tuple
     grid = np.arange(0.0, cfg.sim.max_time_s + 1e-9, 1.0 / study.histories.rate_hz)
     case = Case(cfg=cfg, vehicle=prep.vehicle, guidance=read_guidance(prep.command_file), dispersions=dset,
                 history_signals=list(study.histories.signals), history_time=grid,
-                linear=(dataclasses.replace(shipped_option("study", "linear"), times=sorted(study.linear_times))
-                        if study.linear_times else None), staging=staging,
+                linear=linear_settings(sorted(study.linear_times)) if study.linear_times else None, staging=staging,
                 tailoff_lead_s=_tailoff_lead(prep.model, cfg) if study.linear_times else None)
     return case, names
 

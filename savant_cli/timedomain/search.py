@@ -44,7 +44,7 @@ class Search:
     time_s : float
         The point (s).
     axis, kind : str
-        ``pitch`` | ``yaw``; one of :data:`savant_cli.config.MARGIN_KINDS`.
+        ``pitch`` | ``yaw``; one of :class:`savant_cli.config.MarginKind`.
     snapshot : int
         Index of the stored state the trials start from (at ``start_s``).
     start_s, end_s : float

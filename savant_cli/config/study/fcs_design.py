@@ -113,10 +113,6 @@ class FcsDesignStudyConfig:
     optimizer: DesignOptimizer = field(default_factory=DesignOptimizer)
 
 
-#: The gain schedules ``study=fcs_design`` tunes, in order.
-DESIGN_SCHEDULES = tuple(DesignSchedule)
-
-
 def design_controller_name(s: FcsDesignStudyConfig) -> str:
     """The name ``study=fcs_design`` writes its controller under: ``study.controller_name``,
     else the design's own with ``study.install`` and ``<design>_tuned`` without."""

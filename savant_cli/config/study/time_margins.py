@@ -21,9 +21,6 @@ class MarginKind(StrEnum):
     delay = "delay"
 
 
-MARGIN_KINDS = tuple(MarginKind)
-
-
 @dataclass
 class TimeMarginsStudyConfig:
     """``study=time_margins``: gain and delay margins measured in the nonlinear time
@@ -57,7 +54,7 @@ def check_time_margins(s: TimeMarginsStudyConfig) -> None:
     if not s.axes:
         raise ConfigError("study.axes", [], "must name at least one loop (pitch, yaw)")
     if not s.kinds:
-        raise ConfigError("study.kinds", [], f"must name at least one of {', '.join(MARGIN_KINDS)}")
+        raise ConfigError("study.kinds", [], f"must name at least one of {', '.join(MarginKind)}")
     for key in ("window_s", "max_window_s", "gain_bound_dB", "delay_bound_ms", "gain_tolerance_dB",
                 "delay_tolerance_ms", "excitation_deg", "excitation_s"):
         positive(f"study.{key}", getattr(s, key))
