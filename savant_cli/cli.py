@@ -2,7 +2,8 @@
 
 ``savant run [overrides]`` is Hydra's main (all Hydra flags work: ``-m``, ``--cfg job``,
 ``--help``, ``hydra.run.dir=…``, ``-cd DIR``); ``savant report DIR`` redraws a run's
-plots from its ``savant.h5``; ``savant --version``; ``savant --help``.
+plots from its ``savant.h5``; ``savant convert-vehicle FILE`` converts a vehicle file of
+the old two-stage schema; ``savant --version``; ``savant --help``.
 """
 
 from __future__ import annotations
@@ -32,6 +33,9 @@ commands:
                       whole time history and plots (DIR/rerun_<N>/)
   compare RUN_DIR REFERENCE --map MAP.yaml [--out DIR]
                       compare a run with another simulation's time history
+  convert-vehicle FILE [--out NEW]
+                      convert a vehicle file of the old two-stage schema (in
+                      place, the original kept as FILE.v1; docs/vehicles.md)
   --version           print the version
   --help              this text
 
@@ -171,6 +175,8 @@ def _main(argv: list[str] | None) -> int:
         return _batch_command(cmd, rest)
     if cmd == "compare":
         return _compare_command(rest)
+    if cmd == "convert-vehicle":
+        return _convert_vehicle_command(rest)
     Console(stderr=True).print(f"unknown command {cmd!r}\n\n{USAGE}", markup=False)
     return 2
 
@@ -206,6 +212,35 @@ def _compare_command(rest: list[str]) -> int:
     except ConfigError as exc:
         err.print(f"[bold red]error[/]: {exc}")
         return ConfigError.exit_code
+
+
+def _convert_vehicle_command(rest: list[str]) -> int:
+    """``savant convert-vehicle FILE [--out NEW]``."""
+    import argparse
+
+    ap = argparse.ArgumentParser(
+        prog="savant convert-vehicle", description="Convert a vehicle file of the old two-stage schema to the "
+        "vehicle tree's (docs/vehicles.md): the same vehicle, flown bit for bit.")
+    ap.add_argument("file", type=Path, help="the vehicle YAML (conf/vehicle/<name>.yaml of your config folder)")
+    ap.add_argument("--out", type=Path, default=None, help="where to write it (default: in place, the original "
+                                                           "kept as FILE.v1)")
+    if any(a in ("-h", "--help") for a in rest):
+        ap.print_help()
+        return 0
+    try:
+        args = ap.parse_args(rest)
+    except SystemExit:  # argparse printed the usage and the problem
+        return 2
+    from savant_cli.vehicle.convert import convert_file
+
+    try:
+        written = convert_file(args.file, args.out)
+    except SavantError as exc:
+        Console(stderr=True).print(f"[bold red]error[/]: {exc}", highlight=False)
+        return exc.exit_code
+    kept = "" if args.out else f" (the original kept as {args.file}.v1)"
+    Console().print(f"converted {args.file} -> {written}{kept}", highlight=False)
+    return 0
 
 
 def _batch_command(cmd: str, rest: list[str]) -> int:

@@ -67,8 +67,8 @@ class SloshData:
 def _spec(vehicle: Vehicle, section: str) -> dict:
     spec = vehicle.flex_spec if section == "flex" else vehicle.slosh_spec
     if not spec:
-        raise ConfigError(f"vehicle.{section}", None,
-                          f"missing: {section}=on needs the vehicle's `{section}` section (or use {section}=off)")
+        where = vehicle.keys.get(section, f"vehicle.{section}")
+        raise ConfigError(where, None, f"missing: {section}=on needs it (or use {section}=off)")
     return spec
 
 
@@ -126,8 +126,7 @@ def load_flex(vehicle: Vehicle, fcfg: FlexOnConfig, plant_rate_hz: float) -> Fle
     return FlexTables(frequency_rad_s=freq, damping=zeta, shapes=shapes, sets=sets)
 
 
-def _tank(name: str, node: dict, vdir: Path, load_kg: float) -> SloshTank:
-    key = f"vehicle.slosh.{name}"
+def _tank(name: str, key: str, node: dict, vdir: Path, load_kg: float) -> SloshTank:
     for k in ("table", "radius_m", "bottom_station_m", "density_kgm3"):
         if k not in node:
             raise ConfigError(f"{key}.{k}", None, "missing")
@@ -166,8 +165,11 @@ def load_slosh(vehicle: Vehicle, scfg: SloshOnConfig) -> SloshData:
             raise ConfigError(f"vehicle.slosh.{k}", spec[k], "unknown key; allowed: reference_accel_mps2, lox, lh2")
     a_ref = float(spec.get("reference_accel_mps2", 0.0))
     if not a_ref > 0.0:
-        raise ConfigError("vehicle.slosh.reference_accel_mps2", a_ref, "must be positive")
+        raise ConfigError(vehicle.keys.get("slosh.lox", "vehicle.slosh") + ".reference_accel_mps2", a_ref,
+                          "must be positive")
     vdir = Path(vehicle.data_dir or ".")
     us = vehicle.upper_stage
-    tanks = (_tank("lox", spec.get("lox") or {}, vdir, us.lox_kg), _tank("lh2", spec.get("lh2") or {}, vdir, us.lh2_kg))
+    keys = {name: vehicle.keys.get(f"slosh.{name}", f"vehicle.slosh.{name}") for name in ("lox", "lh2")}
+    tanks = (_tank("lox", keys["lox"], spec.get("lox") or {}, vdir, us.lox_kg),
+             _tank("lh2", keys["lh2"], spec.get("lh2") or {}, vdir, us.lh2_kg))
     return SloshData(reference_accel_mps2=a_ref, tanks=tanks)

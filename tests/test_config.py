@@ -127,7 +127,7 @@ def test_malformed_data_file_refused(compose_cfg, tmp_path):
 
 
 def test_negative_thrust_refused(compose_cfg):
-    _expect(compose_cfg(["vehicle.upper_stage.thrust_vac_N=-1"]), "thrust")
+    _expect(compose_cfg(["vehicle.stages.upper_stage.engines.j2x.thrust_vac_N=-1"]), "thrust")
 
 
 def test_staging_state_for_another_vehicle_refused(compose_cfg, tmp_path):

@@ -221,7 +221,7 @@ def test_all_on_signals_exist_with_units(phase):
     # liquid level of a flat-bottom cylinder: m / (ρ π R²)
     prop = sig["propellant_remaining"].data
     for j, tank in enumerate(("lox", "lh2")):
-        spec = cfg.vehicle["slosh"][tank]
+        spec = cfg.vehicle["stages"]["upper_stage"]["tanks"][tank]["slosh"]
         level = prop[:, 1 + j] / (spec["density_kgm3"] * np.pi * spec["radius_m"] ** 2)
         np.testing.assert_allclose(sig["liquid_level"].data[:, j], level, rtol=1e-12)
     assert np.all(sig["slosh_frequency"].data > 0.0)
@@ -241,8 +241,9 @@ def test_tail_wags_dog_moment_is_engine_inertia_times_nozzle_acceleration():
     """Slosh off (the CG is the vehicle's): M_y = (I_R + m_R l_R l_c) δ̈_p and
     M_z = (I_R + m_R l_R l_c) δ̈_y with l_c the gimbal's distance aft of the CG."""
     cfg, model, result, sig = _fly("off", "off", "on", "third_order", "first_stage")
-    eng = cfg.vehicle["first_stage"]["engine"]
-    l_c = cfg.vehicle["first_stage"]["gimbal_m"][0] - sig["cg_structure"].data[:, 0]
+    motor = cfg.vehicle["stages"]["first_stage"]["engines"]["five_segment_motor"]
+    eng = motor["moving_mass"]
+    l_c = motor["gimbal_m"][0] - sig["cg_structure"].data[:, 0]
     j = eng["inertia_about_gimbal_kgm2"] + eng["mass_kg"] * eng["cg_from_gimbal_m"] * l_c
     acc = sig["gimbal_acceleration"].data
     m = sig["twd_moment"].data

@@ -23,7 +23,7 @@ def _fly(*overrides: str):
 
 
 def test_zero_ramp_is_an_instantaneous_step():
-    prep, res, sig = _fly("vehicle.rcs.ramp_up_s=0", "vehicle.rcs.ramp_down_s=0")
+    prep, res, sig = _fly("vehicle.stages.upper_stage.roll_jets.ramp_up_s=0", "vehicle.stages.upper_stage.roll_jets.ramp_down_s=0")
     assert res.status == "complete", res.message
     rcs = prep.vehicle.rcs
     alt = sig["altitude"].data
@@ -46,4 +46,4 @@ def test_negative_ramp_is_refused():
     from savant_cli.errors import ConfigError
 
     with pytest.raises(ConfigError, match="ramp_up_s"):
-        _fly("vehicle.rcs.ramp_up_s=-0.01")
+        _fly("vehicle.stages.upper_stage.roll_jets.ramp_up_s=-0.01")

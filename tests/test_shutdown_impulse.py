@@ -60,7 +60,7 @@ def test_flown_shutdown_impulse_is_the_configured_one(nominal):
 
 
 def test_dispersed_shutdown_impulse_is_flown():
-    prep, res, summ = _fly(["vehicle.upper_stage.shutdown_impulse_Ns=300000.0"])
+    prep, res, summ = _fly(["vehicle.stages.upper_stage.engines.j2x.shutdown_impulse_Ns=300000.0"])
     flown, _ = _flown_shutdown_impulse(prep, res)
     assert flown == pytest.approx(300000.0, rel=2e-3)
     assert summ["shutdown_impulse_Ns"] == pytest.approx(300000.0, rel=2e-3)

@@ -98,7 +98,7 @@ def test_flown_mixture_ratio_sets_the_limiting_propellant():
     from savant_cli.sim.summary import propulsion_keys
 
     cfg = validate(compose_config(["phase=upper_stage", "sim.progress=false",
-                                   "vehicle.upper_stage.mixture_ratio=5.6"]))
+                                   "vehicle.stages.upper_stage.engines.j2x.mixture_ratio=5.6"]))
     prep = prepare(cfg, hydra_search_dirs())
     res = simulate(prep.model, progress=False)
     us = prep.vehicle.upper_stage

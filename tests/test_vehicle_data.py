@@ -44,6 +44,22 @@ def _cfg() -> dict:
     return OmegaConf.to_container(OmegaConf.load(VEHICLE_YAML).vehicle, resolve=True)  # a `_global_` preset
 
 
+# the sections of ares_i.yaml the refusal tests edit (paths below `vehicle`)
+FIRST = "stages.first_stage"
+MOTOR = f"{FIRST}.engines.five_segment_motor"
+UPPER = "stages.upper_stage"
+J2X = f"{UPPER}.engines.j2x"
+GRAIN, LOX, LH2 = f"{FIRST}.tanks.grain", f"{UPPER}.tanks.lox", f"{UPPER}.tanks.lh2"
+ROLL_JETS, LES = f"{UPPER}.roll_jets", "items.les"
+
+
+def _section(cfg: dict, path: str) -> dict:
+    """The section of the vehicle node at a dotted path."""
+    for part in path.split("."):
+        cfg = cfg[part]
+    return cfg
+
+
 @pytest.fixture(scope="module")
 def vehicle() -> Vehicle:
     return load_vehicle(OmegaConf.load(VEHICLE_YAML).vehicle, DATA_DIR)
@@ -437,19 +453,19 @@ def test_refuses_negative_table_values(copy, file, column, value):
 
 
 @pytest.mark.parametrize("section, key", [
-    ("first_stage", "isp_vac_s"), ("first_stage", "isp_sl_s"), ("upper_stage", "isp_vac_s"),
-    ("upper_stage", "thrust_vac_N"), ("upper_stage", "lox_kg"), ("first_stage", "propellant_kg"),
+    (MOTOR, "isp_vac_s"), (MOTOR, "isp_sl_s"), (J2X, "isp_vac_s"), (J2X, "thrust_vac_N"), (LOX, "propellant_kg"),
+    (GRAIN, "propellant_kg"), (FIRST, "inert_mass_kg"), (LES, "mass_kg"),
 ])
 def test_refuses_negative_config_values(copy, section, key):
     cfg = _cfg()
-    cfg[section][key] = -abs(cfg[section][key])
+    _section(cfg, section)[key] = -abs(_section(cfg, section)[key])
     _refused(cfg, copy, f"vehicle.{section}.{key}")
 
 
 def test_refuses_negative_engine_mass(copy):
     cfg = _cfg()
-    cfg["first_stage"]["engine"]["mass_kg"] = -7000.0
-    _refused(cfg, copy, "vehicle.first_stage.engine.mass_kg")
+    _section(cfg, MOTOR)["moving_mass"]["mass_kg"] = -7000.0
+    _refused(cfg, copy, f"vehicle.{MOTOR}.moving_mass.mass_kg")
 
 
 def test_refuses_inertia_not_positive_definite(copy):
@@ -463,13 +479,13 @@ def test_refuses_inertia_violating_triangle_inequality(copy):
 
 
 @pytest.mark.parametrize("section, key, value", [
-    ("first_stage", "gimbal_m", [90.5, 0.0]),
+    (MOTOR, "gimbal_m", [90.5, 0.0]),
     ("sensors", "imu_m", [10.0, 0.0, 0.0, 0.0]),
-    ("rcs", "location_m", "35.6"),
+    (ROLL_JETS, "location_m", "35.6"),
 ])
 def test_refuses_wrong_location_length(copy, section, key, value):
     cfg = _cfg()
-    cfg[section][key] = value
+    _section(cfg, section)[key] = value
     _refused(cfg, copy, f"vehicle.{section}.{key}")
 
 
@@ -480,15 +496,15 @@ def test_refuses_wrong_reference_vector(copy):
 
 
 @pytest.mark.parametrize("section, key, delta", [
-    ("first_stage", "jettison_mass_kg", 500.0),
-    ("upper_stage", "les_mass_kg", 100.0),
-    ("first_stage", "propellant_kg", 1000.0),
-    ("upper_stage", "lh2_kg", -200.0),
+    (FIRST, "inert_mass_kg", 500.0),
+    (LES, "mass_kg", 100.0),
+    (GRAIN, "propellant_kg", 1000.0),
+    (LH2, "propellant_kg", -200.0),
 ])
 def test_refuses_mass_tables_inconsistent_with_jettisoned_masses(copy, section, key, delta):
     cfg = _cfg()
-    cfg[section][key] += delta
-    _refused(cfg, copy, f"vehicle.{section}.")
+    _section(cfg, section)[key] += delta
+    _refused(cfg, copy, f"vehicle.{section if section != LH2 else LOX}.")
 
 
 def test_refuses_mass_table_not_matching_staging(copy):
@@ -500,19 +516,19 @@ def test_refuses_mass_table_not_matching_staging(copy):
     cells[1] = repr(float(cells[1]) + 50.0)
     lines[h + 6] = ",".join(cells)
     path.write_text("\n".join(lines) + "\n")
-    _refused(_cfg(), copy, "vehicle.upper_stage.les_mass_kg")
+    _refused(_cfg(), copy, f"vehicle.{LES}.mass_kg")
 
 
 def test_refuses_unknown_and_missing_keys(copy):
     cfg = _cfg()
-    cfg["first_stage"]["isp_vacuum_s"] = 266.0
-    _refused(cfg, copy, "vehicle.first_stage.isp_vacuum_s")
+    _section(cfg, MOTOR)["isp_vacuum_s"] = 266.0
+    _refused(cfg, copy, f"vehicle.{MOTOR}.isp_vacuum_s")
     cfg = _cfg()
-    del cfg["upper_stage"]["mixture_ratio"]
-    _refused(cfg, copy, "vehicle.upper_stage.mixture_ratio")
+    del _section(cfg, J2X)["mixture_ratio"]
+    _refused(cfg, copy, f"vehicle.{J2X}.mixture_ratio")
     cfg = _cfg()
     del cfg["configurations"]["upper"]
-    _refused(cfg, copy, "vehicle.configurations.upper")
+    _refused(cfg, copy, "vehicle.events.les_jettison.jettison")  # the parts left after it have no configuration
 
 
 # ===================================================================== reproducibility
@@ -538,13 +554,14 @@ def test_yaml_derived_scalars_match_the_generator_layout():
 
     cfg = _cfg()
     d = gen.derived_figures()
-    assert cfg["first_stage"]["nozzle_exit_area_m2"] == pytest.approx(d["first_stage.nozzle_exit_area_m2"], abs=0.01)
-    assert cfg["first_stage"]["jettison_mass_kg"] == pytest.approx(d["first_stage.jettison_mass_kg"])
-    assert cfg["first_stage"]["gimbal_m"][0] == pytest.approx(d["first_stage.gimbal_x_m"])
-    assert cfg["upper_stage"]["gimbal_m"][0] == pytest.approx(d["upper_stage.gimbal_x_m"])
+    motor, j2x = _section(cfg, MOTOR), _section(cfg, J2X)
+    assert motor["nozzle_exit_area_m2"] == pytest.approx(d["first_stage.nozzle_exit_area_m2"], abs=0.01)
+    assert _section(cfg, FIRST)["inert_mass_kg"] == pytest.approx(d["first_stage.jettison_mass_kg"])
+    assert motor["gimbal_m"][0] == pytest.approx(d["first_stage.gimbal_x_m"])
+    assert j2x["gimbal_m"][0] == pytest.approx(d["upper_stage.gimbal_x_m"])
     for k in ("mass_kg", "cg_from_gimbal_m", "inertia_about_gimbal_kgm2"):
-        assert cfg["upper_stage"]["engine"][k] == pytest.approx(d[f"upper_stage.engine.{k}"])
-    assert cfg["rcs"]["location_m"][0] == pytest.approx(d["rcs.location_x_m"])
+        assert j2x["moving_mass"][k] == pytest.approx(d[f"upper_stage.engine.{k}"])
+    assert _section(cfg, ROLL_JETS)["location_m"][0] == pytest.approx(d["rcs.location_x_m"])
     assert cfg["sensors"]["imu_m"][0] == pytest.approx(d["sensors.imu_x_m"])
     assert cfg["sensors"]["rate_gyro_first_stage_m"][0] == pytest.approx(d["sensors.rate_gyro_first_stage_x_m"])
     assert cfg["configurations"]["upper"]["moment_reference_m"][0] == pytest.approx(

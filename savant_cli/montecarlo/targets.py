@@ -168,7 +168,7 @@ def resolve(key: str, text: str, cfg: SavantConfig, vehicle: Vehicle, search_dir
         if inactive:
             name = next((e for e in reversed(path) if isinstance(e, str)), "")
             return Target(text, "inactive", tuple(shown), units=_units(name), note=inactive)
-        where = "the loaded vehicle's attributes (see savant_cli/vehicle.py)" if kind == "vehicle" else \
+        where = "the loaded vehicle's attributes (see savant_cli/vehicle/two_stage.py)" if kind == "vehicle" else \
             "the config (see `savant run --cfg job`)"
         raise ConfigError(key, text, f"unknown target: no such key in {where}, and not a tables.* or group target") from None
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):

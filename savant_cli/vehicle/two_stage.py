@@ -1,0 +1,279 @@
+"""The two-stage vehicle the compiled plant flies today, as a view of the vehicle tree.
+
+The plant's models (``savant_cli/models/``) read a vehicle of one shape: a first stage
+with one engine flown by its thrust trace (a solid motor), an upper stage with one
+liquid engine drawing from an oxidizer and a fuel tank and carrying the roll jets, at
+most one jettisoned item (LES or fairing),
+and three configurations (``stack``, ``upper_les``, ``upper``) reached by separation
+and the item's jettison. :func:`two_stage_view` derives these records from a loaded
+:class:`~savant_cli.vehicle.tree.VehicleTree` and refuses, naming the key, a tree the
+plant cannot fly yet (more stages, boosters, clusters, other event sequences).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from savant_cli.errors import ConfigError
+from savant_cli.vehicle.tables import AeroTable, MassTable
+from savant_cli.vehicle.tree import (
+    BOOSTER, GIMBAL_AXES, ITEM, LIFTOFF, EngineSpec, LiquidThrust, MovingMass, RollJets, Sensors, ThrustTrace,
+    VehicleTree
+)
+
+#: The vehicle's configurations, in the order the aero and mass tables are stacked
+#: (models/configurations.py numbers them).
+CONFIG_NAMES = ("stack", "upper_les", "upper")
+MASS_TOLERANCE_KG = 1.0   # staging consistency of the mass tables
+#: The consistency check's keys for a view built without a tree.
+LEGACY_KEYS = {"propellant_first": "first_stage.propellant_kg", "propellant_upper": "upper_stage.lox_kg + lh2_kg",
+               "jettison_mass": "first_stage.jettison_mass_kg", "les_mass": "upper_stage.les_mass_kg"}
+
+
+@dataclass(frozen=True)
+class Configuration:
+    """One flight configuration (``stack``, ``upper_les``, ``upper``)."""
+
+    name: str
+    aero: AeroTable
+    mass: MassTable
+
+
+#: The moving engine (nozzle) mass properties about its gimbal, for tail-wags-dog.
+Engine = MovingMass
+
+
+@dataclass(frozen=True)
+class FirstStage:
+    """Solid first stage. Thrust is vacuum thrust (N) vs time from liftoff (s); the
+    delivered thrust is ``F_vac - p A_exit``; mass flow ``F_vac / (g0 Isp_vac)``.
+    Gimbal location in the structure frame (m); limit in rad."""
+
+    thrust_time_s: np.ndarray
+    thrust_vac_N: np.ndarray
+    isp_vac_s: float
+    isp_sl_s: float
+    nozzle_exit_area_m2: float
+    propellant_kg: float
+    jettison_mass_kg: float
+    gimbal_m: np.ndarray
+    gimbal_limit_rad: float
+    engine: Engine
+
+
+@dataclass(frozen=True)
+class UpperStage:
+    """J-2X upper stage: rated vacuum thrust (N), Isp (s), LOX/LH2 mixture ratio and
+    loads (kg), start transient (thrust fraction vs time since the ignition command, s),
+    shutdown impulse (N·s: the vacuum impulse delivered after the cutoff command), gimbal
+    (structure frame, m; limit rad) and the launch abort system mass (kg)."""
+
+    thrust_vac_N: float
+    isp_vac_s: float
+    mixture_ratio: float
+    nozzle_exit_area_m2: float
+    lox_kg: float
+    lh2_kg: float
+    startup_time_s: np.ndarray
+    startup_fraction: np.ndarray
+    shutdown_impulse_Ns: float
+    gimbal_m: np.ndarray
+    gimbal_limit_rad: float
+    les_mass_kg: float
+    engine: Engine
+
+
+#: Roll-control jets (the upper stage's).
+Rcs = RollJets
+
+
+@dataclass(frozen=True)
+class Events:
+    """Staging event parameters: separation when first-stage vacuum thrust falls below
+    ``separation_thrust_fraction`` of its peak; J-2X ignition command
+    ``ignition_delay_s`` later; LES jettison ``les_jettison_delay_s`` after that."""
+
+    separation_thrust_fraction: float
+    ignition_delay_s: float
+    les_jettison_delay_s: float
+
+
+@dataclass(frozen=True)
+class Vehicle:
+    """A loaded, checked vehicle, all SI."""
+
+    name: str
+    description: str
+    length_m: float
+    configurations: dict[str, Configuration]
+    first_stage: FirstStage
+    upper_stage: UpperStage
+    rcs: Rcs
+    sensors: Sensors
+    events: Events
+    data_dir: Path | None = None
+    flex_spec: dict | None = None  # raw ``flex`` section, loaded by savant_cli.flex_slosh when flex is on
+    slosh_spec: dict | None = None  # raw ``slosh`` section, loaded when slosh is on
+    #: structural load allowable on the total q·α (Pa·deg, ``loads.qalpha_limit_Pa_deg``;
+    #: None: no limit declared). The run summary reports the time above it.
+    qalpha_limit_Pa_deg: float | None = None
+    #: the YAML keys of the quantities the consistency check names (``propellant_first``,
+    #: ``propellant_upper``, ``jettison_mass``, ``les_mass``, and ``slosh.<tank>``)
+    keys: dict = field(default_factory=dict)
+    #: the vehicle tree this view was derived from (None: built directly, as tests do)
+    tree: VehicleTree | None = None
+
+
+def check_consistency(v: Vehicle, mass_files: Mapping[str, str] | None = None) -> None:
+    """Refuse mass tables that disagree with the loads and the jettisoned masses.
+
+    * every table starts at 0 propellant; the stack's ends at ``first_stage.propellant_kg``,
+      the upper configurations' at ``upper_stage.lox_kg + lh2_kg``;
+    * stack mass at 0 propellant minus ``first_stage.jettison_mass_kg`` equals the
+      upper_les mass at full propellant;
+    * upper_les minus upper mass equals ``upper_stage.les_mass_kg`` at every propellant
+      level (upper_les interpolated at upper's breakpoints; mass is linear in propellant).
+
+    All within :data:`MASS_TOLERANCE_KG`.
+    """
+    files = dict(mass_files or {n: f"mass_{n}.csv" for n in CONFIG_NAMES})
+    keys = {**LEGACY_KEYS, **v.keys}
+    tol = MASS_TOLERANCE_KG
+    stack, les, up = (v.configurations[n].mass for n in CONFIG_NAMES)
+    us_prop = v.upper_stage.lox_kg + v.upper_stage.lh2_kg
+    for name, table, full, key in (("stack", stack, v.first_stage.propellant_kg, keys["propellant_first"]),
+                                   ("upper_les", les, us_prop, keys["propellant_upper"]),
+                                   ("upper", up, us_prop, keys["propellant_upper"])):
+        if table.propellant_kg[0] > tol:
+            raise ConfigError(f"{files[name]}:propellant_remaining", float(table.propellant_kg[0]),
+                              "the table must start at 0 propellant remaining")
+        if abs(table.propellant_kg[-1] - full) > tol:
+            raise ConfigError(key, full, f"must equal the largest propellant_remaining of {files[name]} "
+                                         f"({table.propellant_kg[-1]:.1f} kg)")
+    after_sep = stack.mass_kg[0] - v.first_stage.jettison_mass_kg
+    if abs(after_sep - les.mass_kg[-1]) > tol:
+        raise ConfigError(keys["jettison_mass"], v.first_stage.jettison_mass_kg,
+                          f"stack mass at burnout ({stack.mass_kg[0]:.1f} kg, {files['stack']}) minus the jettison "
+                          f"mass must equal the upper_les mass at full propellant ({les.mass_kg[-1]:.1f} kg, "
+                          f"{files['upper_les']}) within {tol:g} kg")
+    diff = np.interp(up.propellant_kg, les.propellant_kg, les.mass_kg) - up.mass_kg
+    worst = int(np.argmax(np.abs(diff - v.upper_stage.les_mass_kg)))
+    if abs(diff[worst] - v.upper_stage.les_mass_kg) > tol:
+        raise ConfigError(keys["les_mass"], v.upper_stage.les_mass_kg,
+                          f"must equal upper_les mass minus upper mass at every propellant level within {tol:g} kg; "
+                          f"at {up.propellant_kg[worst]:.1f} kg propellant the difference is {diff[worst]:.1f} kg")
+
+
+def _refuse(key: str, value, what: str) -> None:
+    raise ConfigError(key, value, f"the plant flies one vehicle shape today (docs/vehicles.md, \"What flies today\"): "
+                                  f"{what}")
+
+
+def _single_engine(tree: VehicleTree, part: str, source: str) -> EngineSpec:
+    engines = tree.engines_of(part)
+    key = tree.parts[part].key
+    if len(engines) != 1 or engines[0].source != source:
+        _refuse(f"{key}.engines", [e.name for e in engines], f"the {part} stage has one {source} engine")
+    eng = engines[0]
+    if eng.gimbal_axes != GIMBAL_AXES:
+        _refuse(f"{eng.key}.gimbal_axes", list(eng.gimbal_axes), "each stage's engine gimbals in pitch and yaw")
+    if np.any(eng.cant_rad != 0.0):
+        _refuse(f"{eng.key}.cant_deg", np.degrees(eng.cant_rad).tolist(), "nozzles are not canted")
+    if set(tree.parts[part].tanks) != set(eng.tanks):
+        _refuse(f"{key}.tanks", list(tree.parts[part].tanks), f"the stage's tanks are its engine's, {list(eng.tanks)}")
+    return eng
+
+
+def _event(tree: VehicleTree, name: str, after: str, trigger: bool, jettison: tuple = (), ignite: tuple = ()):
+    ev = tree.events[name]
+    if ev.after != after or (ev.when is not None) != trigger or ev.jettison != jettison or ev.ignite != ignite \
+            or ev.shutdown or (trigger and ev.delay_s != 0.0):
+        what = (f"after {after}" + (", when a thrust fraction falls below a value" if trigger else ", a delay later")
+                + (f", jettison {list(jettison)}" if jettison else "") + (f", ignite {list(ignite)}" if ignite else ""))
+        _refuse(ev.key, name, f"this event is: {what}")
+    return ev
+
+
+def two_stage_view(tree: VehicleTree) -> Vehicle:
+    """The plant's two-stage records of a vehicle tree (module docstring), or a refusal
+    naming the first key that leaves the shape."""
+    stages = tree.stages()
+    if len(stages) != 2:
+        _refuse("vehicle.stages", [s.name for s in stages], "two stages")
+    boosters = [p.name for p in tree.parts.values() if p.kind == BOOSTER]
+    if boosters:
+        _refuse("vehicle.boosters", boosters, "no boosters")
+    first, upper = stages
+    items = [p for p in tree.parts.values() if p.kind == ITEM]
+    if len(items) > 1 or any(i.attached_to != upper.name for i in items):
+        _refuse("vehicle.items", [i.name for i in items], f"at most one jettisoned item, on {upper.name}")
+    fs, us = _single_engine(tree, first.name, "trace"), _single_engine(tree, upper.name, "liquid")
+    if first.roll_jets is not None or upper.roll_jets is None:
+        _refuse(f"{upper.key}.roll_jets", None, "roll jets on the upper stage only")
+    if first.inert_mass_kg is None:
+        _refuse(f"{first.key}.inert_mass_kg", None, "the first stage's inert mass, dropped at separation")
+    names = list(tree.events)
+    if len(names) != 2 + len(items):
+        _refuse("vehicle.events", names,
+                "separation, the upper-stage ignition" + (", the item's jettison" if items else ""))
+    sep = _event(tree, names[0], LIFTOFF, True, jettison=(first.name,))
+    if sep.when.quantity != "thrust_fraction" or sep.when.of not in (fs.name, first.name) or sep.when.below is None:
+        _refuse(f"{sep.key}.when", sep.when.quantity,
+                f"separation when the thrust fraction of {fs.name} falls below a value")
+    ign = _event(tree, names[1], sep.name, False, ignite=(us.name,))
+    jet = _event(tree, names[2], ign.name, False, jettison=(items[0].name,)) if items else None
+    configs = [tree.configurations[c] for _, c in tree.sequence]
+    for c, tanks in zip(configs, (fs.tanks, us.tanks, us.tanks)):
+        if set(c.mass_tanks) != set(tanks):
+            _refuse(f"{c.key}.mass_tanks", list(c.mass_tanks),
+                    f"this configuration's mass table is against {list(tanks)}")
+    if not items:  # the upper stage alone from separation on
+        configs.append(configs[1])
+    fs_thrust, us_thrust = fs.thrust, us.thrust
+    assert isinstance(fs_thrust, ThrustTrace) and isinstance(us_thrust, LiquidThrust)
+    grain, (ox, fuel) = tree.tanks[fs.tanks[0]], (tree.tanks[t] for t in us.tanks)
+    first_stage = FirstStage(
+        thrust_time_s=fs_thrust.time_s, thrust_vac_N=fs_thrust.thrust_vac_N, isp_vac_s=fs_thrust.isp_vac_s,
+        isp_sl_s=fs_thrust.isp_sl_s, nozzle_exit_area_m2=fs.nozzle_exit_area_m2, propellant_kg=grain.propellant_kg,
+        jettison_mass_kg=first.inert_mass_kg, gimbal_m=fs.gimbal_m, gimbal_limit_rad=fs.gimbal_limit_rad,
+        engine=fs.moving_mass)
+    upper_stage = UpperStage(
+        thrust_vac_N=us_thrust.thrust_vac_N, isp_vac_s=us_thrust.isp_vac_s, mixture_ratio=us_thrust.mixture_ratio,
+        nozzle_exit_area_m2=us.nozzle_exit_area_m2, lox_kg=ox.propellant_kg, lh2_kg=fuel.propellant_kg,
+        startup_time_s=us_thrust.startup_time_s, startup_fraction=us_thrust.startup_fraction,
+        shutdown_impulse_Ns=us_thrust.shutdown_impulse_Ns, gimbal_m=us.gimbal_m, gimbal_limit_rad=us.gimbal_limit_rad,
+        les_mass_kg=items[0].inert_mass_kg if items else 0.0, engine=us.moving_mass)
+    events = Events(separation_thrust_fraction=sep.when.below, ignition_delay_s=ign.delay_s,
+                    les_jettison_delay_s=jet.delay_s if jet is not None else float("inf"))
+    keys = {"propellant_first": f"{grain.key}.propellant_kg",
+            "propellant_upper": f"{ox.key}.propellant_kg + {fuel.name}.propellant_kg",
+            "jettison_mass": f"{first.key}.inert_mass_kg",
+            "les_mass": f"{items[0].key}.mass_kg" if items else "vehicle.items",
+            "slosh.lox": f"{ox.key}.slosh", "slosh.lh2": f"{fuel.key}.slosh",
+            "slosh": f"{ox.key}.slosh and {fuel.key}.slosh"}
+    vehicle = Vehicle(
+        name=tree.name, description=tree.description, length_m=tree.length_m,
+        configurations={n: Configuration(n, c.aero, c.mass) for n, c in zip(CONFIG_NAMES, configs)},
+        first_stage=first_stage, upper_stage=upper_stage, rcs=upper.roll_jets, sensors=tree.sensors, events=events,
+        data_dir=tree.data_dir, flex_spec=tree.flex_spec, slosh_spec=_slosh_spec(tree, ox.name, fuel.name),
+        qalpha_limit_Pa_deg=tree.qalpha_limit_Pa_deg, keys=keys, tree=tree)
+    check_consistency(vehicle, {n: c.mass_file for n, c in zip(CONFIG_NAMES, configs)})
+    return vehicle
+
+
+def _slosh_spec(tree: VehicleTree, ox: str, fuel: str) -> dict | None:
+    """The upper-stage tanks' slosh sections as the slosh loader reads them (``lox``: the
+    oxidizer's, ``lh2``: the fuel's, one reference acceleration); None without slosh data."""
+    sloshing = [t for t in tree.tanks.values() if t.slosh is not None]
+    if not sloshing:
+        return None
+    if {t.name for t in sloshing} != {ox, fuel}:
+        _refuse(sloshing[0].key, [t.name for t in sloshing], f"slosh in the upper stage's two tanks, {ox} and {fuel}")
+    a_ref = {float(t.slosh["reference_accel_mps2"]) for t in sloshing}
+    if len(a_ref) != 1:
+        _refuse(f"{tree.tanks[fuel].key}.slosh.reference_accel_mps2", sorted(a_ref), "one reference acceleration")
+    return {"reference_accel_mps2": a_ref.pop(), "lox": tree.tanks[ox].slosh, "lh2": tree.tanks[fuel].slosh}
