@@ -181,6 +181,18 @@ def _main(argv: list[str] | None) -> int:
     return 2
 
 
+def _parsed(ap, rest: list[str]):
+    """A subcommand's parsed arguments, or its exit status: 0 after ``--help``, 2 after
+    argparse printed the usage and the problem."""
+    if any(a in ("-h", "--help") for a in rest):
+        ap.print_help()
+        return 0
+    try:
+        return ap.parse_args(rest)
+    except SystemExit:
+        return 2
+
+
 def _compare_command(rest: list[str]) -> int:
     """``savant compare RUN_DIR REFERENCE --map MAP.yaml [--out DIR]``."""
     import argparse
@@ -195,13 +207,9 @@ def _compare_command(rest: list[str]) -> int:
                     help="YAML mapping of names, units, window and tolerances (e.g. references/jsbsim_names.yaml)")
     ap.add_argument("--out", type=Path, default=None, help="output folder (default: RUN_DIR/compare_<reference>)")
     ap.add_argument("--no-plots", action="store_true", help="statistics only")
-    if any(a in ("-h", "--help") for a in rest):
-        ap.print_help()
-        return 0
-    try:
-        args = ap.parse_args(rest)
-    except SystemExit:  # argparse printed the usage and the problem
-        return 2
+    args = _parsed(ap, rest)
+    if isinstance(args, int):
+        return args
     if not (args.run_dir / "savant.h5").is_file():
         err.print(f"[bold red]error[/]: {args.run_dir} holds no savant.h5")
         return 2
@@ -224,13 +232,9 @@ def _convert_vehicle_command(rest: list[str]) -> int:
     ap.add_argument("file", type=Path, help="the vehicle YAML (conf/vehicle/<name>.yaml of your config folder)")
     ap.add_argument("--out", type=Path, default=None, help="where to write it (default: in place, the original "
                                                            "kept as FILE.v1)")
-    if any(a in ("-h", "--help") for a in rest):
-        ap.print_help()
-        return 0
-    try:
-        args = ap.parse_args(rest)
-    except SystemExit:  # argparse printed the usage and the problem
-        return 2
+    args = _parsed(ap, rest)
+    if isinstance(args, int):
+        return args
     from savant_cli.vehicle.convert import convert_file
 
     try:
