@@ -163,9 +163,9 @@ def test_shipped_simplex_mount_matches_the_third_order_defaults():
     spx = OmegaConf.load(conf / "actuator" / "simplex.yaml")
     third = OmegaConf.load(conf / "actuator" / "third_order.yaml")
     vehicle = OmegaConf.load(conf / "vehicle" / "ares_i.yaml")["vehicle"]
-    for stage in ("first_stage", "upper_stage"):
+    for stage, engine in (("first_stage", "five_segment_motor"), ("upper_stage", "j2x")):
         k, c = spx[stage]["stiffness_Nm_per_rad"], spx[stage]["damping_Nms_per_rad"]
-        j = vehicle[stage]["engine"]["inertia_about_gimbal_kgm2"]
+        j = vehicle.stages[stage].engines[engine].moving_mass.inertia_about_gimbal_kgm2
         assert np.sqrt(k / j) / (2 * np.pi) == pytest.approx(third[stage]["natural_frequency_hz"], rel=5e-3)
         assert c / (2.0 * np.sqrt(k * j)) == pytest.approx(third[stage]["damping"], rel=5e-3)
         assert spx[stage]["rate_limit_deg_s"] == third[stage]["rate_limit_deg_s"]

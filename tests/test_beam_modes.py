@@ -177,7 +177,8 @@ def named_stations_m() -> dict[int, float]:
     assert y.sensors.rate_gyro_upper_stage_m[0] == y.sensors.imu_m[0]
     st = stations(LAYOUT)
     return {4021: y.sensors.imu_m[0], 6030: y.sensors.rate_gyro_first_stage_m[0],
-            718: y.first_stage.gimbal_m[0], 6023: y.rcs.location_m[0], 6226: y.upper_stage.gimbal_m[0],
+            718: y.stages.first_stage.engines.five_segment_motor.gimbal_m[0],
+            6023: y.stages.upper_stage.roll_jets.location_m[0], 6226: y.stages.upper_stage.engines.j2x.gimbal_m[0],
             6003: st["lh2_fwd"], 6004: st["lox_fwd"], 6021: st["lox_fwd"], 6022: st["lox_aft"]}
 
 
