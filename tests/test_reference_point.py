@@ -53,7 +53,8 @@ def flown():
 
 def _apply_events(model, snap):
     x, u, d, ev = snap.x.copy(), snap.u.copy(), snap.d.copy(), snap.events.copy()
-    status = engine.handle_events(snap.t, model.rates.dt, x, u, d, ev, model.sched, model.p, model.packed_tables)
+    status = engine.handle_events(snap.t, model.rates.dt, x, u, d, ev, model.sched, model.p, model.packed_tables,
+                                  engine.work_array(x.size))
     return status, x, u, ev
 
 

@@ -45,6 +45,7 @@ from scipy.spatial.transform import Rotation
 
 from savant_cli import constants
 from savant_cli.config import SavantConfig
+from savant_cli.errors import ConfigError
 from savant_cli.io.guidance_file import SPEED_COLUMN
 from savant_cli.models import aero, atmosphere as atm, earth, mass as mass_model, quaternion as qt
 from savant_cli.models.configurations import CONFIG_STACK, CONFIG_UPPER, CONFIG_UPPER_LES
@@ -75,8 +76,6 @@ class Program:
         known = set(cls.__dataclass_fields__)
         unknown = set(gen) - known
         if unknown:
-            from savant_cli.errors import ConfigError
-
             raise ConfigError(f"guidance.generator.{sorted(unknown)[0]}", gen[sorted(unknown)[0]],
                               f"unknown key; known: {', '.join(sorted(known))}")
         return cls(**{k: float(v) for k, v in gen.items()})
@@ -89,6 +88,19 @@ def _cosine_ramp(t: float, start: float, duration: float) -> float:
     if t >= start + duration:
         return 1.0
     return 0.5 * (1.0 - np.cos(np.pi * (t - start) / duration))
+
+
+def timed_events(vehicle: Vehicle) -> None:
+    """Refuse a vehicle whose ignition or jettison waits for a condition: this reference
+    places the events at their delays (after the predicted separation)."""
+    names = list(vehicle.tree.events) if vehicle.tree is not None else []
+    for slot in (1, 2):
+        if vehicle.events.trigger(slot).quantity is not None:
+            key = f"vehicle.events.{names[slot]}.when" if len(names) > slot else "vehicle.events"
+            raise ConfigError(key, vehicle.events.trigger(slot).quantity,
+                              f"the reference ascent of this generator places the ignition and the jettison at "
+                              f"their delays: generate the command file without the condition, with a delay that "
+                              f"stands for it ('~{key}' and {key[:-5]}.delay_s=...; docs/vehicles.md)")
 
 
 class Reference:
@@ -106,6 +118,7 @@ class Reference:
         self.c_e2n = earth.dcm_ecef_to_ned(lat, lon)  # = ECI→launch frame at t = 0
         self.pad_heading = np.radians(ls.pad_heading_deg)
         self.t_sep = build.predicted_separation_time(vehicle)  # a prediction: no flight exists here (the flight separates on board)
+        timed_events(vehicle)
         self.t_ign = self.t_sep + vehicle.events.ignition_delay_s
         self.t_les = self.t_ign + vehicle.events.les_jettison_delay_s
         self.energy_target = build.target_energy(cfg)

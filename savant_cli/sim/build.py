@@ -21,6 +21,7 @@ from savant_cli.models.command_schedule import SCHEDULES
 from savant_cli.models.fcs import FcsTables, fcs_tables
 from savant_cli.models.guidance import SmootherGains, smoother_gains
 from savant_cli.models.sensors import GYRO_MISALIGN, GyroModel, build_gyro, gyro_steady_state, misalignment
+from savant_cli.sim import engine
 from savant_cli.sim.engine import EventSchedule, Rates
 from savant_cli.sim.plant import PlantTables, mass_state, pack_tables
 from savant_cli.vehicle import Vehicle
@@ -173,13 +174,24 @@ def first_stage_profile(table: GuidanceTable, cfg: SavantConfig, t_sep: float) -
     return table._replace(speed=np.ascontiguousarray(speed))
 
 
+#: A condition's quantity (vehicle/tree.py) → the engine's code of it.
+WHEN_CODES = {None: engine.WHEN_NONE, "thrust_fraction": engine.WHEN_THRUST_FRACTION,
+              "axial_acceleration_mps2": engine.WHEN_AXIAL_ACCELERATION, "altitude_m": engine.WHEN_ALTITUDE,
+              "dynamic_pressure_Pa": engine.WHEN_DYNAMIC_PRESSURE, "propellant_kg": engine.WHEN_PROPELLANT}
+#: The plant's propellant states by the tank roles of ``vehicle/two_stage.py``.
+TANK_STATES = {"first_stage": layout.MFS, "lox": layout.MLOX, "lh2": layout.MLH2}
+
+
 def event_schedule(cfg: SavantConfig, vehicle: Vehicle, rt: Rates) -> EventSchedule:
     """The event rules and run limits of one run, from the vehicle's events and the config."""
-    ev = vehicle.events
+    triggers = [vehicle.events.trigger(k) for k in range(engine.N_SEQUENCE)]
     return EventSchedule(
-        separation_thrust_fraction=float(ev.separation_thrust_fraction),
-        ignition_delay_s=float(ev.ignition_delay_s),
-        les_jettison_delay_s=float(ev.les_jettison_delay_s),
+        after=np.array([tr.after for tr in triggers], dtype=np.int64),
+        delay_s=np.array([tr.delay_s for tr in triggers], dtype=np.float64),
+        when=np.array([WHEN_CODES[tr.quantity] for tr in triggers], dtype=np.int64),
+        of=np.array([TANK_STATES[tr.tank] if tr.tank else -1 for tr in triggers], dtype=np.int64),
+        above=np.array([tr.above for tr in triggers], dtype=np.bool_),
+        threshold=np.array([tr.threshold for tr in triggers], dtype=np.float64),
         cutoff_energy_j_kg=float(target_energy(cfg)),
         max_time_s=float(cfg.sim.max_time_s),
         stop_at_separation=cfg.phase.stop_at == "separation",

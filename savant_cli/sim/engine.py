@@ -12,11 +12,13 @@ on step boundaries, runs the discrete parts at their own rates with zero-order h
   speed: ``models/command_schedule.py``) or, once engaged in the upper stage, from
   Powered Explicit Guidance (``models/peg.py``), whose time to go (less the nominal
   shutdown impulse's lead) also commands the cutoff at the plant step nearest it;
-* events at the first step boundary at or after their time or condition: separation when
-  the sensed (vacuum) thrust of the flown first-stage motor falls below
-  ``vehicle.events.separation_thrust_fraction`` of its own flown peak (the peak is kept in
-  the discrete state), J-2X ignition and LES jettison at their delays after the flown
-  separation and ignition, the cutoff command; after the command the J-2X's thrust decays
+* the vehicle's events at the first step boundary at which their trigger holds
+  (:class:`EventSchedule`, from the vehicle file's ``events``): separation when the
+  sensed (vacuum) thrust of the flown first-stage motor falls below a fraction of its own
+  flown peak (the peak is kept in the discrete state), the upper-stage ignition and the
+  item's (LES or fairing) jettison a delay after the event they count from and, with a
+  condition, once it holds (axial acceleration, altitude, dynamic pressure, a tank's
+  propellant); then the cutoff command; after the command the upper-stage thrust decays
   over its shutdown transient (``models/propulsion.py``) with guidance frozen (the last
   attitude command held), and the run stops when the decay ends: the insertion state
   includes the shutdown impulse.
@@ -34,7 +36,7 @@ from numba import njit
 
 from savant_cli.io.guidance_file import GuidanceTable
 from savant_cli.models import (
-    actuator, earth, flex, navigation, peg, propulsion, quaternion as qt, rcs, rigid_body, slosh
+    actuator, aero, earth, flex, navigation, peg, propulsion, quaternion as qt, rcs, rigid_body, slosh
 )
 from savant_cli.models.command_schedule import BY_TIME, D_PROFILE_OFFSET, D_PROFILE_RATE, profile_time
 from savant_cli.models.earth import A_ALT, P_E2, P_OMEGA_E, P_RE
@@ -71,17 +73,42 @@ EV_IGNITION = 1
 EV_LES = 2
 EV_CUTOFF = 3
 EVENT_NAMES = ("separation", "upper_stage_ignition", "les_jettison", "cutoff")
+N_SEQUENCE = 3  # the vehicle's events (the cutoff is guidance's)
+
+# what an event's condition watches (EventSchedule.when)
+WHEN_NONE = 0  # fires once armed
+WHEN_THRUST_FRACTION = 1  # the first-stage motor's sensed vacuum thrust over its own flown peak
+WHEN_AXIAL_ACCELERATION = 2  # sensed specific force along body x, m/s²
+WHEN_ALTITUDE = 3  # geodetic altitude of the CG, m
+WHEN_DYNAMIC_PRESSURE = 4  # Pa
+WHEN_PROPELLANT = 5  # propellant remaining in a tank (a state of x), kg
+
 
 class EventSchedule(NamedTuple):
     """The event rules and run limits :func:`advance` applies at step boundaries (SI).
 
+    The vehicle's events, one slot each (``EV_SEPARATION``, ``EV_IGNITION``, ``EV_LES``;
+    the cutoff is guidance's), each with its trigger (``vehicle/two_stage.py::Trigger``):
+    armed ``delay_s`` after the event slot ``after`` fired (−1: liftoff), it fires at the
+    first step boundary from then on at which its condition holds (``when``: one of the
+    ``WHEN_*`` codes; ``WHEN_NONE`` at once).
+
     Attributes
     ----------
-    separation_thrust_fraction : float
-        Separation when the sensed first-stage vacuum thrust falls below this fraction
-        (1) of its own flown peak (0: never separates).
-    ignition_delay_s, les_jettison_delay_s : float
-        Upper-stage ignition after separation, LES jettison after ignition, s.
+    after : numpy.ndarray
+        ``(N_SEQUENCE,)`` int64: the slot each event counts from, −1 liftoff.
+    delay_s : numpy.ndarray
+        ``(N_SEQUENCE,)`` s after that event.
+    when : numpy.ndarray
+        ``(N_SEQUENCE,)`` int64: the condition's quantity (``WHEN_*``).
+    of : numpy.ndarray
+        ``(N_SEQUENCE,)`` int64: the propellant state a ``WHEN_PROPELLANT`` condition
+        reads (its index in ``x``; −1 otherwise).
+    above : numpy.ndarray
+        ``(N_SEQUENCE,)`` bool: the condition holds above the threshold (else below).
+    threshold : numpy.ndarray
+        ``(N_SEQUENCE,)`` in the quantity's units (a thrust fraction: of the first-stage
+        motor's own flown peak).
     cutoff_energy_j_kg : float
         The stored profile's cutoff: point-mass specific orbital energy, J/kg.
     max_time_s : float
@@ -97,9 +124,12 @@ class EventSchedule(NamedTuple):
         ``models.command_schedule.SCHEDULES``.
     """
 
-    separation_thrust_fraction: float
-    ignition_delay_s: float
-    les_jettison_delay_s: float
+    after: np.ndarray
+    delay_s: np.ndarray
+    when: np.ndarray
+    of: np.ndarray
+    above: np.ndarray
+    threshold: np.ndarray
     cutoff_energy_j_kg: float
     max_time_s: float
     stop_at_separation: bool
@@ -168,22 +198,64 @@ def move_reference(x: np.ndarray, old: tuple[float, float, float], new: tuple[fl
 
 
 @njit(cache=True, error_model="numpy")
-def handle_events(t: float, dt: float, x: np.ndarray, u: np.ndarray, d: np.ndarray,
-                  events: np.ndarray, sched: EventSchedule, p: np.ndarray, tb: np.ndarray) -> int:
-    """Apply time- and condition-triggered events at a step boundary; return a stop code.
+def armed(k: int, t: float, events: np.ndarray, sched: EventSchedule) -> bool:
+    """Whether event slot ``k`` waits for its condition at ``t`` (s): not fired, and
+    ``delay_s`` past the event it counts from."""
+    if not np.isnan(events[k]):
+        return False
+    a = sched.after[k]
+    t0 = 0.0 if a < 0 else events[a]
+    return not np.isnan(t0) and t >= t0 + sched.delay_s[k]
 
-    Separation is decided on board: the sensed first-stage vacuum thrust at ``t``
-    (``propulsion.first_stage_flow``, the motor flown so far) is compared with the
-    largest value sensed so far (``d[D_FS_PEAK]``, updated here); the first step at which
-    it is below ``sched.separation_thrust_fraction`` of that peak separates. Until then the sensed
-    thrust's trapezoidal integral accumulates in ``d[D_FS_IMPULSE]`` (the impulse the motor
-    delivered to the vehicle); the motor's propellant at separation is kept in
+
+@njit(cache=True, error_model="numpy")
+def condition_holds(k: int, t: float, x: np.ndarray, u: np.ndarray, f_sensed: float, d: np.ndarray,
+                    sched: EventSchedule, p: np.ndarray, tb: np.ndarray, work: np.ndarray) -> bool:
+    """Whether the condition of armed event slot ``k`` holds at the step boundary ``t``.
+
+    A thrust fraction compares the first-stage motor's sensed vacuum thrust ``f_sensed``
+    (N) with the fraction of its flown peak; the propellant reads its state in ``x``; the
+    axial acceleration, altitude and dynamic pressure come from one evaluation of the
+    plant at ``t`` (its diagnostics, into the scratch rows of ``work``)."""
+    when = sched.when[k]
+    if when == WHEN_NONE:
+        return True
+    limit = sched.threshold[k]
+    if when == WHEN_THRUST_FRACTION:
+        value, limit = f_sensed, limit * d[propulsion.D_FS_PEAK]
+    elif when == WHEN_PROPELLANT:
+        value = x[sched.of[k]]
+    else:
+        aux = work[5]
+        derivative(t, x, u, p, tb, aux, work[4])
+        if when == WHEN_ALTITUDE:
+            value = aux[A_ALT]
+        elif when == WHEN_DYNAMIC_PRESSURE:
+            value = aux[aero.A_QBAR]
+        else:
+            value = aux[rigid_body.A_ACCEL]
+    return value > limit if sched.above[k] else value < limit
+
+
+@njit(cache=True, error_model="numpy")
+def handle_events(t: float, dt: float, x: np.ndarray, u: np.ndarray, d: np.ndarray,
+                  events: np.ndarray, sched: EventSchedule, p: np.ndarray, tb: np.ndarray, work: np.ndarray) -> int:
+    """Apply the vehicle's events at a step boundary; return a stop code.
+
+    Each event slot, in order, fires when it is :func:`armed` and its condition holds
+    (:func:`condition_holds`), and applies its actions: separation drops the first stage
+    (the upper-stage nozzle and its command start at null, a new modal set starts at rest,
+    the reference point moves to the new configuration's CG), ignition lights the upper
+    stage (the flight control fades its gains in from here), the item's jettison drops the
+    LES or fairing (the reference point moves again). Until separation the first-stage
+    motor's sensed vacuum thrust at ``t`` (``propulsion.first_stage_flow``, the motor
+    flown so far) is tracked: its largest value so far (``d[D_FS_PEAK]``, the thrust
+    fraction's reference) and its trapezoidal integral (``d[D_FS_IMPULSE]``, the impulse
+    the motor delivered); the motor's propellant at separation is kept in
     ``d[D_FS_PROP_SEP]``. After the cutoff command the upper stage's sensed thrust
-    accumulates the same way in ``d[D_US_SD_IMPULSE]``. At separation and at LES jettison
-    the state's reference point moves to the new configuration's CG (position and velocity
-    of every structural point unchanged). ``dt`` is the plant step (s), the trapezoids'
-    width."""
-    separate = False
+    accumulates the same way in ``d[D_US_SD_IMPULSE]``. ``dt`` is the plant step (s), the
+    trapezoids' width; ``work``: the scratch rows of :func:`work_array`."""
+    f_sensed = 0.0
     if np.isnan(events[EV_SEPARATION]):
         f_sensed = propulsion.first_stage_flow(x, tb, p, t)[0]
         if t > 0.0:
@@ -191,39 +263,22 @@ def handle_events(t: float, dt: float, x: np.ndarray, u: np.ndarray, d: np.ndarr
         d[propulsion.D_FS_LAST] = f_sensed
         if f_sensed > d[propulsion.D_FS_PEAK]:
             d[propulsion.D_FS_PEAK] = f_sensed
-        separate = f_sensed < sched.separation_thrust_fraction * d[propulsion.D_FS_PEAK]
-    if separate:
-        events[EV_SEPARATION] = t
-        d[propulsion.D_FS_PROP_SEP] = x[MFS]
-        if sched.stop_at_separation:
-            return STOP_SEPARATION
-        cg_stack = reference_cg(x, p, tb, np.int64(CONFIG_STACK))  # (not a literal: one compile for every config)
-        u[U_CONFIG] = CONFIG_UPPER_LES
-        u[U_ENGINE] = ENGINE_OFF
-        x[MFS] = 0.0
-        x[ACT_P:ACT_P + 3] = 0.0  # the upper-stage nozzle starts at null ...
-        x[ACT_Y:ACT_Y + 3] = 0.0
-        u[U_DPC] = 0.0  # ... and so does its command (not the first stage's last one)
-        u[U_DYC] = 0.0
-        vo = int(p[actuator.P_VALVE_OFFSET])
-        if vo >= 0:
-            x[vo:vo + actuator.N_VALVE] = 0.0
-        fo = int(p[flex.P_OFFSET])
-        if fo >= 0:  # new modal set: its modes start at rest (paper: liftoff → ignition set)
-            x[fo:fo + 2 * int(p[flex.P_N_MODES])] = 0.0
-        move_reference(x, cg_stack, reference_cg(x, p, tb, np.int64(CONFIG_UPPER_LES)))
-        reset_phase(d)
-    t_sep = events[EV_SEPARATION]
-    if not np.isnan(t_sep) and np.isnan(events[EV_IGNITION]) and t >= t_sep + sched.ignition_delay_s:
-        events[EV_IGNITION] = t
-        u[U_ENGINE] = ENGINE_UPPER
-        u[U_T_IGN] = t  # the flight control fades its gains in from here (models/fcs.py)
-    t_ign = events[EV_IGNITION]
-    if not np.isnan(t_ign) and np.isnan(events[EV_LES]) and t >= t_ign + sched.les_jettison_delay_s:
-        events[EV_LES] = t
-        cg_les = reference_cg(x, p, tb, np.int64(CONFIG_UPPER_LES))
-        u[U_CONFIG] = CONFIG_UPPER
-        move_reference(x, cg_les, reference_cg(x, p, tb, np.int64(CONFIG_UPPER)))
+    for k in range(N_SEQUENCE):
+        if not (armed(k, t, events, sched) and condition_holds(k, t, x, u, f_sensed, d, sched, p, tb, work)):
+            continue
+        events[k] = t
+        if k == EV_SEPARATION:
+            d[propulsion.D_FS_PROP_SEP] = x[MFS]
+            if sched.stop_at_separation:
+                return STOP_SEPARATION
+            separate(x, u, d, p, tb)
+        elif k == EV_IGNITION:
+            u[U_ENGINE] = ENGINE_UPPER
+            u[U_T_IGN] = t  # the flight control fades its gains in from here (models/fcs.py)
+        else:
+            cg_les = reference_cg(x, p, tb, np.int64(CONFIG_UPPER_LES))
+            u[U_CONFIG] = CONFIG_UPPER
+            move_reference(x, cg_les, reference_cg(x, p, tb, np.int64(CONFIG_UPPER)))
     if int(u[U_ENGINE]) == ENGINE_UPPER:
         if u[U_T_CUT] > 0.0:  # shutdown transient: the impulse after the command (trapezoid)
             f_us = propulsion.upper_stage_thrust_vac(x, tb, p, t, u[U_T_IGN], u[U_T_CUT])
@@ -235,6 +290,30 @@ def handle_events(t: float, dt: float, x: np.ndarray, u: np.ndarray, d: np.ndarr
                 events[EV_CUTOFF] = t
             return STOP_DEPLETION
     return RUNNING
+
+
+@njit(cache=True, error_model="numpy")
+def separate(x: np.ndarray, u: np.ndarray, d: np.ndarray, p: np.ndarray, tb: np.ndarray) -> None:
+    """First-stage separation's actions on the state: the upper-stage configuration, its
+    engine not yet lit, its nozzle (and its command, not the first stage's last one) at
+    null, the new modal set at rest, the reference point at the new configuration's CG
+    (position and velocity of every structural point unchanged)."""
+    cg_stack = reference_cg(x, p, tb, np.int64(CONFIG_STACK))  # (not a literal: one compile for every config)
+    u[U_CONFIG] = CONFIG_UPPER_LES
+    u[U_ENGINE] = ENGINE_OFF
+    x[MFS] = 0.0
+    x[ACT_P:ACT_P + 3] = 0.0
+    x[ACT_Y:ACT_Y + 3] = 0.0
+    u[U_DPC] = 0.0
+    u[U_DYC] = 0.0
+    vo = int(p[actuator.P_VALVE_OFFSET])
+    if vo >= 0:
+        x[vo:vo + actuator.N_VALVE] = 0.0
+    fo = int(p[flex.P_OFFSET])
+    if fo >= 0:  # new modal set: its modes start at rest (paper: liftoff → ignition set)
+        x[fo:fo + 2 * int(p[flex.P_N_MODES])] = 0.0
+    move_reference(x, cg_stack, reference_cg(x, p, tb, np.int64(CONFIG_UPPER_LES)))
+    reset_phase(d)
 
 
 @njit(cache=True, error_model="numpy")
@@ -339,7 +418,7 @@ def _advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0
     for j in range(n_steps):
         k = k0 + j
         t = k * dt
-        status = handle_events(t, dt, x, u, d, events, sched, p, tb)
+        status = handle_events(t, dt, x, u, d, events, sched, p, tb, work)
         if status != RUNNING:
             return status, j, log_row, ""
         if nav_on:  # the IMU sample, then the navigated state (true plus the navigation errors)

@@ -92,14 +92,43 @@ Rcs = RollJets
 
 
 @dataclass(frozen=True)
+class Trigger:
+    """When one of the plant's events fires: armed ``delay_s`` (s) after the event
+    ``after`` (its position in :data:`EVENT_ORDER`, −1 liftoff), at the first step from
+    then on at which the condition holds: ``quantity`` (a key of
+    ``tree.CONDITION_QUANTITIES``; None: at once) ``above`` or below ``threshold`` (its
+    units); a propellant condition reads the tank ``tank`` (``first_stage``, ``lox`` or
+    ``lh2``: the plant's propellant states)."""
+
+    after: int
+    delay_s: float
+    quantity: str | None = None
+    tank: str | None = None
+    above: bool = False
+    threshold: float = 0.0
+
+
+#: The plant's events, in slot order (sim/engine.py: EV_SEPARATION, EV_IGNITION, EV_LES).
+EVENT_ORDER = ("separation", "upper_stage_ignition", "les_jettison")
+
+
+@dataclass(frozen=True)
 class Events:
-    """Staging event parameters: separation when first-stage vacuum thrust falls below
-    ``separation_thrust_fraction`` of its peak; J-2X ignition command
-    ``ignition_delay_s`` later; LES jettison ``les_jettison_delay_s`` after that."""
+    """Staging events: separation when the first-stage motor's vacuum thrust falls below
+    ``separation_thrust_fraction`` of its peak; the upper-stage ignition command
+    ``ignition_delay_s`` later; the LES (or fairing) jettison ``les_jettison_delay_s``
+    after that (infinite: none). ``triggers``: each event's whole trigger, in
+    :data:`EVENT_ORDER`, where the ignition and the jettison may also wait for a
+    condition."""
 
     separation_thrust_fraction: float
     ignition_delay_s: float
     les_jettison_delay_s: float
+    triggers: tuple[Trigger, Trigger, Trigger]
+
+    def trigger(self, slot: int) -> Trigger:
+        """Event ``slot``'s trigger."""
+        return self.triggers[slot]
 
 
 @dataclass(frozen=True)
@@ -188,14 +217,25 @@ def _single_engine(tree: VehicleTree, part: str, source: str) -> EngineSpec:
     return eng
 
 
-def _event(tree: VehicleTree, name: str, after: str, trigger: bool, jettison: tuple = (), ignite: tuple = ()):
+def _event(tree: VehicleTree, name: str, after: str, jettison: tuple = (), ignite: tuple = ()):
     ev = tree.events[name]
-    if ev.after != after or (ev.when is not None) != trigger or ev.jettison != jettison or ev.ignite != ignite \
-            or ev.shutdown or (trigger and ev.delay_s != 0.0):
-        what = (f"after {after}" + (", when a thrust fraction falls below a value" if trigger else ", a delay later")
-                + (f", jettison {list(jettison)}" if jettison else "") + (f", ignite {list(ignite)}" if ignite else ""))
+    if ev.after != after or ev.jettison != jettison or ev.ignite != ignite or ev.shutdown:
+        what = (f"after {after}" + (f", jettison {list(jettison)}" if jettison else "")
+                + (f", ignite {list(ignite)}" if ignite else ""))
         _refuse(ev.key, name, f"this event is: {what}")
     return ev
+
+
+def _trigger(ev, slot_after: int, tanks: dict[str, str]) -> Trigger:
+    """The plant's trigger of a non-separation event: a delay, and optionally a condition
+    on the vehicle or a tank (a thrust fraction is the first-stage motor's alone)."""
+    if ev.when is None:
+        return Trigger(slot_after, ev.delay_s)
+    if ev.when.quantity == "thrust_fraction":
+        _refuse(f"{ev.key}.when.quantity", ev.when.quantity, "a thrust fraction triggers the separation only")
+    above = ev.when.above is not None
+    return Trigger(slot_after, ev.delay_s, ev.when.quantity, tanks.get(ev.when.of) if ev.when.of else None, above,
+                   ev.when.above if above else ev.when.below)
 
 
 def two_stage_view(tree: VehicleTree) -> Vehicle:
@@ -220,12 +260,13 @@ def two_stage_view(tree: VehicleTree) -> Vehicle:
     if len(names) != 2 + len(items):
         _refuse("vehicle.events", names,
                 "separation, the upper-stage ignition" + (", the item's jettison" if items else ""))
-    sep = _event(tree, names[0], LIFTOFF, True, jettison=(first.name,))
-    if sep.when.quantity != "thrust_fraction" or sep.when.of not in (fs.name, first.name) or sep.when.below is None:
-        _refuse(f"{sep.key}.when", sep.when.quantity,
-                f"separation when the thrust fraction of {fs.name} falls below a value")
-    ign = _event(tree, names[1], sep.name, False, ignite=(us.name,))
-    jet = _event(tree, names[2], ign.name, False, jettison=(items[0].name,)) if items else None
+    sep = _event(tree, names[0], LIFTOFF, jettison=(first.name,))
+    if sep.when is None or sep.when.quantity != "thrust_fraction" or sep.when.of not in (fs.name, first.name) \
+            or sep.when.below is None or sep.delay_s != 0.0:
+        _refuse(f"{sep.key}.when", sep.when.quantity if sep.when else None,
+                f"separation when the thrust fraction of {fs.name} falls below a value, from liftoff")
+    ign = _event(tree, names[1], sep.name, ignite=(us.name,))
+    jet = _event(tree, names[2], ign.name, jettison=(items[0].name,)) if items else None
     configs = [tree.configurations[c] for _, c in tree.sequence]
     for c, tanks in zip(configs, (fs.tanks, us.tanks, us.tanks)):
         if set(c.mass_tanks) != set(tanks):
@@ -247,8 +288,13 @@ def two_stage_view(tree: VehicleTree) -> Vehicle:
         startup_time_s=us_thrust.startup_time_s, startup_fraction=us_thrust.startup_fraction,
         shutdown_impulse_Ns=us_thrust.shutdown_impulse_Ns, gimbal_m=us.gimbal_m, gimbal_limit_rad=us.gimbal_limit_rad,
         les_mass_kg=items[0].inert_mass_kg if items else 0.0, engine=us.moving_mass)
+    tanks = {grain.name: "first_stage", ox.name: "lox", fuel.name: "lh2"}
+    separation = Trigger(-1, 0.0, "thrust_fraction", None, False, sep.when.below)
+    never = Trigger(1, float("inf"))  # no item: no jettison
     events = Events(separation_thrust_fraction=sep.when.below, ignition_delay_s=ign.delay_s,
-                    les_jettison_delay_s=jet.delay_s if jet is not None else float("inf"))
+                    les_jettison_delay_s=jet.delay_s if jet is not None else float("inf"),
+                    triggers=(separation, _trigger(ign, 0, tanks),
+                              _trigger(jet, 1, tanks) if jet is not None else never))
     keys = {"propellant_first": f"{grain.key}.propellant_kg",
             "propellant_upper": f"{ox.key}.propellant_kg + {fuel.name}.propellant_kg",
             "jettison_mass": f"{first.key}.inert_mass_kg",
