@@ -12,6 +12,9 @@ from savant_cli.vehicle.tables import is_number
 #: Value kinds of a key (besides ``float``, ``int``, ``str`` and a nested schema dict).
 VEC3 = "vec3"  # [x, y, z], finite numbers
 VEC2 = "vec2"  # [pitch, yaw], finite numbers
+VEC6 = "vec6"  # [Ixx, Iyy, Izz, Ixy, Ixz, Iyz], finite numbers
+VECTORS = {VEC3: (3, "[x, y, z] (structure frame, m)"), VEC2: (2, "[pitch, yaw]"),
+           VEC6: (6, "[Ixx, Iyy, Izz, Ixy, Ixz, Iyz] (kg m^2, about the CG, body axes)")}
 NAMES = "names"  # a list of names (strings)
 NAMED = "named"  # a mapping of name → section, each checked by its own reader
 MAPPING = "mapping"  # a free-form mapping checked by its own reader
@@ -61,9 +64,8 @@ def check_value(key: str, value: Any, kind: Any) -> None:
     elif kind is int:
         if isinstance(value, bool) or not isinstance(value, int):
             raise ConfigError(key, value, "must be an integer")
-    elif kind in (VEC3, VEC2):
-        n = 3 if kind == VEC3 else 2
-        what = "[x, y, z] (structure frame, m)" if kind == VEC3 else "[pitch, yaw]"
+    elif kind in VECTORS:
+        n, what = VECTORS[kind]
         if not isinstance(value, (list, tuple)) or len(value) != n or not all(is_number(v) for v in value):
             raise ConfigError(key, value, f"must be a list of {n} finite numbers {what}")
     elif kind == NAMES:

@@ -25,8 +25,9 @@ import numpy as np
 from savant_cli.config.checks import no_negative_entries, non_negative, positive
 from savant_cli.errors import ConfigError
 from savant_cli.io.table_order import table_key
-from savant_cli.vehicle.keys import MAPPING, NAMED, NAMES, VEC2, VEC3, check_keys, opt
-from savant_cli.vehicle.tables import read_aero, read_mass, read_table, vec3
+from savant_cli.vehicle.composition import composed_table, full_row
+from savant_cli.vehicle.keys import MAPPING, NAMED, NAMES, VEC2, VEC3, VEC6, check_keys, opt
+from savant_cli.vehicle.tables import MASS_TOLERANCE_KG, check_inertia, read_aero, read_mass, read_table, vec3
 from savant_cli.vehicle.tree import (
     BOOSTER, CONDITION_QUANTITIES, GIMBAL_AXES, ITEM, LIFTOFF, LIQUID, STAGE, TRACE, Condition, ConfigurationSpec,
     EngineSpec, EventSpec, LiquidThrust, MovingMass, Part, RollJets, Sensors, Tank, ThrustTrace, VehicleTree
@@ -48,11 +49,12 @@ SLOSH_KEYS = {"table": str, "radius_m": float, "bottom_station_m": float, "densi
 TANK_KEYS = {"propellant_kg": float, "slosh": opt(SLOSH_KEYS)}
 ROLL_JET_KEYS = {"thrust_table": str, "exit_area_m2": float, "jets_per_direction": int, "moment_arm_m": float,
                  "ramp_up_s": float, "ramp_down_s": float, "location_m": VEC3}
-STAGE_KEYS = {"inert_mass_kg": opt(float), "tanks": NAMED, "engines": NAMED, "roll_jets": opt(ROLL_JET_KEYS)}
+STAGE_KEYS = {"inert_mass_kg": opt(float), "tanks": NAMED, "engines": NAMED, "roll_jets": opt(ROLL_JET_KEYS),
+              "mass_table": opt(str)}
 BOOSTER_KEYS = {"attached_to": str, "inert_mass_kg": float, "tanks": NAMED, "engines": NAMED,
-                "roll_jets": opt(ROLL_JET_KEYS)}
-ITEM_KEYS = {"mass_kg": float, "attached_to": opt(str)}
-CONFIG_KEYS = {"parts": NAMES, "aero_table": str, "base_force_table": str, "mass_table": str, "mass_tanks": NAMES,
+                "roll_jets": opt(ROLL_JET_KEYS), "mass_table": opt(str)}
+ITEM_KEYS = {"mass_kg": float, "attached_to": opt(str), "cg_m": opt(VEC3), "inertia_kgm2": opt(VEC6)}
+CONFIG_KEYS = {"parts": NAMES, "aero_table": str, "base_force_table": str, "mass_table": opt(str), "mass_tanks": NAMES,
                "reference_area_m2": float, "reference_length_m": VEC3, "moment_reference_m": VEC3}
 CONDITION_KEYS = {"quantity": str, "of": opt(str), "below": opt(float), "above": opt(float)}
 EVENT_KEYS = {"after": opt(str), "delay_s": opt(float), "when": opt(CONDITION_KEYS), "jettison": opt(NAMES),
@@ -104,7 +106,12 @@ class _Reader:
                 raise ConfigError(f"{key}.attached_to", attached, f"must name a stage: {', '.join(stages)}")
         if kind == ITEM:
             mass = non_negative(f"{key}.mass_kg", section["mass_kg"])
-            self.parts[name] = Part(name, kind, attached, mass, (), (), None, key)
+            cg = vec3(section["cg_m"]) if section.get("cg_m") is not None else None
+            inertia = np.zeros(6)  # a point mass unless given
+            if section.get("inertia_kgm2") is not None:
+                inertia = np.asarray(section["inertia_kgm2"], float)
+                check_inertia(f"{key}.inertia_kgm2", inertia[None, :])
+            self.parts[name] = Part(name, kind, attached, mass, (), (), None, key, cg_m=cg, inertia_kgm2=inertia)
             return
         inert = section.get("inert_mass_kg")
         if inert is not None:
@@ -116,7 +123,16 @@ class _Reader:
         if not engines:
             raise ConfigError(f"{key}.engines", {}, "a stage or booster needs at least one engine")
         jets = self.roll_jets(section["roll_jets"], f"{key}.roll_jets") if section.get("roll_jets") else None
-        self.parts[name] = Part(name, kind, attached, inert, tanks, engines, jets, key)
+        table = None
+        if section.get("mass_table") is not None:
+            table = read_mass(section, self.vdir, float(self.node["length_m"]))
+            load = sum(self.tanks[t].propellant_kg for t in tanks)
+            if table.propellant_kg[0] > MASS_TOLERANCE_KG or abs(table.propellant_kg[-1] - load) > MASS_TOLERANCE_KG:
+                raise ConfigError(f"{key}.mass_table", section["mass_table"],
+                                  f"a part's mass table runs from 0 to its tanks' load ({load:.1f} kg), against its "
+                                  f"own propellant; it runs from {table.propellant_kg[0]:.1f} to "
+                                  f"{table.propellant_kg[-1]:.1f} kg")
+        self.parts[name] = Part(name, kind, attached, inert, tanks, engines, jets, key, mass=table)
 
     def tank(self, name: str, section: Mapping, part: str, key: str) -> str:
         check_keys(section, TANK_KEYS, key)
@@ -284,10 +300,35 @@ def _configuration(r: _Reader, name: str, section: Mapping) -> ConfigurationSpec
         for n in section[k]:
             if n not in pool:
                 raise ConfigError(f"{key}.{k}", n, f"must name {k.replace('mass_', '')}: {', '.join(pool)}")
+    if section.get("mass_table") is not None:
+        mass, mass_file = read_mass(section, r.vdir, float(r.node["length_m"])), str(section["mass_table"])
+    else:
+        mass, mass_file = _composed(r, section, key), f"{key} (composed from its parts)"
     return ConfigurationSpec(name=name, parts=frozenset(section["parts"]), key=key,
-                             aero=read_aero(section, r.vdir, key),
-                             mass=read_mass(section, r.vdir, float(r.node["length_m"])),
-                             mass_tanks=tuple(section["mass_tanks"]), mass_file=str(section["mass_table"]))
+                             aero=read_aero(section, r.vdir, key), mass=mass,
+                             mass_tanks=tuple(section["mass_tanks"]), mass_file=mass_file)
+
+
+def _composed(r: _Reader, section: Mapping, key: str):
+    """The mass table of a configuration without one, composed from its parts: the part
+    owning ``mass_tanks`` at its table's rows, the other stages and boosters full, the
+    items as they are (:mod:`savant_cli.vehicle.composition`)."""
+    owners = {r.tanks[t].part for t in section["mass_tanks"]}
+    burning = r.parts[owners.pop()] if len(owners) == 1 else None
+    if burning is None or set(burning.tanks) != set(section["mass_tanks"]):
+        raise ConfigError(f"{key}.mass_tanks", section["mass_tanks"], "a configuration composed from its parts is "
+                          "tabulated against the tanks of one part, all of them")
+    fixed = []
+    for name in section["parts"]:
+        part = r.parts[name]
+        what = {ITEM: "cg_m (and inertia_kgm2 unless a point mass)"}.get(part.kind, "mass_table")
+        if (part.kind == ITEM and part.cg_m is None) or (part.kind != ITEM and part.mass is None):
+            raise ConfigError(f"{part.key}", name, f"{key} has no mass_table: it is composed from its parts, and "
+                                                   f"this part needs its {what}")
+        if part is not burning:
+            fixed.append((part.inert_mass_kg, part.cg_m, part.inertia_kgm2) if part.kind == ITEM
+                         else full_row(part.mass))
+    return composed_table(burning.mass, fixed)
 
 
 def walk_sequence(parts: dict[str, Part], tanks: dict, engines: dict[str, EngineSpec], events: dict[str, EventSpec],

@@ -43,6 +43,8 @@ AERO_COEFFICIENTS = ("CA", "CY", "CN", "Cl", "Cm", "Cn")
 
 _INERTIA = ("ixx", "iyy", "izz", "ixy", "ixz", "iyz")
 
+MASS_TOLERANCE_KG = 1.0   # consistency of the mass tables with the loads and the jettisoned masses
+
 #: table kind -> required columns (base name, dimension); ``None`` = dimensionless
 TABLE_COLUMNS: dict[str, tuple[tuple[str, str | None], ...]] = {
     "mass": (("propellant_remaining", "mass"), ("mass", "mass"), ("cg_x", "length"), ("cg_y", "length"),
@@ -239,6 +241,30 @@ def read_aero(cfg: Mapping, vdir: Path, key_prefix: str) -> AeroTable:
     )
 
 
+def inertia_tensors(inertia: np.ndarray) -> np.ndarray:
+    """``(n, 6)`` rows ``Ixx, Iyy, Izz, Ixy, Ixz, Iyz`` (moments and products of inertia,
+    kg m²) → ``(n, 3, 3)`` tensors (off-diagonal elements the products' negatives)."""
+    tensor = np.empty((inertia.shape[0], 3, 3))
+    tensor[:, 0, 0], tensor[:, 1, 1], tensor[:, 2, 2] = inertia[:, 0], inertia[:, 1], inertia[:, 2]
+    tensor[:, 0, 1] = tensor[:, 1, 0] = -inertia[:, 3]
+    tensor[:, 0, 2] = tensor[:, 2, 0] = -inertia[:, 4]
+    tensor[:, 1, 2] = tensor[:, 2, 1] = -inertia[:, 5]
+    return tensor
+
+
+def check_inertia(key: str, inertia: np.ndarray) -> None:
+    """Refuse a row of ``(n, 6)`` inertia rows whose tensor is not positive definite or
+    whose principal moments break the triangle inequality (I1 + I2 >= I3)."""
+    ev = np.linalg.eigvalsh(inertia_tensors(inertia))  # ascending principal moments, per row
+    scale = ev[:, 2]
+    bad = np.nonzero((ev[:, 0] <= 1e-12 * scale) | (ev[:, 0] + ev[:, 1] < ev[:, 2] * (1.0 - 1e-9)))[0]
+    if bad.size:
+        i = int(bad[0])
+        raise ConfigError(key, inertia[i].tolist(),
+                          f"row {i + 1}: the inertia tensor must be positive definite and its principal moments "
+                          f"must satisfy the triangle inequality (I1 + I2 >= I3); principal moments {ev[i].tolist()}")
+
+
 def read_mass(cfg: Mapping, vdir: Path, length_m: float) -> MassTable:
     """The mass-properties table ``cfg["mass_table"]``, checked: positive mass and
     moments, mass at least the propellant, CG on the vehicle (``[0, length_m]``), a
@@ -262,18 +288,6 @@ def read_mass(cfg: Mapping, vdir: Path, length_m: float) -> MassTable:
         raise ConfigError(f"{key}:{tn['cg_x']}", float(cg[out[0], 0]),
                           f"CG station must lie on the vehicle, within [0, {length_m:g}] m of the nose tip")
     inertia = np.column_stack([t[c] for c in _INERTIA])
-    tensor = np.empty((inertia.shape[0], 3, 3))
-    tensor[:, 0, 0], tensor[:, 1, 1], tensor[:, 2, 2] = inertia[:, 0], inertia[:, 1], inertia[:, 2]
-    tensor[:, 0, 1] = tensor[:, 1, 0] = -inertia[:, 3]
-    tensor[:, 0, 2] = tensor[:, 2, 0] = -inertia[:, 4]
-    tensor[:, 1, 2] = tensor[:, 2, 1] = -inertia[:, 5]
-    ev = np.linalg.eigvalsh(tensor)  # ascending principal moments, per row
-    scale = ev[:, 2]
-    bad = np.nonzero((ev[:, 0] <= 1e-12 * scale) | (ev[:, 0] + ev[:, 1] < ev[:, 2] * (1.0 - 1e-9)))[0]
-    if bad.size:
-        i = int(bad[0])
-        raise ConfigError(f"{key}:{tn['ixx']}", inertia[i].tolist(),
-                          f"row {i + 1}: the inertia tensor must be positive definite and its principal moments "
-                          f"must satisfy the triangle inequality (I1 + I2 >= I3); principal moments {ev[i].tolist()}")
+    check_inertia(f"{key}:{tn['ixx']}", inertia)
     return MassTable(propellant_kg=prop, mass_kg=t["mass"], cg_m=np.ascontiguousarray(cg),
                      inertia_kgm2=np.ascontiguousarray(inertia))

@@ -188,6 +188,12 @@ class Part:
         Its roll-control jets.
     key : str
         The part's YAML path.
+    mass : MassTable or None
+        A stage's or booster's own mass properties against its own propellant (for
+        configurations composed from their parts; None: not given).
+    cg_m, inertia_kgm2 : numpy.ndarray or None
+        An item's CG (structure frame, m) and inertia about it (body axes, ``[Ixx, Iyy,
+        Izz, Ixy, Ixz, Iyz]`` kg m²; zeros: a point mass); None: not given.
     """
 
     name: str
@@ -198,6 +204,9 @@ class Part:
     engines: tuple[str, ...]
     roll_jets: RollJets | None
     key: str
+    mass: MassTable | None = None
+    cg_m: np.ndarray | None = None
+    inertia_kgm2: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -243,8 +252,9 @@ class EventSpec:
 
 @dataclass(frozen=True)
 class ConfigurationSpec:
-    """A flight configuration: the parts attached, its aerodynamics and (tabulated mass
-    properties) its mass table against the propellant of ``mass_tanks``.
+    """A flight configuration: the parts attached, its aerodynamics and its mass table
+    against the propellant of ``mass_tanks`` (read from its own file, or composed from
+    its parts').
 
     Attributes
     ----------
@@ -257,7 +267,7 @@ class ConfigurationSpec:
     mass_tanks : tuple of str
         The tanks whose propellant remaining is the mass table's argument.
     mass_file : str
-        The mass table's file name, for refusals.
+        The mass table's file name, or what it was composed from, for refusals.
     key : str
     """
 

@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from savant_cli.errors import ConfigError
-from savant_cli.vehicle.tables import AeroTable, MassTable
+from savant_cli.vehicle.tables import MASS_TOLERANCE_KG, AeroTable, MassTable
 from savant_cli.vehicle.tree import (
     BOOSTER, GIMBAL_AXES, ITEM, LIFTOFF, EngineSpec, LiquidThrust, MovingMass, RollJets, Sensors, ThrustTrace,
     VehicleTree
@@ -28,7 +28,6 @@ from savant_cli.vehicle.tree import (
 #: The vehicle's configurations, in the order the aero and mass tables are stacked
 #: (models/configurations.py numbers them).
 CONFIG_NAMES = ("stack", "upper_les", "upper")
-MASS_TOLERANCE_KG = 1.0   # staging consistency of the mass tables
 #: The consistency check's keys for a view built without a tree.
 LEGACY_KEYS = {"propellant_first": "first_stage.propellant_kg", "propellant_upper": "upper_stage.lox_kg + lh2_kg",
                "jettison_mass": "first_stage.jettison_mass_kg", "les_mass": "upper_stage.les_mass_kg"}
