@@ -52,7 +52,7 @@ def _quantity(model, snap, when: dict) -> float:
 ])
 def test_a_condition_fires_within_one_step(when):
     model = _prepared(when).model
-    assert model.sched.when[engine.EV_LES] != engine.WHEN_NONE
+    assert model.sched.rules[engine.EV_LES].when != engine.WHEN_NONE
     result = simulate(model, progress=False)
     t_event = result.events[engine.EV_LES]
     assert result.events[engine.EV_IGNITION] < t_event < result.t_final, result.events

@@ -216,12 +216,9 @@ def test_engine_feeds_gyros_rigid_plus_flex_rate_and_nav_unit_flex_rotation(conf
     gt = engine.GuidanceTable(time=np.array([0.0, 1.0e4]), quat=np.tile([1.0, 0.0, 0.0, 0.0], (2, 1)),
                               rate=np.zeros((2, 3)), speed=np.zeros(0))
     ft = fcs_tables(validate(compose_config()).controller)
-    never = np.full(engine.N_SEQUENCE, np.inf)  # no event fires (armed at infinity)
-    sched = engine.EventSchedule(after=np.full(engine.N_SEQUENCE, -1), delay_s=never,
-                                 when=np.zeros(engine.N_SEQUENCE, dtype=np.int64), of=np.full(engine.N_SEQUENCE, -1),
-                                 above=np.zeros(engine.N_SEQUENCE, dtype=np.bool_), threshold=np.zeros(engine.N_SEQUENCE),
-                                 cutoff_energy_j_kg=1.0e12, max_time_s=1.0e9, stop_at_separation=False,
-                                 max_body_rate_rad_s=10.0, command_delay_steps=0, profile_schedule=0)
+    never = engine.EventRule(after=-1, delay_s=np.inf, when=engine.WHEN_NONE, of=-1, above=False, threshold=0.0)
+    sched = engine.EventSchedule(rules=(never,) * engine.N_SEQUENCE, cutoff_energy_j_kg=1.0e12, max_time_s=1.0e9,
+                                 stop_at_separation=False, max_body_rate_rad_s=10.0, command_delay_steps=0, profile_schedule=0)
     d = np.zeros(layout.N_DISC)
     events = np.full(4, np.nan)
     n = 400

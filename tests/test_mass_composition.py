@@ -7,7 +7,6 @@ vehicle file whose configurations give no mass table, composed from its parts' t
 from __future__ import annotations
 
 import copy
-import shutil
 
 import numpy as np
 import pytest
@@ -78,32 +77,16 @@ def test_the_tensor_form_of_the_theorem():
     np.testing.assert_allclose(inertia_tensors(inertia[None, :])[0], total, rtol=1e-12)
 
 
-def _part_table(segments_at) -> MassTable:
-    """A part's table from the generator's segments at its propellant grid."""
-    rows = []
-    for p, segs in segments_at:
-        m, cg, inertia = gen.mass_properties(segs)
-        rows.append([p, m, cg, 0.0, 0.0, *inertia])
-    rows = np.array(rows)
+def _table(rows: np.ndarray) -> MassTable:
     return MassTable(rows[:, 0], rows[:, 1], np.ascontiguousarray(rows[:, 2:5]), np.ascontiguousarray(rows[:, 5:]))
 
 
-def _ares_parts():
-    """ares_i's first stage, upper stage (each against its own propellant) and LES, from
-    the generator's segments, at the shipped configuration tables' propellant grids."""
-    lay, dry = gen.LAYOUT, gen.dry_segments(gen.LAYOUT)
-    stack, upper = gen.mass_table("stack"), gen.mass_table("upper")
-    first = _part_table([(p, dry["first_stage"] + gen.propellant_segments(lay, p, 0.0, 0.0)) for p in stack[:, 0]])
-    upper_stage = _part_table([(p, dry["upper"] + gen.propellant_segments(lay, 0.0, *gen.upper_stage_loads(p)))
-                               for p in upper[:, 0]])
-    m, cg, inertia = gen.mass_properties(dry["les"])
-    return first, upper_stage, (m, np.array([cg, 0.0, 0.0]), inertia)
-
-
 def test_the_parts_of_ares_i_compose_to_its_configurations():
-    """The generator sums every segment of a configuration at once; composing its parts'
-    sums must give the same tables."""
-    first, upper_stage, les = _ares_parts()
+    """The generator sums every segment of a configuration at once; composing the sums of
+    its parts (each stage against its own propellant, the LES) must give the same tables."""
+    first, upper_stage = (_table(gen.stage_mass_table(s)) for s in gen.STAGES)
+    m, cg, inertia = gen.les_mass_properties()
+    les = (m, np.array([cg, 0.0, 0.0]), inertia)
     composed = {"stack": composed_table(first, [full_row(upper_stage), les]),
                 "upper_les": composed_table(upper_stage, [les]), "upper": composed_table(upper_stage, [])}
     for name, table in composed.items():
@@ -114,27 +97,18 @@ def test_the_parts_of_ares_i_compose_to_its_configurations():
 
 
 @pytest.fixture
-def composed_folder(tmp_path):
-    """ares_i's tables plus its two stages' own mass tables, and its YAML with the
-    configurations' mass tables left out (composed) and the LES's CG and inertia given."""
-    folder = tmp_path / "ares_i"
-    shutil.copytree(SHIPPED / "ares_i", folder)
-    first, upper_stage, les = _ares_parts()
-    for name, t in (("mass_first_stage.csv", first), ("mass_upper_stage.csv", upper_stage)):
-        rows = np.column_stack([t.propellant_kg, t.mass_kg, t.cg_m, t.inertia_kgm2])
-        gen.write_csv(folder / name, gen.MASS_HEADER, rows, ["a stage's own mass properties"])  # as the shipped tables
+def composed_folder():
+    """ares_i's shipped folder (its stages' own mass tables beside the configurations'),
+    and its YAML with the configurations' mass tables left out: composed."""
     node = OmegaConf.to_container(OmegaConf.load(SHIPPED / "ares_i.yaml").vehicle, resolve=True)
-    node["stages"]["first_stage"]["mass_table"] = "mass_first_stage.csv"
-    node["stages"]["upper_stage"]["mass_table"] = "mass_upper_stage.csv"
-    node["items"]["les"].update(cg_m=les[1].tolist(), inertia_kgm2=les[2].tolist())
     for c in node["configurations"].values():
         del c["mass_table"]
-    return folder, node
+    return SHIPPED / "ares_i", node
 
 
 def test_a_vehicle_composed_from_its_parts_loads_its_configurations(composed_folder):
     folder, node = composed_folder
-    composed = load_vehicle(node, folder)
+    composed = load_vehicle(node, folder)  # the LES's CG and inertia as the YAML gives them (9 digits)
     shipped = load_vehicle(OmegaConf.load(SHIPPED / "ares_i.yaml").vehicle, SHIPPED / "ares_i")
     for name, c in composed.configurations.items():
         ref = shipped.configurations[name].mass
@@ -159,9 +133,9 @@ def test_composition_needs_every_parts_mass(composed_folder):
     assert info.value.key == "vehicle.stages.upper_stage"
     bad = copy.deepcopy(node)
     bad["stages"]["first_stage"]["tanks"]["grain"]["propellant_kg"] -= 10.0
-    with pytest.raises(ConfigError, match="from 0 to its tanks' load") as info:
+    with pytest.raises(ConfigError, match="first_stage.mass_table") as info:
         load_vehicle(bad, folder)
-    assert info.value.key == "vehicle.stages.first_stage.mass_table"
+    assert info.value.key == "vehicle.stages.first_stage.tanks.grain.propellant_kg"
 
 
 def test_a_stage_heavier_than_its_declared_inert_mass_is_refused(composed_folder):

@@ -54,9 +54,9 @@ def _whole_burn(base, **factors):
     """Fly the stack without separating (fraction 0) past the end of the dispersed trace;
     return the vehicle, times (s), flown vacuum thrust (N) and first-stage propellant (kg)."""
     applied, model = _model(base, **factors)
-    threshold = model.sched.threshold.copy()
-    threshold[engine.EV_SEPARATION] = 0.0  # a thrust never below 0 % of its peak: no separation
-    model.sched = model.sched._replace(threshold=threshold)
+    rules = list(model.sched.rules)  # a thrust never below 0 % of its peak: no separation
+    rules[engine.EV_SEPARATION] = rules[engine.EV_SEPARATION]._replace(threshold=0.0)
+    model.sched = model.sched._replace(rules=tuple(rules))
     t_end = applied.vehicle.first_stage.thrust_time_s[-1]
     res = simulate(model, progress=False, t_stop=t_end + 2.0)
     assert np.isnan(res.events[engine.EV_SEPARATION])

@@ -562,6 +562,9 @@ def test_yaml_derived_scalars_match_the_generator_layout():
     for k in ("mass_kg", "cg_from_gimbal_m", "inertia_about_gimbal_kgm2"):
         assert j2x["moving_mass"][k] == pytest.approx(d[f"upper_stage.engine.{k}"])
     assert _section(cfg, ROLL_JETS)["location_m"][0] == pytest.approx(d["rcs.location_x_m"])
+    les = _section(cfg, LES)
+    assert les["cg_m"][0] == pytest.approx(d["items.les.cg_x_m"])
+    assert les["inertia_kgm2"][:2] == pytest.approx([d["items.les.ixx_kgm2"], d["items.les.iyy_kgm2"]], rel=1e-7)
     assert cfg["sensors"]["imu_m"][0] == pytest.approx(d["sensors.imu_x_m"])
     assert cfg["sensors"]["rate_gyro_first_stage_m"][0] == pytest.approx(d["sensors.rate_gyro_first_stage_x_m"])
     assert cfg["configurations"]["upper"]["moment_reference_m"][0] == pytest.approx(

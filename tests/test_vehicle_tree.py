@@ -168,4 +168,4 @@ def test_the_records_are_the_trees_numbers():
 
 def test_the_mass_check_names_the_tank(node):
     node["stages"]["first_stage"]["tanks"]["grain"]["propellant_kg"] += 1000.0
-    _refused(node, "vehicle.stages.first_stage.tanks.grain.propellant_kg", "mass_stack.csv")
+    _refused(node, "vehicle.stages.first_stage.tanks.grain.propellant_kg", "mass_first_stage.csv")

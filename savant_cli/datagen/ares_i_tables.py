@@ -369,6 +369,32 @@ def mass_table(config: str, lay: Layout = LAYOUT) -> np.ndarray:
     return np.array(rows)
 
 
+#: The stages whose own mass tables the generator writes (``mass_<stage>.csv``).
+STAGES = ("first_stage", "upper_stage")
+
+
+def stage_mass_table(stage: str, lay: Layout = LAYOUT) -> np.ndarray:
+    """A stage's own mass properties (the ``mass_table`` of ``vehicle.stages.<stage>``, for
+    configurations composed from their parts), rows as :func:`mass_table`'s against the
+    stage's own propellant, at the propellant grid of the configuration it burns in."""
+    dry = dry_segments(lay)
+    rows = []
+    for p in mass_table("stack" if stage == "first_stage" else "upper", lay)[:, 0]:
+        if stage == "first_stage":
+            segs = dry["first_stage"] + propellant_segments(lay, float(p), 0.0, 0.0)
+        else:
+            segs = dry["upper"] + propellant_segments(lay, 0.0, *upper_stage_loads(float(p)))
+        m, cg, inertia = mass_properties(segs)
+        rows.append([p, m, cg, 0.0, 0.0, *inertia])
+    return np.array(rows)
+
+
+def les_mass_properties(lay: Layout = LAYOUT) -> tuple[float, float, np.ndarray]:
+    """The launch abort system's mass (kg), CG station (m) and inertia about it (body
+    axes, ``[Ixx, Iyy, Izz, Ixy, Ixz, Iyz]`` kg m^2): the item's ``cg_m`` and ``inertia_kgm2``."""
+    return mass_properties(dry_segments(lay)["les"])
+
+
 def config_geometry(config: str, lay: Layout = LAYOUT) -> tuple[float, float]:
     """Nose station and length (m) of a configuration; its MRP is at the nose."""
     s = stations(lay)
@@ -555,6 +581,8 @@ def derived_figures(lay: Layout = LAYOUT) -> dict[str, float]:
         # opposite sign to the upper stage's, so blending the two gyros can null the mode
         "sensors.rate_gyro_first_stage_x_m": s["fs_gimbal"] - 1.5,
         "configurations.upper.moment_reference_x_m": s["cm_fwd"],
+        "items.les.cg_x_m": les_mass_properties(lay)[1],
+        **{f"items.les.{k}_kgm2": v for k, v in zip(("ixx", "iyy"), les_mass_properties(lay)[2][:2])},
         "separation_time_s": separation_time(),
     }
 
@@ -576,6 +604,11 @@ def write_all(out: Path, lay: Layout = LAYOUT) -> None:
         write_csv(out / f"base_force_{config}.csv", ["time_s", "base_force_N"], bases[config],
                [src, f"{config}: [E] base force along body X (negative = drag) vs time from liftoff, "
                      "C_pb(M) q A_base along a 2-D point-mass ascent"], fmt="%.6g")
+    for stage in STAGES:
+        write_csv(out / f"mass_{stage}.csv", MASS_HEADER, stage_mass_table(stage, lay),
+                  [src, f"{stage}: [D] the stage's own mass properties against its own propellant (uniform-segment "
+                        "model), for configurations composed from their parts; CG in the structure frame, inertia "
+                        "about the stage's CG in body axes"])
     write_csv(out / "first_stage_thrust.csv", ["time_s", "thrust_vac_N"],
            np.column_stack([FS_THRUST_TIME_S, FS_THRUST_VAC_MN * 1e6]),
            [src, "[D] first-stage vacuum thrust vs time from liftoff (data file curve, MN -> N)"])

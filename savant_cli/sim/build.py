@@ -22,7 +22,7 @@ from savant_cli.models.fcs import FcsTables, fcs_tables
 from savant_cli.models.guidance import SmootherGains, smoother_gains
 from savant_cli.models.sensors import GYRO_MISALIGN, GyroModel, build_gyro, gyro_steady_state, misalignment
 from savant_cli.sim import engine
-from savant_cli.sim.engine import EventSchedule, Rates
+from savant_cli.sim.engine import EventRule, EventSchedule, Rates
 from savant_cli.sim.plant import PlantTables, mass_state, pack_tables
 from savant_cli.vehicle import Vehicle
 
@@ -186,12 +186,9 @@ def event_schedule(cfg: SavantConfig, vehicle: Vehicle, rt: Rates) -> EventSched
     """The event rules and run limits of one run, from the vehicle's events and the config."""
     triggers = [vehicle.events.trigger(k) for k in range(engine.N_SEQUENCE)]
     return EventSchedule(
-        after=np.array([tr.after for tr in triggers], dtype=np.int64),
-        delay_s=np.array([tr.delay_s for tr in triggers], dtype=np.float64),
-        when=np.array([WHEN_CODES[tr.quantity] for tr in triggers], dtype=np.int64),
-        of=np.array([TANK_STATES[tr.tank] if tr.tank else -1 for tr in triggers], dtype=np.int64),
-        above=np.array([tr.above for tr in triggers], dtype=np.bool_),
-        threshold=np.array([tr.threshold for tr in triggers], dtype=np.float64),
+        rules=tuple(EventRule(after=int(tr.after), delay_s=float(tr.delay_s), when=WHEN_CODES[tr.quantity],
+                              of=TANK_STATES[tr.tank] if tr.tank else -1, above=bool(tr.above),
+                              threshold=float(tr.threshold)) for tr in triggers),
         cutoff_energy_j_kg=float(target_energy(cfg)),
         max_time_s=float(cfg.sim.max_time_s),
         stop_at_separation=cfg.phase.stop_at == "separation",

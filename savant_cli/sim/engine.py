@@ -84,31 +84,46 @@ WHEN_DYNAMIC_PRESSURE = 4  # Pa
 WHEN_PROPELLANT = 5  # propellant remaining in a tank (a state of x), kg
 
 
-class EventSchedule(NamedTuple):
-    """The event rules and run limits :func:`advance` applies at step boundaries (SI).
-
-    The vehicle's events, one slot each (``EV_SEPARATION``, ``EV_IGNITION``, ``EV_LES``;
-    the cutoff is guidance's), each with its trigger (``vehicle/two_stage.py::Trigger``):
-    armed ``delay_s`` after the event slot ``after`` fired (−1: liftoff), it fires at the
-    first step boundary from then on at which its condition holds (``when``: one of the
-    ``WHEN_*`` codes; ``WHEN_NONE`` at once).
+class EventRule(NamedTuple):
+    """One vehicle event's trigger (scalars: no reference counting in the step loop).
 
     Attributes
     ----------
-    after : numpy.ndarray
-        ``(N_SEQUENCE,)`` int64: the slot each event counts from, −1 liftoff.
-    delay_s : numpy.ndarray
-        ``(N_SEQUENCE,)`` s after that event.
-    when : numpy.ndarray
-        ``(N_SEQUENCE,)`` int64: the condition's quantity (``WHEN_*``).
-    of : numpy.ndarray
-        ``(N_SEQUENCE,)`` int64: the propellant state a ``WHEN_PROPELLANT`` condition
-        reads (its index in ``x``; −1 otherwise).
-    above : numpy.ndarray
-        ``(N_SEQUENCE,)`` bool: the condition holds above the threshold (else below).
-    threshold : numpy.ndarray
-        ``(N_SEQUENCE,)`` in the quantity's units (a thrust fraction: of the first-stage
-        motor's own flown peak).
+    after : int
+        The event slot it counts from, −1 liftoff.
+    delay_s : float
+        s after that event.
+    when : int
+        The condition's quantity (``WHEN_*``).
+    of : int
+        The propellant state a ``WHEN_PROPELLANT`` condition reads (its index in ``x``; −1
+        otherwise).
+    above : bool
+        The condition holds above the threshold (else below).
+    threshold : float
+        In the quantity's units (a thrust fraction: of the first-stage motor's own flown
+        peak).
+    """
+
+    after: int
+    delay_s: float
+    when: int
+    of: int
+    above: bool
+    threshold: float
+
+
+class EventSchedule(NamedTuple):
+    """The event rules and run limits :func:`advance` applies at step boundaries (SI).
+
+    Attributes
+    ----------
+    rules : tuple of EventRule
+        The vehicle's events, one per slot (``EV_SEPARATION``, ``EV_IGNITION``,
+        ``EV_LES``; the cutoff is guidance's; ``vehicle/two_stage.py::Trigger``): armed
+        ``delay_s`` after the event slot ``after`` fired (−1: liftoff), each fires at the
+        first step boundary from then on at which its condition holds (``WHEN_NONE``: at
+        once).
     cutoff_energy_j_kg : float
         The stored profile's cutoff: point-mass specific orbital energy, J/kg.
     max_time_s : float
@@ -124,12 +139,7 @@ class EventSchedule(NamedTuple):
         ``models.command_schedule.SCHEDULES``.
     """
 
-    after: np.ndarray
-    delay_s: np.ndarray
-    when: np.ndarray
-    of: np.ndarray
-    above: np.ndarray
-    threshold: np.ndarray
+    rules: tuple[EventRule, EventRule, EventRule]
     cutoff_energy_j_kg: float
     max_time_s: float
     stop_at_separation: bool
@@ -197,15 +207,15 @@ def move_reference(x: np.ndarray, old: tuple[float, float, float], new: tuple[fl
     rigid_body.move_reference(x, new[0] - old[0], new[1] - old[1], new[2] - old[2])
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")  # every slot, every step: no call
 def armed(k: int, t: float, events: np.ndarray, sched: EventSchedule) -> bool:
     """Whether event slot ``k`` waits for its condition at ``t`` (s): not fired, and
     ``delay_s`` past the event it counts from."""
     if not np.isnan(events[k]):
         return False
-    a = sched.after[k]
-    t0 = 0.0 if a < 0 else events[a]
-    return not np.isnan(t0) and t >= t0 + sched.delay_s[k]
+    rule = sched.rules[k]
+    t0 = 0.0 if rule.after < 0 else events[rule.after]
+    return not np.isnan(t0) and t >= t0 + rule.delay_s
 
 
 @njit(cache=True, error_model="numpy")
@@ -217,14 +227,15 @@ def condition_holds(k: int, t: float, x: np.ndarray, u: np.ndarray, f_sensed: fl
     (N) with the fraction of its flown peak; the propellant reads its state in ``x``; the
     axial acceleration, altitude and dynamic pressure come from one evaluation of the
     plant at ``t`` (its diagnostics, into the scratch rows of ``work``)."""
-    when = sched.when[k]
+    rule = sched.rules[k]
+    when = rule.when
     if when == WHEN_NONE:
         return True
-    limit = sched.threshold[k]
+    limit = rule.threshold
     if when == WHEN_THRUST_FRACTION:
         value, limit = f_sensed, limit * d[propulsion.D_FS_PEAK]
     elif when == WHEN_PROPELLANT:
-        value = x[sched.of[k]]
+        value = x[rule.of]
     else:
         aux = work[5]
         derivative(t, x, u, p, tb, aux, work[4])
@@ -234,7 +245,7 @@ def condition_holds(k: int, t: float, x: np.ndarray, u: np.ndarray, f_sensed: fl
             value = aux[aero.A_QBAR]
         else:
             value = aux[rigid_body.A_ACCEL]
-    return value > limit if sched.above[k] else value < limit
+    return value > limit if rule.above else value < limit
 
 
 @njit(cache=True, error_model="numpy")

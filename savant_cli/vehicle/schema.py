@@ -128,10 +128,10 @@ class _Reader:
             table = read_mass(section, self.vdir, float(self.node["length_m"]))
             load = sum(self.tanks[t].propellant_kg for t in tanks)
             if table.propellant_kg[0] > MASS_TOLERANCE_KG or abs(table.propellant_kg[-1] - load) > MASS_TOLERANCE_KG:
-                raise ConfigError(f"{key}.mass_table", section["mass_table"],
-                                  f"a part's mass table runs from 0 to its tanks' load ({load:.1f} kg), against its "
-                                  f"own propellant; it runs from {table.propellant_kg[0]:.1f} to "
-                                  f"{table.propellant_kg[-1]:.1f} kg")
+                loads = " + ".join(f"{self.tanks[t].key}.propellant_kg" for t in tanks)
+                raise ConfigError(loads, load, f"must equal the largest propellant_remaining of {key}.mass_table "
+                                               f"({section['mass_table']}, from {table.propellant_kg[0]:.1f} to "
+                                               f"{table.propellant_kg[-1]:.1f} kg: the part's own propellant, from 0)")
         self.parts[name] = Part(name, kind, attached, inert, tanks, engines, jets, key, mass=table)
 
     def tank(self, name: str, section: Mapping, part: str, key: str) -> str:
