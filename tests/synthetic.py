@@ -10,6 +10,22 @@ from savant_cli.models import actuator, aero as aero_model, earth, flex, gravity
 from savant_cli.models.atmosphere import upper_atmosphere_table
 from savant_cli.sim.plant import PlantTables
 
+#: The synthetic vehicle's tanks: the first stage's, then the upper stage's LOX and LH2.
+TANKS = ("first_stage_propellant", "lox", "lh2")
+
+
+def state_layout(**optional) -> layout.StateLayout:
+    """The synthetic vehicle's state layout with the optional blocks ``optional``
+    (:class:`~savant_cli.models.layout.StateLayout`'s ``simplex``, ``slosh``, ``n_modes``)."""
+    return layout.StateLayout(tanks=TANKS, **optional)
+
+
+#: The layout without optional blocks, and the indices tests address in it.
+LAYOUT = state_layout()
+FS, LOX, LH2 = (LAYOUT.tank(t) for t in TANKS)
+ACT_P, ACT_Y = LAYOUT.channel(0), LAYOUT.channel(1)
+RCS_POS = LAYOUT.rcs
+
 
 def tables(mass: float = 1000.0, inertia=(100.0, 400.0, 400.0, 0.0, 0.0, 0.0),
            cg=(5.0, 0.0, 0.0)) -> PlantTables:
@@ -32,7 +48,9 @@ def tables(mass: float = 1000.0, inertia=(100.0, 400.0, 400.0, 0.0, 0.0, 0.0),
     )
 
 
-def parameters(gravity_order: int = 0, aero: bool = False, thrust: bool = False) -> np.ndarray:
+def parameters(gravity_order: int = 0, aero: bool = False, thrust: bool = False,
+               lay: layout.StateLayout = LAYOUT) -> np.ndarray:
+    """Parameters of the synthetic plant, with the state offsets of ``lay``."""
     p = np.zeros(layout.N_PARAM)
     p[gravity.P_MU] = constants.MU_EARTH
     p[earth.P_RE] = constants.WGS84_A
@@ -52,7 +70,10 @@ def parameters(gravity_order: int = 0, aero: bool = False, thrust: bool = False)
     p[aero_model.P_ON] = 1.0 if aero else 0.0
     p[propulsion.P_ON] = 1.0 if thrust else 0.0
     p[gravity.P_ORDER] = gravity_order
-    p[actuator.P_VALVE_OFFSET] = p[slosh.P_OFFSET] = p[flex.P_OFFSET] = -1.0  # optional blocks absent
+    p[propulsion.P_FS_TANK], p[propulsion.P_US_OX_TANK], p[propulsion.P_US_FUEL_TANK] = (lay.tank(t) for t in TANKS)
+    p[actuator.P_CHANNEL_OFFSET] = lay.channel(0)
+    p[rcs.P_STATE_OFFSET] = lay.rcs
+    p[actuator.P_VALVE_OFFSET], p[slosh.P_OFFSET], p[flex.P_OFFSET] = lay.valve, lay.slosh_offset, lay.flex
     p[propulsion.P_FS_PROP_FULL] = p[propulsion.P_US_PROP_FULL] = 1.0
     p[slosh.P_AREF] = 9.80665
     p[slosh.P_FREQ_SCALE] = p[slosh.P_ZETA_SCALE] = 1.0

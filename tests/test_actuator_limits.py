@@ -12,7 +12,7 @@ from omegaconf import OmegaConf
 
 from conftest import compose_config
 from savant_cli.config import validate
-from savant_cli.models import actuator, layout
+from savant_cli.models import actuator
 from savant_cli.models.configurations import ENGINE_FIRST, ENGINE_UPPER
 from savant_cli.paths import hydra_search_dirs, shipped_config_dir
 from savant_cli.sim.setup import prepare
@@ -46,15 +46,16 @@ def fly(model, engine: int, command, t_end: float = 2.0, dt: float = DT,
     flow move with it)."""
     p = model.p
     x = model.x0.copy()
-    x[layout.ACT_P:layout.ACT_P + 3] = 0.0
-    x[layout.ACT_Y:layout.ACT_Y + 3] = 0.0
+    kp, ky = model.layout.channel(0), model.layout.channel(1)
+    x[kp:kp + actuator.N_PER_CHANNEL] = 0.0
+    x[ky:ky + actuator.N_PER_CHANNEL] = 0.0
     vo = int(p[actuator.P_VALVE_OFFSET])
     if vo >= 0:
-        x[vo:vo + actuator.N_VALVE] = 0.0
-    x[layout.ACT_P], x[layout.ACT_P + 1] = start
+        x[vo:vo + 2 * actuator.N_VALVE_PER_CHANNEL] = 0.0
+    x[kp], x[kp + 1] = start
     if vo >= 0:  # ram with the nozzle (mount unloaded but for its damping), flow = rate
         base = actuator.P_FS_SPX if engine == ENGINE_FIRST else actuator.P_US_SPX
-        x[layout.ACT_P + 2] = start[0] + p[base + actuator.SX_DAMPING] * start[1] / p[base + actuator.SX_STIFFNESS]
+        x[kp + 2] = start[0] + p[base + actuator.SX_DAMPING] * start[1] / p[base + actuator.SX_STIFFNESS]
         x[vo] = start[1]
 
     def f(xs, c):
@@ -67,8 +68,8 @@ def fly(model, engine: int, command, t_end: float = 2.0, dt: float = DT,
         t = i * dt
         c = command(t)
         k1, acc = f(x, c)
-        for key, v in (("t", t), ("delta", x[layout.ACT_P]), ("rate", x[layout.ACT_P + 1]), ("acc", acc),
-                       ("flow", x[vo] if vo >= 0 else np.nan), ("ram_rate", k1[layout.ACT_P + 2] if vo >= 0 else np.nan)):
+        for key, v in (("t", t), ("delta", x[kp]), ("rate", x[kp + 1]), ("acc", acc),
+                       ("flow", x[vo] if vo >= 0 else np.nan), ("ram_rate", k1[kp + 2] if vo >= 0 else np.nan)):
             out[key].append(v)
         k2, _ = f(x + 0.5 * dt * k1, c)
         k3, _ = f(x + 0.5 * dt * k2, c)

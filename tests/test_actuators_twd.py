@@ -130,20 +130,20 @@ def test_tail_wags_dog_moment_closed_form_and_zero_pair():
     w_twd = np.sqrt(thrust * l_c / jj)
     amp = 0.01
     aux = np.zeros(layout.N_AUX)
-    x = np.zeros(layout.N_STATE)
+    x = np.zeros(synthetic.LAYOUT.n)
     x[layout.Q] = 1.0
     x[layout.R] = 7.0e6
-    x[layout.MLOX] = x[layout.MLH2] = 1000.0
+    x[synthetic.LOX] = x[synthetic.LH2] = 1000.0
     for w in (0.3 * w_twd, w_twd, 2.0 * w_twd):
         for tt in np.linspace(0.1, 2.0, 7):
             d, dd, ddd = amp * np.sin(w * tt), amp * w * np.cos(w * tt), -amp * w * w * np.sin(w * tt)
-            x[layout.ACT_P:layout.ACT_P + 3] = d, dd, ddd
-            derivative(0.0, x, u, p, tb, aux, np.zeros(layout.N_STATE))
+            x[synthetic.ACT_P:synthetic.ACT_P + 3] = d, dd, ddd
+            derivative(0.0, x, u, p, tb, aux, np.zeros(synthetic.LAYOUT.n))
             total = aux[propulsion.A_MOMENT + 1] + aux[twd.A_MOMENT + 1]
             expected = thrust * l_c * np.sin(d) + jj * ddd
             assert total == pytest.approx(expected, rel=1e-9, abs=1e-6 * thrust * l_c * amp)
             if w == w_twd:  # cancellation to small-angle accuracy
                 assert abs(total) < 1e-4 * thrust * l_c * amp
     p[twd.P_ON] = 0.0
-    derivative(0.0, x, u, p, tb, aux, np.zeros(layout.N_STATE))
+    derivative(0.0, x, u, p, tb, aux, np.zeros(synthetic.LAYOUT.n))
     assert aux[twd.A_MOMENT + 1] == 0.0

@@ -44,14 +44,14 @@ def _first_stage_point():
     p = synthetic.parameters(thrust=True)
     u = synthetic.coast_inputs()
     u[layout.U_CONFIG], u[layout.U_ENGINE] = layout.CONFIG_STACK, layout.ENGINE_FIRST
-    x = np.zeros(layout.N_STATE)
-    x[layout.R], x[layout.Q], x[layout.MFS] = 7.0e6, 1.0, 1000.0  # vacuum, no aero: thrust alone
+    x = np.zeros(synthetic.LAYOUT.n)
+    x[layout.R], x[layout.Q], x[synthetic.FS] = 7.0e6, 1.0, 1000.0  # vacuum, no aero: thrust alone
     return tb, p, u, x
 
 
 def _thrust_moment(tb, p, u, x) -> tuple[np.ndarray, np.ndarray]:
     aux = np.zeros(layout.N_AUX)
-    derivative(0.5, x, u, p, tb, aux, np.zeros(layout.N_STATE))
+    derivative(0.5, x, u, p, tb, aux, np.zeros(synthetic.LAYOUT.n))
     return aux[propulsion.A_MOMENT:propulsion.A_MOMENT + 3].copy(), aux
 
 
@@ -61,7 +61,7 @@ def test_gimbal_bias_turns_the_thrust_line():
     applies to the actuator, and the other stage's bias plays no part."""
     tb, p, u, x = _first_stage_point()
     delta, b = 0.03, 0.01
-    x[layout.ACT_P] = delta
+    x[synthetic.ACT_P] = delta
     m0, _ = _thrust_moment(tb, p, u, x)
     p[FS_BIAS] = b
     p[US_BIAS:US_BIAS + 2] = 0.05, -0.05  # inactive stage
@@ -73,7 +73,7 @@ def test_gimbal_bias_turns_the_thrust_line():
 
     # both axes against an independent cross product
     p[FS_BIAS + 1] = -0.02
-    x[layout.ACT_Y] = 0.015
+    x[synthetic.ACT_Y] = 0.015
     m2, aux = _thrust_moment(tb, p, u, x)
     a, c = delta + b, 0.015 - 0.02
     t_hat = np.array([np.cos(a) * np.cos(c), -np.sin(c), np.sin(a) * np.cos(c)])
@@ -81,7 +81,7 @@ def test_gimbal_bias_turns_the_thrust_line():
     assert aux[actuator.A_ANGLES + 1] == 0.015
 
     # the actuator at its stop: the thrust line is the limit plus the bias
-    x[layout.ACT_P], x[layout.ACT_Y] = 0.5, 0.0
+    x[synthetic.ACT_P], x[synthetic.ACT_Y] = 0.5, 0.0
     m3, aux = _thrust_moment(tb, p, u, x)
     lim = p[actuator.P_FS_GIMBAL + actuator.G_LIMIT]
     assert aux[actuator.A_ANGLES] == lim
@@ -96,12 +96,14 @@ def test_controller_trims_a_gimbal_bias_out():
     little, so the wind and aerodynamic loads it trims drift apart later: 0.05° by 25 s
     with the shipped msfc_pid; a PD without the integral keeps the whole offset)."""
     bias = np.radians([0.5, -0.3])
-    nom = simulate(_model(["sim.max_time_s=20"]), progress=False)
+    nominal_model = _model(["sim.max_time_s=20"])
+    nom = simulate(nominal_model, progress=False)
     biased = simulate(_model(["sim.max_time_s=20", "actuator.first_stage.null_bias_deg=[0.5,-0.3]"]),
                       progress=False)
     t = nom.log[:, 0]
     settled = (t >= 5.0) & (t <= 15.0)
-    for c, state in enumerate((layout.ACT_P, layout.ACT_Y)):
+    for c in range(2):
+        state = nominal_model.layout.channel(c)
         offset = biased.log[settled, 1 + state] - nom.log[settled, 1 + state]
         assert np.all(np.abs(offset + bias[c]) < 0.10 * abs(bias[c])), (c, offset.min(), offset.max())
     assert biased.status == "complete"

@@ -40,7 +40,7 @@ def _quantity(model, snap, when: dict) -> float:
     field = {"altitude_m": "earth.altitude", "dynamic_pressure_Pa": "aero.dynamic_pressure",
              "axial_acceleration_mps2": "rigid_body.sensed_acceleration"}
     if when["quantity"] == "propellant_kg":
-        return float(snap.x[layout.MLOX])
+        return float(snap.x[model.layout.tank("lox")])
     return float(aux[blocks.DIAGNOSTICS.field(field[when["quantity"]]).index])
 
 

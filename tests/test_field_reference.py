@@ -31,11 +31,19 @@ def test_vectors_are_contiguous_and_sized_as_the_layout_says():
 
 
 def test_core_state_order_is_the_staging_file_order():
-    """The staging-state files and the logged histories name the core states in this
-    order; a model imported out of order would silently move them."""
+    """The staging-state files and the logged histories name the states in this order:
+    the rigid body, the vehicle's tanks in order, the gimbal channels, the roll jets, then
+    the optional blocks; a model imported out of order would silently move them."""
     assert layout.STATE_NAMES[:layout.W + 3][-3:] == ["p", "q", "r"]
-    assert (layout.R, layout.V, layout.Q, layout.W, layout.MFS, layout.MLOX, layout.MLH2, layout.ACT_P, layout.ACT_Y, layout.RCS_POS, layout.RCS_NEG) == (
-        0, 3, 6, 10, 13, 14, 15, 16, 19, 22, 23)
+    lay = layout.StateLayout(tanks=("grain", "lox", "lh2"), simplex=True, slosh=True, n_modes=2)
+    assert (layout.R, layout.V, layout.Q, layout.W, layout.N_STATE) == (0, 3, 6, 10, 13)
+    assert ([lay.tank(t) for t in lay.tanks], lay.channel(0), lay.channel(1), lay.rcs, lay.n_core) == (
+        [13, 14, 15], 16, 19, 22, 24)
+    assert (lay.valve, lay.slosh_offset, lay.flex, lay.n) == (24, 28, 36, 40)
+    names = lay.names()
+    assert names[13:24] == ["prop_grain", "prop_lox", "prop_lh2", "dp", "dp_dot", "dp_piston", "dy", "dy_dot",
+                            "dy_piston", "rcs_pos", "rcs_neg"]
+    assert names[24:28] == ["valve_p", "valve_p_dot", "valve_y", "valve_y_dot"] and len(names) == lay.n
 
 
 def test_docs_list_every_field_as_declared():

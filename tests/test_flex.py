@@ -36,9 +36,8 @@ def _flex_tables(freq: np.ndarray, zeta: np.ndarray, shapes: np.ndarray, **kw):
 
 
 def _flex_params(n_modes: int, switch: int = 0, **kw) -> tuple[np.ndarray, layout.StateLayout]:
-    lay = layout.StateLayout(n_modes=n_modes)
-    p = synthetic.parameters(**kw)
-    p[flex.P_OFFSET] = lay.flex
+    lay = synthetic.state_layout(n_modes=n_modes)
+    p = synthetic.parameters(lay=lay, **kw)
     p[flex.P_N_MODES] = n_modes
     p[flex.P_SWITCH] = switch
     return p, lay
@@ -48,7 +47,7 @@ def _orbit_state(lay: layout.StateLayout) -> np.ndarray:
     x = np.zeros(lay.n)
     x[layout.R] = 7.0e6  # far above the atmosphere (no pressure loss, no divergence on altitude)
     x[layout.Q] = 1.0
-    x[layout.MFS] = x[layout.MLOX] = x[layout.MLH2] = 1.0
+    x[synthetic.FS] = x[synthetic.LOX] = x[synthetic.LH2] = 1.0
     return x
 
 
@@ -152,8 +151,8 @@ def test_flex_point_rotation_and_rate_at_every_point(config, switch, sets, weigh
     p[propulsion.P_FS_PROP_FULL] = 4.0e5
     p[propulsion.P_US_PROP_FULL] = 1.0e5
     x = _orbit_state(lay)
-    x[layout.MFS] = 0.75 * 4.0e5
-    x[layout.MLOX], x[layout.MLH2] = 0.4 * 1.0e5 * 5 / 6, 0.4 * 1.0e5 / 6
+    x[synthetic.FS] = 0.75 * 4.0e5
+    x[synthetic.LOX], x[synthetic.LH2] = 0.4 * 1.0e5 * 5 / 6, 0.4 * 1.0e5 / 6
     x[layout.W:layout.W + 3] = (0.01, -0.02, 0.03)
     fo = lay.flex
     q = rng.standard_normal(nm)
@@ -302,7 +301,7 @@ def test_modal_acceleration_is_thrust_at_the_gimbal_turned_by_flex(engine, plane
     qd = np.array([0.3, 1.2])
     x[fo:fo + nm] = q
     x[fo + nm:fo + 2 * nm] = qd
-    x[layout.ACT_P], x[layout.ACT_Y] = dp, dy
+    x[synthetic.ACT_P], x[synthetic.ACT_Y] = dp, dy
     sa = 0 if engine == layout.ENGINE_FIRST else 2
     phi = shapes[sa, :, pg, :3]
     sig = shapes[sa, :, pg, 3:]
@@ -344,8 +343,8 @@ def test_engine_inertia_reaction_loads_the_modes_at_the_gimbal(engine):
     fo = lay.flex
     q = np.array([0.2, 0.1])
     x[fo:fo + nm] = q
-    x[layout.ACT_P], x[layout.ACT_P + 2] = 0.01, 4.0
-    x[layout.ACT_Y], x[layout.ACT_Y + 2] = -0.02, -2.5
+    x[synthetic.ACT_P], x[synthetic.ACT_P + 2] = 0.01, 4.0
+    x[synthetic.ACT_Y], x[synthetic.ACT_Y + 2] = -0.02, -2.5
     if engine == layout.ENGINE_FIRST:
         pg, (m_r, l_r, i_r), sa = layout.PT_GIMBAL_FS, (7000.0, 2.0, 35000.0), 0
     else:
@@ -369,7 +368,7 @@ def test_roll_jet_torque_loads_the_modes_at_the_rcs_point():
     tables = tables._replace(rcs_alt=np.array([0.0, 1.0e7]), rcs_thrust=np.array([f_jet, f_jet]))
     p[rcs.P_N], p[rcs.P_ARM] = 2.0, 2.75
     tb = pack_tables(tables)
-    x[layout.RCS_POS] = 1.0
+    x[synthetic.RCS_POS] = 1.0
     fo = lay.flex
     torque = 2.0 * f_jet * 2.75
     expected = shapes[2, :, layout.PT_RCS, 3] * torque
@@ -395,8 +394,8 @@ def test_thrust_and_engine_reaction_act_at_the_displaced_gimbal(engine):
     tb = pack_tables(tables._replace(flex_shape=shapes))
     fo = lay.flex
     acc_p = 3.0  # rad/s², the third-order nozzle acceleration state
-    x[layout.ACT_P:layout.ACT_P + 3] = 0.0, 0.0, acc_p
-    x[layout.ACT_Y:layout.ACT_Y + 3] = 0.0
+    x[synthetic.ACT_P:synthetic.ACT_P + 3] = 0.0, 0.0, acc_p
+    x[synthetic.ACT_Y:synthetic.ACT_Y + 3] = 0.0
 
     def moments(q: float) -> tuple[float, float]:
         xs = x.copy()

@@ -158,7 +158,7 @@ def test_closed_form_rigid_pitch_loop_margins(maxq):
 
     s_ref, l_ref, x_mrp = tb.aero_ref[0, 0], tb.aero_ref[0, 2], tb.aero_ref[0, 4]
     n_tab = tb.mass_len[0]
-    iyy = float(np.interp(snap.x[layout.MFS], tb.mass_prop[0, :n_tab], tb.mass_data[0, :n_tab, 5]))
+    iyy = float(np.interp(snap.x[model.layout.tank("grain")], tb.mass_prop[0, :n_tab], tb.mass_data[0, :n_tab, 5]))
     dx = cg - x_mrp
     ca0, cn0, cm0 = coef(0), coef(2), coef(4)
     u0, w0 = v * np.cos(a0), v * np.sin(a0)
@@ -246,14 +246,15 @@ def _closed_loop_gust_response(model, snap, gust: float, seconds: float) -> np.n
     u[layout.U_GUST + 2] = gust
     rt = model.rates
     log = np.empty((int(seconds / rt.dt) // rt.n_log + 4, log_columns(x.size)))
-    out, k, row = [x[layout.ACT_P]], snap.step, 0
+    kp = model.layout.channel(0)
+    out, k, row = [x[kp]], snap.step, 0
     for _ in range(int(round(seconds / (rt.dt * rt.n_fcs)))):
         status, done, row, _ = engine.advance(x, d, u, ev, k, rt.n_fcs, rt, model.p, model.packed_tables, model.fcs,
                                               model.gyro, model.smoother, model.guidance, model.sched, log, row,
                                               loop_perturbation.NONE)
         assert status == engine.RUNNING and done == rt.n_fcs
         k += done
-        out.append(x[layout.ACT_P])
+        out.append(x[kp])
     return np.asarray(out)
 
 

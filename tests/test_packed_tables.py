@@ -43,7 +43,7 @@ def _state_in_flight(model, alt_m: float, speed_mps: float, alpha_deg: float, be
     c_b2i = qt.dcm(x[layout.Q:layout.Q + 4])
     omega = np.array([0.0, 0.0, model.p[earth.P_OMEGA_E]])
     x[layout.V:layout.V + 3] = c_b2i @ v_body + np.cross(omega, x[layout.R:layout.R + 3])  # no wind below
-    x[layout.MFS] = prop_kg
+    x[model.layout.tank("grain")] = prop_kg  # ares_i's first-stage motor
     return x
 
 
@@ -61,7 +61,7 @@ def test_plant_reads_aero_mass_and_thrust_tables_as_independent_lookups(model, a
     x = _state_in_flight(model, alt_m, speed, alpha, beta, prop)
     aux = np.zeros(layout.N_AUX)
     t = 40.0
-    derivative(t, x, u, p, model.packed_tables, aux, np.zeros(layout.N_STATE))
+    derivative(t, x, u, p, model.packed_tables, aux, np.zeros(x.size))
     assert np.degrees(aux[aero.A_ALPHA]) == pytest.approx(alpha, abs=1e-6)
     assert np.degrees(aux[aero.A_BETA]) == pytest.approx(beta, abs=1e-6)
 

@@ -64,8 +64,8 @@ def test_nose_tip_is_continuous_across_separation(flown):
     assert snap.u[layout.U_CONFIG] == CONFIG_STACK
     status, x, u, ev = _apply_events(model, snap)
     assert status == engine.RUNNING and u[layout.U_CONFIG] == CONFIG_UPPER_LES and ev[engine.EV_SEPARATION] == snap.t
-    cg_before = _cg(vehicle, "stack", snap.x[layout.MFS])
-    cg_after = _cg(vehicle, "upper_les", snap.x[layout.MLOX] + snap.x[layout.MLH2])
+    cg_before = _cg(vehicle, "stack", snap.x[model.layout.tank("grain")])
+    cg_after = _cg(vehicle, "upper_les", snap.x[model.layout.tank("lox")] + snap.x[model.layout.tank("lh2")])
     assert cg_before[0] - cg_after[0] > 10.0  # the CG moves forward by over 10 m
     r0, v0 = point_state(snap.x, cg_before)
     r1, v1 = point_state(x, cg_after)
@@ -81,7 +81,7 @@ def test_nose_tip_is_continuous_across_les_jettison(flown):
     assert snap.u[layout.U_CONFIG] == CONFIG_UPPER_LES
     status, x, u, ev = _apply_events(model, snap)
     assert status == engine.RUNNING and u[layout.U_CONFIG] == CONFIG_UPPER
-    prop = snap.x[layout.MLOX] + snap.x[layout.MLH2]
+    prop = snap.x[model.layout.tank("lox")] + snap.x[model.layout.tank("lh2")]
     cg_before, cg_after = _cg(vehicle, "upper_les", prop), _cg(vehicle, "upper", prop)
     assert abs(cg_before[0] - cg_after[0]) > 0.1
     r0, v0 = point_state(snap.x, cg_before)
@@ -97,7 +97,7 @@ def test_slosh_on_starts_from_the_same_pad():
     off = prepare(validate(compose_config(["slosh=off"])), hydra_search_dirs())
     on = prepare(validate(compose_config(["slosh=on"])), hydra_search_dirs())
     vehicle = off.vehicle
-    cg_whole = _cg(vehicle, "stack", off.model.x0[layout.MFS])
+    cg_whole = _cg(vehicle, "stack", off.model.x0[off.model.layout.tank("grain")])
     # the rigid part's CG, by hand from the plant's slosh masses and stations at the start
     from savant_cli.sim.plant import mass_state
 

@@ -21,12 +21,11 @@ def _setup(w_ref: float, zeta: float, m_s: float, accel: float, inertia: float =
     level = np.array([0.0, 20.0])
     row = [w_ref, zeta, m_s, 1.0]
     tables = tables._replace(slosh_level=np.tile(level, (2, 1)), slosh_data=np.tile(row, (2, 2, 1)))
-    p = synthetic.parameters(thrust=True)
+    lay = synthetic.state_layout(slosh=True)
+    p = synthetic.parameters(thrust=True, lay=lay)
     p[propulsion.P_US_THRUST] = accel * 1.0e6
     p[propulsion.P_US_ISP] = 1e12  # no mass flow: constant acceleration
     p[propulsion.P_US_GIMBAL:propulsion.P_US_GIMBAL + 3] = (40.0, 0.0, 0.0)
-    lay = layout.StateLayout(slosh=True)
-    p[slosh.P_OFFSET] = lay.slosh_offset
     p[slosh.P_AREF] = A_REF
     for j, bottom in enumerate((30.0, 15.0)):
         p[slosh.P_TANKS + slosh.N_TANK_FIELDS * j:slosh.P_TANKS + slosh.N_TANK_FIELDS * j + 3] = (2.75, bottom, 1000.0)
@@ -36,7 +35,7 @@ def _setup(w_ref: float, zeta: float, m_s: float, accel: float, inertia: float =
     x = np.zeros(lay.n)
     x[layout.Q] = 1.0
     x[layout.R] = 7.0e6
-    x[layout.MLOX] = x[layout.MLH2] = 5.0e4  # level 2.1 m, inside the table
+    x[synthetic.LOX] = x[synthetic.LH2] = 5.0e4  # level 2.1 m, inside the table
     return pack_tables(tables), p, u, x, lay
 
 

@@ -16,7 +16,7 @@ from conftest import compose_config
 from savant_cli import constants
 from savant_cli.config import validate
 from savant_cli.io.guidance_file import read_guidance
-from savant_cli.models import layout, propulsion
+from savant_cli.models import propulsion
 from savant_cli.montecarlo.targets import Target, apply_samples, build_dispersed
 from savant_cli.paths import hydra_search_dirs
 from savant_cli.sim import engine
@@ -63,7 +63,7 @@ def _whole_burn(base, **factors):
     log = res.log
     t = log[:, 0]
     f_vac = log[:, 1 + model.layout.n + propulsion.A_THRUST_VAC]
-    prop = log[:, 1 + layout.MFS]
+    prop = log[:, 1 + model.layout.tank("grain")]
     return applied.vehicle, t, f_vac, prop
 
 

@@ -93,7 +93,6 @@ def test_dispersed_load_stays_inside_the_slosh_tables(base):
 def test_flown_mixture_ratio_sets_the_limiting_propellant():
     """Fly the upper stage at MR 5.6 from tanks loaded at 5.5: the engine draws LOX : LH2 =
     5.6 (from the flown states), LOX limits, and the LH2 left beyond L/5.6 is unusable."""
-    from savant_cli.models import layout
     from savant_cli.sim.run import simulate
     from savant_cli.sim.summary import propulsion_keys
 
@@ -102,7 +101,7 @@ def test_flown_mixture_ratio_sets_the_limiting_propellant():
     prep = prepare(cfg, hydra_search_dirs())
     res = simulate(prep.model, progress=False)
     us = prep.vehicle.upper_stage
-    lox, lh2 = res.x[layout.MLOX], res.x[layout.MLH2]
+    lox, lh2 = (res.x[prep.model.layout.tank(t)] for t in ("lox", "lh2"))
     assert (us.lox_kg - lox) / (us.lh2_kg - lh2) == pytest.approx(5.6, rel=1e-9)
     keys = propulsion_keys(res, prep.model.p)
     assert keys["limiting_propellant"] == "lox"

@@ -15,6 +15,7 @@ from omegaconf import OmegaConf
 
 from savant_cli.config import validate
 from savant_cli.hydra_compose import compose_config, task_config
+from savant_cli.models import layout
 from savant_cli.paths import shipped_config_dir
 from savant_cli.sim import build, engine
 from savant_cli.vehicle import load_vehicle
@@ -61,7 +62,9 @@ def check_composed_mass_properties(vehicle):
 
 def check_ignition_on_a_tank(vehicle):
     rule = _rule(vehicle, engine.EV_IGNITION)
-    assert (rule.when, rule.of, rule.above) == (engine.WHEN_PROPELLANT, build.TANK_STATES["lox"], True)
+    # the tanks' states follow the rigid body's in the vehicle's order
+    lox_state = layout.N_STATE + vehicle.tanks.index("lox")
+    assert (rule.when, rule.of, rule.above) == (engine.WHEN_PROPELLANT, lox_state, True)
 
 
 CHECKS = {"jettison-on-a-condition": check_jettison_on_a_condition,

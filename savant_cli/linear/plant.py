@@ -61,9 +61,10 @@ def linear_states(model: SimModel) -> tuple[list[str], np.ndarray]:
     idx += [layout.Q + 1, layout.Q + 2, layout.Q + 3]
     idx += list(range(layout.W, layout.W + 3))
     names += ["p", "q", "r"]
-    idx += list(range(layout.ACT_P, layout.ACT_P + 6))
-    names += full[layout.ACT_P:layout.ACT_P + 6]
-    extra = [i for i in range(layout.N_STATE, lay.n)]
+    channels = range(lay.channel_offset, lay.channel_offset + layout.N_PER_CHANNEL * len(lay.channels))
+    idx += list(channels)
+    names += [full[i] for i in channels]
+    extra = [i for i in range(lay.n_core, lay.n)]
     idx += extra
     names += [full[i] for i in extra]
     return names, np.asarray(idx)
@@ -81,9 +82,9 @@ def _steps(model: SimModel, idx: np.ndarray, mode: str, rel_step: float) -> np.n
             h[j] = STEP["att"]
         elif layout.W <= i < layout.W + 3:
             h[j] = STEP["w"]
-        elif layout.ACT_P <= i < layout.ACT_Y + 3:
-            h[j] = STEP["act"][(i - layout.ACT_P) % 3]
-        elif lay.simplex and lay.valve <= i < lay.valve + layout.N_VALVE:
+        elif lay.channel_offset <= i < lay.rcs:
+            h[j] = STEP["act"][(i - lay.channel_offset) % layout.N_PER_CHANNEL]
+        elif lay.simplex and lay.valve <= i < lay.valve + layout.N_VALVE_PER_CHANNEL * len(lay.channels):
             h[j] = STEP["valve"]
         elif lay.slosh and lay.slosh_offset <= i < lay.slosh_offset + 8:
             h[j] = STEP["slosh"][((i - lay.slosh_offset) % 4) // 2]

@@ -1,8 +1,10 @@
 """TVC actuators: the third-order model and the simplex (electro-hydraulic) model.
 
-States ``x[ACT_P:ACT_P+3]`` (pitch) and ``x[ACT_Y:ACT_Y+3]`` (yaw); the simplex model adds
-a power-valve block ``[r, ṙ]`` per axis (offset ``P_VALVE_OFFSET``). The command is
-clipped to the stage's gimbal limit.
+One gimbal channel per axis, pitch then yaw, each :data:`N_PER_CHANNEL` states from the
+offset ``P_CHANNEL_OFFSET`` in ``x`` (``models/layout.py``); the simplex model adds a
+power-valve block ``[r, ṙ]`` per channel (offset ``P_VALVE_OFFSET``). The engines of the
+two stages share the channels: only one of them is live at a time, and the actuator
+states restart at rest at separation. The command is clipped to the stage's gimbal limit.
 
 Third order (``actuator=third_order``), states ``[δ, δ̇, δ̈]``::
 
@@ -50,13 +52,11 @@ from savant_cli.models.configurations import ENGINE_FIRST
 
 THIRD_ORDER = 0
 SIMPLEX = 1
-N_VALVE = 4  # simplex power valves: pitch [r, ṙ], yaw [r, ṙ]
-
-_STATE = blocks.STATE.block("actuator")
-ACT_P = _STATE.array("pitch", 3, "rad, rad/s, rad/s^2 or rad",
-                     "pitch actuator: third order [δ, δ̇, δ̈]; simplex [δ, δ̇, θ_piston]")
-ACT_Y = _STATE.array("yaw", 3, "rad, rad/s, rad/s^2 or rad", "yaw actuator, as pitch")
-STATE_NAMES = ("dp", "dp_dot", "dp_ddot", "dy", "dy_dot", "dy_ddot")
+#: States of one gimbal channel: third order [δ, δ̇, δ̈], simplex [δ, δ̇, θ_piston]
+#: (rad, rad/s, rad/s² or rad).
+N_PER_CHANNEL = 3
+#: Simplex power-valve states of one channel: [r, ṙ] (rad/s, rad/s²).
+N_VALVE_PER_CHANNEL = 2
 
 THIRD = blocks.Record(
     "third-order actuator",
@@ -91,6 +91,8 @@ G_LIMIT, G_BIAS_PITCH, G_BIAS_YAW = STAGE.offsets
 _PARAMS = blocks.PARAMETERS.block("actuator")
 P_KIND = _PARAMS.scalar("kind", "1", "0 third order, 1 simplex")
 P_VALVE_OFFSET = _PARAMS.scalar("valve_offset", "1", "offset of the simplex valve states in x (−1: none)")
+P_CHANNEL_OFFSET = _PARAMS.scalar("channel_offset", "1",
+                                  "offset in x of the pitch channel's states; the yaw channel's follow")
 P_FS_GIMBAL = _PARAMS.record("first_stage", STAGE, "first-stage gimbal")
 P_US_GIMBAL = _PARAMS.record("upper_stage", STAGE, "upper-stage gimbal")
 P_FS_THIRD = _PARAMS.record("first_stage.third_order", THIRD, "first-stage third-order actuator")
@@ -120,6 +122,7 @@ def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarra
     cfg, v = inputs.cfg, inputs.vehicle
     p[P_KIND] = SIMPLEX if cfg.actuator.name == "simplex" else THIRD_ORDER
     p[P_VALVE_OFFSET] = inputs.layout.valve
+    p[P_CHANNEL_OFFSET] = inputs.layout.channel(0)
     stages = (("first_stage", v.first_stage, P_FS_GIMBAL, P_FS_THIRD, P_FS_SPX),
               ("upper_stage", v.upper_stage, P_US_GIMBAL, P_US_THIRD, P_US_SPX))
     for name, stage, pg, p3, px in stages:
@@ -245,15 +248,22 @@ def contain(x: np.ndarray, p: np.ndarray, engine: int) -> None:
     rl, lim = limits(p, engine)
     if int(p[P_KIND]) == SIMPLEX:
         vo = int(p[P_VALVE_OFFSET])
-        for kv in (vo, vo + 2):
+        for kv in (vo, vo + N_VALVE_PER_CHANNEL):
             _stop(x, kv, rl)
-        for k in (ACT_P, ACT_Y):
+        for k in channels(p):
             _stop(x, k, lim)
     else:
-        for k in (ACT_P, ACT_Y):
+        for k in channels(p):
             _stop(x, k + 1, rl)
             if _stop(x, k, lim) and x[k + 2] * x[k] > 0.0:
                 x[k + 2] = 0.0  # no outward acceleration at the stop
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def channels(p: np.ndarray) -> tuple[int, int]:
+    """Indices in ``x`` of the pitch and the yaw channel's first state (δ)."""
+    k = int(p[P_CHANNEL_OFFSET])
+    return k, k + N_PER_CHANNEL
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -269,15 +279,16 @@ def actuator_rates(x: np.ndarray, p: np.ndarray, engine: int, pitch_cmd: float, 
     accelerations pitch, yaw (rad/s²; zero while a stop holds the nozzle)."""
     lim = p[gimbal_stage(engine) + G_LIMIT]
     first = engine == ENGINE_FIRST
+    kp, ky = channels(p)
     if int(p[P_KIND]) == SIMPLEX:
         vo = int(p[P_VALVE_OFFSET])
         sp = P_FS_SPX if first else P_US_SPX
-        ddp = simplex(x, ACT_P, vo, clip(pitch_cmd, lim), p, sp, lim, xd)
-        ddy = simplex(x, ACT_Y, vo + 2, clip(yaw_cmd, lim), p, sp, lim, xd)
+        ddp = simplex(x, kp, vo, clip(pitch_cmd, lim), p, sp, lim, xd)
+        ddy = simplex(x, ky, vo + N_VALVE_PER_CHANNEL, clip(yaw_cmd, lim), p, sp, lim, xd)
     else:
         t3 = P_FS_THIRD if first else P_US_THIRD
-        ddp = third_order(x, ACT_P, clip(pitch_cmd, lim), p, t3, lim, xd)
-        ddy = third_order(x, ACT_Y, clip(yaw_cmd, lim), p, t3, lim, xd)
+        ddp = third_order(x, kp, clip(pitch_cmd, lim), p, t3, lim, xd)
+        ddy = third_order(x, ky, clip(yaw_cmd, lim), p, t3, lim, xd)
     return ddp, ddy
 
 
@@ -286,4 +297,5 @@ def gimbal_angles(x: np.ndarray, p: np.ndarray, engine: int) -> tuple[float, flo
     """Limited actuator angles δp, δy and the active stage's null biases pitch, yaw (rad)."""
     g = gimbal_stage(engine)
     lim = p[g + G_LIMIT]
-    return clip(x[ACT_P], lim), clip(x[ACT_Y], lim), p[g + G_BIAS_PITCH], p[g + G_BIAS_YAW]
+    kp, ky = channels(p)
+    return clip(x[kp], lim), clip(x[ky], lim), p[g + G_BIAS_PITCH], p[g + G_BIAS_YAW]

@@ -1,6 +1,6 @@
 """Named blocks of the flat vectors the compiled plant reads.
 
-The plant sees four flat float64 vectors: the continuous state ``x`` (its core part), the
+The plant sees four flat float64 vectors: the continuous state ``x`` (its rigid-body part), the
 scalar parameters ``p``, the per-evaluation diagnostics ``aux`` and the packed tables
 ``tb``; the flight software keeps its discrete state in a fifth, ``d``. Each physical model declares, in its own file, the fields it owns in them::
 

@@ -33,7 +33,7 @@ from savant_cli.flex_slosh import FIRST_STAGE_KEYS, POINT_KEYS
 from savant_cli.models import blocks
 from savant_cli.models.configurations import CONFIG_STACK
 from savant_cli.models.interp import tab, tab_offset
-from savant_cli.models.propulsion import MFS, MLH2, MLOX, P_FS_PROP_FULL, P_US_PROP_FULL
+from savant_cli.models.propulsion import P_FS_PROP_FULL, P_US_PROP_FULL, first_stage_propellant, upper_stage_propellant
 
 # Points where the plant and the sensors use mode shapes, and the vehicle YAML key
 # (``flex.nodes.<key>``) of each; a point may average several nodes.
@@ -109,9 +109,10 @@ def flex_sets(x: np.ndarray, config: int, p: np.ndarray) -> tuple[int, int, floa
     fraction of the stage's propellant burned.
     """
     if config == CONFIG_STACK:
-        a, frac = 0, x[MFS] / p[P_FS_PROP_FULL]
+        a, frac = 0, first_stage_propellant(x, p) / p[P_FS_PROP_FULL]
     else:
-        a, frac = 2, (x[MLOX] + x[MLH2]) / p[P_US_PROP_FULL]
+        lox, lh2 = upper_stage_propellant(x, p)
+        a, frac = 2, (lox + lh2) / p[P_US_PROP_FULL]
     if p[P_SWITCH] == 0.0:
         return a, a + 1, 0.0
     return a, a + 1, 1.0 - min(max(frac, 0.0), 1.0)

@@ -7,25 +7,28 @@ owns it (``savant_cli/models/*.py``, through :mod:`savant_cli.models.blocks`); t
 module declares the held inputs ``u``, adds the vectors up and re-exports the state and
 discrete-state indices that the engine, the linearization and the tests address.
 
-Continuous state ``x`` (SI): the core states in the order the models are imported
-(rigid body ``R V Q W``, propulsion ``MFS MLOX MLH2``, actuators ``ACT_P ACT_Y``, roll jets
-``RCS_POS RCS_NEG``), then the optional blocks, in this order, only when their model is on
-(their offsets are in ``p``, −1 when absent; :class:`StateLayout` builds them):
+Continuous state ``x`` (SI): the rigid body ``R V Q W`` (compile-time indices), then the
+blocks a vehicle and a model set size, in this order (:class:`StateLayout` builds them; the
+compiled models read their offsets from ``p``):
 
-* simplex power valves: pitch [r, ṙ], yaw [r, ṙ] (valve flow as no-load piston rate, rad/s);
+* propellant: one state per tank of the vehicle, in the vehicle file's order (kg);
+* gimbal channels: ``[δ, δ̇, δ̈]`` (third order) or ``[δ, δ̇, θ_piston]`` (simplex) per
+  channel (rad, rad/s, rad/s² or rad); engines whose gimbals are never live together share
+  a channel (``vehicle/two_stage.py``);
+* roll jets: the thrust fractions of the positive and negative jets (1);
+* simplex power valves: ``[r, ṙ]`` per channel (valve flow as no-load piston rate, rad/s),
+  only with the simplex actuator;
 * slosh: LOX [y, z, ẏ, ż], LH2 [y, z, ẏ, ż] (slosh-mass lateral displacement from the tank
-  centerline, body axes, m and m/s);
+  centerline, body axes, m and m/s), only with slosh on;
 * flex: q₁ … q_N, then q̇₁ … q̇_N (modal coordinates, unit generalized mass in SI:
-  √kg·m and √kg·m/s).
+  √kg·m and √kg·m/s), only with flex on.
 """
 
 from __future__ import annotations
 
 from savant_cli.flex_slosh import FLEX_SETS  # noqa: F401  (the modal sets, in table order)
 from savant_cli.models import blocks
-from savant_cli.models.actuator import (  # noqa: F401  (re-exported state indices)
-    ACT_P, ACT_Y, N_VALVE, STATE_NAMES as _ACTUATOR_NAMES
-)
+from savant_cli.models.actuator import N_PER_CHANNEL, N_VALVE_PER_CHANNEL  # noqa: F401
 from savant_cli.models.configurations import (  # noqa: F401
     CONFIG_STACK, CONFIG_UPPER, CONFIG_UPPER_LES, ENGINE_FIRST, ENGINE_OFF, ENGINE_UPPER
 )
@@ -38,51 +41,74 @@ from savant_cli.models.flex import (  # noqa: F401
     PT_SLOSH_LH2, PT_SLOSH_LOX
 )
 from savant_cli.models.guidance import D_QG, D_QS, D_TG, D_VG, D_VS  # noqa: F401
-from savant_cli.models.propulsion import MFS, MLH2, MLOX, STATE_NAMES as _PROPULSION_NAMES  # noqa: F401
-from savant_cli.models.rcs import RCS_NEG, RCS_POS, STATE_NAMES as _RCS_NAMES  # noqa: F401
+from savant_cli.models.rcs import N_JET_STATES, STATE_NAMES as _RCS_NAMES  # noqa: F401
 from savant_cli.models.rigid_body import STATE_NAMES as _RIGID_NAMES, Q, R, V, W  # noqa: F401
 from savant_cli.models.sensors import D_GYRO_X, D_GYRO_Y, GYRO_MISALIGN, GYRO_POINTS  # noqa: F401
 from savant_cli.models.slosh import N_PER_TANK as N_SLOSH_PER_TANK, N_TANKS  # noqa: F401
 
-N_STATE = blocks.STATE.size  # the core states; optional blocks follow
+N_STATE = blocks.STATE.size  # the rigid body; the vehicle's and the optional blocks follow
 N_PARAM = blocks.PARAMETERS.size
 N_AUX = blocks.DIAGNOSTICS.size
 N_DISC = blocks.DISCRETE.size
-STATE_NAMES = [*_RIGID_NAMES, *_PROPULSION_NAMES, *_ACTUATOR_NAMES, *_RCS_NAMES]
-assert len(STATE_NAMES) == N_STATE, "every core state needs a name"
+STATE_NAMES = list(_RIGID_NAMES)
+assert len(STATE_NAMES) == N_STATE, "every rigid-body state needs a name"
+#: The gimbal channels of a vehicle whose stages each gimbal one engine in pitch and yaw.
+PITCH_YAW = ("p", "y")
 
 
 class StateLayout:
-    """Size and offsets of the continuous state for one model set.
+    """Size and offsets of the continuous state for one vehicle and model set.
 
     Parameters
     ----------
+    tanks : sequence of str
+        The vehicle's tanks, one propellant state each, in order.
+    channels : sequence of str
+        The gimbal channels' names (``p``, ``y``: the states ``dp``, ``dy`` …), in order.
     simplex : bool
-        Simplex actuators (adds the 4 power-valve states).
+        Simplex actuators (adds 2 power-valve states per channel).
     slosh : bool
         LOX and LH2 slosh (8 states).
     n_modes : int
         Retained flexible modes (2 states each).
     """
 
-    def __init__(self, simplex: bool = False, slosh: bool = False, n_modes: int = 0) -> None:
+    def __init__(self, tanks: tuple[str, ...] | list[str] = (), channels: tuple[str, ...] | list[str] = PITCH_YAW,
+                 simplex: bool = False, slosh: bool = False, n_modes: int = 0) -> None:
+        self.tanks, self.channels = tuple(tanks), tuple(channels)
         self.simplex, self.slosh, self.n_modes = bool(simplex), bool(slosh), int(n_modes)
-        pos = N_STATE
+        pos = N_STATE + len(self.tanks)
+        self.channel_offset = pos
+        pos += N_PER_CHANNEL * len(self.channels)
+        self.rcs = pos
+        pos += N_JET_STATES
+        self.n_core = pos  # the states every run of this vehicle has
         self.valve = pos if simplex else -1
-        pos += N_VALVE if simplex else 0
+        pos += N_VALVE_PER_CHANNEL * len(self.channels) if simplex else 0
         self.slosh_offset = pos if slosh else -1
         pos += N_TANKS * N_SLOSH_PER_TANK if slosh else 0
         self.flex = pos if n_modes > 0 else -1
         pos += 2 * n_modes
         self.n = pos
 
+    def tank(self, name: str) -> int:
+        """The index in ``x`` of tank ``name``'s propellant state (kg)."""
+        return N_STATE + self.tanks.index(name)
+
+    def channel(self, k: int) -> int:
+        """The index in ``x`` of gimbal channel ``k``'s first state (its angle δ, rad)."""
+        return self.channel_offset + N_PER_CHANNEL * k
+
     def names(self) -> list[str]:
         """Names of every state, in order (also the staging-state file's keys)."""
-        names = list(STATE_NAMES)
+        names = list(STATE_NAMES) + [f"prop_{t}" for t in self.tanks]
+        third = "piston" if self.simplex else "ddot"
+        for c in self.channels:
+            names += [f"d{c}", f"d{c}_dot", f"d{c}_{third}"]
+        names += list(_RCS_NAMES)
         if self.simplex:
-            names[ACT_P + 2] = "dp_piston"
-            names[ACT_Y + 2] = "dy_piston"
-            names += ["valve_p", "valve_p_dot", "valve_y", "valve_y_dot"]
+            for c in self.channels:
+                names += [f"valve_{c}", f"valve_{c}_dot"]
         if self.slosh:
             for tank in ("lox", "lh2"):
                 names += [f"slosh_{tank}_y", f"slosh_{tank}_z", f"slosh_{tank}_y_dot", f"slosh_{tank}_z_dot"]

@@ -43,12 +43,6 @@ from savant_cli.models.interp import interp1_at, tab, tab_offset
 
 G0 = constants.G0
 
-_STATE = blocks.STATE.block("propulsion")
-MFS = _STATE.scalar("first_stage_propellant", "kg", "first-stage propellant remaining")
-MLOX = _STATE.scalar("lox", "kg", "upper-stage LOX remaining")
-MLH2 = _STATE.scalar("lh2", "kg", "upper-stage LH2 remaining")
-STATE_NAMES = ("prop_first_stage", "prop_lox", "prop_lh2")
-
 GIMBAL = blocks.Record("gimbal point", ("x", "m", "structure x"), ("y", "m", "structure y"),
                        ("z", "m", "structure z"))
 GIMBAL_X, GIMBAL_Y, GIMBAL_Z = GIMBAL.offsets
@@ -67,6 +61,9 @@ P_US_EXIT_AREA = _PARAMS.scalar("upper_stage.exit_area", "m^2", "upper-stage noz
 P_US_PROP_FULL = _PARAMS.scalar("upper_stage.propellant_full", "kg", "upper-stage LOX + LH2 at ignition")
 P_US_SHUTDOWN_TIME = _PARAMS.scalar("upper_stage.shutdown_time", "s",
                                     "duration of the linear thrust decay after the cutoff command, 2 I_sd / F_rated")
+P_FS_TANK = _PARAMS.scalar("first_stage.tank_state", "1", "index in x of the first-stage motor's propellant (kg)")
+P_US_OX_TANK = _PARAMS.scalar("upper_stage.oxidizer_state", "1", "index in x of the upper stage's LOX (kg)")
+P_US_FUEL_TANK = _PARAMS.scalar("upper_stage.fuel_state", "1", "index in x of the upper stage's LH2 (kg)")
 P_FS_GIMBAL = _PARAMS.record("first_stage.gimbal", GIMBAL, "first-stage gimbal point")
 P_US_GIMBAL = _PARAMS.record("upper_stage.gimbal", GIMBAL, "upper-stage gimbal point")
 
@@ -119,6 +116,10 @@ def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarra
     p[P_US_EXIT_AREA] = us.nozzle_exit_area_m2
     p[P_US_PROP_FULL] = us.lox_kg + us.lh2_kg
     p[P_US_SHUTDOWN_TIME] = 2.0 * us.shutdown_impulse_Ns / us.thrust_vac_N
+    grain, ox, fuel = inputs.vehicle.tanks
+    p[P_FS_TANK] = inputs.layout.tank(grain)
+    p[P_US_OX_TANK] = inputs.layout.tank(ox)
+    p[P_US_FUEL_TANK] = inputs.layout.tank(fuel)
     p[P_FS_GIMBAL:P_FS_GIMBAL + GIMBAL.size] = fs.gimbal_m
     p[P_US_GIMBAL:P_US_GIMBAL + GIMBAL.size] = us.gimbal_m
     tables.update(fs_time=fs.thrust_time_s, fs_thrust=fs.thrust_vac_N, us_start_time=us.startup_time_s,
@@ -132,13 +133,25 @@ def table_impulse(time_s: np.ndarray, thrust_N: np.ndarray) -> float:
 
 
 @njit(cache=True, error_model="numpy", inline="always")
+def first_stage_propellant(x: np.ndarray, p: np.ndarray) -> float:
+    """The first-stage motor's propellant remaining (kg)."""
+    return x[int(p[P_FS_TANK])]
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def upper_stage_propellant(x: np.ndarray, p: np.ndarray) -> tuple[float, float]:
+    """The upper stage's LOX and LH2 remaining (kg)."""
+    return x[int(p[P_US_OX_TANK])], x[int(p[P_US_FUEL_TANK])]
+
+
+@njit(cache=True, error_model="numpy", inline="always")
 def first_stage_flow(x: np.ndarray, tb: np.ndarray, p: np.ndarray, t: float) -> tuple[float, float]:
     """Vacuum thrust (N) and mass flow (kg/s) of the solid motor at mission time ``t``
     (s): ``ṁ = M F_tab(t) / I_tab``, ``F_vac = g0 Isp ṁ``; zero outside the table's time
-    span and once the propellant state ``x[MFS]`` is empty. The sequencer's sensed
-    thrust (chamber pressure) is this ``F_vac``."""
+    span and once the motor's propellant state is empty. The sequencer's sensed thrust
+    (chamber pressure) is this ``F_vac``."""
     o_ft, n_ft = tab(tb, T_FS_TIME)
-    if x[MFS] <= 0.0 or t < tb[o_ft] or t > tb[o_ft + n_ft - 1]:
+    if first_stage_propellant(x, p) <= 0.0 or t < tb[o_ft] or t > tb[o_ft + n_ft - 1]:
         return 0.0, 0.0
     mdot = p[P_FS_FLOW_PER_THRUST] * interp1_at(tb, o_ft, tab_offset(tb, T_FS_THRUST), n_ft, t)
     if not mdot > 0.0:
@@ -153,7 +166,8 @@ def upper_stage_thrust_vac(x: np.ndarray, tb: np.ndarray, p: np.ndarray, t: floa
     fraction at ``t − t_ign`` × the rated thrust, × the shutdown decay
     ``max(0, 1 − (t − t_cut)/T_sd)`` once the cutoff command at ``t_cut`` (s; 0 or less:
     none yet) is given; zero once either tank is empty."""
-    if not (x[MLOX] > 0.0 and x[MLH2] > 0.0):
+    lox, lh2 = upper_stage_propellant(x, p)
+    if not (lox > 0.0 and lh2 > 0.0):
         return 0.0
     o_st, n_st = tab(tb, T_US_START_TIME)
     f_vac = interp1_at(tb, o_st, tab_offset(tb, T_US_START_FRAC), n_st, t - t_ign) * p[P_US_THRUST]
@@ -164,10 +178,13 @@ def upper_stage_thrust_vac(x: np.ndarray, tb: np.ndarray, p: np.ndarray, t: floa
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def propellant_remaining(x: np.ndarray, config: int) -> float:
+def propellant_remaining(x: np.ndarray, p: np.ndarray, config: int) -> float:
     """Propellant of the burning configuration (kg): first stage on the stack, LOX + LH2
     after separation (the mass tables' argument)."""
-    return x[MFS] if config == CONFIG_STACK else x[MLOX] + x[MLH2]
+    if config == CONFIG_STACK:
+        return first_stage_propellant(x, p)
+    lox, lh2 = upper_stage_propellant(x, p)
+    return lox + lh2
 
 
 @njit(cache=True, error_model="numpy", inline="always")

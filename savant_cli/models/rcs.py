@@ -19,12 +19,14 @@ from numba import njit
 from savant_cli.models import blocks
 from savant_cli.models.interp import interp1_at, tab, tab_offset
 
-_STATE = blocks.STATE.block("rcs")
-RCS_POS = _STATE.scalar("positive", "1", "thrust fraction of the positive-roll jets (0..1)")
-RCS_NEG = _STATE.scalar("negative", "1", "thrust fraction of the negative-roll jets (0..1)")
+#: The jets' states: the thrust fractions of the positive- and the negative-roll jets (1,
+#: 0..1), from the offset ``P_STATE_OFFSET`` in ``x`` (``models/layout.py``).
 STATE_NAMES = ("rcs_pos", "rcs_neg")
+N_JET_STATES = len(STATE_NAMES)
 
 _PARAMS = blocks.PARAMETERS.block("rcs")
+P_STATE_OFFSET = _PARAMS.scalar("state_offset", "1",
+                                "offset in x of the jets' thrust fractions, positive then negative")
 P_EXIT_AREA = _PARAMS.scalar("exit_area", "m^2", "nozzle exit area of one jet")
 P_N = _PARAMS.scalar("jets_per_direction", "1", "jets firing together for one roll direction")
 P_ARM = _PARAMS.scalar("moment_arm", "m", "roll moment arm of each jet")
@@ -46,6 +48,7 @@ def write_diagnostics(aux: np.ndarray, torque: float) -> None:
 def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarray]) -> None:
     """The vehicle's roll jets."""
     rcs = inputs.vehicle.rcs
+    p[P_STATE_OFFSET] = inputs.layout.rcs
     p[P_EXIT_AREA] = rcs.exit_area_m2
     p[P_N] = rcs.jets_per_direction
     p[P_ARM] = rcs.moment_arm_m
@@ -67,15 +70,17 @@ def jet_ramp(frac: float, on: bool, ramp_up_s: float, ramp_down_s: float) -> flo
 def jet_rates(x: np.ndarray, p: np.ndarray, command: float) -> tuple[float, float]:
     """Derivatives of the positive and negative thrust fractions for a jet command
     (+1 positive roll, −1 negative, 0 off)."""
-    return (jet_ramp(x[RCS_POS], command > 0.5, p[P_RAMP_UP], p[P_RAMP_DOWN]),
-            jet_ramp(x[RCS_NEG], command < -0.5, p[P_RAMP_UP], p[P_RAMP_DOWN]))
+    k = int(p[P_STATE_OFFSET])
+    return (jet_ramp(x[k], command > 0.5, p[P_RAMP_UP], p[P_RAMP_DOWN]),
+            jet_ramp(x[k + 1], command < -0.5, p[P_RAMP_UP], p[P_RAMP_DOWN]))
 
 
 @njit(cache=True, error_model="numpy", inline="always")
 def step_jets(x: np.ndarray, p: np.ndarray, command: float) -> None:
     """At a new jet command (+1, 0, −1): the thrust fractions whose ramp time is 0 jump
     to their end value (1 for the commanded direction, 0 for the other)."""
-    for i, on in ((RCS_POS, command > 0.5), (RCS_NEG, command < -0.5)):
+    k = int(p[P_STATE_OFFSET])
+    for i, on in ((k, command > 0.5), (k + 1, command < -0.5)):
         if on and p[P_RAMP_UP] <= 0.0:
             x[i] = 1.0
         elif not on and p[P_RAMP_DOWN] <= 0.0:
@@ -90,4 +95,5 @@ def roll_torque(x: np.ndarray, tb: np.ndarray, p: np.ndarray, alt_m: float, pres
     f_jet = interp1_at(tb, o_ra, tab_offset(tb, T_THRUST), n_ra, alt_m) - pres * p[P_EXIT_AREA]
     if f_jet < 0.0:
         f_jet = 0.0
-    return (x[RCS_POS] - x[RCS_NEG]) * p[P_N] * f_jet * p[P_ARM]
+    k = int(p[P_STATE_OFFSET])
+    return (x[k] - x[k + 1]) * p[P_N] * f_jet * p[P_ARM]

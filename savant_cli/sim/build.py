@@ -61,7 +61,7 @@ def model_inputs(cfg: SavantConfig, vehicle: Vehicle, slosh: SloshData | None = 
         slosh = load_slosh(vehicle, cfg.slosh)
     if cfg.flex.enabled and flex is None:
         flex = load_flex(vehicle, cfg.flex, cfg.sim.plant_rate_hz)
-    return blocks.ModelInputs(cfg=cfg, vehicle=vehicle, layout=state_layout(cfg),
+    return blocks.ModelInputs(cfg=cfg, vehicle=vehicle, layout=state_layout(cfg, vehicle),
                               slosh=slosh if cfg.slosh.enabled else None, flex=flex if cfg.flex.enabled else None)
 
 
@@ -91,9 +91,9 @@ def plant_tables(cfg: SavantConfig, vehicle: Vehicle, slosh: SloshData | None = 
     return plant_data(cfg, vehicle, slosh, flex)[1]
 
 
-def state_layout(cfg: SavantConfig) -> layout.StateLayout:
-    """The continuous-state layout of the models switched on in ``cfg``."""
-    return layout.StateLayout(simplex=cfg.actuator.name == "simplex", slosh=cfg.slosh.enabled,
+def state_layout(cfg: SavantConfig, vehicle: Vehicle) -> layout.StateLayout:
+    """The continuous-state layout of ``vehicle`` with the models switched on in ``cfg``."""
+    return layout.StateLayout(tanks=vehicle.tanks, simplex=cfg.actuator.name == "simplex", slosh=cfg.slosh.enabled,
                               n_modes=cfg.flex.n_modes if cfg.flex.enabled else 0)
 
 
@@ -178,16 +178,13 @@ def first_stage_profile(table: GuidanceTable, cfg: SavantConfig, t_sep: float) -
 WHEN_CODES = {None: engine.WHEN_NONE, "thrust_fraction": engine.WHEN_THRUST_FRACTION,
               "axial_acceleration_mps2": engine.WHEN_AXIAL_ACCELERATION, "altitude_m": engine.WHEN_ALTITUDE,
               "dynamic_pressure_Pa": engine.WHEN_DYNAMIC_PRESSURE, "propellant_kg": engine.WHEN_PROPELLANT}
-#: The plant's propellant states by the tank roles of ``vehicle/two_stage.py``.
-TANK_STATES = {"first_stage": layout.MFS, "lox": layout.MLOX, "lh2": layout.MLH2}
-
-
 def event_schedule(cfg: SavantConfig, vehicle: Vehicle, rt: Rates) -> EventSchedule:
     """The event rules and run limits of one run, from the vehicle's events and the config."""
     triggers = [vehicle.events.trigger(k) for k in range(engine.N_SEQUENCE)]
+    x_layout = state_layout(cfg, vehicle)
     return EventSchedule(
         rules=tuple(EventRule(after=int(tr.after), delay_s=float(tr.delay_s), when=WHEN_CODES[tr.quantity],
-                              of=TANK_STATES[tr.tank] if tr.tank else -1, above=bool(tr.above),
+                              of=x_layout.tank(tr.tank) if tr.tank else -1, above=bool(tr.above),
                               threshold=float(tr.threshold)) for tr in triggers),
         cutoff_energy_j_kg=float(target_energy(cfg)),
         max_time_s=float(cfg.sim.max_time_s),
@@ -206,15 +203,16 @@ def build_model(cfg: SavantConfig, vehicle: Vehicle, guidance: GuidanceTable) ->
 
     r0, v0, q0 = pad_state(cfg, vehicle)
     w0 = qt.dcm(q0).T @ np.array([0.0, 0.0, constants.OMEGA_EARTH])  # Earth rate, body axes
-    x_layout = state_layout(cfg)
+    x_layout = state_layout(cfg, vehicle)
     x0 = np.zeros(x_layout.n)
     x0[layout.R:layout.R + 3] = r0
     x0[layout.V:layout.V + 3] = v0
     x0[layout.Q:layout.Q + 4] = q0
     x0[layout.W:layout.W + 3] = w0
-    x0[layout.MFS] = vehicle.configurations["stack"].mass.propellant_kg[-1]
-    x0[layout.MLOX] = vehicle.upper_stage.lox_kg
-    x0[layout.MLH2] = vehicle.upper_stage.lh2_kg
+    grain, ox, fuel = vehicle.tanks
+    x0[x_layout.tank(grain)] = vehicle.configurations["stack"].mass.propellant_kg[-1]
+    x0[x_layout.tank(ox)] = vehicle.upper_stage.lox_kg
+    x0[x_layout.tank(fuel)] = vehicle.upper_stage.lh2_kg
     # the pad state is the whole vehicle's CG; with slosh on the state's reference point
     # is the rigid part's (the slosh masses left out): move it there
     _, whole, rigid, _, _ = mass_state(x0, p, pack_tables(tb), layout.CONFIG_STACK)

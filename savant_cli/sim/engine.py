@@ -44,9 +44,8 @@ from savant_cli.models.fcs import FCS_COAST, FCS_STACK, FCS_UPPER, FcsTables, fc
 from savant_cli.models.gravity import P_MU
 from savant_cli.models.guidance import D_TG, D_VG, SmootherGains, guidance_sample, smoother_step
 from savant_cli.models.layout import (
-    ACT_P, ACT_Y, CONFIG_STACK, CONFIG_UPPER, CONFIG_UPPER_LES, D_CMD_P, D_CMD_RCS, D_CMD_Y, D_FLEX_NAV, D_GYRO_X,
-    D_GYRO_Y, ENGINE_OFF, ENGINE_UPPER, MFS, MLH2, MLOX, N_AUX, N_STATE, RCS_NEG, RCS_POS, U_CONFIG, U_DPC, U_DYC,
-    U_ENGINE, U_RCS, U_T_CUT, U_T_IGN, Q, R, V, W
+    CONFIG_STACK, CONFIG_UPPER, CONFIG_UPPER_LES, D_CMD_P, D_CMD_RCS, D_CMD_Y, D_FLEX_NAV, D_GYRO_X, D_GYRO_Y,
+    ENGINE_OFF, ENGINE_UPPER, N_AUX, U_CONFIG, U_DPC, U_DYC, U_ENGINE, U_RCS, U_T_CUT, U_T_IGN, Q, R, V, W
 )
 from savant_cli.models.sensors import (
     GYRO_MISALIGN, GYRO_POINTS, IMU_GYRO, N_GYROS, P_IMU_MISALIGN, GyroModel, gyro_step, misalignment
@@ -195,8 +194,8 @@ def rk4(t: float, x: np.ndarray, u: np.ndarray, dt: float, p: np.ndarray, tb: np
 
 
 @njit(cache=True, error_model="numpy")
-def work_array(n_state: int = N_STATE) -> np.ndarray:
-    """Scratch space for :func:`rk4` (rows wide enough for the state and the diagnostics)."""
+def work_array(n_state: int) -> np.ndarray:
+    """Scratch space for :func:`rk4`: rows wide enough for ``n_state`` states and the diagnostics."""
     return np.zeros((6, max(n_state, N_AUX)))
 
 
@@ -279,7 +278,7 @@ def handle_events(t: float, dt: float, x: np.ndarray, u: np.ndarray, d: np.ndarr
             continue
         events[k] = t
         if k == EV_SEPARATION:
-            d[propulsion.D_FS_PROP_SEP] = x[MFS]
+            d[propulsion.D_FS_PROP_SEP] = propulsion.first_stage_propellant(x, p)
             if sched.stop_at_separation:
                 return STOP_SEPARATION
             separate(x, u, d, p, tb)
@@ -296,7 +295,8 @@ def handle_events(t: float, dt: float, x: np.ndarray, u: np.ndarray, d: np.ndarr
             if t > u[U_T_CUT]:
                 d[propulsion.D_US_SD_IMPULSE] += 0.5 * (d[propulsion.D_US_SD_LAST] + f_us) * dt
             d[propulsion.D_US_SD_LAST] = f_us
-        if x[MLOX] <= 0.0 or x[MLH2] <= 0.0:
+        lox, lh2 = propulsion.upper_stage_propellant(x, p)
+        if lox <= 0.0 or lh2 <= 0.0:
             if np.isnan(events[EV_CUTOFF]):
                 events[EV_CUTOFF] = t
             return STOP_DEPLETION
@@ -312,14 +312,15 @@ def separate(x: np.ndarray, u: np.ndarray, d: np.ndarray, p: np.ndarray, tb: np.
     cg_stack = reference_cg(x, p, tb, np.int64(CONFIG_STACK))  # (not a literal: one compile for every config)
     u[U_CONFIG] = CONFIG_UPPER_LES
     u[U_ENGINE] = ENGINE_OFF
-    x[MFS] = 0.0
-    x[ACT_P:ACT_P + 3] = 0.0
-    x[ACT_Y:ACT_Y + 3] = 0.0
+    x[int(p[propulsion.P_FS_TANK])] = 0.0
+    kp, ky = actuator.channels(p)
+    x[kp:kp + actuator.N_PER_CHANNEL] = 0.0
+    x[ky:ky + actuator.N_PER_CHANNEL] = 0.0
     u[U_DPC] = 0.0
     u[U_DYC] = 0.0
     vo = int(p[actuator.P_VALVE_OFFSET])
     if vo >= 0:
-        x[vo:vo + actuator.N_VALVE] = 0.0
+        x[vo:vo + 2 * actuator.N_VALVE_PER_CHANNEL] = 0.0
     fo = int(p[flex.P_OFFSET])
     if fo >= 0:  # new modal set: its modes start at rest (paper: liftoff → ignition set)
         x[fo:fo + 2 * int(p[flex.P_N_MODES])] = 0.0
@@ -517,10 +518,11 @@ def _advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0
         qn = 1.0 / np.sqrt(x[Q] ** 2 + x[Q + 1] ** 2 + x[Q + 2] ** 2 + x[Q + 3] ** 2)
         for i in range(Q, Q + 4):
             x[i] *= qn
-        for i in (MFS, MLOX, MLH2):
+        for i in (int(p[propulsion.P_FS_TANK]), int(p[propulsion.P_US_OX_TANK]), int(p[propulsion.P_US_FUEL_TANK])):
             if x[i] < 0.0:
                 x[i] = 0.0
-        for i in (RCS_POS, RCS_NEG):
+        jets = int(p[rcs.P_STATE_OFFSET])
+        for i in (jets, jets + 1):
             x[i] = min(max(x[i], 0.0), 1.0)
         actuator.contain(x, p, int(u[U_ENGINE]))  # the rate and gimbal stops
         slosh.contain(x, p)

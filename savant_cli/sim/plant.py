@@ -25,9 +25,7 @@ from savant_cli.models import (
     rigid_body, slosh, twd, winds
 )
 from savant_cli.models.configurations import ENGINE_FIRST
-from savant_cli.models.layout import (
-    MFS, MLH2, MLOX, RCS_NEG, RCS_POS, U_CONFIG, U_DPC, U_DYC, U_ENGINE, U_GUST, U_RCS, U_T_CUT, U_T_IGN, Q, R, V, W
-)
+from savant_cli.models.layout import U_CONFIG, U_DPC, U_DYC, U_ENGINE, U_GUST, U_RCS, U_T_CUT, U_T_IGN, Q, R, V, W
 
 #: Tabular data of the plant by name (SI, contiguous arrays); the fields are the tables
 #: the models declare, in field-number order (``blocks.TABLES``).
@@ -70,13 +68,14 @@ def mass_state(x: np.ndarray, p: np.ndarray, tb: np.ndarray, config: int):
         whole vehicle), and each tank is a :class:`~savant_cli.models.slosh.SloshTank`
         (zeros with slosh off).
     """
-    prop = propulsion.propellant_remaining(x, config)
+    prop = propulsion.propellant_remaining(x, p, config)
     mass, cgx, cgy, cgz, ixx, iyy, izz, ixy, ixz, iyz = mass_model.mass_properties(tb, config, prop)
     whole = (mass, cgx, cgy, cgz)
     tank0 = tank1 = slosh.SloshTank(0.0, 0.0, 0.0, 0.0, 0.0)
     if int(p[slosh.P_OFFSET]) >= 0:  # the rigid part leaves the slosh masses out
-        tank0 = slosh.slosh_tank(tb, p, 0, x[MLOX])
-        tank1 = slosh.slosh_tank(tb, p, 1, x[MLH2])
+        lox, lh2 = propulsion.upper_stage_propellant(x, p)
+        tank0 = slosh.slosh_tank(tb, p, 0, lox)
+        tank1 = slosh.slosh_tank(tb, p, 1, lh2)
         mass, cgx, cgy, cgz, ixx, iyy, izz, ixy, ixz, iyz = slosh.rigid_part(
             mass, cgx, cgy, cgz, ixx, iyy, izz, ixy, ixz, iyz, tank0.mass_kg, tank0.station_m, tank1.mass_kg,
             tank1.station_m)
@@ -155,8 +154,9 @@ def compose(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarra
     fax, fay, faz, max_, may, maz = aero.aero_loads(tb, p, config, t, mach, alpha, beta, qbar, cgx, cgy, cgz)
     ddp, ddy = actuator.actuator_rates(x, p, engine, u[U_DPC], u[U_DYC], xd)
     rcs_pos_rate, rcs_neg_rate = rcs.jet_rates(x, p, u[U_RCS])
-    xd[RCS_POS] = rcs_pos_rate
-    xd[RCS_NEG] = rcs_neg_rate
+    jets = int(p[rcs.P_STATE_OFFSET])
+    xd[jets] = rcs_pos_rate
+    xd[jets + 1] = rcs_neg_rate
     gimbal_pt = flex.PT_GIMBAL_FS if engine == ENGINE_FIRST else flex.PT_GIMBAL_US
     tgx, tgy, tgz = flex.rotation_at(x, config, p, tb, gimbal_pt, False)  # follower thrust
     thrust, mdot_fs, mdot_us, thrust_vac = propulsion.thrust_and_flow(x, tb, p, engine, t, u[U_T_IGN], u[U_T_CUT], pres)
@@ -212,9 +212,9 @@ def compose(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarra
     xd[W] = alx
     xd[W + 1] = aly
     xd[W + 2] = alz
-    xd[MFS] = dm_fs
-    xd[MLOX] = dm_lox
-    xd[MLH2] = dm_lh2
+    xd[int(p[propulsion.P_FS_TANK])] = dm_fs
+    xd[int(p[propulsion.P_US_OX_TANK])] = dm_lox
+    xd[int(p[propulsion.P_US_FUEL_TANK])] = dm_lh2
 
     # ------------------------------------------------------- auxiliary states
     if slosh_at >= 0:

@@ -305,9 +305,9 @@ def signals(result: SimResult, model: SimModel) -> dict[str, Signal]:
         "attitude_euler": Signal(euler, "rad", "body attitude, 3-2-1 Euler angles relative to the launch frame (pad NED frozen at liftoff)", rpy, "launch"),
         "attitude_euler_command": Signal(euler_c, "rad", "smoothed command attitude, 3-2-1 Euler angles relative to the launch frame", rpy, "launch"),
         "gimbal_command": Signal(d[:, [layout.D_CMD_P, layout.D_CMD_Y]], "rad", "flight-control gimbal commands", pq, "body"),
-        "gimbal_rate": Signal(x[:, [layout.ACT_P + 1, layout.ACT_Y + 1]], "rad/s", "nozzle angular rates", pq, "body"),
+        "gimbal_rate": Signal(x[:, [lay.channel(0) + 1, lay.channel(1) + 1]], "rad/s", "nozzle angular rates", pq, "body"),
         "rcs_command": Signal(d[:, layout.D_CMD_RCS], "1", "roll jet command (+1 positive roll torque, 0, -1)"),
-        "propellant_remaining": Signal(x[:, [layout.MFS, layout.MLOX, layout.MLH2]], "kg", "propellant remaining", ("first_stage", "lox", "lh2")),
+        "propellant_remaining": Signal(x[:, [lay.tank(n) for n in lay.tanks]], "kg", "propellant remaining", lay.tanks),
         "sensed_rate": Signal(d[:, layout.D_GYRO_Y:layout.D_GYRO_Y + 9], "rad/s", "rate-gyro outputs (rigid plus flex rate "
                               "at each gyro's node, through the gyro dynamics)",
                               tuple(f"{g}_{a}" for g in ("upper", "imu", "first") for a in ("p", "q", "r")), "body"),
@@ -323,9 +323,9 @@ def signals(result: SimResult, model: SimModel) -> dict[str, Signal]:
     if model.p[navigation.P_ON] != 0.0:
         s.update(navigation_signals(d))
     if lay.simplex:
-        s["actuator_ram_position"] = Signal(x[:, [layout.ACT_P + 2, layout.ACT_Y + 2]], "rad",
+        s["actuator_ram_position"] = Signal(x[:, [lay.channel(0) + 2, lay.channel(1) + 2]], "rad",
                                             "simplex ram position as an equivalent gimbal angle", pq, "body")
-        s["actuator_valve_flow"] = Signal(x[:, [lay.valve, lay.valve + 2]], "rad/s",
+        s["actuator_valve_flow"] = Signal(x[:, [lay.valve, lay.valve + layout.N_VALVE_PER_CHANNEL]], "rad/s",
                                           "simplex power-valve flow as no-load ram rate", pq, "body")
     if lay.slosh:
         so = lay.slosh_offset

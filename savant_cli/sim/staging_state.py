@@ -7,8 +7,9 @@ a run resumed from it separates on its first step exactly as the full ascent doe
 
 JSON layout: ``format`` ("savant-staging-state"), ``format_version``, ``vehicle``,
 ``guidance``, ``dt_s`` (plant step), ``step`` (plant step index), ``time_s``, ``state``
-(name → value, SI, the names of :meth:`savant_cli.models.layout.StateLayout.names`: the core
-states plus those of the optional models that were on), ``discrete`` and ``inputs``
+(name → value, SI, the names of :meth:`savant_cli.models.layout.StateLayout.names`: the
+rigid body, the vehicle's tanks, gimbal channels and roll jets, then the optional models
+that were on), ``discrete`` and ``inputs``
 (flight-software state and held inputs, as lists).
 """
 
@@ -81,8 +82,8 @@ def read_staging_state(path: Path, key: str = "phase.staging_state_file") -> Sta
     if doc.get("format") != FORMAT or doc.get("format_version") != FORMAT_VERSION:
         raise ConfigError(key, str(path), f"not a {FORMAT} file of version {FORMAT_VERSION}")
     names = list(doc.get("state", {}))
-    if names[:layout.N_STATE] != list(layout.STATE_NAMES) and names[:layout.N_STATE] != list(layout.StateLayout(simplex=True).names()[:layout.N_STATE]):
-        raise ConfigError(key, str(path), f"the state must start with the core states {list(layout.STATE_NAMES)}")
+    if names[:layout.N_STATE] != list(layout.STATE_NAMES):
+        raise ConfigError(key, str(path), f"the state must start with the rigid-body states {list(layout.STATE_NAMES)}")
     d = np.asarray(doc["discrete"], float)
     u = np.asarray(doc["inputs"], float)
     if d.size > layout.N_DISC or u.size != layout.N_INPUT:

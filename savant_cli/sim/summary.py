@@ -179,7 +179,8 @@ def propulsion_keys(result: SimResult, p: np.ndarray) -> dict[str, float | str |
     upper-stage vacuum impulse delivered after the cutoff command (the same trapezoid over
     the shutdown transient; None without a cutoff command)."""
     x, d = result.x, result.d
-    usable, unusable, limiting = usable_propellant(x[propulsion.MLOX], x[propulsion.MLH2], p[propulsion.P_US_MR])
+    lox, lh2 = propulsion.upper_stage_propellant(x, p)
+    usable, unusable, limiting = usable_propellant(lox, lh2, p[propulsion.P_US_MR])
     separated = not np.isnan(result.events[engine.EV_SEPARATION])
     at_sep = d[propulsion.D_FS_PROP_SEP] if separated else np.nan
     return {"usable_propellant_remaining_kg": usable, "unusable_propellant_kg": unusable,

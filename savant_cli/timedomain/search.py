@@ -133,8 +133,8 @@ def _saturated_s(log: np.ndarray, model: SimModel, engine: int, axis: int, after
     stage's limits)."""
     lay = model.layout
     rate_limit, gimbal_limit = actuator.limits(model.p, engine)
-    k = (layout.ACT_P, layout.ACT_Y)[axis]
-    rate_col = 1 + (lay.valve + 2 * axis if lay.simplex else k + 1)
+    k = lay.channel(axis)
+    rate_col = 1 + (lay.valve + layout.N_VALVE_PER_CHANNEL * axis if lay.simplex else k + 1)
     on = (np.abs(log[:, 1 + k]) >= 0.999 * gimbal_limit) | (np.abs(log[:, rate_col]) >= 0.999 * rate_limit)
     on &= log[:, 0] >= after_s
     dt_log = float(np.median(np.diff(log[:, 0]))) if log.shape[0] > 1 else 0.0

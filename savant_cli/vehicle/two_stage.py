@@ -96,8 +96,8 @@ class Trigger:
     ``after`` (its position in :data:`EVENT_ORDER`, −1 liftoff), at the first step from
     then on at which the condition holds: ``quantity`` (a key of
     ``tree.CONDITION_QUANTITIES``; None: at once) ``above`` or below ``threshold`` (its
-    units); a propellant condition reads the tank ``tank`` (``first_stage``, ``lox`` or
-    ``lh2``: the plant's propellant states)."""
+    units); a propellant condition reads the tank ``tank`` (its name in the vehicle
+    file: one of :attr:`Vehicle.tanks`)."""
 
     after: int
     delay_s: float
@@ -154,6 +154,9 @@ class Vehicle:
     keys: dict = field(default_factory=dict)
     #: the vehicle tree this view was derived from (None: built directly, as tests do)
     tree: VehicleTree | None = None
+    #: the plant's propellant states, by the tanks' names in the vehicle file: the first
+    #: stage's motor, then the upper stage's oxidizer and fuel
+    tanks: tuple[str, str, str] = ("first_stage_propellant", "lox", "lh2")
 
 
 def check_consistency(v: Vehicle, mass_files: Mapping[str, str] | None = None) -> None:
@@ -225,7 +228,7 @@ def _event(tree: VehicleTree, name: str, after: str, jettison: tuple = (), ignit
     return ev
 
 
-def _trigger(ev, slot_after: int, tanks: dict[str, str]) -> Trigger:
+def _trigger(ev, slot_after: int, tanks: tuple[str, ...]) -> Trigger:
     """The plant's trigger of a non-separation event: a delay, and optionally a condition
     on the vehicle or a tank (a thrust fraction is the first-stage motor's alone)."""
     if ev.when is None:
@@ -233,7 +236,7 @@ def _trigger(ev, slot_after: int, tanks: dict[str, str]) -> Trigger:
     if ev.when.quantity == "thrust_fraction":
         _refuse(f"{ev.key}.when.quantity", ev.when.quantity, "a thrust fraction triggers the separation only")
     above = ev.when.above is not None
-    return Trigger(slot_after, ev.delay_s, ev.when.quantity, tanks.get(ev.when.of) if ev.when.of else None, above,
+    return Trigger(slot_after, ev.delay_s, ev.when.quantity, ev.when.of if ev.when.of in tanks else None, above,
                    ev.when.above if above else ev.when.below)
 
 
@@ -287,7 +290,7 @@ def two_stage_view(tree: VehicleTree) -> Vehicle:
         startup_time_s=us_thrust.startup_time_s, startup_fraction=us_thrust.startup_fraction,
         shutdown_impulse_Ns=us_thrust.shutdown_impulse_Ns, gimbal_m=us.gimbal_m, gimbal_limit_rad=us.gimbal_limit_rad,
         les_mass_kg=items[0].inert_mass_kg if items else 0.0, engine=us.moving_mass)
-    tanks = {grain.name: "first_stage", ox.name: "lox", fuel.name: "lh2"}
+    tanks = (grain.name, ox.name, fuel.name)
     separation = Trigger(-1, 0.0, "thrust_fraction", None, False, sep.when.below)
     never = Trigger(1, float("inf"))  # no item: no jettison
     events = Events(separation_thrust_fraction=sep.when.below, ignition_delay_s=ign.delay_s,
@@ -305,7 +308,7 @@ def two_stage_view(tree: VehicleTree) -> Vehicle:
         configurations={n: Configuration(n, c.aero, c.mass) for n, c in zip(CONFIG_NAMES, configs)},
         first_stage=first_stage, upper_stage=upper_stage, rcs=upper.roll_jets, sensors=tree.sensors, events=events,
         data_dir=tree.data_dir, flex_spec=tree.flex_spec, slosh_spec=_slosh_spec(tree, ox.name, fuel.name),
-        qalpha_limit_Pa_deg=tree.qalpha_limit_Pa_deg, keys=keys, tree=tree)
+        qalpha_limit_Pa_deg=tree.qalpha_limit_Pa_deg, keys=keys, tree=tree, tanks=tanks)
     check_consistency(vehicle, {n: c.mass_file for n, c in zip(CONFIG_NAMES, configs)})
     return vehicle
 
