@@ -73,14 +73,25 @@ def start_from_staging(model: SimModel, cfg: SavantConfig, path: Path) -> None:
     model.d0, model.u0, model.k0 = st.d, st.u, st.step
 
 
+#: The propellant states' names before the tanks were named (savant 0.1): the two-stage
+#: vehicle's first-stage, LOX and LH2 tanks, in the order of ``Vehicle.tanks``.
+LEGACY_TANK_STATES = ("prop_first_stage", "prop_lox", "prop_lh2")
+
+
 def staging_vector(st, layout, key: str, path: Path) -> np.ndarray:
     """The model's state vector from a staging state, by name.
 
     States of models the file was written without start at rest: exact for the flex
     modes and the actuators (all restart at separation) and an approximation for
-    slosh (logged). A model the file has but the config has off is ignored.
+    slosh (logged). A model the file has but the config has off is ignored. A file
+    written before the tanks were named gives the propellant states by their old names
+    (:data:`LEGACY_TANK_STATES`), read as the vehicle's three tanks in order.
     """
     have = dict(zip(st.names, st.x, strict=True))
+    if len(layout.tanks) == len(LEGACY_TANK_STATES):
+        for old, tank in zip(LEGACY_TANK_STATES, layout.tanks):
+            if old in have:
+                have.setdefault(f"prop_{tank}", have[old])
     x = np.zeros(layout.n)
     missing_slosh = False
     for i, name in enumerate(layout.names()):
