@@ -137,3 +137,8 @@ def test_a_given_mixing_matrix_is_checked_against_the_effectiveness():
     wrong[:, mixer.YAW] *= 1.1
     assert [m.split(" gives")[0] for m in mixer.check_mixing_matrix(wrong, b, limits, axis)] == ["the yaw command"]
     assert "one row per gimbal channel" in mixer.check_mixing_matrix(own[:3], b, limits, axis)[0]
+    # the tolerance's edge: a yaw column off by half of rtol passes, by twice rtol fails
+    for factor, named in ((1.0 + 0.5e-6, []), (1.0 + 2.0e-6, ["the yaw command"])):
+        near = own.copy()
+        near[:, mixer.YAW] *= factor
+        assert [m.split(" gives")[0] for m in mixer.check_mixing_matrix(near, b, limits, axis, rtol=1e-6)] == named

@@ -178,6 +178,8 @@ def first_stage_profile(table: GuidanceTable, cfg: SavantConfig, t_sep: float) -
 WHEN_CODES = {None: engine.WHEN_NONE, "thrust_fraction": engine.WHEN_THRUST_FRACTION,
               "axial_acceleration_mps2": engine.WHEN_AXIAL_ACCELERATION, "altitude_m": engine.WHEN_ALTITUDE,
               "dynamic_pressure_Pa": engine.WHEN_DYNAMIC_PRESSURE, "propellant_kg": engine.WHEN_PROPELLANT}
+
+
 def event_schedule(cfg: SavantConfig, vehicle: Vehicle, rt: Rates) -> EventSchedule:
     """The event rules and run limits of one run, from the vehicle's events and the config."""
     triggers = [vehicle.events.trigger(k) for k in range(engine.N_SEQUENCE)]
