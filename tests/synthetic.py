@@ -6,7 +6,9 @@ from __future__ import annotations
 import numpy as np
 
 from savant_cli import constants
-from savant_cli.models import actuator, aero as aero_model, earth, flex, gravity, layout, propulsion, rcs, slosh
+from savant_cli.models import (
+    actuator, aero as aero_model, cluster, earth, flex, gravity, layout, propulsion, rcs, slosh
+)
 from savant_cli.models.atmosphere import upper_atmosphere_table
 from savant_cli.sim.plant import PlantTables
 
@@ -45,6 +47,8 @@ def tables(mass: float = 1000.0, inertia=(100.0, 400.0, 400.0, 0.0, 0.0, 0.0),
         wind_alt=ax, wind_north=np.zeros(2), wind_east=np.zeros(2),
         flex_freq=np.zeros((4, 1)), flex_zeta=np.zeros(1), flex_shape=np.zeros((4, 1, layout.N_POINTS, 6)),
         slosh_level=np.tile(ax, (2, 1)), slosh_data=np.zeros((2, 2, 4)), slosh_len=np.array([2, 2]),
+        mounts=np.array([[0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0],  # one engine a stage, at its gimbal point
+                         [1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0]]),
     )
 
 
@@ -76,6 +80,7 @@ def parameters(gravity_order: int = 0, aero: bool = False, thrust: bool = False,
     p[actuator.P_VALVE_OFFSET], p[slosh.P_OFFSET], p[flex.P_OFFSET] = lay.valve, lay.slosh_offset, lay.flex
     p[propulsion.P_FS_PROP_FULL] = p[propulsion.P_US_PROP_FULL] = 1.0
     p[slosh.P_AREF] = 9.80665
+    p[cluster.P_UPPER_FIRST] = 1.0  # tables(): one engine a stage
     p[slosh.P_FREQ_SCALE] = p[slosh.P_ZETA_SCALE] = 1.0
     return p
 

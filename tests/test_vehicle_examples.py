@@ -67,10 +67,23 @@ def check_ignition_on_a_tank(vehicle):
     assert (rule.when, rule.of, rule.above) == (engine.WHEN_PROPELLANT, lox_state, True)
 
 
+def check_a_two_engine_cluster(vehicle):
+    shipped = load_vehicle(OmegaConf.load(SHIPPED / "ares_i.yaml").vehicle, SHIPPED / "ares_i").upper_stage
+    us = vehicle.upper_stage
+    # the stage's record is the engines' sums and mean: the shipped J-2X's (1 ulp: 3.65 + 3.65 is 7.3 exactly)
+    for name in ("thrust_vac_N", "nozzle_exit_area_m2", "shutdown_impulse_Ns", "isp_vac_s", "mixture_ratio"):
+        assert getattr(us, name) == getattr(shipped, name), name
+    np.testing.assert_array_equal(us.gimbal_m, shipped.gimbal_m)
+    assert [m.name for m in us.mounts] == ["j2x", "j2x_b"]
+    np.testing.assert_array_equal([m.offset_m for m in us.mounts], [[0.0, 1.2, 0.0], [0.0, -1.2, 0.0]])
+    assert (us.engine.mass_kg, us.engine.inertia_about_gimbal_kgm2) == (1250.0, 4062.5)  # each engine's
+
+
 CHECKS = {"jettison-on-a-condition": check_jettison_on_a_condition,
           "a-delay-arms-a-condition": check_a_delay_arms_a_condition,
           "composed-mass-properties": check_composed_mass_properties,
-          "ignition-on-a-tank": check_ignition_on_a_tank}
+          "ignition-on-a-tank": check_ignition_on_a_tank,
+          "a-two-engine-cluster": check_a_two_engine_cluster}
 
 
 def test_every_example_on_the_page_has_a_check():

@@ -133,8 +133,8 @@ def test_a_fixed_nozzle_needs_no_gimbal_data_and_a_gimbaled_one_does(node):
 
 @pytest.mark.parametrize("edit, key", [
     (lambda n: n["stages"].update(third_stage=copy.deepcopy(n["stages"]["upper_stage"])), "vehicle.stages"),
-    (lambda n: n["stages"]["first_stage"]["engines"]["five_segment_motor"].update(cant_deg=[1.0, 0.0]),
-     "vehicle.stages.first_stage.engines.five_segment_motor.cant_deg"),
+    (lambda n: n["stages"]["first_stage"]["engines"]["five_segment_motor"].update(gimbal_axes=["pitch"]),
+     "vehicle.stages.first_stage.engines.five_segment_motor.gimbal_axes"),
     (lambda n: n["stages"]["first_stage"]["engines"]["five_segment_motor"].update(gimbal_axes=["pitch"]),
      "vehicle.stages.first_stage.engines.five_segment_motor.gimbal_axes"),
 ])

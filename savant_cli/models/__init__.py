@@ -13,9 +13,11 @@ from savant_cli.models import blocks, configurations, interp, quaternion  # noqa
 from savant_cli.models import earth, gravity, atmosphere, winds  # noqa: F401  (environment)
 from savant_cli.models import rigid_body, propulsion, actuator, rcs  # noqa: F401  (parameters in this order)
 from savant_cli.models import mass, aero, twd, slosh, flex  # noqa: F401
+from savant_cli.models import cluster  # noqa: F401  (a table only: after the models whose kernels it calls)
 from savant_cli.models import guidance, sensors, fcs  # noqa: F401  (flight software, discrete state in order)
 from savant_cli.models import command_schedule, peg  # noqa: F401  (appended: older staging states stay valid)
 from savant_cli.models import navigation  # noqa: F401  (appended likewise)
 
 #: The models that build plant parameters and tables, in build order.
-PLANT_MODELS = (earth, gravity, atmosphere, winds, propulsion, actuator, rcs, mass, aero, twd, slosh, flex, sensors, peg, navigation)
+PLANT_MODELS = (earth, gravity, atmosphere, winds, propulsion, actuator, rcs, mass, aero, twd, slosh, flex, cluster,
+                sensors, peg, navigation)

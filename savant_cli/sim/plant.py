@@ -21,8 +21,8 @@ import numpy as np
 from numba import njit
 
 from savant_cli.models import (
-    actuator, aero, atmosphere, blocks, earth, flex, gravity, mass as mass_model, propulsion, quaternion as qt, rcs,
-    rigid_body, slosh, twd, winds
+    actuator, aero, atmosphere, blocks, cluster, earth, flex, gravity, mass as mass_model, propulsion, quaternion as qt,
+    rcs, rigid_body, slosh, twd, winds
 )
 from savant_cli.models.configurations import ENGINE_FIRST
 from savant_cli.models.layout import U_CONFIG, U_DPC, U_DYC, U_ENGINE, U_GUST, U_RCS, U_T_CUT, U_T_IGN, Q, R, V, W
@@ -164,9 +164,10 @@ def compose(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarra
     rgx, rgy, rgz = propulsion.gimbal_arm(p, engine, cgx, cgy, cgz)
     dgx, dgy, dgz = flex.displacement_at(x, config, p, tb, gimbal_pt)  # the structure moves the gimbal
     rgx, rgy, rgz = rgx + dgx, rgy + dgy, rgz + dgz
-    ftx, fty, ftz, mtx, mty, mtz = propulsion.thrust_loads(thrust, dp + bias_p - tgy, dy + bias_y - tgz,
-                                                           rgx, rgy, rgz)
-    fwx, fwy, fwz, twy, twz, mwx, mwy, mwz = twd.twd_loads(p, engine, ddp, ddy, rgx, rgy, rgz)
+    thrust_part, twd_part = cluster.cluster_loads(tb, p, engine, thrust, dp + bias_p - tgy, dy + bias_y - tgz, ddp,
+                                                  ddy, rgx, rgy, rgz)
+    ftx, fty, ftz, mtx, mty, mtz = thrust_part
+    fwx, fwy, fwz, twy, twz, mwx, mwy, mwz = twd_part
     rcs_torque = rcs.roll_torque(x, tb, p, alt, pres)
     fex, fey, fez = fax + ftx, fay + fty, faz + ftz  # external, non-gravitational
     fsx0 = fsy0 = fsz0 = fsx1 = fsy1 = fsz1 = 0.0

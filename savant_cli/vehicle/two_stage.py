@@ -1,9 +1,10 @@
 """The two-stage vehicle the compiled plant flies today, as a view of the vehicle tree.
 
 The plant's models (``savant_cli/models/``) read a vehicle of one shape: a first stage
-with one engine flown by its thrust trace (a solid motor), an upper stage with one
-liquid engine drawing from an oxidizer and a fuel tank and carrying the roll jets, at
-most one jettisoned item (LES or fairing),
+of engines flown by their thrust trace (a solid motor), an upper stage of liquid engines
+drawing from an oxidizer and a fuel tank and carrying the roll jets (each stage one
+engine or a cluster of identical ones, ``models/cluster.py``), at most one jettisoned
+item (LES or fairing),
 and three configurations (``stack``, ``upper_les``, ``upper``) reached by separation
 and the item's jettison. :func:`two_stage_view` derives these records from a loaded
 :class:`~savant_cli.vehicle.tree.VehicleTree` and refuses, naming the key, a tree the
@@ -12,6 +13,7 @@ plant cannot fly yet (more stages, boosters, clusters, other event sequences).
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -47,10 +49,26 @@ Engine = MovingMass
 
 
 @dataclass(frozen=True)
+class Mount:
+    """Where one engine of a stage's cluster sits: its gimbal's offset from the stage's
+    gimbal point (structure frame, m; the stage's ``gimbal_m`` is the engines' mean) and
+    its nozzle's fixed cant at null (pitch, yaw, rad: added to the thrust-line angles)."""
+
+    name: str
+    offset_m: np.ndarray
+    cant_rad: np.ndarray
+
+
+@dataclass(frozen=True)
 class FirstStage:
     """Solid first stage. Thrust is vacuum thrust (N) vs time from liftoff (s); the
     delivered thrust is ``F_vac - p A_exit``; mass flow ``F_vac / (g0 Isp_vac)``.
-    Gimbal location in the structure frame (m); limit in rad."""
+    Gimbal location in the structure frame (m); limit in rad.
+
+    A cluster of identical engines is one record of the whole stage: the thrust table and
+    the exit area are the engines' sums, ``gimbal_m`` their mean gimbal point, ``engine``
+    (the moving mass) and the limit each engine's; ``mounts`` places each engine (empty:
+    one engine at ``gimbal_m``, not canted), and each carries an equal share of the thrust."""
 
     thrust_time_s: np.ndarray
     thrust_vac_N: np.ndarray
@@ -62,6 +80,7 @@ class FirstStage:
     gimbal_m: np.ndarray
     gimbal_limit_rad: float
     engine: Engine
+    mounts: tuple[Mount, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -69,7 +88,9 @@ class UpperStage:
     """J-2X upper stage: rated vacuum thrust (N), Isp (s), LOX/LH2 mixture ratio and
     loads (kg), start transient (thrust fraction vs time since the ignition command, s),
     shutdown impulse (N·s: the vacuum impulse delivered after the cutoff command), gimbal
-    (structure frame, m; limit rad) and the launch abort system mass (kg)."""
+    (structure frame, m; limit rad) and the launch abort system mass (kg). A cluster of
+    identical engines is one record, as :class:`FirstStage`'s: the rated thrust, the
+    exit area and the shutdown impulse are the engines' sums."""
 
     thrust_vac_N: float
     isp_vac_s: float
@@ -84,6 +105,7 @@ class UpperStage:
     gimbal_limit_rad: float
     les_mass_kg: float
     engine: Engine
+    mounts: tuple[Mount, ...] = ()
 
 
 #: Roll-control jets (the upper stage's).
@@ -204,19 +226,48 @@ def _refuse(key: str, value, what: str) -> None:
                                   f"{what}")
 
 
-def _single_engine(tree: VehicleTree, part: str, source: str) -> EngineSpec:
+def _stage_engines(tree: VehicleTree, part: str, source: str) -> tuple[EngineSpec, ...]:
+    """The stage's engines: one or a cluster of identical ``source`` engines (the same
+    thrust data, exit area, tanks, gimbal limit and moving mass; each gimbaled in pitch
+    and yaw, anywhere and at any cant), drawing on all of the stage's tanks."""
     engines = tree.engines_of(part)
     key = tree.parts[part].key
-    if len(engines) != 1 or engines[0].source != source:
-        _refuse(f"{key}.engines", [e.name for e in engines], f"the {part} stage has one {source} engine")
-    eng = engines[0]
-    if eng.gimbal_axes != GIMBAL_AXES:
-        _refuse(f"{eng.key}.gimbal_axes", list(eng.gimbal_axes), "each stage's engine gimbals in pitch and yaw")
-    if np.any(eng.cant_rad != 0.0):
-        _refuse(f"{eng.key}.cant_deg", np.degrees(eng.cant_rad).tolist(), "nozzles are not canted")
-    if set(tree.parts[part].tanks) != set(eng.tanks):
-        _refuse(f"{key}.tanks", list(tree.parts[part].tanks), f"the stage's tanks are its engine's, {list(eng.tanks)}")
-    return eng
+    if not engines or any(e.source != source for e in engines):
+        _refuse(f"{key}.engines", [e.name for e in engines], f"the {part} stage's engines are {source} engines")
+    first = engines[0]
+    for eng in engines:
+        if eng.gimbal_axes != GIMBAL_AXES:
+            _refuse(f"{eng.key}.gimbal_axes", list(eng.gimbal_axes), "each stage's engines gimbal in pitch and yaw")
+        for name, value, other in (("thrust", eng.thrust, first.thrust), ("tanks", eng.tanks, first.tanks),
+                                   ("nozzle_exit_area_m2", eng.nozzle_exit_area_m2, first.nozzle_exit_area_m2),
+                                   ("gimbal_limit_deg", eng.gimbal_limit_rad, first.gimbal_limit_rad),
+                                   ("moving_mass", eng.moving_mass, first.moving_mass)):
+            if not _same(value, other):
+                _refuse(f"{eng.key}.{name}", eng.name,
+                        f"a stage's engines are identical but for their place and cant (as {first.name})")
+    if set(tree.parts[part].tanks) != set(first.tanks):
+        _refuse(f"{key}.tanks", list(tree.parts[part].tanks),
+                f"the stage's tanks are its engines', {list(first.tanks)}")
+    return engines
+
+
+def _same(a, b) -> bool:
+    """Equal values, the arrays of a dataclass element by element."""
+    if dataclasses.is_dataclass(a) and dataclasses.is_dataclass(b):
+        return type(a) is type(b) and all(_same(getattr(a, f.name), getattr(b, f.name))
+                                          for f in dataclasses.fields(a))
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        return np.shape(a) == np.shape(b) and bool(np.all(np.asarray(a) == np.asarray(b)))
+    return a == b
+
+
+def _cluster(engines: tuple[EngineSpec, ...]) -> tuple[float, np.ndarray, tuple[Mount, ...]]:
+    """The number of engines, their mean gimbal point (structure frame, m) and each one's
+    :class:`Mount` about it."""
+    gimbals = np.array([e.gimbal_m for e in engines], dtype=float)
+    mean = gimbals.sum(axis=0) / len(engines)
+    mounts = tuple(Mount(e.name, g - mean, np.array(e.cant_rad, dtype=float)) for e, g in zip(engines, gimbals))
+    return float(len(engines)), mean, mounts
 
 
 def _event(tree: VehicleTree, name: str, after: str, jettison: tuple = (), ignite: tuple = ()):
@@ -253,7 +304,8 @@ def two_stage_view(tree: VehicleTree) -> Vehicle:
     items = [p for p in tree.parts.values() if p.kind == ITEM]
     if len(items) > 1 or any(i.attached_to != upper.name for i in items):
         _refuse("vehicle.items", [i.name for i in items], f"at most one jettisoned item, on {upper.name}")
-    fs, us = _single_engine(tree, first.name, "trace"), _single_engine(tree, upper.name, "liquid")
+    fs_engines, us_engines = _stage_engines(tree, first.name, "trace"), _stage_engines(tree, upper.name, "liquid")
+    fs, us = fs_engines[0], us_engines[0]
     if first.roll_jets is not None or upper.roll_jets is None:
         _refuse(f"{upper.key}.roll_jets", None, "roll jets on the upper stage only")
     if first.inert_mass_kg is None:
@@ -263,11 +315,13 @@ def two_stage_view(tree: VehicleTree) -> Vehicle:
         _refuse("vehicle.events", names,
                 "separation, the upper-stage ignition" + (", the item's jettison" if items else ""))
     sep = _event(tree, names[0], LIFTOFF, jettison=(first.name,))
-    if sep.when is None or sep.when.quantity != "thrust_fraction" or sep.when.of not in (fs.name, first.name) \
+    if sep.when is None or sep.when.quantity != "thrust_fraction" \
+            or sep.when.of not in (first.name, *(e.name for e in fs_engines)) \
             or sep.when.below is None or sep.delay_s != 0.0:
         _refuse(f"{sep.key}.when", sep.when.quantity if sep.when else None,
-                f"separation when the thrust fraction of {fs.name} falls below a value, from liftoff")
-    ign = _event(tree, names[1], sep.name, ignite=(us.name,))
+                f"separation when the thrust fraction of {first.name} (or one of its identical engines) falls below "
+                f"a value, from liftoff")
+    ign = _event(tree, names[1], sep.name, ignite=tuple(e.name for e in us_engines))
     jet = _event(tree, names[2], ign.name, jettison=(items[0].name,)) if items else None
     configs = [tree.configurations[c] for _, c in tree.sequence]
     for c, tanks in zip(configs, (fs.tanks, us.tanks, us.tanks)):
@@ -279,17 +333,20 @@ def two_stage_view(tree: VehicleTree) -> Vehicle:
     fs_thrust, us_thrust = fs.thrust, us.thrust
     assert isinstance(fs_thrust, ThrustTrace) and isinstance(us_thrust, LiquidThrust)
     grain, (ox, fuel) = tree.tanks[fs.tanks[0]], (tree.tanks[t] for t in us.tanks)
-    first_stage = FirstStage(
-        thrust_time_s=fs_thrust.time_s, thrust_vac_N=fs_thrust.thrust_vac_N, isp_vac_s=fs_thrust.isp_vac_s,
-        isp_sl_s=fs_thrust.isp_sl_s, nozzle_exit_area_m2=fs.nozzle_exit_area_m2, propellant_kg=grain.propellant_kg,
-        jettison_mass_kg=first.inert_mass_kg, gimbal_m=fs.gimbal_m, gimbal_limit_rad=fs.gimbal_limit_rad,
-        engine=fs.moving_mass)
+    n_fs, fs_gimbal, fs_mounts = _cluster(fs_engines)
+    n_us, us_gimbal, us_mounts = _cluster(us_engines)
+    first_stage = FirstStage(  # a cluster's sums: n × each engine's (exact for one)
+        thrust_time_s=fs_thrust.time_s, thrust_vac_N=n_fs * fs_thrust.thrust_vac_N, isp_vac_s=fs_thrust.isp_vac_s,
+        isp_sl_s=fs_thrust.isp_sl_s, nozzle_exit_area_m2=n_fs * fs.nozzle_exit_area_m2,
+        propellant_kg=grain.propellant_kg, jettison_mass_kg=first.inert_mass_kg, gimbal_m=fs_gimbal,
+        gimbal_limit_rad=fs.gimbal_limit_rad, engine=fs.moving_mass, mounts=fs_mounts)
     upper_stage = UpperStage(
-        thrust_vac_N=us_thrust.thrust_vac_N, isp_vac_s=us_thrust.isp_vac_s, mixture_ratio=us_thrust.mixture_ratio,
-        nozzle_exit_area_m2=us.nozzle_exit_area_m2, lox_kg=ox.propellant_kg, lh2_kg=fuel.propellant_kg,
-        startup_time_s=us_thrust.startup_time_s, startup_fraction=us_thrust.startup_fraction,
-        shutdown_impulse_Ns=us_thrust.shutdown_impulse_Ns, gimbal_m=us.gimbal_m, gimbal_limit_rad=us.gimbal_limit_rad,
-        les_mass_kg=items[0].inert_mass_kg if items else 0.0, engine=us.moving_mass)
+        thrust_vac_N=n_us * us_thrust.thrust_vac_N, isp_vac_s=us_thrust.isp_vac_s,
+        mixture_ratio=us_thrust.mixture_ratio, nozzle_exit_area_m2=n_us * us.nozzle_exit_area_m2,
+        lox_kg=ox.propellant_kg, lh2_kg=fuel.propellant_kg, startup_time_s=us_thrust.startup_time_s,
+        startup_fraction=us_thrust.startup_fraction, shutdown_impulse_Ns=n_us * us_thrust.shutdown_impulse_Ns,
+        gimbal_m=us_gimbal, gimbal_limit_rad=us.gimbal_limit_rad, les_mass_kg=items[0].inert_mass_kg if items else 0.0,
+        engine=us.moving_mass, mounts=us_mounts)
     tanks = (grain.name, ox.name, fuel.name)
     separation = Trigger(-1, 0.0, "thrust_fraction", None, False, sep.when.below)
     never = Trigger(1, float("inf"))  # no item: no jettison
