@@ -47,9 +47,20 @@ def tables(mass: float = 1000.0, inertia=(100.0, 400.0, 400.0, 0.0, 0.0, 0.0),
         wind_alt=ax, wind_north=np.zeros(2), wind_east=np.zeros(2),
         flex_freq=np.zeros((4, 1)), flex_zeta=np.zeros(1), flex_shape=np.zeros((4, 1, layout.N_POINTS, 6)),
         slosh_level=np.tile(ax, (2, 1)), slosh_data=np.zeros((2, 2, 4)), slosh_len=np.array([2, 2]),
-        mounts=np.array([[0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0],  # one engine a stage, at its gimbal point
-                         [1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0]]),
+        mounts=MOUNTS,
     )
+
+
+def _one_engine_mounts() -> np.ndarray:
+    """One engine a stage at its gimbal point, on channel pair 0, its mixer the identity."""
+    rows = np.zeros((2, cluster.MOUNT_SIZE))
+    rows[:, cluster.M_STAGE] = (0.0, 1.0)
+    rows[:, cluster.M_SHARE] = 1.0
+    rows[:, cluster.M_PITCH_PITCH] = rows[:, cluster.M_YAW_YAW] = 1.0
+    return rows
+
+
+MOUNTS = _one_engine_mounts()
 
 
 def parameters(gravity_order: int = 0, aero: bool = False, thrust: bool = False,
@@ -76,6 +87,7 @@ def parameters(gravity_order: int = 0, aero: bool = False, thrust: bool = False,
     p[gravity.P_ORDER] = gravity_order
     p[propulsion.P_FS_TANK], p[propulsion.P_US_OX_TANK], p[propulsion.P_US_FUEL_TANK] = (lay.tank(t) for t in TANKS)
     p[actuator.P_CHANNEL_OFFSET] = lay.channel(0)
+    p[actuator.P_N_CHANNELS] = len(lay.channels)
     p[rcs.P_STATE_OFFSET] = lay.rcs
     p[actuator.P_VALVE_OFFSET], p[slosh.P_OFFSET], p[flex.P_OFFSET] = lay.valve, lay.slosh_offset, lay.flex
     p[propulsion.P_FS_PROP_FULL] = p[propulsion.P_US_PROP_FULL] = 1.0

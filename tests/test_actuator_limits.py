@@ -60,7 +60,9 @@ def fly(model, engine: int, command, t_end: float = 2.0, dt: float = DT,
 
     def f(xs, c):
         xd = np.zeros(xs.size)
-        acc = actuator.actuator_rates(xs, p, engine, c, c, xd)[0]
+        stage = actuator.stage_actuator(p, engine)
+        acc = actuator.channel_rates(xs, p, stage, 0, c, xd)  # pitch, and yaw alike
+        actuator.channel_rates(xs, p, stage, 1, c, xd)
         return xd, acc
 
     out: dict[str, list] = {k: [] for k in ("t", "delta", "rate", "acc", "flow", "ram_rate")}

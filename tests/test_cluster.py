@@ -21,7 +21,7 @@ from conftest import compose_config
 from savant_cli.config import validate
 from savant_cli.errors import ConfigError
 from savant_cli.io.guidance_file import read_guidance
-from savant_cli.models import blocks, cluster, layout, twd
+from savant_cli.models import actuator, blocks, cluster, layout, twd
 from savant_cli.paths import hydra_search_dirs, shipped_config_dir
 from savant_cli.sim import engine
 from savant_cli.sim.build import build_model
@@ -37,10 +37,40 @@ SHIPPED = shipped_config_dir() / "vehicle"
 
 
 def _packed(mounts: np.ndarray) -> np.ndarray:
-    """A packed table array holding ``mounts`` (the other tables empty)."""
+    """A packed table array holding ``mounts`` (the other tables empty), each engine on
+    its own channel pair, ganged (the mixer's columns of a single engine)."""
     arrays = [np.zeros(1)] * len(PlantTables._fields)
-    arrays[cluster.T_MOUNTS] = mounts
+    rows = np.zeros((len(mounts), cluster.MOUNT_SIZE))
+    rows[:, :7] = mounts
+    rows[:, cluster.M_PAIR] = np.arange(len(mounts)) - np.count_nonzero(mounts[:, 0] == 0.0) * mounts[:, 0]
+    rows[:, cluster.M_PITCH_PITCH] = rows[:, cluster.M_YAW_YAW] = 1.0
+    arrays[cluster.T_MOUNTS] = rows
     return blocks.pack(arrays)
+
+
+def _plant_vectors(n_pairs: int, angles=(), accelerations=(), limit=0.2):
+    """``p``, ``x`` and ``xd`` of a plant whose gimbal channels start at index 0 of ``x``:
+    ``angles[k]`` and ``accelerations[k]`` (rad, rad/s²) of channel ``k`` (pitch, yaw of
+    each engine in turn)."""
+    p = np.zeros(layout.N_PARAM)
+    p[actuator.P_N_CHANNELS] = 2 * n_pairs
+    p[actuator.P_VALVE_OFFSET] = -1
+    p[actuator.P_US_GIMBAL + actuator.G_LIMIT] = p[actuator.P_FS_GIMBAL + actuator.G_LIMIT] = limit
+    x, xd = np.zeros(actuator.N_PER_CHANNEL * 2 * n_pairs), np.zeros(actuator.N_PER_CHANNEL * 2 * n_pairs)
+    for k, (a, dd) in enumerate(zip(angles, accelerations)):
+        x[actuator.N_PER_CHANNEL * k] = a
+        xd[actuator.N_PER_CHANNEL * k + 1] = dd
+    return p, x, xd
+
+
+def plant_loads(tb: np.ndarray, p: np.ndarray, x: np.ndarray, xd: np.ndarray, engine: int, thrust: float, arm):
+    """``cluster.cluster_loads`` as the plant calls it, no null bias or flex: the first
+    engine's limited angles and nozzle accelerations from its channels (pair 0), the
+    others' read by the kernel from ``x`` and ``xd``."""
+    k, lim = int(p[actuator.P_CHANNEL_OFFSET]), p[actuator.gimbal_stage(engine) + actuator.G_LIMIT]
+    ky = k + actuator.N_PER_CHANNEL
+    return cluster.cluster_loads(tb, p, x, xd, engine, thrust, actuator.clip(x[k], lim), actuator.clip(x[ky], lim),
+                                 xd[k + 1], xd[ky + 1], 0.0, 0.0, 0.0, 0.0, *arm)
 
 
 def _reference_loads(mounts, thrust, pitch, yaw, dd, arm, moving):
@@ -69,12 +99,12 @@ def test_an_asymmetric_canted_cluster_against_its_engines_written_out():
                        [1.0, 0.25, -0.2, -0.9, 0.7, -0.01, 0.05],
                        [1.0, 0.25, 0.0, 0.1, 1.3, 0.04, 0.0]])
     moving = (800.0, 1.2, 3000.0)
-    p = np.zeros(layout.N_PARAM)
+    thrust, pitch, yaw, dd, arm = 1.2e6, 0.013, -0.021, (0.7, -1.9), (-24.0, 0.05, -0.08)
+    p, x, xd = _plant_vectors(3, [pitch, yaw] * 3, list(dd) * 3)
     p[cluster.P_UPPER_FIRST] = 1.0
     p[twd.P_ON] = 1.0
     p[twd.P_US_ENGINE:twd.P_US_ENGINE + twd.ENGINE.size] = moving
-    thrust, pitch, yaw, dd, arm = 1.2e6, 0.013, -0.021, (0.7, -1.9), (-24.0, 0.05, -0.08)
-    loads, reaction = cluster.cluster_loads(_packed(mounts), p, layout.ENGINE_UPPER, thrust, pitch, yaw, *dd, *arm)
+    loads, reaction = plant_loads(_packed(mounts), p, x, xd, layout.ENGINE_UPPER, thrust, arm)
     force, moment, twd_force, twd_moment = _reference_loads(mounts, thrust, pitch, yaw, dd, arm, moving)
     np.testing.assert_allclose(loads[:3], force, rtol=1e-14, atol=1e-9 * thrust)
     np.testing.assert_allclose(loads[3:], moment, rtol=1e-14, atol=1e-9 * thrust)
@@ -91,8 +121,8 @@ def test_a_symmetric_toed_in_pair_has_no_side_force_and_loses_cos_cant():
     cant = np.radians(3.0)
     mounts = np.array([[1.0, 0.5, 0.0, 1.5, 0.0, 0.0, cant], [1.0, 0.5, 0.0, -1.5, 0.0, 0.0, -cant]])
     thrust = 2.0e6
-    loads, _ = cluster.cluster_loads(_packed(mounts), np.zeros(layout.N_PARAM), layout.ENGINE_UPPER, thrust, 0.0, 0.0,
-                                     0.0, 0.0, -20.0, 0.0, 0.0)
+    p, x, xd = _plant_vectors(2)
+    loads, _ = plant_loads(_packed(mounts), p, x, xd, layout.ENGINE_UPPER, thrust, (-20.0, 0.0, 0.0))
     assert loads[0] == pytest.approx(thrust * np.cos(cant), rel=1e-15)
     assert abs(loads[1]) < 1e-9 * thrust and abs(loads[2]) < 1e-9 * thrust
     assert np.all(np.abs(loads[3:]) < 1e-9 * thrust)  # the lines cross on the axis: no moment either

@@ -166,7 +166,7 @@ def _tables(coast: tuple[float, float, float, float], upper: tuple[float, float,
     return FcsTables(filters=filters, roll_filters=np.broadcast_to(identity, (2, 2, 2, 5)).copy(),
                      blend=np.array([[1.0, 0.0, 0.0], [1.0, 0.0, 0.0]]),
                      gain_axis=np.array([[0.0, 1e5]] * 3), gain_data=gain_data, gain_len=np.array([2, 2, 2]),
-                     roll=np.array([np.radians(1.0), np.radians(1.0), 1.0]), fade=FADE)
+                     roll=np.array([np.radians(1.0), np.radians(1.0), 1.0]), fade=FADE, roll_gimbal=np.zeros((3, 3)))
 
 
 def _fly_cycles(ft: FcsTables, phase: int, n: int, pitch_error: float, dt: float = 0.02):

@@ -6,6 +6,7 @@ fails, as does a check whose example left the page.
 
 from __future__ import annotations
 
+import dataclasses
 import re
 from pathlib import Path
 
@@ -15,7 +16,7 @@ from omegaconf import OmegaConf
 
 from savant_cli.config import validate
 from savant_cli.hydra_compose import compose_config, task_config
-from savant_cli.models import layout
+from savant_cli.models import cluster, layout
 from savant_cli.paths import shipped_config_dir
 from savant_cli.sim import build, engine
 from savant_cli.vehicle import load_vehicle
@@ -31,7 +32,8 @@ def examples() -> dict[str, str]:
 
 def _loaded(name: str):
     base = OmegaConf.load(SHIPPED / "ares_i.yaml").vehicle
-    node = OmegaConf.to_container(OmegaConf.merge(base, OmegaConf.create(examples()[name])), resolve=True)
+    over = [OmegaConf.create(examples()[b]) for b in BUILDS_ON.get(name, ())]
+    node = OmegaConf.to_container(OmegaConf.merge(base, *over, OmegaConf.create(examples()[name])), resolve=True)
     return load_vehicle(node, SHIPPED / "ares_i")
 
 
@@ -79,11 +81,24 @@ def check_a_two_engine_cluster(vehicle):
     assert (us.engine.mass_kg, us.engine.inertia_about_gimbal_kgm2) == (1250.0, 4062.5)  # each engine's
 
 
+def check_a_given_mixing_matrix(vehicle):
+    given = [[1.0, 1.0, 0.0], [0.0, 0.0, 1.0], [-1.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+    rows = cluster.mount_table(vehicle)  # checks the matrix against the allocation's moments
+    np.testing.assert_array_equal(rows[-2:, cluster.M_PITCH_ROLL:], np.reshape(given, (2, 6)))
+    # the mixer's own allocation, to roundoff: the page's "this one is the mixer's own"
+    np.testing.assert_allclose(cluster.mount_table(dataclasses.replace(
+        vehicle, upper_stage=dataclasses.replace(vehicle.upper_stage, mixing_matrix=None)))[-2:, cluster.M_PITCH_ROLL:],
+        np.reshape(given, (2, 6)), atol=1e-12)
+
+
+#: examples written over another example of the page (merged in this order)
+BUILDS_ON = {"a-given-mixing-matrix": ("a-two-engine-cluster",)}
 CHECKS = {"jettison-on-a-condition": check_jettison_on_a_condition,
           "a-delay-arms-a-condition": check_a_delay_arms_a_condition,
           "composed-mass-properties": check_composed_mass_properties,
           "ignition-on-a-tank": check_ignition_on_a_tank,
-          "a-two-engine-cluster": check_a_two_engine_cluster}
+          "a-two-engine-cluster": check_a_two_engine_cluster,
+          "a-given-mixing-matrix": check_a_given_mixing_matrix}
 
 
 def test_every_example_on_the_page_has_a_check():

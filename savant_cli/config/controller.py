@@ -133,8 +133,36 @@ class GainTables:
 
 
 @dataclass
+class RollGimbalGains:
+    """One flight-control phase's roll-by-gimbal gains (``models/roll_gimbal.py``).
+
+    Attributes
+    ----------
+    kp : float
+        Equivalent roll angle per roll-attitude error (rad/rad).
+    ki : float
+        Per integrated roll-attitude error (1/s).
+    kd : float
+        Per roll-rate error (s)."""
+
+    kp: float = MISSING
+    ki: float = MISSING
+    kd: float = MISSING
+
+
+@dataclass
+class RollGimbal:
+    """``controller.roll.gimbal``: roll by the engines' gimbals, for the stages whose
+    engines can roll the vehicle (a cluster, ``models/cluster.py``); gains of 0 (the
+    shipped controllers'): none."""
+
+    stack: RollGimbalGains = field(default_factory=RollGimbalGains)
+    upper: RollGimbalGains = field(default_factory=RollGimbalGains)
+
+
+@dataclass
 class RollControl:
-    """``controller.roll``: the roll jets' phase plane.
+    """``controller.roll``: the roll jets' phase plane, and roll by the engines' gimbals.
 
     Attributes
     ----------
@@ -143,11 +171,14 @@ class RollControl:
     rate_deadband_deg_s : float
         Roll-rate deadband (deg/s).
     lead_time_s : float
-        Lead time of the switching line (s)."""
+        Lead time of the switching line (s).
+    gimbal : RollGimbal
+        Roll-by-gimbal gains of the stack and the upper stage."""
 
     attitude_deadband_deg: float = MISSING
     rate_deadband_deg_s: float = MISSING
     lead_time_s: float = 1.0
+    gimbal: RollGimbal = field(default_factory=RollGimbal)
 
 
 @dataclass
@@ -254,6 +285,9 @@ def check_controller(c: ControllerConfig) -> None:
     non_negative("controller.roll.attitude_deadband_deg", c.roll.attitude_deadband_deg)
     non_negative("controller.roll.rate_deadband_deg_s", c.roll.rate_deadband_deg_s)
     non_negative("controller.roll.lead_time_s", c.roll.lead_time_s)
+    for name in ("stack", "upper"):
+        for g in ("kp", "ki", "kd"):
+            non_negative(f"controller.roll.gimbal.{name}.{g}", getattr(getattr(c.roll.gimbal, name), g))
     fade = c.ignition_fade
     non_negative("controller.ignition_fade.start_s", fade.start_s)
     if not (np.isfinite(fade.end_s) and fade.end_s >= fade.start_s):

@@ -328,6 +328,9 @@ def controller_yaml(tables: dict, stack_blend: list[float], spec: dict = DESIGN,
         "  attitude_deadband_deg: 1.0",
         "  rate_deadband_deg_s: 1.0",
         "  lead_time_s: 2.0",
+        "  gimbal:             # roll by the engines' gimbals, a cluster's (docs/models.md): none",
+        "    stack: {kp: 0.0, ki: 0.0, kd: 0.0}",
+        "    upper: {kp: 0.0, ki: 0.0, kd: 0.0}",
     ]
     if design:
         lines += ["design:              # how this file was made (provenance; the flight uses the tables above)",

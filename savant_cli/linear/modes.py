@@ -29,6 +29,7 @@ The band of the requirement (``rigid/aero``, ``slosh``, ``flex``) follows from t
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 
 import control as ct
@@ -63,8 +64,8 @@ def plant_group(name: str) -> str:
         return "slosh_lh2"
     if name.startswith("flex_q"):
         return "flex_" + name[len("flex_q"):].split("_")[0]
-    if name in ("dp", "dp_dot", "dp_ddot", "dy", "dy_dot", "dy_ddot") or name.startswith("valve"):
-        return "actuator"
+    if re.fullmatch(r"d[py]\d*(_dot|_ddot|_piston)?", name) or name.startswith("valve"):
+        return "actuator"  # every engine's channels (dp, dy, dp2 …), the simplex piston and valves
     return "rigid"
 
 

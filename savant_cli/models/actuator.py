@@ -1,10 +1,13 @@
 """TVC actuators: the third-order model and the simplex (electro-hydraulic) model.
 
-One gimbal channel per axis, pitch then yaw, each :data:`N_PER_CHANNEL` states from the
-offset ``P_CHANNEL_OFFSET`` in ``x`` (``models/layout.py``); the simplex model adds a
-power-valve block ``[r, ṙ]`` per channel (offset ``P_VALVE_OFFSET``). The engines of the
-two stages share the channels: only one of them is live at a time, and the actuator
-states restart at rest at separation. The command is clipped to the stage's gimbal limit.
+One gimbal channel per engine axis: each engine of a stage has a pitch and a yaw
+channel (a channel pair), each :data:`N_PER_CHANNEL` states, the pairs in engine order
+from the offset ``P_CHANNEL_OFFSET`` in ``x`` (``models/layout.py``); the simplex model
+adds a power-valve block ``[r, ṙ]`` per channel (offset ``P_VALVE_OFFSET``). The stages
+share the channels (engine ``i`` of either stage drives pair ``i``): only one stage's
+engines are live at a time, and every channel restarts at rest at separation. The
+command of each channel (the mixer's, ``models/cluster.py``) is clipped to the stage's
+gimbal limit.
 
 Third order (``actuator=third_order``), states ``[δ, δ̇, δ̈]``::
 
@@ -92,15 +95,18 @@ _PARAMS = blocks.PARAMETERS.block("actuator")
 P_KIND = _PARAMS.scalar("kind", "1", "0 third order, 1 simplex")
 P_VALVE_OFFSET = _PARAMS.scalar("valve_offset", "1", "offset of the simplex valve states in x (−1: none)")
 P_CHANNEL_OFFSET = _PARAMS.scalar("channel_offset", "1",
-                                  "offset in x of the pitch channel's states; the yaw channel's follow")
+                                  "offset in x of the first engine's pitch channel; its yaw channel and the other "
+                                  "engines' pairs follow")
 P_FS_GIMBAL = _PARAMS.record("first_stage", STAGE, "first-stage gimbal")
 P_US_GIMBAL = _PARAMS.record("upper_stage", STAGE, "upper-stage gimbal")
 P_FS_THIRD = _PARAMS.record("first_stage.third_order", THIRD, "first-stage third-order actuator")
 P_US_THIRD = _PARAMS.record("upper_stage.third_order", THIRD, "upper-stage third-order actuator")
 P_FS_SPX = _PARAMS.record("first_stage.simplex", SPX, "first-stage simplex actuator")
 P_US_SPX = _PARAMS.record("upper_stage.simplex", SPX, "upper-stage simplex actuator")
+P_N_CHANNELS = _PARAMS.scalar("channels", "1", "gimbal channels: two per engine of the stage with the most engines")
 _AUX = blocks.DIAGNOSTICS.block("actuator")
-A_ANGLES = _AUX.array("angles", 2, "rad", "engine gimbal angles (limited)",  # null bias not included
+# the first engine's (a cluster's other engines: their channels' states); null bias not included
+A_ANGLES = _AUX.array("angles", 2, "rad", "engine gimbal angles (limited)",
                       blocks.Logged("gimbal_angle", ("pitch", "yaw"), "body"))
 A_ACCEL = _AUX.array("accelerations", 2, "rad/s^2", "nozzle angular accelerations (zero while held at a gimbal stop)",
                      blocks.Logged("gimbal_acceleration", ("pitch", "yaw"), "body"))
@@ -123,6 +129,7 @@ def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarra
     p[P_KIND] = SIMPLEX if cfg.actuator.name == "simplex" else THIRD_ORDER
     p[P_VALVE_OFFSET] = inputs.layout.valve
     p[P_CHANNEL_OFFSET] = inputs.layout.channel(0)
+    p[P_N_CHANNELS] = len(inputs.layout.channels)
     stages = (("first_stage", v.first_stage, P_FS_GIMBAL, P_FS_THIRD, P_FS_SPX),
               ("upper_stage", v.upper_stage, P_US_GIMBAL, P_US_THIRD, P_US_SPX))
     for name, stage, pg, p3, px in stages:
@@ -243,25 +250,40 @@ def limits(p: np.ndarray, engine: int) -> tuple[float, float]:
 
 @njit(cache=True, error_model="numpy")
 def contain(x: np.ndarray, p: np.ndarray, engine: int) -> None:
-    """After a plant step: the active stage's gimbal stop on δ, and the rate stop (the
-    third-order δ̇, the simplex spool r), each with its outward rate of change cleared."""
+    """After a plant step: the active stage's gimbal stop on every channel's δ, and the
+    rate stop (the third-order δ̇, the simplex spool r), each with its outward rate of
+    change cleared."""
     rl, lim = limits(p, engine)
+    k0 = int(p[P_CHANNEL_OFFSET])
+    vo = int(p[P_VALVE_OFFSET])
+    n = int(p[P_N_CHANNELS])
     if int(p[P_KIND]) == SIMPLEX:
-        vo = int(p[P_VALVE_OFFSET])
-        for kv in (vo, vo + N_VALVE_PER_CHANNEL):
-            _stop(x, kv, rl)
-        for k in channels(p):
-            _stop(x, k, lim)
+        for c in range(n):
+            _stop(x, vo + N_VALVE_PER_CHANNEL * c, rl)
+            _stop(x, k0 + N_PER_CHANNEL * c, lim)
     else:
-        for k in channels(p):
+        for c in range(n):
+            k = k0 + N_PER_CHANNEL * c
             _stop(x, k + 1, rl)
             if _stop(x, k, lim) and x[k + 2] * x[k] > 0.0:
                 x[k + 2] = 0.0  # no outward acceleration at the stop
 
 
+@njit(cache=True, error_model="numpy")
+def rest(x: np.ndarray, p: np.ndarray) -> None:
+    """Every gimbal channel (and its power valve) at rest at null: the stages' engines
+    change at separation."""
+    k0 = int(p[P_CHANNEL_OFFSET])
+    n = int(p[P_N_CHANNELS])
+    x[k0:k0 + N_PER_CHANNEL * n] = 0.0
+    vo = int(p[P_VALVE_OFFSET])
+    if vo >= 0:
+        x[vo:vo + N_VALVE_PER_CHANNEL * n] = 0.0
+
+
 @njit(cache=True, error_model="numpy", inline="always")
 def channels(p: np.ndarray) -> tuple[int, int]:
-    """Indices in ``x`` of the pitch and the yaw channel's first state (δ)."""
+    """Indices in ``x`` of the first engine's pitch and yaw channel's first state (δ)."""
     k = int(p[P_CHANNEL_OFFSET])
     return k, k + N_PER_CHANNEL
 
@@ -273,28 +295,47 @@ def gimbal_stage(engine: int) -> int:
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def actuator_rates(x: np.ndarray, p: np.ndarray, engine: int, pitch_cmd: float, yaw_cmd: float,
-                   xd: np.ndarray) -> tuple[float, float]:
-    """Write the actuator state derivatives into ``xd``; return the nozzle angular
-    accelerations pitch, yaw (rad/s²; zero while a stop holds the nozzle)."""
-    lim = p[gimbal_stage(engine) + G_LIMIT]
+def stage_actuator(p: np.ndarray, engine: int) -> tuple[int, int, int, int, float]:
+    """The active stage's actuator: whether simplex (1) or third order (0), the offset of
+    its parameter record in ``p``, the offsets of the first gimbal channel and of the
+    first power valve in ``x`` (−1: none), and the gimbal limit (rad)."""
     first = engine == ENGINE_FIRST
-    kp, ky = channels(p)
     if int(p[P_KIND]) == SIMPLEX:
-        vo = int(p[P_VALVE_OFFSET])
-        sp = P_FS_SPX if first else P_US_SPX
-        ddp = simplex(x, kp, vo, clip(pitch_cmd, lim), p, sp, lim, xd)
-        ddy = simplex(x, ky, vo + N_VALVE_PER_CHANNEL, clip(yaw_cmd, lim), p, sp, lim, xd)
+        kind, base = SIMPLEX, P_FS_SPX if first else P_US_SPX
     else:
-        t3 = P_FS_THIRD if first else P_US_THIRD
-        ddp = third_order(x, kp, clip(pitch_cmd, lim), p, t3, lim, xd)
-        ddy = third_order(x, ky, clip(yaw_cmd, lim), p, t3, lim, xd)
-    return ddp, ddy
+        kind, base = THIRD_ORDER, P_FS_THIRD if first else P_US_THIRD
+    return kind, base, int(p[P_CHANNEL_OFFSET]), int(p[P_VALVE_OFFSET]), p[gimbal_stage(engine) + G_LIMIT]
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def channel_rates(x: np.ndarray, p: np.ndarray, stage: tuple[int, int, int, int, float], c: int, cmd: float,
+                  xd: np.ndarray) -> float:
+    """Write the derivatives of gimbal channel ``c`` (and of its power valve) into ``xd``
+    for the command ``cmd`` (rad, clipped to the gimbal limit); ``stage`` is
+    :func:`stage_actuator`'s. Returns the nozzle's angular acceleration (rad/s²; zero
+    while a stop holds it), which is also ``xd`` of the channel's δ̇."""
+    kind, base, k0, vo, lim = stage
+    k = k0 + N_PER_CHANNEL * c
+    if kind == SIMPLEX:
+        return simplex(x, k, vo + N_VALVE_PER_CHANNEL * c, clip(cmd, lim), p, base, lim, xd)
+    return third_order(x, k, clip(cmd, lim), p, base, lim, xd)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def idle_channel(p: np.ndarray, c: int, xd: np.ndarray) -> None:
+    """Zero derivatives for gimbal channel ``c`` (and its power valve): no engine of the
+    active stage drives it, and it stays at rest."""
+    k = int(p[P_CHANNEL_OFFSET]) + N_PER_CHANNEL * c
+    xd[k:k + N_PER_CHANNEL] = 0.0
+    vo = int(p[P_VALVE_OFFSET])
+    if vo >= 0:
+        xd[vo + N_VALVE_PER_CHANNEL * c:vo + N_VALVE_PER_CHANNEL * (c + 1)] = 0.0
 
 
 @njit(cache=True, error_model="numpy", inline="always")
 def gimbal_angles(x: np.ndarray, p: np.ndarray, engine: int) -> tuple[float, float, float, float]:
-    """Limited actuator angles δp, δy and the active stage's null biases pitch, yaw (rad)."""
+    """The first engine's limited actuator angles δp, δy and the active stage's null
+    biases pitch, yaw (rad)."""
     g = gimbal_stage(engine)
     lim = p[g + G_LIMIT]
     kp, ky = channels(p)

@@ -78,7 +78,8 @@ class FcsTables(NamedTuple):
     (0 integrated stack, 1 upper stage). ``roll_filters[s, section, 0|1, :]`` likewise.
     ``gain_axis[phase, :gain_len[phase]]`` is altitude (m, stack) or relative speed (m/s);
     ``gain_data[phase, i, :]`` = Kp, Ki, Kd, Kir for pitch then for yaw. ``fade`` is the
-    ignition fade (:func:`engagement`).
+    ignition fade (:func:`engagement`). ``roll_gimbal[phase]`` = Kp (rad/rad), Ki (1/s),
+    Kd (s) of roll by the engines' gimbals (``models/roll_gimbal.py``).
     """
 
     filters: np.ndarray  # (2, 2, 2, 2, 5)
@@ -89,6 +90,7 @@ class FcsTables(NamedTuple):
     gain_len: np.ndarray  # (3,) int64
     roll: np.ndarray  # (3,): attitude deadband rad, rate deadband rad/s, lead time s
     fade: np.ndarray  # (2,): ignition fade start, end, s after the upper-stage ignition command
+    roll_gimbal: np.ndarray  # (3, 3): roll-by-gimbal Kp, Ki, Kd per phase (coast: zeros)
 
 
 def fcs_tables(c: "ControllerConfig") -> FcsTables:
@@ -122,8 +124,12 @@ def fcs_tables(c: "ControllerConfig") -> FcsTables:
     roll = np.array([np.radians(c.roll.attitude_deadband_deg), np.radians(c.roll.rate_deadband_deg_s),
                      c.roll.lead_time_s])
     fade = np.array([c.ignition_fade.start_s, c.ignition_fade.end_s], float)
+    roll_gimbal = np.zeros((3, 3))
+    for phase, name in ((FCS_STACK, "stack"), (FCS_UPPER, "upper")):
+        g = getattr(c.roll.gimbal, name)
+        roll_gimbal[phase] = g.kp, g.ki, g.kd
     return FcsTables(filters=filters, roll_filters=roll_filters, blend=blend, gain_axis=gain_axis,
-                     gain_data=gain_data, gain_len=gain_len, roll=roll, fade=fade)
+                     gain_data=gain_data, gain_len=gain_len, roll=roll, fade=fade, roll_gimbal=roll_gimbal)
 
 
 @njit(cache=True, error_model="numpy")
@@ -170,9 +176,11 @@ def roll_phase_plane(err: float, rate_err: float, att_db: float, rate_db: float,
 
 @njit(cache=True, error_model="numpy")
 def fcs_step(d: np.ndarray, q_nav: np.ndarray, phase: int, schedule_var: float,
-             since_ignition: float, dt: float, ft: FcsTables) -> None:
+             since_ignition: float, dt: float, ft: FcsTables) -> tuple[float, float]:
     """One 50 Hz flight-control cycle; reads sensors and smoother from ``d`` and writes
-    the gimbal and jet commands back into ``d``.
+    the gimbal and jet commands back into ``d``; returns the flex-filtered roll-rate error
+    (rad/s) and the loop's engagement φ (1, :func:`engagement`), for the roll law by the
+    engines' gimbals (``models/roll_gimbal.py``).
 
     Parameters
     ----------
@@ -221,7 +229,8 @@ def fcs_step(d: np.ndarray, q_nav: np.ndarray, phase: int, schedule_var: float,
     d[D_RATE_ERR + 2] = b2 - rc2
     own = GYRO_FIRST if phase == FCS_STACK else GYRO_UPPER
 
-    integrate = flight_gains(ft, phase, schedule_var, since_ignition, d, D_GAINS) > 0.0
+    phi = flight_gains(ft, phase, schedule_var, since_ignition, d, D_GAINS)
+    integrate = phi > 0.0
 
     for c in range(2):  # 0 pitch (body y), 1 yaw (body z)
         ax = c + 1
@@ -240,6 +249,7 @@ def fcs_step(d: np.ndarray, q_nav: np.ndarray, phase: int, schedule_var: float,
 
     roll_rate_f = filter_pair(d, D_ROLL_FILT, ft.roll_filters[fset], d[D_RATE_ERR])
     d[D_CMD_RCS] = roll_phase_plane(d[D_ERR], roll_rate_f, ft.roll[0], ft.roll[1], ft.roll[2])
+    return roll_rate_f, phi
 
 
 @njit(cache=True, error_model="numpy")

@@ -13,8 +13,9 @@ compiled models read their offsets from ``p``):
 
 * propellant: one state per tank of the vehicle, in the vehicle file's order (kg);
 * gimbal channels: ``[δ, δ̇, δ̈]`` (third order) or ``[δ, δ̇, θ_piston]`` (simplex) per
-  channel (rad, rad/s, rad/s² or rad); engines whose gimbals are never live together share
-  a channel (``vehicle/two_stage.py``);
+  channel (rad, rad/s, rad/s² or rad), a pitch and a yaw channel per engine of the stage
+  with the most engines; engines whose gimbals are never live together (engine ``i`` of
+  each stage) share a channel pair (``models/actuator.py``);
 * roll jets: the thrust fractions of the positive and negative jets (1);
 * simplex power valves: ``[r, ṙ]`` per channel (valve flow as no-load piston rate, rad/s),
   only with the simplex actuator;
@@ -54,6 +55,12 @@ STATE_NAMES = list(_RIGID_NAMES)
 assert len(STATE_NAMES) == N_STATE, "every rigid-body state needs a name"
 #: The gimbal channels of a vehicle whose stages each gimbal one engine in pitch and yaw.
 PITCH_YAW = ("p", "y")
+
+
+def channel_names(n_engines: int) -> tuple[str, ...]:
+    """The gimbal channels' names for stages of at most ``n_engines`` engines: ``p``, ``y``
+    for the first engine, then ``p2``, ``y2``, ``p3``, … (the states ``dp``, ``dy``, ``dp2`` …)."""
+    return PITCH_YAW + tuple(f"{axis}{i}" for i in range(2, n_engines + 1) for axis in PITCH_YAW)
 
 
 class StateLayout:
@@ -120,8 +127,8 @@ class StateLayout:
 # ------------------------------------------------------------------- held inputs u
 # Set by the flight software and the event logic, held over a plant step.
 _INPUTS = blocks.INPUTS.block("engine")
-U_DPC = _INPUTS.scalar("pitch_command", "rad", "pitch gimbal command")
-U_DYC = _INPUTS.scalar("yaw_command", "rad", "yaw gimbal command")
+U_DPC = _INPUTS.scalar("pitch_command", "rad", "pitch gimbal command δp (the equivalent engine's)")
+U_DYC = _INPUTS.scalar("yaw_command", "rad", "yaw gimbal command δy (the equivalent engine's)")
 U_RCS = _INPUTS.scalar("roll_jet_command", "1", "roll jet command +1, 0, −1")
 U_CONFIG = _INPUTS.scalar("configuration", "1", "aero/mass configuration (models/configurations.py)")
 U_ENGINE = _INPUTS.scalar("engine_phase", "1", "engine phase (models/configurations.py)")
@@ -129,6 +136,8 @@ U_T_IGN = _INPUTS.scalar("ignition_time", "s", "upper-stage ignition time, missi
 U_T_CUT = _INPUTS.scalar("cutoff_command_time", "s",
                          "upper-stage cutoff command time, mission time (0: none yet; never at liftoff)")
 U_GUST = _INPUTS.array("gust", 3, "m/s", "gust velocity, body axes: the air moves with it (linear-analysis input)")
+U_ROLL = _INPUTS.scalar("roll_gimbal_command", "rad",
+                       "roll command δr to the engines' gimbals: the most-deflected nozzle's angle")
 N_INPUT = blocks.INPUTS.size
 
 

@@ -93,7 +93,9 @@ def plant_tables(cfg: SavantConfig, vehicle: Vehicle, slosh: SloshData | None = 
 
 def state_layout(cfg: SavantConfig, vehicle: Vehicle) -> layout.StateLayout:
     """The continuous-state layout of ``vehicle`` with the models switched on in ``cfg``."""
-    return layout.StateLayout(tanks=vehicle.tanks, simplex=cfg.actuator.name == "simplex", slosh=cfg.slosh.enabled,
+    engines = max(len(vehicle.first_stage.mounts), len(vehicle.upper_stage.mounts), 1)
+    return layout.StateLayout(tanks=vehicle.tanks, channels=layout.channel_names(engines),
+                              simplex=cfg.actuator.name == "simplex", slosh=cfg.slosh.enabled,
                               n_modes=cfg.flex.n_modes if cfg.flex.enabled else 0)
 
 

@@ -36,7 +36,7 @@ from numba import njit
 
 from savant_cli.io.guidance_file import GuidanceTable
 from savant_cli.models import (
-    actuator, aero, earth, flex, navigation, peg, propulsion, quaternion as qt, rcs, rigid_body, slosh
+    actuator, aero, earth, flex, navigation, peg, propulsion, quaternion as qt, rcs, rigid_body, roll_gimbal, slosh
 )
 from savant_cli.models.command_schedule import BY_TIME, D_PROFILE_OFFSET, D_PROFILE_RATE, profile_time
 from savant_cli.models.earth import A_ALT, P_E2, P_OMEGA_E, P_RE
@@ -45,7 +45,7 @@ from savant_cli.models.gravity import P_MU
 from savant_cli.models.guidance import D_TG, D_VG, SmootherGains, guidance_sample, smoother_step
 from savant_cli.models.layout import (
     CONFIG_STACK, CONFIG_UPPER, CONFIG_UPPER_LES, D_CMD_P, D_CMD_RCS, D_CMD_Y, D_FLEX_NAV, D_GYRO_X, D_GYRO_Y,
-    ENGINE_OFF, ENGINE_UPPER, N_AUX, U_CONFIG, U_DPC, U_DYC, U_ENGINE, U_RCS, U_T_CUT, U_T_IGN, Q, R, V, W
+    ENGINE_OFF, ENGINE_UPPER, N_AUX, U_CONFIG, U_DPC, U_DYC, U_ENGINE, U_RCS, U_ROLL, U_T_CUT, U_T_IGN, Q, R, V, W
 )
 from savant_cli.models.sensors import (
     GYRO_MISALIGN, GYRO_POINTS, IMU_GYRO, N_GYROS, P_IMU_MISALIGN, GyroModel, gyro_step, misalignment
@@ -313,19 +313,16 @@ def separate(x: np.ndarray, u: np.ndarray, d: np.ndarray, p: np.ndarray, tb: np.
     u[U_CONFIG] = CONFIG_UPPER_LES
     u[U_ENGINE] = ENGINE_OFF
     x[int(p[propulsion.P_FS_TANK])] = 0.0
-    kp, ky = actuator.channels(p)
-    x[kp:kp + actuator.N_PER_CHANNEL] = 0.0
-    x[ky:ky + actuator.N_PER_CHANNEL] = 0.0
+    actuator.rest(x, p)
     u[U_DPC] = 0.0
     u[U_DYC] = 0.0
-    vo = int(p[actuator.P_VALVE_OFFSET])
-    if vo >= 0:
-        x[vo:vo + 2 * actuator.N_VALVE_PER_CHANNEL] = 0.0
+    u[U_ROLL] = 0.0
     fo = int(p[flex.P_OFFSET])
     if fo >= 0:  # new modal set: its modes start at rest (paper: liftoff → ignition set)
         x[fo:fo + 2 * int(p[flex.P_N_MODES])] = 0.0
     move_reference(x, cg_stack, reference_cg(x, p, tb, np.int64(CONFIG_UPPER_LES)))
     reset_phase(d)
+    roll_gimbal.reset(d)
 
 
 @njit(cache=True, error_model="numpy")
@@ -493,12 +490,14 @@ def _advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0
                 qt.qmul_into(q_true_nav, q_imu, q_nav)
             else:  # sensed attitude q_b2i ⊗ q_s2b
                 qt.qmul_into(x[Q:Q + 4], q_imu, q_nav)
-            fcs_step(d, q_nav, phase, sched_var, t - u[U_T_IGN], dt_fcs, ft)
+            roll_rate_error, engagement = fcs_step(d, q_nav, phase, sched_var, t - u[U_T_IGN], dt_fcs, ft)
+            roll_gimbal.roll_gimbal_step(d, ft.roll_gimbal[phase], engagement, roll_rate_error, dt_fcs)
         command_update = (k - sched.command_delay_steps) % rates.n_fcs == 0
         if command_update:  # the commands, after the loop delay
             u[U_DPC] = d[D_CMD_P]
             u[U_DYC] = d[D_CMD_Y]
             u[U_RCS] = d[D_CMD_RCS]
+            u[U_ROLL] = d[roll_gimbal.D_CMD_ROLL]
             rcs.step_jets(x, p, u[U_RCS])  # jets without a ramp open and shut at once
         if perturbed:
             loop_perturbation.apply(pert, k, t, dt, command_update, u)

@@ -25,7 +25,9 @@ from savant_cli.models import (
     rcs, rigid_body, slosh, twd, winds
 )
 from savant_cli.models.configurations import ENGINE_FIRST
-from savant_cli.models.layout import U_CONFIG, U_DPC, U_DYC, U_ENGINE, U_GUST, U_RCS, U_T_CUT, U_T_IGN, Q, R, V, W
+from savant_cli.models.layout import (
+    U_CONFIG, U_DPC, U_DYC, U_ENGINE, U_GUST, U_RCS, U_ROLL, U_T_CUT, U_T_IGN, Q, R, V, W
+)
 
 #: Tabular data of the plant by name (SI, contiguous arrays); the fields are the tables
 #: the models declare, in field-number order (``blocks.TABLES``).
@@ -152,7 +154,7 @@ def compose(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarra
 
     # ------------------------------------------------- forces and moments
     fax, fay, faz, max_, may, maz = aero.aero_loads(tb, p, config, t, mach, alpha, beta, qbar, cgx, cgy, cgz)
-    ddp, ddy = actuator.actuator_rates(x, p, engine, u[U_DPC], u[U_DYC], xd)
+    ddp, ddy = cluster.gimbal_rates(x, p, tb, engine, u[U_ROLL], u[U_DPC], u[U_DYC], xd)
     rcs_pos_rate, rcs_neg_rate = rcs.jet_rates(x, p, u[U_RCS])
     jets = int(p[rcs.P_STATE_OFFSET])
     xd[jets] = rcs_pos_rate
@@ -164,8 +166,8 @@ def compose(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarra
     rgx, rgy, rgz = propulsion.gimbal_arm(p, engine, cgx, cgy, cgz)
     dgx, dgy, dgz = flex.displacement_at(x, config, p, tb, gimbal_pt)  # the structure moves the gimbal
     rgx, rgy, rgz = rgx + dgx, rgy + dgy, rgz + dgz
-    thrust_part, twd_part = cluster.cluster_loads(tb, p, engine, thrust, dp + bias_p - tgy, dy + bias_y - tgz, ddp,
-                                                  ddy, rgx, rgy, rgz)
+    thrust_part, twd_part = cluster.cluster_loads(tb, p, x, xd, engine, thrust, dp + bias_p - tgy, dy + bias_y - tgz,
+                                                  ddp, ddy, bias_p, bias_y, tgy, tgz, rgx, rgy, rgz)
     ftx, fty, ftz, mtx, mty, mtz = thrust_part
     fwx, fwy, fwz, twy, twz, mwx, mwy, mwz = twd_part
     rcs_torque = rcs.roll_torque(x, tb, p, alt, pres)

@@ -11,7 +11,7 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
 from savant_cli import constants, lifecycle
 from savant_cli.io.record import Signal
-from savant_cli.models import blocks, earth, layout, navigation, peg, quaternion as qt, slosh
+from savant_cli.models import blocks, earth, layout, navigation, peg, quaternion as qt, roll_gimbal, slosh
 from savant_cli.sim import compile_notice, engine, loop_perturbation
 from savant_cli.sim.build import SimModel
 from savant_cli.sim.plant import compose, derivative
@@ -280,6 +280,8 @@ def signals(result: SimResult, model: SimModel) -> dict[str, Signal]:
     xyz = ("x", "y", "z")
     rpy = ("roll", "pitch", "yaw")
     pq = ("pitch", "yaw")
+    n_ch = len(lay.channels)  # every engine's pitch and yaw channels
+    channels = pq + tuple(f"{axis}{i}" for i in range(2, n_ch // 2 + 1) for axis in pq)
     c_launch = launch_frame(model)
     q = x[:, layout.Q:layout.Q + 4]
     qc = d[:, layout.D_QS:layout.D_QS + 4]
@@ -305,7 +307,8 @@ def signals(result: SimResult, model: SimModel) -> dict[str, Signal]:
         "attitude_euler": Signal(euler, "rad", "body attitude, 3-2-1 Euler angles relative to the launch frame (pad NED frozen at liftoff)", rpy, "launch"),
         "attitude_euler_command": Signal(euler_c, "rad", "smoothed command attitude, 3-2-1 Euler angles relative to the launch frame", rpy, "launch"),
         "gimbal_command": Signal(d[:, [layout.D_CMD_P, layout.D_CMD_Y]], "rad", "flight-control gimbal commands", pq, "body"),
-        "gimbal_rate": Signal(x[:, [lay.channel(0) + 1, lay.channel(1) + 1]], "rad/s", "nozzle angular rates", pq, "body"),
+        "gimbal_rate": Signal(x[:, [lay.channel(k) + 1 for k in range(n_ch)]], "rad/s", "nozzle angular rates", channels,
+                              "body"),
         "rcs_command": Signal(d[:, layout.D_CMD_RCS], "1", "roll jet command (+1 positive roll torque, 0, -1)"),
         "propellant_remaining": Signal(x[:, [lay.tank(n) for n in lay.tanks]], "kg", "propellant remaining", lay.tanks),
         "sensed_rate": Signal(d[:, layout.D_GYRO_Y:layout.D_GYRO_Y + 9], "rad/s", "rate-gyro outputs (rigid plus flex rate "
@@ -322,11 +325,17 @@ def signals(result: SimResult, model: SimModel) -> dict[str, Signal]:
         s.update(guidance_signals(t, x[:, layout.R:layout.R + 3], d, model.p))
     if model.p[navigation.P_ON] != 0.0:
         s.update(navigation_signals(d))
+    if n_ch > 2:  # a cluster: every engine's channels, and the roll command the mixer spreads over them
+        s["gimbal_angle"] = Signal(x[:, [lay.channel(k) for k in range(n_ch)]], "rad",
+                                   "each engine's gimbal angles (pitch, yaw: the first engine's; pitch2, yaw2: the "
+                                   "second's …)", channels, "body")
+        s["roll_gimbal_command"] = Signal(d[:, roll_gimbal.D_CMD_ROLL], "rad",
+                                          "roll command to the engines' gimbals (the most-deflected nozzle's angle)")
     if lay.simplex:
-        s["actuator_ram_position"] = Signal(x[:, [lay.channel(0) + 2, lay.channel(1) + 2]], "rad",
-                                            "simplex ram position as an equivalent gimbal angle", pq, "body")
-        s["actuator_valve_flow"] = Signal(x[:, [lay.valve, lay.valve + layout.N_VALVE_PER_CHANNEL]], "rad/s",
-                                          "simplex power-valve flow as no-load ram rate", pq, "body")
+        s["actuator_ram_position"] = Signal(x[:, [lay.channel(k) + 2 for k in range(n_ch)]], "rad",
+                                            "simplex ram position as an equivalent gimbal angle", channels, "body")
+        s["actuator_valve_flow"] = Signal(x[:, [lay.valve + layout.N_VALVE_PER_CHANNEL * k for k in range(n_ch)]],
+                                          "rad/s", "simplex power-valve flow as no-load ram rate", channels, "body")
     if lay.slosh:
         so = lay.slosh_offset
         yz = ("lox_y", "lox_z", "lh2_y", "lh2_z")

@@ -86,11 +86,12 @@ def read_staging_state(path: Path, key: str = "phase.staging_state_file") -> Sta
         raise ConfigError(key, str(path), f"the state must start with the rigid-body states {list(layout.STATE_NAMES)}")
     d = np.asarray(doc["discrete"], float)
     u = np.asarray(doc["inputs"], float)
-    if d.size > layout.N_DISC or u.size != layout.N_INPUT:
-        raise ConfigError(key, str(path), f"needs {layout.N_DISC} discrete and {layout.N_INPUT} input values")
-    # discrete fields are only ever appended (models/__init__.py): those a file was
-    # written without start at their initial zero
+    if d.size > layout.N_DISC or u.size > layout.N_INPUT:
+        raise ConfigError(key, str(path), f"needs at most {layout.N_DISC} discrete and {layout.N_INPUT} input values")
+    # discrete fields and inputs are only ever appended (models/__init__.py, models/layout.py):
+    # those a file was written without start at their initial zero
     d = np.concatenate([d, np.zeros(layout.N_DISC - d.size)])
+    u = np.concatenate([u, np.zeros(layout.N_INPUT - u.size)])
     x = np.array([doc["state"][n] for n in names], float)
     if not (np.all(np.isfinite(x)) and np.all(np.isfinite(d)) and np.all(np.isfinite(u))):
         raise ConfigError(key, str(path), "all values must be finite")

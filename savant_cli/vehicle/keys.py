@@ -15,6 +15,7 @@ VEC2 = "vec2"  # [pitch, yaw], finite numbers
 VEC6 = "vec6"  # [Ixx, Iyy, Izz, Ixy, Ixz, Iyz], finite numbers
 VECTORS = {VEC3: (3, "[x, y, z] (structure frame, m)"), VEC2: (2, "[pitch, yaw]"),
            VEC6: (6, "[Ixx, Iyy, Izz, Ixy, Ixz, Iyz] (kg m^2, about the CG, body axes)")}
+ROWS3 = "rows3"  # a list of rows of 3 finite numbers
 NAMES = "names"  # a list of names (strings)
 NAMED = "named"  # a mapping of name → section, each checked by its own reader
 MAPPING = "mapping"  # a free-form mapping checked by its own reader
@@ -68,6 +69,11 @@ def check_value(key: str, value: Any, kind: Any) -> None:
         n, what = VECTORS[kind]
         if not isinstance(value, (list, tuple)) or len(value) != n or not all(is_number(v) for v in value):
             raise ConfigError(key, value, f"must be a list of {n} finite numbers {what}")
+    elif kind == ROWS3:
+        rows_ok = isinstance(value, (list, tuple)) and len(value) > 0 and all(
+            isinstance(r, (list, tuple)) and len(r) == 3 and all(is_number(v) for v in r) for r in value)
+        if not rows_ok:
+            raise ConfigError(key, value, "must be a list of rows of 3 finite numbers")
     elif kind == NAMES:
         if not isinstance(value, (list, tuple)) or not all(isinstance(v, str) for v in value):
             raise ConfigError(key, value, "must be a list of names")

@@ -26,7 +26,7 @@ from savant_cli.config.checks import no_negative_entries, non_negative, positive
 from savant_cli.errors import ConfigError
 from savant_cli.io.table_order import table_key
 from savant_cli.vehicle.composition import composed_table, full_row
-from savant_cli.vehicle.keys import MAPPING, NAMED, NAMES, VEC2, VEC3, VEC6, check_keys, opt
+from savant_cli.vehicle.keys import MAPPING, NAMED, NAMES, ROWS3, VEC2, VEC3, VEC6, check_keys, opt
 from savant_cli.vehicle.tables import MASS_TOLERANCE_KG, check_inertia, read_aero, read_mass, read_table, vec3
 from savant_cli.vehicle.tree import (
     BOOSTER, CONDITION_QUANTITIES, GIMBAL_AXES, ITEM, LIFTOFF, LIQUID, STAGE, TRACE, Condition, ConfigurationSpec,
@@ -50,7 +50,7 @@ TANK_KEYS = {"propellant_kg": float, "slosh": opt(SLOSH_KEYS)}
 ROLL_JET_KEYS = {"thrust_table": str, "exit_area_m2": float, "jets_per_direction": int, "moment_arm_m": float,
                  "ramp_up_s": float, "ramp_down_s": float, "location_m": VEC3}
 STAGE_KEYS = {"inert_mass_kg": opt(float), "tanks": NAMED, "engines": NAMED, "roll_jets": opt(ROLL_JET_KEYS),
-              "mass_table": opt(str)}
+              "mass_table": opt(str), "mixing_matrix": opt(ROWS3)}
 BOOSTER_KEYS = {"attached_to": str, "inert_mass_kg": float, "tanks": NAMED, "engines": NAMED,
                 "roll_jets": opt(ROLL_JET_KEYS), "mass_table": opt(str)}
 ITEM_KEYS = {"mass_kg": float, "attached_to": opt(str), "cg_m": opt(VEC3), "inertia_kgm2": opt(VEC6)}
@@ -132,7 +132,16 @@ class _Reader:
                 raise ConfigError(loads, load, f"must equal the largest propellant_remaining of {key}.mass_table "
                                                f"({section['mass_table']}, from {table.propellant_kg[0]:.1f} to "
                                                f"{table.propellant_kg[-1]:.1f} kg: the part's own propellant, from 0)")
-        self.parts[name] = Part(name, kind, attached, inert, tanks, engines, jets, key, mass=table)
+        mixing = None
+        if section.get("mixing_matrix") is not None:
+            mixing = np.asarray(section["mixing_matrix"], float)
+            if mixing.shape[0] != 2 * len(engines):
+                raise ConfigError(f"{key}.mixing_matrix", section["mixing_matrix"],
+                                  f"needs one row per gimbal channel, {2 * len(engines)}: the pitch then the yaw "
+                                  f"channel of each engine ({', '.join(engines)}), each row the channel's angle per "
+                                  "radian of the roll, pitch and yaw commands")
+        self.parts[name] = Part(name, kind, attached, inert, tanks, engines, jets, key, mass=table,
+                                mixing_matrix=mixing)
 
     def tank(self, name: str, section: Mapping, part: str, key: str) -> str:
         check_keys(section, TANK_KEYS, key)

@@ -194,6 +194,10 @@ class Part:
     cg_m, inertia_kgm2 : numpy.ndarray or None
         An item's CG (structure frame, m) and inertia about it (body axes, ``[Ixx, Iyy,
         Izz, Ixy, Ixz, Iyz]`` kg m²; zeros: a point mass); None: not given.
+    mixing_matrix : numpy.ndarray or None
+        A stage's own control mixer, ``(2 n_engines, 3)``: each gimbal channel's angle
+        (pitch then yaw of each engine, in order) per radian of the roll, pitch and yaw
+        commands (``models/cluster.py``); None: the mixer's own allocation.
     """
 
     name: str
@@ -207,6 +211,7 @@ class Part:
     mass: MassTable | None = None
     cg_m: np.ndarray | None = None
     inertia_kgm2: np.ndarray | None = None
+    mixing_matrix: np.ndarray | None = None
 
 
 @dataclass(frozen=True)

@@ -68,7 +68,9 @@ class FirstStage:
     A cluster of identical engines is one record of the whole stage: the thrust table and
     the exit area are the engines' sums, ``gimbal_m`` their mean gimbal point, ``engine``
     (the moving mass) and the limit each engine's; ``mounts`` places each engine (empty:
-    one engine at ``gimbal_m``, not canted), and each carries an equal share of the thrust."""
+    one engine at ``gimbal_m``, not canted), and each carries an equal share of the thrust;
+    ``mixing_matrix`` is the vehicle file's own control mixer for them (None: the mixer's
+    allocation, ``models/cluster.py``)."""
 
     thrust_time_s: np.ndarray
     thrust_vac_N: np.ndarray
@@ -81,6 +83,7 @@ class FirstStage:
     gimbal_limit_rad: float
     engine: Engine
     mounts: tuple[Mount, ...] = ()
+    mixing_matrix: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -106,6 +109,7 @@ class UpperStage:
     les_mass_kg: float
     engine: Engine
     mounts: tuple[Mount, ...] = ()
+    mixing_matrix: np.ndarray | None = None
 
 
 #: Roll-control jets (the upper stage's).
@@ -339,14 +343,15 @@ def two_stage_view(tree: VehicleTree) -> Vehicle:
         thrust_time_s=fs_thrust.time_s, thrust_vac_N=n_fs * fs_thrust.thrust_vac_N, isp_vac_s=fs_thrust.isp_vac_s,
         isp_sl_s=fs_thrust.isp_sl_s, nozzle_exit_area_m2=n_fs * fs.nozzle_exit_area_m2,
         propellant_kg=grain.propellant_kg, jettison_mass_kg=first.inert_mass_kg, gimbal_m=fs_gimbal,
-        gimbal_limit_rad=fs.gimbal_limit_rad, engine=fs.moving_mass, mounts=fs_mounts)
+        gimbal_limit_rad=fs.gimbal_limit_rad, engine=fs.moving_mass, mounts=fs_mounts,
+        mixing_matrix=first.mixing_matrix)
     upper_stage = UpperStage(
         thrust_vac_N=n_us * us_thrust.thrust_vac_N, isp_vac_s=us_thrust.isp_vac_s,
         mixture_ratio=us_thrust.mixture_ratio, nozzle_exit_area_m2=n_us * us.nozzle_exit_area_m2,
         lox_kg=ox.propellant_kg, lh2_kg=fuel.propellant_kg, startup_time_s=us_thrust.startup_time_s,
         startup_fraction=us_thrust.startup_fraction, shutdown_impulse_Ns=n_us * us_thrust.shutdown_impulse_Ns,
         gimbal_m=us_gimbal, gimbal_limit_rad=us.gimbal_limit_rad, les_mass_kg=items[0].inert_mass_kg if items else 0.0,
-        engine=us.moving_mass, mounts=us_mounts)
+        engine=us.moving_mass, mounts=us_mounts, mixing_matrix=upper.mixing_matrix)
     tanks = (grain.name, ox.name, fuel.name)
     separation = Trigger(-1, 0.0, "thrust_fraction", None, False, sep.when.below)
     never = Trigger(1, float("inf"))  # no item: no jettison
@@ -359,7 +364,9 @@ def two_stage_view(tree: VehicleTree) -> Vehicle:
             "jettison_mass": f"{first.key}.inert_mass_kg",
             "les_mass": f"{items[0].key}.mass_kg" if items else "vehicle.items",
             "slosh.lox": f"{ox.key}.slosh", "slosh.lh2": f"{fuel.key}.slosh",
-            "slosh": f"{ox.key}.slosh and {fuel.key}.slosh"}
+            "slosh": f"{ox.key}.slosh and {fuel.key}.slosh",
+            "mixing_matrix.first_stage": f"{first.key}.mixing_matrix",
+            "mixing_matrix.upper_stage": f"{upper.key}.mixing_matrix"}
     vehicle = Vehicle(
         name=tree.name, description=tree.description, length_m=tree.length_m,
         configurations={n: Configuration(n, c.aero, c.mass) for n, c in zip(CONFIG_NAMES, configs)},
