@@ -17,20 +17,29 @@ from __future__ import annotations
 import dataclasses
 import json
 
+import h5py
 import numpy as np
 import pytest
 from omegaconf import OmegaConf
 
 from conftest import compose_config
 from savant_cli.config import validate
+from savant_cli.config.study.linear import LinearStudyConfig
 from savant_cli.errors import ConfigError
 from savant_cli.io.guidance_file import read_guidance
+from savant_cli.linear.charts import point_charts
+from savant_cli.linear.loops import assemble
 from savant_cli.linear.modes import plant_group
-from savant_cli.models import actuator, blocks, cluster, layout, roll_gimbal
+from savant_cli.linear.plant import linearize_plant
+from savant_cli.linear.point_analysis import analyse
+from savant_cli.linear.requirements import checks_array
+from savant_cli.linear.store import write_linear_group
+from savant_cli.models import actuator, blocks, cluster, layout, mass as mass_model, propulsion, roll_gimbal
 from savant_cli.paths import hydra_search_dirs, shipped_config_dir
+from savant_cli.plots.linear import plot_linear_point
 from savant_cli.sim import engine
 from savant_cli.sim.build import build_model
-from savant_cli.sim.plant import PlantTables
+from savant_cli.sim.plant import PlantTables, derivative
 from savant_cli.sim.run import signals, simulate
 from savant_cli.sim.setup import prepare
 from savant_cli.sim.staging_state import read_staging_state
@@ -352,3 +361,51 @@ def test_a_stages_own_mixing_matrix_reaches_the_plant_and_a_wrong_one_is_refused
     with pytest.raises(ConfigError, match=r"upper_stage\.mixing_matrix = \[\[1\.0, 2\.0\]\]: must be a list of rows of 3"):
         load_vehicle(_two_engine_node(**{"stages.upper_stage.mixing_matrix": [[1.0, 2.0]]}),
                      shipped_config_dir() / "vehicle" / "ares_i")
+
+
+@pytest.mark.slow
+def test_the_linear_roll_loop_is_the_rigid_roll_axis_at_low_frequency(tmp_path):
+    """The octaweb at 60 s with stack roll gains: the loop broken at the roll command is,
+    well below its crossover, the rigid roll axis under the PD law,
+    ``L(jω) → −b_r (Kp + jω Kd) / (I_xx ω²)`` (b_r the delivered thrust times the roll
+    effectiveness), so ``|L| ω² I_xx / (b_r Kp) → 1``, at −180°. The shipped vehicle
+    keeps two loops and four plant inputs."""
+    base = validate(compose_config(["sim.progress=false"]))
+    prep = prepare(base, hydra_search_dirs())
+    vehicle = _octaweb_first_stage(prep.vehicle)
+    kp, kd = 0.4, 0.3
+    cfg = validate(compose_config(["sim.progress=false", f"controller.roll.gimbal.stack.kp={kp}",
+                                   f"controller.roll.gimbal.stack.kd={kd}"]))
+    guidance = read_guidance(prep.command_file)
+    rolling = build_model(cfg, vehicle, guidance)
+    dt = rolling.rates.dt * rolling.rates.n_fcs
+    step = int(round(60.0 / rolling.rates.dt))
+    snap = simulate(rolling, progress=False, snapshot_steps=(step,), t_stop=61.0).snapshots[step]
+    point = assemble(rolling, snap, linearize_plant(rolling, snap), dt)
+    assert tuple(point.loops) == ("pitch", "yaw", "roll")
+    assert point.closed.input_labels[:3] == ["pitch_command", "yaw_command", "roll_command"]
+    aux, xd = np.zeros(layout.N_AUX), np.zeros(snap.x.size)
+    tb = rolling.packed_tables
+    derivative(snap.t, snap.x, snap.u, rolling.p, tb, aux, xd)
+    config = int(snap.u[layout.U_CONFIG])
+    ixx = mass_model.mass_properties(tb, config, aux[mass_model.A_PROP])[4]
+    b_r = aux[propulsion.A_THRUST] * cluster.roll_effectiveness(vehicle, 0)
+    for w in (0.01, 0.03):
+        response = complex(np.squeeze(point.loops["roll"](np.exp(1j * w * dt))))
+        assert abs(response) * w * w * ixx / (b_r * kp) == pytest.approx(1.0, rel=0.02)
+        assert np.degrees(np.angle(-response)) == pytest.approx(0.0, abs=3.0)  # −180°, a little lead
+    # the whole point analysis, its charts and its record carry the roll loop
+    analysis = analyse(rolling, snap, LinearStudyConfig(), dt, cfg.requirements)
+    roll_rows = [r for r in analysis.rows if r.axis == "roll"]
+    assert {r.kind for r in roll_rows} >= {"gain", "phase"}
+    assert analysis.scalars["roll_bandwidth_hz"] > 0.0 and "roll_disk_gain_margin_dB" in analysis.scalars
+    assert analysis.verdict is not None and checks_array([analysis.verdict]).shape[0] > 0
+    charts = point_charts(snap.t, analysis.point.loops, analysis.point.closed, analysis.rows)
+    assert "roll" in [lp.label for lp in charts.loops]
+    with h5py.File(tmp_path / "linear.h5", "w") as f:
+        write_linear_group(f, [analysis.point], analysis.rows, {snap.t: charts}, cfg.requirements)
+    assert len(plot_linear_point(charts, analysis.rows, tmp_path)) == 6
+    shipped = build_model(base, prep.vehicle, guidance)
+    snap = simulate(shipped, progress=False, snapshot_steps=(step,), t_stop=61.0).snapshots[step]
+    plain = assemble(shipped, snap, linearize_plant(shipped, snap), dt)
+    assert tuple(plain.loops) == ("pitch", "yaw") and plain.plant.ninputs == 4

@@ -77,9 +77,9 @@ ROOT_LOCUS_GAINS = np.unique(np.concatenate([np.logspace(-2.0, 1.0, 25), [1.0]])
 #: Duration of the closed-loop time responses (s).
 RESPONSE_DURATION_S = 10.0
 
-AXIS_ORDER = ("pitch", "yaw")
+AXIS_ORDER = ("pitch", "yaw", "roll")
 #: Names of the closed loop's command inputs and of the outputs the responses keep.
-COMMAND_INPUTS = ("pitch_command", "yaw_command")
+COMMAND_INPUTS = ("pitch_command", "yaw_command", "roll_command")
 RESPONSE_SUFFIXES = ("_attitude", "_gimbal")
 
 

@@ -13,10 +13,10 @@ import control as ct
 import numpy as np
 
 from savant_cli.config import RequirementSet
-from savant_cli.linear.loops import AXES, broken_loops, controller_lti, fcs_phase, sensor_plant
+from savant_cli.linear.loops import AXES, broken_loops, controller_lti, fcs_phase, roll_gains_at, sensor_plant
 from savant_cli.linear.margins import MarginRow, loop_margins
 from savant_cli.linear.modes import MarginLabeler, ModePeak, aero_unstable, state_groups
-from savant_cli.linear.plant import PlantLinearization, linearize_plant
+from savant_cli.linear.plant import ROLL_INPUT, PlantLinearization, linearize_plant
 from savant_cli.linear.requirements import STAGE_OF_PHASE, PointVerdict, evaluate_point
 from savant_cli.linear.response import FastResponse
 from savant_cli.models.fcs import FcsTables, flight_gains
@@ -41,12 +41,13 @@ def closed_loop_stability(poles_z: np.ndarray, dt: float) -> tuple[bool, float]:
 
 
 def judge_loops(loops: dict[str, ct.StateSpace], groups: np.ndarray, unstable: bool, time_s: float,
-                axes: tuple[str, ...] = AXES) -> tuple[list[MarginRow], list[ModePeak], dict[str, FastResponse]]:
-    """Every crossing of each loop of ``axes`` labelled by its mode, each loop's
-    bending-mode peaks, and the loops' fast responses (for further use, e.g. disk
-    margins)."""
+                axes: tuple[str, ...] | None = None
+                ) -> tuple[list[MarginRow], list[ModePeak], dict[str, FastResponse]]:
+    """Every crossing of each loop of ``axes`` (None: every loop, pitch, yaw and roll
+    where there is one) labelled by its mode, each loop's bending-mode peaks, and the
+    loops' fast responses (for further use, e.g. disk margins)."""
     rows, peaks, responses = [], [], {}
-    for axis in axes:
+    for axis in (tuple(loops) if axes is None else axes):
         fr = FastResponse(loops[axis])
         labeler = MarginLabeler(loops[axis], groups, unstable)
         rows += loop_margins(loops[axis], time_s, axis, response=fr, labeler=labeler)
@@ -110,11 +111,12 @@ def freeze(model: SimModel, snap: Snapshot, dt: float, jacobian: str = "auto", r
 def point_controller(point: FrozenPoint, ft: FcsTables, dt: float, gains: np.ndarray | None = None) -> ct.StateSpace:
     """The flight control ``ft`` as an LTI at a frozen point: its gains at the point's
     state as in flight (scheduled, faded in after ignition), or ``gains`` (Kp, Ki, Kd, Kir
-    of pitch then yaw)."""
+    of pitch then yaw); with the roll loop where the point's plant has the roll input."""
     if gains is None:
         gains = np.zeros(8)
         flight_gains(ft, point.phase, point.schedule_var, point.since_ignition, gains, 0)
-    return controller_lti(ft, gains, point.phase, dt)
+    roll = roll_gains_at(ft, point.phase, point.since_ignition) if ROLL_INPUT in point.plant.input_labels else None
+    return controller_lti(ft, gains, point.phase, dt, roll)
 
 
 def candidate_loops(point: FrozenPoint, ft: FcsTables, dt: float) -> dict[str, ct.StateSpace]:
@@ -126,14 +128,14 @@ def judge_controller(point: FrozenPoint, ft: FcsTables, dt: float, requirements:
                      gains: np.ndarray | None = None, axes: tuple[str, ...] = AXES
                      ) -> tuple[list[MarginRow], list[ModePeak], PointVerdict]:
     """The margins, bending-mode peaks and verdict of a candidate flight control ``ft`` on
-    a frozen point (the loops of ``axes``; the closed loop with both); its gains scheduled
-    at the point's state as in flight, or ``gains`` (Kp, Ki, Kd, Kir of pitch then yaw)
-    when given."""
+    a frozen point (the loops of ``axes``; the closed loop with every loop); its gains
+    scheduled at the point's state as in flight, or ``gains`` (Kp, Ki, Kd, Kir of pitch
+    then yaw) when given."""
     fcs = point_controller(point, ft, dt, gains)
     g2, loops, _ = broken_loops(point.plant, fcs, dt)
     groups = state_groups(point.lin, point.plant, fcs)
     rows, peaks, _ = judge_loops(loops, groups, point.aero_unstable, point.time_s, tuple(axes))
-    closed = ct.feedback(g2, ct.ss([], [], [], np.eye(2), dt), sign=1)
+    closed = ct.feedback(g2, ct.ss([], [], [], np.eye(g2.ninputs), dt), sign=1)
     stable, max_real = closed_loop_stability(closed.poles(), dt)
     rows, v = verdict(point.time_s, point.phase_name, rows, peaks, stable, max_real, requirements)
     return rows, peaks, v

@@ -6,11 +6,13 @@ Pitch and yaw (``models/fcs.py``), frozen at the snapshot's scheduled gains:
     δc = −[Kp e + Ki I(e) + Kd F(Σ wᵢ ωᵢ) + Kir F_ir(I(ω_own))],     I(z) = T z / (z − 1)
 
 (the integrators are updated before use, as in the flight code), F the two fourth-order
-flex-filter sections, the gyro blend and the stage's own gyro as in flight. The roll jets
-(on/off) are outside linear analysis. The plant is sampled exactly as the time run samples
-it (:func:`sensor_plant`): held commands over each plant step, the rate gyros' own
-discrete filters at the sensor rate, and the loop's transport delay
-(``controller.delay_s``), lifted to the control period.
+flex-filter sections, the gyro blend and the stage's own gyro as in flight. Roll by the
+engines' gimbals (``models/roll_gimbal.py``), where the phase's roll gains are on, is a
+third loop, ``δr = −φ [Kp e + Ki I(e) + Kd F_r(Σ wᵢ pᵢ)]`` with the roll filter F_r and
+the engagement φ; the roll jets (on/off) are outside linear analysis. The plant is
+sampled exactly as the time run samples it (:func:`sensor_plant`): held commands over
+each plant step, the rate gyros' own discrete filters at the sensor rate, and the loop's
+transport delay (``controller.delay_s``), lifted to the control period.
 
 Loop conventions: ``L`` is the open loop broken at an actuator command with the
 negative-feedback convention (closed loop ``L/(1+L)``), so
@@ -26,15 +28,17 @@ import numpy as np
 from scipy.linalg import block_diag, expm
 from scipy.signal import tf2ss
 
-from savant_cli.linear.plant import SENSOR_NAMES, PlantLinearization
+from savant_cli.linear.plant import ROLL_INPUT, SENSOR_NAMES, PlantLinearization, rolls_by_gimbal
 from savant_cli.models import layout
-from savant_cli.models.fcs import FCS_STACK, GYRO_FIRST, GYRO_UPPER, FcsTables
+from savant_cli.models.fcs import FCS_STACK, GYRO_FIRST, GYRO_UPPER, FcsTables, engagement
 from savant_cli.sim import engine
 from savant_cli.sim.build import SimModel
 from savant_cli.sim.run import Snapshot
 
 AXES = ("pitch", "yaw")
 COMMANDS = ("cmd_pitch", "cmd_yaw")
+#: A loop of the roll command to the engines' gimbals, after the pitch and yaw loops.
+ROLL = "roll"
 
 
 @dataclass
@@ -46,10 +50,10 @@ class LinearPoint:
     plant_continuous: ct.StateSpace
     plant: ct.StateSpace  # discretized with the gyro dynamics
     controller: ct.StateSpace
-    loops: dict[str, ct.StateSpace]  # loop-at-a-time, other axis closed
-    loops_open: dict[str, ct.StateSpace]  # SISO with the other axis open
-    mimo: ct.StateSpace  # both broken: 2x2 L
-    closed: ct.StateSpace  # inputs cmd_pitch, cmd_yaw, gust_y, gust_z
+    loops: dict[str, ct.StateSpace]  # loop-at-a-time, the other axes closed (pitch, yaw[, roll])
+    loops_open: dict[str, ct.StateSpace]  # SISO with the other axes open
+    mimo: ct.StateSpace  # all broken: 2x2 L (3x3 with roll)
+    closed: ct.StateSpace  # inputs the commands (pitch, yaw[, roll]), gust_y, gust_z
 
 
 def fcs_phase(events: np.ndarray) -> int:
@@ -62,8 +66,19 @@ def _filter(coef: np.ndarray, dt: float) -> ct.StateSpace:
     return ct.ss(*tf2ss(coef[0, 0], coef[0, 1]), dt) * ct.ss(*tf2ss(coef[1, 0], coef[1, 1]), dt)
 
 
-def controller_lti(ft: FcsTables, gains: np.ndarray, phase: int, dt: float) -> ct.StateSpace:
-    """The pitch/yaw flight control as a discrete LTI.
+def _pid_block(m: np.ndarray, parts: list) -> tuple:
+    """One axis's controller, ``−Σ parts[i](m[i] · inputs)`` as (A, B, C, D)."""
+    a = block_diag(*[p.A for p in parts])
+    b = np.vstack([p.B @ m[i:i + 1] for i, p in enumerate(parts)])
+    cc = -np.hstack([p.C for p in parts])
+    dd = -sum(p.D @ m[i:i + 1] for i, p in enumerate(parts))
+    return a, b, cc, dd
+
+
+def controller_lti(ft: FcsTables, gains: np.ndarray, phase: int, dt: float,
+                   roll_gains: np.ndarray | None = None) -> ct.StateSpace:
+    """The flight control as a discrete LTI: pitch and yaw, and roll by the engines'
+    gimbals when ``roll_gains`` has a non-zero gain.
 
     Parameters
     ----------
@@ -75,14 +90,20 @@ def controller_lti(ft: FcsTables, gains: np.ndarray, phase: int, dt: float) -> c
         Flight-control phase (``FCS_STACK``: the stack filter set and first-stage gyro).
     dt : float
         Control period (s).
+    roll_gains : numpy.ndarray, optional
+        The roll law's Kp (rad/rad), Ki (1/s), Kd (s), the engagement applied
+        (:func:`roll_gains_at`); None or zeros: no roll loop.
 
     Inputs: the 12 sensor signals (:data:`SENSOR_NAMES`) and the attitude commands
-    ``cmd_pitch``, ``cmd_yaw`` (rad); outputs the gimbal commands ``dc_pitch``, ``dc_yaw``.
+    ``cmd_pitch``, ``cmd_yaw`` (and ``cmd_roll``; rad); outputs the gimbal commands
+    ``dc_pitch``, ``dc_yaw`` (and ``dc_roll``).
     """
     fset = 0 if phase == FCS_STACK else 1
     own = GYRO_FIRST if phase == FCS_STACK else GYRO_UPPER
     integ = ct.ss(1.0, 1.0, dt, dt, dt)  # T z / (z − 1) = T + T / (z − 1)
-    n_in = len(SENSOR_NAMES) + len(COMMANDS)
+    rolls = roll_gains is not None and bool(np.any(roll_gains != 0.0))
+    commands = list(COMMANDS) + (["cmd_roll"] if rolls else [])
+    n_in = len(SENSOR_NAMES) + len(commands)
     blocks = []
     for c, axis in enumerate(AXES):
         ax = c + 1  # body y (pitch), z (yaw)
@@ -95,17 +116,27 @@ def controller_lti(ft: FcsTables, gains: np.ndarray, phase: int, dt: float) -> c
         for g in range(3):
             m[1, 3 + 3 * g + ax] = ft.blend[fset, g]
         m[2, 3 + 3 * own + ax] = 1.0
-        a = block_diag(*[p.A for p in parts])
-        b = np.vstack([p.B @ m[i:i + 1] for i, p in enumerate(parts)])
-        cc = -np.hstack([p.C for p in parts])
-        dd = -sum(p.D @ m[i:i + 1] for i, p in enumerate(parts))
-        blocks.append((a, b, cc, dd))
-    a = block_diag(blocks[0][0], blocks[1][0])
-    b = np.vstack([blocks[0][1], blocks[1][1]])
-    c = block_diag(blocks[0][2], blocks[1][2])
-    d = np.vstack([blocks[0][3], blocks[1][3]])
-    return ct.ss(a, b, c, d, dt, inputs=list(SENSOR_NAMES) + list(COMMANDS), outputs=["dc_pitch", "dc_yaw"],
-                 name="fcs")
+        blocks.append(_pid_block(m, parts))
+    if rolls:
+        kp, ki, kd = roll_gains
+        m = np.zeros((2, n_in))  # [e, blended roll rate]
+        m[0, 0] = 1.0
+        m[0, len(SENSOR_NAMES) + 2] = -1.0
+        for g in range(3):
+            m[1, 3 + 3 * g] = ft.blend[fset, g]
+        blocks.append(_pid_block(m, [kp + ki * integ, kd * _filter(ft.roll_filters[fset], dt)]))
+    a = block_diag(*[blk[0] for blk in blocks])
+    b = np.vstack([blk[1] for blk in blocks])
+    c = block_diag(*[blk[2] for blk in blocks])
+    d = np.vstack([blk[3] for blk in blocks])
+    return ct.ss(a, b, c, d, dt, inputs=list(SENSOR_NAMES) + commands,
+                 outputs=["dc_pitch", "dc_yaw"] + (["dc_roll"] if rolls else []), name="fcs")
+
+
+def roll_gains_at(ft: FcsTables, phase: int, since_ignition: float) -> np.ndarray:
+    """The roll law's gains Kp, Ki, Kd as flown at a point: the phase's, times the loop's
+    engagement (``models/fcs.py::engagement``: 0 in the coast, fading in after ignition)."""
+    return ft.roll_gimbal[phase] * engagement(phase, since_ignition, ft.fade)
 
 
 def sensor_plant(lin: PlantLinearization, model: SimModel, dt: float) -> ct.StateSpace:
@@ -144,7 +175,8 @@ def sensor_plant(lin: PlantLinearization, model: SimModel, dt: float) -> ct.Stat
     step_m = {False: block_diag(phi, np.eye(2 * ng)),
               True: np.block([[phi, np.zeros((n, 2 * ng))], [bg @ c[gyro], ag]])}
     step_b = {False: np.vstack([gam, np.zeros((2 * ng, nu))]), True: np.vstack([gam, bg @ d[gyro]])}
-    commands = [sys.input_labels.index(name) for name in ("dc_pitch", "dc_yaw")]
+    commands = [sys.input_labels.index(name) for name in ("dc_pitch", "dc_yaw", ROLL_INPUT)
+                if name in sys.input_labels]
     total = np.eye(nx)
     b_now = np.zeros((nx, nu))
     b_prev = np.zeros((nx, len(commands)))
@@ -176,8 +208,11 @@ def sensor_plant(lin: PlantLinearization, model: SimModel, dt: float) -> ct.Stat
 
 
 def snapshot_controller(model: SimModel, snap: Snapshot, dt: float) -> ct.StateSpace:
-    """:func:`controller_lti` of the model's flight control at a snapshot's gains."""
-    return controller_lti(model.fcs, snap.d[layout.D_GAINS:layout.D_GAINS + 8], fcs_phase(snap.events), dt)
+    """:func:`controller_lti` of the model's flight control at a snapshot's gains (the
+    roll loop's where the vehicle rolls by its gimbals)."""
+    phase = fcs_phase(snap.events)
+    roll = roll_gains_at(model.fcs, phase, snap.t - snap.u[layout.U_T_IGN]) if rolls_by_gimbal(model) else None
+    return controller_lti(model.fcs, snap.d[layout.D_GAINS:layout.D_GAINS + 8], phase, dt, roll)
 
 
 def _series(p: tuple, k: tuple) -> tuple:
@@ -203,23 +238,26 @@ def _feedback_static(g: tuple, h: np.ndarray, sign: float) -> tuple:
 
 def broken_loops(plant: ct.StateSpace, fcs: ct.StateSpace, dt: float
                  ) -> tuple[ct.StateSpace, dict[str, ct.StateSpace], dict[str, ct.StateSpace]]:
-    """``G2`` (the two gimbal commands → the controller's commands, negative-feedback
-    sign inside), the loops broken at one command with the other closed, and with the
-    other open. The algebra is python-control's series and feedback, done on the
-    matrices (:func:`_series`, :func:`_feedback_static`): a design search builds these
-    loops for every candidate."""
+    """``G`` (the gimbal commands → the controller's commands, negative-feedback sign
+    inside: pitch, yaw, and roll when the controller has a roll loop), the loops broken at
+    one command with the others closed, and with the others open. The algebra is
+    python-control's series and feedback, done on the matrices (:func:`_series`,
+    :func:`_feedback_static`): a design search builds these loops for every candidate."""
     n_s = len(SENSOR_NAMES)
     pm = tuple(np.asarray(m, dtype=float) for m in (plant.A, plant.B, plant.C, plant.D))
     km = tuple(np.asarray(m, dtype=float) for m in (fcs.A, fcs.B, fcs.C, fcs.D))
-    # G: plant inputs → controller outputs (commands zero); G2: from the two gimbal commands
+    axes = AXES + ((ROLL,) if fcs.noutputs > len(AXES) else ())
+    n = len(axes)
+    # G: plant inputs → controller outputs (commands zero); G2: from the gimbal commands
     a, b, c, d = _series((pm[0], pm[1], pm[2][:n_s, :], pm[3][:n_s, :]), (km[0], km[1][:, :n_s], km[2],
                                                                          km[3][:, :n_s]))
-    g2m = (a, b[:, :2], c, d[:, :2])
+    columns = [plant.input_labels.index(f"dc_{axis}") for axis in axes]
+    g2m = (a, b[:, columns], c, d[:, columns]) if n > len(AXES) else (a, b[:, :2], c, d[:, :2])
     g2 = ct.ss(*g2m, dt)
     loops, loops_open = {}, {}
-    for k, axis in enumerate(AXES):
-        close_other = np.zeros((2, 2))
-        close_other[1 - k, 1 - k] = 1.0  # the other axis's command fed back (dc = r + k)
+    for k, axis in enumerate(axes):
+        close_other = np.eye(n)
+        close_other[k, k] = 0.0  # the other axes' commands fed back (dc = r + k)
         oa, ob, oc, od = _feedback_static(g2m, close_other, 1.0)
         loops[axis] = ct.ss(oa, ob[:, [k]], -oc[[k], :], -od[[k], :][:, [k]], dt, name=f"L_{axis}",
                             inputs=[f"dc_{axis}"], outputs=[f"k_{axis}"])
@@ -234,36 +272,45 @@ def assemble(model: SimModel, snap: Snapshot, lin: PlantLinearization, dt: float
     plant = sensor_plant(lin, model, dt)
     fcs = snapshot_controller(model, snap, dt)
     g2, loops, loops_open = broken_loops(plant, fcs, dt)
-    n_s = len(SENSOR_NAMES)
+    axes = tuple(loops)
+    n, n_s = len(axes), len(SENSOR_NAMES)
     mimo = -g2
-    mimo = ct.ss(mimo.A, mimo.B, mimo.C, mimo.D, dt, inputs=["dc_pitch", "dc_yaw"], outputs=["k_pitch", "k_yaw"],
-                 name="L_mimo")
-    # closed loop: inputs [dc (2), gust (2), cmd (2)], outputs [k (2), selected plant outputs]
+    mimo = ct.ss(mimo.A, mimo.B, mimo.C, mimo.D, dt, inputs=[f"dc_{a}" for a in axes],
+                 outputs=[f"k_{a}" for a in axes], name="L_mimo")
+    # closed loop: inputs [plant inputs, cmd (n)], outputs [k (n), selected plant outputs]
     n_in = plant.ninputs
-    p_aug = ct.append(plant, ct.ss([], [], [], np.eye(2), dt))  # commands pass through
-    sel_k = np.zeros((n_s + 2, plant.noutputs + 2))
+    p_aug = ct.append(plant, ct.ss([], [], [], np.eye(n), dt))  # commands pass through
+    sel_k = np.zeros((n_s + n, plant.noutputs + n))
     sel_k[:n_s, :n_s] = np.eye(n_s)
-    sel_k[n_s:, plant.noutputs:] = np.eye(2)
-    picks = ["nav_pitch", "nav_yaw", "gimbal_pitch", "gimbal_yaw", "alpha", "beta"]
-    sel_y = np.zeros((len(picks), plant.noutputs + 2))
+    sel_k[n_s:, plant.noutputs:] = np.eye(n)
+    picks = ["nav_pitch", "nav_yaw", "gimbal_pitch", "gimbal_yaw", "alpha", "beta"] + (["nav_roll"] if n > 2 else [])
+    sel_y = np.zeros((len(picks), plant.noutputs + n))
     for i, name in enumerate(picks):
         sel_y[i, plant.output_labels.index(name)] = 1.0
     # one copy of the plant states: [sensors, cmds] → controller, the picks pass through
     h = ct.series(p_aug, ct.ss([], [], [], np.vstack([sel_k, sel_y]), dt),
                   ct.append(fcs, ct.ss([], [], [], np.eye(len(picks)), dt)))
-    fb = np.zeros((n_in + 2, 2 + len(picks)))
-    fb[0, 0] = fb[1, 1] = 1.0  # dc = k
+    fb = np.zeros((n_in + n, n + len(picks)))
+    for k, axis in enumerate(axes):
+        fb[plant.input_labels.index(f"dc_{axis}"), k] = 1.0  # dc = k
     cl = ct.feedback(h, ct.ss([], [], [], fb, dt), sign=1)
-    inputs = [n_in, n_in + 1, 2, 3]  # cmd_pitch, cmd_yaw, gust_y, gust_z
-    outputs = [2, 3, 4, 5, 6, 7, 0, 1]
+    gusts = [plant.input_labels.index("gust_y"), plant.input_labels.index("gust_z")]
+    if n == 2:
+        inputs, outputs = [n_in, n_in + 1] + gusts, [2, 3, 4, 5, 6, 7, 0, 1]
+        in_names = ["pitch_command", "yaw_command", "gust_y", "gust_z"]
+        out_names = ["pitch_attitude", "yaw_attitude", "pitch_gimbal", "yaw_gimbal", "alpha", "beta",
+                     "pitch_gimbal_command", "yaw_gimbal_command"]
+    else:  # the roll command and attitude after pitch and yaw's, the roll gimbal command last
+        inputs, outputs = [n_in, n_in + 1, n_in + 2] + gusts, [3, 4, 9, 5, 6, 7, 8, 0, 1, 2]
+        in_names = ["pitch_command", "yaw_command", "roll_command", "gust_y", "gust_z"]
+        out_names = ["pitch_attitude", "yaw_attitude", "roll_attitude", "pitch_gimbal", "yaw_gimbal", "alpha",
+                     "beta", "pitch_gimbal_command", "yaw_gimbal_command", "roll_gimbal_command"]
     cl = cl[outputs, inputs]
-    closed = ct.ss(cl.A, cl.B, cl.C, cl.D, dt, inputs=["pitch_command", "yaw_command", "gust_y", "gust_z"],
-                   outputs=["pitch_attitude", "yaw_attitude", "pitch_gimbal", "yaw_gimbal", "alpha", "beta",
-                            "pitch_gimbal_command", "yaw_gimbal_command"], name="closed_loop")
+    closed = ct.ss(cl.A, cl.B, cl.C, cl.D, dt, inputs=in_names, outputs=out_names, name="closed_loop")
     phase = {0: "stack", 1: "coast", 2: "upper"}[fcs_phase(snap.events)]
     return LinearPoint(time_s=snap.t, phase=phase, plant_continuous=lin.sys, plant=plant, controller=fcs,
                        loops=loops, loops_open=loops_open, mimo=mimo, closed=closed)
 
 
-__all__ = ["AXES", "COMMANDS", "LinearPoint", "assemble", "broken_loops", "controller_lti", "sensor_plant",
-           "snapshot_controller"]
+__all__ = ["AXES", "COMMANDS", "ROLL", "LinearPoint", "assemble", "broken_loops", "controller_lti", "roll_gains_at",
+           "sensor_plant", "snapshot_controller"]

@@ -54,6 +54,9 @@ LOW_GROUPS = ("rigid", "integrator")
 #: integrator, the rate-path filter (two 4th-order sections), the rate integrator and its
 #: filter.
 CONTROLLER_AXIS = ("integrator",) + ("filter",) * 8 + ("integrator",) + ("filter",) * 8
+#: The roll law's states (roll by the engines' gimbals): the attitude integrator and the
+#: roll-rate filter (two 4th-order sections).
+CONTROLLER_ROLL = ("integrator",) + ("filter",) * 8
 
 
 def plant_group(name: str) -> str:
@@ -85,9 +88,10 @@ def state_groups(lin: PlantLinearization, plant: ct.StateSpace, controller: ct.S
     groups = [plant_group(s) for s in lin.sys.state_labels]
     n_gyro = 2 * sum(1 for o in lin.sys.output_labels if o.startswith("gyro_"))
     groups += ["sensor"] * n_gyro + ["delay"] * (plant.nstates - len(groups) - n_gyro)
-    if controller.nstates != 2 * len(CONTROLLER_AXIS):
-        raise ValueError(f"flight control with {controller.nstates} states; expected {2 * len(CONTROLLER_AXIS)}")
-    return np.array(groups + list(CONTROLLER_AXIS) * 2)
+    control = list(CONTROLLER_AXIS) * 2 + (list(CONTROLLER_ROLL) if controller.noutputs > 2 else [])
+    if controller.nstates != len(control):
+        raise ValueError(f"flight control with {controller.nstates} states; expected {len(control)}")
+    return np.array(groups + control)
 
 
 @dataclass(frozen=True)

@@ -14,6 +14,10 @@ pitch-plane model: rigid gain margin within 2e-4 dB, phase margin within 0.1°, 
 aerodynamic gain margin within 2.3 %; and against the nonlinear plant's small-step
 response within 5 % of peak. ``mode="fixed"`` uses one user step for every
 perturbation instead (``rel_step`` × the state's scale).
+
+Inputs: the equivalent engine's pitch and yaw commands and the lateral gusts
+(:data:`INPUT_NAMES`), then, for a vehicle that rolls by its engines' gimbals, the roll
+command (:data:`ROLL_INPUT`): the mixer's inputs, so the loops break there.
 """
 
 from __future__ import annotations
@@ -39,6 +43,9 @@ GYRO_NAMES = ("upper", "imu", "first")
 SENSOR_NAMES = (["nav_roll", "nav_pitch", "nav_yaw"]
                 + [f"gyro_{g}_{a}" for g in GYRO_NAMES for a in ("p", "q", "r")])
 INPUT_NAMES = ("dc_pitch", "dc_yaw", "gust_y", "gust_z")
+#: The roll command to the engines' gimbals, an input after :data:`INPUT_NAMES` of a
+#: vehicle that rolls by its gimbals (:func:`rolls_by_gimbal`).
+ROLL_INPUT = "dc_roll"
 EXTRA_OUTPUTS = ("gimbal_pitch", "gimbal_yaw", "alpha", "beta")
 
 
@@ -49,6 +56,13 @@ class PlantLinearization:
     sys: ct.StateSpace
     steps: np.ndarray  # perturbation used per state, SI
     z_index: np.ndarray  # index of each linear state's source in x (attitude: Q + axis)
+
+
+def rolls_by_gimbal(model: SimModel) -> bool:
+    """Whether the flight control rolls the vehicle by the engines' gimbals in any phase
+    (``controller.roll.gimbal``, ``models/roll_gimbal.py``): its linear plant then has the
+    roll command as an input, and its loops a roll loop where the gains are on."""
+    return bool(np.any(model.fcs.roll_gimbal != 0.0))
 
 
 def linear_states(model: SimModel) -> tuple[list[str], np.ndarray]:
@@ -191,6 +205,10 @@ def linearize_plant(model: SimModel, snap: Snapshot, mode: str = "auto", rel_ste
         c[:, j] = (_outputs(model, t, xp, x0, u0, tb) - _outputs(model, t, xm, x0, u0, tb)) / (2.0 * h[j])
     inputs = ((layout.U_DPC, STEP["input"]), (layout.U_DYC, STEP["input"]), (layout.U_GUST + 1, STEP["gust"]),
               (layout.U_GUST + 2, STEP["gust"]))
+    names_in = list(INPUT_NAMES)
+    if rolls_by_gimbal(model):
+        inputs += ((layout.U_ROLL, STEP["input"]),)
+        names_in.append(ROLL_INPUT)
     b = np.zeros((n, len(inputs)))
     d = np.zeros((c_rows, len(inputs)))
     for k, (ui, hu) in enumerate(inputs):
@@ -199,6 +217,6 @@ def linearize_plant(model: SimModel, snap: Snapshot, mode: str = "auto", rel_ste
         um[ui] -= hu
         b[:, k] = (f(x0.copy(), up) - f(x0.copy(), um)) / (2.0 * hu)
         d[:, k] = (_outputs(model, t, x0, x0, up, tb) - _outputs(model, t, x0, x0, um, tb)) / (2.0 * hu)
-    sys = ct.ss(a, b, c, d, states=names, inputs=list(INPUT_NAMES), outputs=list(SENSOR_NAMES) + list(EXTRA_OUTPUTS),
+    sys = ct.ss(a, b, c, d, states=names, inputs=names_in, outputs=list(SENSOR_NAMES) + list(EXTRA_OUTPUTS),
                 name=f"plant_t{int(round(t * 1000))}ms")
     return PlantLinearization(sys=sys, steps=h, z_index=idx)

@@ -17,7 +17,7 @@ import numpy as np
 from savant_cli.config import LinearStudyConfig, RequirementSet
 from savant_cli.linear.evaluate import closed_loop_stability, judge_loops, verdict as judge_verdict
 from savant_cli.linear.frozen_time import FrozenTimeWindow, scan_point, window as window_of
-from savant_cli.linear.loops import AXES, LinearPoint, assemble
+from savant_cli.linear.loops import LinearPoint, assemble
 from savant_cli.linear.margins import MarginRow, bandwidth_hz, disk_margins
 from savant_cli.linear.modes import ModePeak, aero_unstable, state_groups
 from savant_cli.linear.plant import linearize_plant
@@ -35,7 +35,7 @@ class PointAnalysis:
     point : LinearPoint
         The linear systems: plant, controller, broken loops, closed loop.
     rows : list of MarginRow
-        Every crossing of both loops (gain dB, phase deg, frequency Hz), labelled by
+        Every crossing of every loop (gain dB, phase deg, frequency Hz), labelled by
         mode; with a requirement set, each with whether it meets it.
     peaks : list of ModePeak
         The loops' peak gain (dB) at each bending mode they carry.
@@ -48,7 +48,7 @@ class PointAnalysis:
     """
 
     point: LinearPoint
-    rows: list[MarginRow]  # every crossing of both loops, labelled by mode
+    rows: list[MarginRow]  # every crossing of every loop, labelled by mode
     peaks: list[ModePeak]  # the loops' peak gain at each bending mode they carry
     scalars: dict  # disk margins, bandwidths, closed-loop stability
     verdict: PointVerdict | None  # against the requirement set, when one is given
@@ -81,7 +81,7 @@ def analyse(model: SimModel, snap: Snapshot, study: LinearStudyConfig, dt: float
     groups = state_groups(lin, pt.plant, pt.controller)
     rows, peaks, responses = judge_loops(pt.loops, groups, aero_unstable(lin), snap.t)
     extra: dict[str, float] = {"time_s": snap.t}
-    for c, axis in enumerate(AXES):
+    for c, axis in enumerate(pt.loops):  # pitch, yaw, and roll where the vehicle rolls by its gimbals
         for k, v in disk_margins(pt.loops[axis], responses[axis]).items():
             extra[f"{axis}_{k}"] = v
         extra[f"{axis}_bandwidth_hz"] = bandwidth_hz(pt.closed[c, c])

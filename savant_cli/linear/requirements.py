@@ -312,7 +312,7 @@ STAGES = ("first_stage", "upper_stage")
 #: Mode names with a fixed code; ``flex_<n>`` is ``len(FIXED_MODES) - 1 + n``.
 FIXED_MODES = ("rigid", "aero", "integrator", "slosh_lox", "slosh_lh2", "closed_loop")
 #: Loops, by code (−1: none, the closed loop).
-AXIS_NAMES = ("pitch", "yaw")
+AXIS_NAMES = ("pitch", "yaw", "roll")
 #: Columns of :func:`checks_array`.
 CHECK_ARRAY_COLUMNS = ("time_s", "axis", "mode", "criterion", "value", "required", "frequency_hz", "passed", "stage")
 

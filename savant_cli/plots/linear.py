@@ -81,9 +81,9 @@ DB_LIMITS = (-80.0, 80.0)
 #: neutral: rigid-body and drift integrators of a linearized vehicle sit at z = 1 ± 1e-5.
 NEUTRAL_RATE = 1e-3
 
-_AXIS_COLORS = {"pitch": "C0", "yaw": "C1"}
+_AXIS_COLORS = {"pitch": "C0", "yaw": "C1", "roll": "C2"}
 _BAND_COLORS = {"rigid/aero": "C0", "slosh": "C2", "flex": "C3"}
-_AXIS_MARKERS = {"pitch": "o", "yaw": "^"}
+_AXIS_MARKERS = {"pitch": "o", "yaw": "^", "roll": "s"}
 _GAIN_COLOR = "C3"   # phase crossover (where the gain margin is read)
 _PHASE_COLOR = "C2"  # gain crossover (where the phase margin is read)
 _CRITICAL_COLOR = "red"
