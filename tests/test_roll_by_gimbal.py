@@ -231,7 +231,7 @@ def test_a_staging_state_written_before_the_roll_command_reads_it_as_zero(tmp_pa
     state = read_staging_state(shipped)
     assert state.u.size == layout.N_INPUT and state.u[layout.U_ROLL] == 0.0
     np.testing.assert_array_equal(state.u[:layout.U_ROLL], doc["inputs"])
-    doc["inputs"] = doc["inputs"] + [0.0, 0.0]  # more inputs than the plant has
+    doc["inputs"] = doc["inputs"] + [0.0] * (layout.N_INPUT - layout.U_ROLL + 1)  # more inputs than the plant has
     path = tmp_path / "staging.json"
     path.write_text(json.dumps(doc))
     with pytest.raises(ConfigError, match=f"at most {layout.N_DISC} discrete and {layout.N_INPUT} input values"):

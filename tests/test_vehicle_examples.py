@@ -30,11 +30,18 @@ def examples() -> dict[str, str]:
     return {name: body for name, body in BLOCK.findall(PAGE.read_text(encoding="utf-8"))}
 
 
-def _loaded(name: str):
+def example_node(name: str) -> dict:
+    """The shipped ares_i vehicle node with the page's example ``name`` written over it
+    (the sections it :data:`REPLACES` emptied first, in place: the stages keep their order)."""
     base = OmegaConf.load(SHIPPED / "ares_i.yaml").vehicle
+    for key in REPLACES.get(name, ()):
+        OmegaConf.update(base, key, {}, merge=False)
     over = [OmegaConf.create(examples()[b]) for b in BUILDS_ON.get(name, ())]
-    node = OmegaConf.to_container(OmegaConf.merge(base, *over, OmegaConf.create(examples()[name])), resolve=True)
-    return load_vehicle(node, SHIPPED / "ares_i")
+    return OmegaConf.to_container(OmegaConf.merge(base, *over, OmegaConf.create(examples()[name])), resolve=True)
+
+
+def _loaded(name: str):
+    return load_vehicle(example_node(name), SHIPPED / "ares_i")
 
 
 def _rule(vehicle, slot: int) -> engine.EventRule:
@@ -91,14 +98,30 @@ def check_a_given_mixing_matrix(vehicle):
         np.reshape(given, (2, 6)), atol=1e-12)
 
 
+def check_a_liquid_first_stage(vehicle):
+    fs = vehicle.first_stage
+    assert vehicle.tanks == ("first_stage_lox", "rp1", "lox", "lh2")
+    assert fs.liquid is not None and fs.propellant_kg == 647600.0  # the stack mass table's full load, unchanged
+    assert (fs.liquid.thrust_vac_N, fs.liquid.mixture_ratio, fs.liquid.throttle.axial_acceleration_limit_mps2) == (
+        14.0e6, 2.6, 39.2)
+    # "the oxidizer runs out first and leaves 153.8 kg of RP-1"
+    burned = min(fs.oxidizer_kg, 2.6 * fs.fuel_kg) * (1 + 1 / 2.6)
+    assert fs.fuel_kg - burned / 3.6 == pytest.approx(153.846, abs=1e-3)
+    rule = _rule(vehicle, engine.EV_SEPARATION)
+    assert (rule.when, rule.threshold) == (engine.WHEN_THRUST_FRACTION, 0.02)
+
+
 #: examples written over another example of the page (merged in this order)
 BUILDS_ON = {"a-given-mixing-matrix": ("a-two-engine-cluster",)}
+#: sections of the shipped vehicle an example replaces whole (emptied before the merge)
+REPLACES = {"a-liquid-first-stage": ("stages.first_stage",)}
 CHECKS = {"jettison-on-a-condition": check_jettison_on_a_condition,
           "a-delay-arms-a-condition": check_a_delay_arms_a_condition,
           "composed-mass-properties": check_composed_mass_properties,
           "ignition-on-a-tank": check_ignition_on_a_tank,
           "a-two-engine-cluster": check_a_two_engine_cluster,
-          "a-given-mixing-matrix": check_a_given_mixing_matrix}
+          "a-given-mixing-matrix": check_a_given_mixing_matrix,
+          "a-liquid-first-stage": check_a_liquid_first_stage}
 
 
 def test_every_example_on_the_page_has_a_check():

@@ -110,14 +110,17 @@ class Reference:
         self.cfg = cfg
         self.vehicle = vehicle
         self.prog = prog
-        self.tb: PlantTables = build.plant_tables(cfg, vehicle)
+        params, self.tb = build.plant_data(cfg, vehicle)
         self.packed = pack_tables(self.tb)  # the plant's own kernels read these
+        # the first stage's nominal trace (a throttled liquid stage's under the flight's own law)
+        self.fs_time, self.fs_thrust = build.nominal_first_stage_trace(vehicle, params, self.packed)
         self.r0, self.v0, self.q0 = build.pad_state(cfg, vehicle)
         ls = cfg.guidance.launch_site
         lat, lon = np.radians(ls.latitude_deg), np.radians(ls.longitude_deg)
         self.c_e2n = earth.dcm_ecef_to_ned(lat, lon)  # = ECI→launch frame at t = 0
         self.pad_heading = np.radians(ls.pad_heading_deg)
-        self.t_sep = build.predicted_separation_time(vehicle)  # a prediction: no flight exists here (the flight separates on board)
+        # a prediction: no flight exists here (the flight separates on board)
+        self.t_sep = build.predicted_separation_time(vehicle, params, self.packed)
         timed_events(vehicle)
         self.t_ign = self.t_sep + vehicle.events.ignition_delay_s
         self.t_les = self.t_ign + vehicle.events.les_jettison_delay_s
@@ -230,7 +233,7 @@ class Reference:
                 f += -qbar * s_ref * cn * n_dir / nn
         fs, us = self.vehicle.first_stage, self.vehicle.upper_stage
         if cfg_i == CONFIG_STACK and y[6] > 0.0:
-            f_vac = np.interp(t, tb.fs_time, tb.fs_thrust)
+            f_vac = np.interp(t, self.fs_time, self.fs_thrust)
             f += max(f_vac - pres * fs.nozzle_exit_area_m2, 0.0) * x_b
             mdot[0] = f_vac / (G0 * fs.isp_vac_s)
         elif t >= self.t_ign and y[7] > 0.0 and y[8] > 0.0:

@@ -18,7 +18,8 @@ from savant_cli.models import guidance, sensors, fcs  # noqa: F401  (flight soft
 from savant_cli.models import command_schedule, peg  # noqa: F401  (appended: older staging states stay valid)
 from savant_cli.models import navigation  # noqa: F401  (appended likewise)
 from savant_cli.models import roll_gimbal  # noqa: F401  (appended likewise)
+from savant_cli.models import throttle  # noqa: F401  (appended likewise)
 
 #: The models that build plant parameters and tables, in build order.
 PLANT_MODELS = (earth, gravity, atmosphere, winds, propulsion, actuator, rcs, mass, aero, twd, slosh, flex, cluster,
-                sensors, peg, navigation)
+                sensors, peg, navigation, throttle)

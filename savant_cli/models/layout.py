@@ -138,6 +138,8 @@ U_T_CUT = _INPUTS.scalar("cutoff_command_time", "s",
 U_GUST = _INPUTS.array("gust", 3, "m/s", "gust velocity, body axes: the air moves with it (linear-analysis input)")
 U_ROLL = _INPUTS.scalar("roll_gimbal_command", "rad",
                        "roll command δr to the engines' gimbals: the most-deflected nozzle's angle")
+U_THROTTLE = _INPUTS.scalar("first_stage_throttle", "1", "the first stage's throttle setting, fraction of rated "
+                           "thrust (read only when it is throttled: models/throttle.py)")
 N_INPUT = blocks.INPUTS.size
 
 

@@ -12,7 +12,11 @@ interpolation). So ``∫ ṁ dt = M`` and the delivered vacuum impulse is ``g0 I
 by construction: the motor stops thrusting exactly when its propellant is gone, whatever
 the load, Isp or burn rate (a burn-rate factor k compresses the table: ``k F_tab(k t)``).
 For a consistent table (``I_tab = g0 Isp M``; the shipped Ares-I table within 0.007 %) the
-nominal thrust is the table's. Upper stage (J-2X class): ``F_vac = F_rated f(t − t_ign)`` with the
+nominal thrust is the table's. A liquid first stage instead burns like the upper stage:
+``F_vac = k F_rated f(t − t_ign)`` with its start-up fraction ``f`` (ignition
+``t_ign`` = minus the transient's length: full thrust at liftoff) and its throttle
+setting ``k`` (``models/throttle.py``; 1 unthrottled), ``ṁ = F_vac / (g0 Isp)`` split
+oxidizer : fuel by its mixture ratio, until either tank is empty. Upper stage (J-2X class): ``F_vac = F_rated f(t − t_ign)`` with the
 start-up thrust fraction ``f`` from a table; ``ṁ = F_vac / (g0 Isp)``, split LOX : LH2 by
 the mixture ratio. After the cutoff command at ``t_cut`` the thrust decays linearly to
 zero over ``T_sd = 2 I_sd / F_rated`` (the shutdown transient; ``I_sd`` the engine's
@@ -54,6 +58,14 @@ P_FS_EXIT_AREA = _PARAMS.scalar("first_stage.exit_area", "m^2", "first-stage noz
 P_FS_FLOW_PER_THRUST = _PARAMS.scalar("first_stage.flow_per_table_thrust", "kg/(N*s)",
                                       "load / table impulse: mass flow per N of the thrust table")
 P_FS_PROP_FULL = _PARAMS.scalar("first_stage.propellant_full", "kg", "first-stage propellant at liftoff")
+P_FS_LIQUID = _PARAMS.scalar("first_stage.liquid", "1", "1: liquid engines (rated thrust, two tanks), 0: a motor")
+P_FS_THRUST = _PARAMS.scalar("first_stage.thrust_vac", "N", "liquid first stage's rated vacuum thrust")
+P_FS_MR = _PARAMS.scalar("first_stage.mixture_ratio", "1", "liquid first stage's oxidizer : fuel mass ratio")
+P_FS_IGNITION = _PARAMS.scalar("first_stage.ignition_time", "s",
+                               "liquid first stage's ignition, mission time (minus its start transient's length)")
+P_FS_FUEL_TANK = _PARAMS.scalar("first_stage.fuel_state", "1",
+                                "index in x of a liquid first stage's fuel (kg; its oxidizer at first_stage.tank_state;"
+                                " read only when first_stage.liquid is 1)")
 P_US_THRUST = _PARAMS.scalar("upper_stage.thrust_vac", "N", "upper-stage rated vacuum thrust")
 P_US_ISP = _PARAMS.scalar("upper_stage.isp_vac", "s", "upper-stage vacuum specific impulse")
 P_US_MR = _PARAMS.scalar("upper_stage.mixture_ratio", "1", "LOX : LH2 mass ratio")
@@ -61,7 +73,8 @@ P_US_EXIT_AREA = _PARAMS.scalar("upper_stage.exit_area", "m^2", "upper-stage noz
 P_US_PROP_FULL = _PARAMS.scalar("upper_stage.propellant_full", "kg", "upper-stage LOX + LH2 at ignition")
 P_US_SHUTDOWN_TIME = _PARAMS.scalar("upper_stage.shutdown_time", "s",
                                     "duration of the linear thrust decay after the cutoff command, 2 I_sd / F_rated")
-P_FS_TANK = _PARAMS.scalar("first_stage.tank_state", "1", "index in x of the first-stage motor's propellant (kg)")
+P_FS_TANK = _PARAMS.scalar("first_stage.tank_state", "1",
+                           "index in x of the first-stage motor's propellant, or a liquid stage's oxidizer (kg)")
 P_US_OX_TANK = _PARAMS.scalar("upper_stage.oxidizer_state", "1", "index in x of the upper stage's LOX (kg)")
 P_US_FUEL_TANK = _PARAMS.scalar("upper_stage.fuel_state", "1", "index in x of the upper stage's LH2 (kg)")
 P_FS_GIMBAL = _PARAMS.record("first_stage.gimbal", GIMBAL, "first-stage gimbal point")
@@ -70,6 +83,8 @@ P_US_GIMBAL = _PARAMS.record("upper_stage.gimbal", GIMBAL, "upper-stage gimbal p
 _TABLES = blocks.TABLES.block("propulsion")
 T_FS_TIME = _TABLES.table("fs_time", "s", "first-stage thrust table, mission time")
 T_FS_THRUST = _TABLES.table("fs_thrust", "N", "first-stage vacuum thrust at T_FS_TIME")
+T_FS_START_TIME = _TABLES.table("fs_start_time", "s", "liquid first stage's start transient, time since ignition")
+T_FS_START_FRAC = _TABLES.table("fs_start_frac", "1", "fraction of rated thrust at T_FS_START_TIME")
 T_US_START_TIME = _TABLES.table("us_start_time", "s", "upper-stage start transient, time since ignition")
 T_US_START_FRAC = _TABLES.table("us_start_frac", "1", "fraction of rated thrust at T_US_START_TIME")
 _AUX = blocks.DIAGNOSTICS.block("propulsion")
@@ -116,14 +131,22 @@ def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarra
     p[P_US_EXIT_AREA] = us.nozzle_exit_area_m2
     p[P_US_PROP_FULL] = us.lox_kg + us.lh2_kg
     p[P_US_SHUTDOWN_TIME] = 2.0 * us.shutdown_impulse_Ns / us.thrust_vac_N
-    grain, ox, fuel = inputs.vehicle.tanks
-    p[P_FS_TANK] = inputs.layout.tank(grain)
+    fs_tanks, (ox, fuel) = inputs.vehicle.first_stage_tanks, inputs.vehicle.upper_stage_tanks
+    p[P_FS_TANK] = inputs.layout.tank(fs_tanks[0])
     p[P_US_OX_TANK] = inputs.layout.tank(ox)
     p[P_US_FUEL_TANK] = inputs.layout.tank(fuel)
     p[P_FS_GIMBAL:P_FS_GIMBAL + GIMBAL.size] = fs.gimbal_m
     p[P_US_GIMBAL:P_US_GIMBAL + GIMBAL.size] = us.gimbal_m
     tables.update(fs_time=fs.thrust_time_s, fs_thrust=fs.thrust_vac_N, us_start_time=us.startup_time_s,
-                  us_start_frac=us.startup_fraction)
+                  us_start_frac=us.startup_fraction, fs_start_time=np.array([0.0, 1.0]),
+                  fs_start_frac=np.array([1.0, 1.0]))  # the start tables: a motor never reads them
+    if fs.liquid is not None:
+        p[P_FS_LIQUID] = 1.0
+        p[P_FS_FUEL_TANK] = inputs.layout.tank(fs_tanks[1])
+        p[P_FS_THRUST] = fs.liquid.thrust_vac_N
+        p[P_FS_MR] = fs.liquid.mixture_ratio
+        p[P_FS_IGNITION] = -float(fs.liquid.startup_time_s[-1])
+        tables.update(fs_start_time=fs.liquid.startup_time_s, fs_start_frac=fs.liquid.startup_fraction)
 
 
 def table_impulse(time_s: np.ndarray, thrust_N: np.ndarray) -> float:
@@ -134,8 +157,10 @@ def table_impulse(time_s: np.ndarray, thrust_N: np.ndarray) -> float:
 
 @njit(cache=True, error_model="numpy", inline="always")
 def first_stage_propellant(x: np.ndarray, p: np.ndarray) -> float:
-    """The first-stage motor's propellant remaining (kg)."""
-    return x[int(p[P_FS_TANK])]
+    """The first stage's propellant remaining (kg): its motor's, or its oxidizer plus fuel."""
+    if p[P_FS_LIQUID] == 0.0:
+        return x[int(p[P_FS_TANK])]
+    return x[int(p[P_FS_TANK])] + x[int(p[P_FS_FUEL_TANK])]
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -145,11 +170,20 @@ def upper_stage_propellant(x: np.ndarray, p: np.ndarray) -> tuple[float, float]:
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def first_stage_flow(x: np.ndarray, tb: np.ndarray, p: np.ndarray, t: float) -> tuple[float, float]:
-    """Vacuum thrust (N) and mass flow (kg/s) of the solid motor at mission time ``t``
-    (s): ``ṁ = M F_tab(t) / I_tab``, ``F_vac = g0 Isp ṁ``; zero outside the table's time
-    span and once the motor's propellant state is empty. The sequencer's sensed thrust
-    (chamber pressure) is this ``F_vac``."""
+def first_stage_flow(x: np.ndarray, tb: np.ndarray, p: np.ndarray, t: float, throttle: float) -> tuple[float, float]:
+    """Vacuum thrust (N) and mass flow (kg/s) of the first stage at mission time ``t``
+    (s). A motor: ``ṁ = M F_tab(t) / I_tab``, ``F_vac = g0 Isp ṁ``, zero outside the
+    table's time span and once its propellant state is empty. Liquid engines: ``F_vac =
+    throttle F_rated f(t − t_ign)``, ``ṁ = F_vac / (g0 Isp)``, zero once either tank is
+    empty (``throttle``: the setting it burns at, 1 unthrottled). The sequencer's sensed
+    thrust (chamber pressure) is this ``F_vac``."""
+    if p[P_FS_LIQUID] != 0.0:
+        if not (x[int(p[P_FS_TANK])] > 0.0 and x[int(p[P_FS_FUEL_TANK])] > 0.0):
+            return 0.0, 0.0
+        o_st, n_st = tab(tb, T_FS_START_TIME)
+        f_vac = throttle * p[P_FS_THRUST] * interp1_at(tb, o_st, tab_offset(tb, T_FS_START_FRAC), n_st,
+                                                      t - p[P_FS_IGNITION])
+        return f_vac, f_vac / (G0 * p[P_FS_ISP])
     o_ft, n_ft = tab(tb, T_FS_TIME)
     if first_stage_propellant(x, p) <= 0.0 or t < tb[o_ft] or t > tb[o_ft + n_ft - 1]:
         return 0.0, 0.0
@@ -189,20 +223,21 @@ def propellant_remaining(x: np.ndarray, p: np.ndarray, config: int) -> float:
 
 @njit(cache=True, error_model="numpy", inline="always")
 def thrust_and_flow(x: np.ndarray, tb: np.ndarray, p: np.ndarray, engine: int, t: float, t_ign: float,
-                    t_cut: float, pres: float) -> tuple[float, float, float, float]:
+                    t_cut: float, throttle: float, pres: float) -> tuple[float, float, float, float]:
     """Delivered thrust (N), the first- and upper-stage mass flows (kg/s) and the vacuum
     thrust of the burning engine (N).
 
     ``engine`` is the engine phase, ``t`` mission time (s), ``t_ign`` the upper-stage
-    ignition time (s), ``t_cut`` its cutoff command time (s; 0 or less: none yet), ``pres``
-    the ambient pressure (Pa).
+    ignition time (s), ``t_cut`` its cutoff command time (s; 0 or less: none yet),
+    ``throttle`` the first stage's setting (1 unthrottled), ``pres`` the ambient pressure
+    (Pa).
     """
     thrust = 0.0
     f_vac = 0.0
     mdot_fs = 0.0
     mdot_us = 0.0
     if engine == ENGINE_FIRST:
-        f_vac, mdot_fs = first_stage_flow(x, tb, p, t)
+        f_vac, mdot_fs = first_stage_flow(x, tb, p, t, throttle)
         if mdot_fs > 0.0:
             thrust = max(f_vac - pres * p[P_FS_EXIT_AREA], 0.0)
     elif engine == ENGINE_UPPER:
@@ -215,10 +250,15 @@ def thrust_and_flow(x: np.ndarray, tb: np.ndarray, p: np.ndarray, engine: int, t
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def propellant_rates(p: np.ndarray, mdot_fs: float, mdot_us: float) -> tuple[float, float, float]:
-    """Derivatives of the first-stage, LOX and LH2 propellant states (kg/s)."""
+def propellant_rates(p: np.ndarray, mdot_fs: float, mdot_us: float) -> tuple[float, float, float, float]:
+    """Derivatives of the first stage's motor (or oxidizer) and fuel (0 for a motor),
+    and of the upper stage's LOX and LH2 propellant states (kg/s)."""
     mr = p[P_US_MR]
-    return -mdot_fs, -mdot_us * mr / (1.0 + mr), -mdot_us / (1.0 + mr)
+    dm_fs, dm_fs_fuel = -mdot_fs, 0.0
+    if p[P_FS_LIQUID] != 0.0:
+        r = p[P_FS_MR]
+        dm_fs, dm_fs_fuel = -mdot_fs * r / (1.0 + r), -mdot_fs / (1.0 + r)
+    return dm_fs, dm_fs_fuel, -mdot_us * mr / (1.0 + mr), -mdot_us / (1.0 + mr)
 
 
 @njit(cache=True, error_model="numpy", inline="always")

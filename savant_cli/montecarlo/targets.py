@@ -308,6 +308,9 @@ def _upper_load(vehicle: Vehicle, name: str, k_tank: float) -> Vehicle:
 def _apply_table(vehicle: Vehicle, name: str, v: float) -> Vehicle:
     """Vehicle-table dispersions applied before the build (aero is applied after)."""
     fs = vehicle.first_stage
+    if fs.liquid is not None and name in ("tables.first_stage.burn_rate", "tables.first_stage.propellant_load"):
+        raise ConfigError(name, v, "disperses a solid motor's trace or grain; this first stage is liquid (disperse "
+                                   "its tanks' loads in the vehicle file)")
     if name == "tables.first_stage.burn_rate":
         if not v > 0.0:
             raise ConfigError(name, v, "burn-rate factor must be positive")

@@ -16,7 +16,7 @@ from savant_cli.errors import ConfigError
 from savant_cli.flex_slosh import FlexTables, SloshData, load_flex, load_slosh
 from savant_cli.io.guidance_file import SPEED_COLUMN, GuidanceTable
 from savant_cli.io.table_order import table_key
-from savant_cli.models import PLANT_MODELS, blocks, earth, layout, propulsion, quaternion as qt, rigid_body
+from savant_cli.models import PLANT_MODELS, blocks, earth, layout, propulsion, quaternion as qt, rigid_body, throttle
 from savant_cli.models.command_schedule import SCHEDULES
 from savant_cli.models.fcs import FcsTables, fcs_tables
 from savant_cli.models.guidance import SmootherGains, smoother_gains
@@ -25,6 +25,7 @@ from savant_cli.sim import engine
 from savant_cli.sim.engine import EventRule, EventSchedule, Rates
 from savant_cli.sim.plant import PlantTables, mass_state, pack_tables
 from savant_cli.vehicle import Vehicle
+from savant_cli.vehicle.two_stage import BURNOUT_DROP_S, usable_load
 
 
 @dataclass
@@ -106,18 +107,73 @@ def rates(cfg: SavantConfig) -> Rates:
                  n_guid=ratio(s.guidance_rate_hz), n_log=ratio(s.log_rate_hz))
 
 
-def predicted_separation_time(vehicle: Vehicle) -> float:
-    """A prediction, from the thrust table alone, of the separation time (s): the first
-    time after the table's peak when the thrust falls below the configured fraction of
-    that peak. The flight itself separates on board at the step its flown motor meets
+def predicted_separation_time(vehicle: Vehicle, p: np.ndarray | None = None, tb: np.ndarray | None = None) -> float:
+    """A prediction, from the nominal thrust trace alone, of the separation time (s): the
+    first time after the trace's peak when the thrust falls below the configured fraction
+    of that peak. The flight itself separates on board at the step its flown stage meets
     the rule (``sim/engine.py``); this is only for what is needed before any flight (the
-    command table's first-stage samples, reference trajectories)."""
-    fs = vehicle.first_stage
-    t = np.linspace(fs.thrust_time_s[0], fs.thrust_time_s[-1], 200001)
-    f = np.interp(t, fs.thrust_time_s, fs.thrust_vac_N)
+    command table's first-stage samples, reference trajectories). A throttled liquid
+    stage's trace needs the run's parameters ``p`` and packed tables ``tb``
+    (:func:`nominal_first_stage_trace`)."""
+    time_s, thrust = nominal_first_stage_trace(vehicle, p, tb)
+    t = np.linspace(time_s[0], time_s[-1], 200001)
+    f = np.interp(t, time_s, thrust)
     ipk = int(np.argmax(f))
     below = np.nonzero(f[ipk:] < vehicle.events.separation_thrust_fraction * f[ipk])[0]
     return float(t[ipk + below[0]]) if below.size else float(t[-1])
+
+
+#: The step of the throttled trace's march (s).
+TRACE_STEP_S = 0.05
+
+
+def nominal_first_stage_trace(vehicle: Vehicle, p: np.ndarray | None = None,
+                              tb: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """The first stage's nominal vacuum thrust (N) against mission time (s).
+
+    A motor's, and an unthrottled liquid stage's, is its thrust table. A throttled liquid
+    stage's is marched at :data:`TRACE_STEP_S` with the flight's own throttle law
+    (``models/throttle.py::cycle``, each step a cycle), its sensed axial acceleration
+    taken as the vacuum thrust over the stack's mass at the propellant left (no drag, no
+    back-pressure loss: an acceleration a little high, so the predicted throttling comes
+    a little early and the burn a little long), until the usable load is burned: the
+    table's own (trapezoidal) impulse is ``g0 Isp`` times the usable load."""
+    fs = vehicle.first_stage
+    if fs.liquid is None or fs.liquid.throttle is None:
+        return fs.thrust_time_s, fs.thrust_vac_N
+    if p is None or tb is None:
+        raise ValueError("a throttled first stage's trace needs the run's parameters and tables")
+    stack = vehicle.configurations["stack"].mass
+    rated = fs.liquid.thrust_vac_N * float(fs.liquid.startup_fraction[-1])
+    flow_per_thrust = 1.0 / (constants.G0 * fs.isp_vac_s)
+    load = usable_load(fs.liquid.mixture_ratio, fs.oxidizer_kg, fs.fuel_kg)
+    time_s = list(fs.thrust_time_s[fs.thrust_time_s < 0.0])
+    thrust = list(fs.thrust_vac_N[fs.thrust_time_s < 0.0])
+    t, burned, k = 0.0, 0.0, throttle.start(p, tb)
+    time_s.append(t)
+    thrust.append(k * rated)
+    while True:
+        f = k * rated
+        left = load - burned
+        if f * flow_per_thrust * TRACE_STEP_S < left:  # a cycle: the setting from the acceleration at its end
+            mass = float(np.interp(fs.propellant_kg - burned - f * flow_per_thrust * TRACE_STEP_S,
+                                   stack.propellant_kg, stack.mass_kg))
+            k_next = throttle.cycle(k, t + TRACE_STEP_S, f / mass, TRACE_STEP_S, p, tb)
+            burned_step = 0.5 * (f + k_next * rated) * flow_per_thrust * TRACE_STEP_S  # the table's trapezoid
+            if burned_step < left:
+                burned += burned_step
+                t += TRACE_STEP_S
+                k = k_next
+                time_s.append(t)
+                thrust.append(k * rated)
+                continue
+        t += left / (f * flow_per_thrust)  # the last step, at the setting held: the load burned exactly
+        time_s.append(t)
+        thrust.append(f)
+        break
+    time_s.append(time_s[-1] + BURNOUT_DROP_S)
+    thrust.append(0.0)
+    return np.asarray(time_s), np.asarray(thrust)
 
 
 def target_energy(cfg: SavantConfig) -> float:
@@ -213,8 +269,13 @@ def build_model(cfg: SavantConfig, vehicle: Vehicle, guidance: GuidanceTable) ->
     x0[layout.V:layout.V + 3] = v0
     x0[layout.Q:layout.Q + 4] = q0
     x0[layout.W:layout.W + 3] = w0
-    grain, ox, fuel = vehicle.tanks
-    x0[x_layout.tank(grain)] = vehicle.configurations["stack"].mass.propellant_kg[-1]
+    fs_tanks, (ox, fuel) = vehicle.first_stage_tanks, vehicle.upper_stage_tanks
+    fs = vehicle.first_stage
+    if fs.liquid is None:
+        x0[x_layout.tank(fs_tanks[0])] = vehicle.configurations["stack"].mass.propellant_kg[-1]
+    else:
+        x0[x_layout.tank(fs_tanks[0])] = fs.oxidizer_kg
+        x0[x_layout.tank(fs_tanks[1])] = fs.fuel_kg
     x0[x_layout.tank(ox)] = vehicle.upper_stage.lox_kg
     x0[x_layout.tank(fuel)] = vehicle.upper_stage.lh2_kg
     # the pad state is the whole vehicle's CG; with slosh on the state's reference point
@@ -233,9 +294,11 @@ def build_model(cfg: SavantConfig, vehicle: Vehicle, guidance: GuidanceTable) ->
     u0 = np.zeros(layout.N_INPUT)
     u0[layout.U_CONFIG] = layout.CONFIG_STACK
     u0[layout.U_ENGINE] = layout.ENGINE_FIRST
+    packed = pack_tables(tb)
+    u0[layout.U_THROTTLE] = throttle.start(p, packed)
 
     sched = event_schedule(cfg, vehicle, rt)
-    t_sep_predicted = predicted_separation_time(vehicle)
+    t_sep_predicted = predicted_separation_time(vehicle, p, packed)
     guidance = first_stage_profile(guidance, cfg, t_sep_predicted)
     info = {"predicted_separation_time_s": t_sep_predicted}
     return SimModel(p=p, tables=tb, fcs=ft, gyro=gyro, smoother=smoother_gains(cfg.guidance.smoother),

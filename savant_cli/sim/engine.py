@@ -6,7 +6,9 @@ on step boundaries, runs the discrete parts at their own rates with zero-order h
 * rate gyros every ``n_sensor`` plant steps (200 Hz by default);
 * command smoother, flight control and roll-jet logic every ``n_fcs`` steps (50 Hz);
   their commands reach the actuators and jets ``controller.delay_s`` later (the loop's
-  transport delay, a whole number of plant steps within the control period);
+  transport delay, a whole number of plant steps within the control period); a
+  throttled first stage's engine controller sets its new throttle at the same cycle, at
+  once (``models/throttle.py``, from the sensed axial acceleration with a limit);
 * a new guidance command every ``n_guid`` steps (1 Hz): from the stored profile
   (``models/guidance.py``, read at mission time or, in the first stage, by relative
   speed: ``models/command_schedule.py``) or, once engaged in the upper stage, from
@@ -14,8 +16,8 @@ on step boundaries, runs the discrete parts at their own rates with zero-order h
   shutdown impulse's lead) also commands the cutoff at the plant step nearest it;
 * the vehicle's events at the first step boundary at which their trigger holds
   (:class:`EventSchedule`, from the vehicle file's ``events``): separation when the
-  sensed (vacuum) thrust of the flown first-stage motor falls below a fraction of its own
-  flown peak (the peak is kept in the discrete state), the upper-stage ignition and the
+  sensed (vacuum) thrust of the flown first stage (its motor, or its liquid engines as
+  throttled) falls below a fraction of its own flown peak (the peak is kept in the discrete state), the upper-stage ignition and the
   item's (LES or fairing) jettison a delay after the event they count from and, with a
   condition, once it holds (axial acceleration, altitude, dynamic pressure, a tank's
   propellant); then the cutoff command; after the command the upper-stage thrust decays
@@ -36,7 +38,8 @@ from numba import njit
 
 from savant_cli.io.guidance_file import GuidanceTable
 from savant_cli.models import (
-    actuator, aero, earth, flex, navigation, peg, propulsion, quaternion as qt, rcs, rigid_body, roll_gimbal, slosh
+    actuator, aero, earth, flex, navigation, peg, propulsion, quaternion as qt, rcs, rigid_body, roll_gimbal, slosh,
+    throttle
 )
 from savant_cli.models.command_schedule import BY_TIME, D_PROFILE_OFFSET, D_PROFILE_RATE, profile_time
 from savant_cli.models.earth import A_ALT, P_E2, P_OMEGA_E, P_RE
@@ -45,7 +48,8 @@ from savant_cli.models.gravity import P_MU
 from savant_cli.models.guidance import D_TG, D_VG, SmootherGains, guidance_sample, smoother_step
 from savant_cli.models.layout import (
     CONFIG_STACK, CONFIG_UPPER, CONFIG_UPPER_LES, D_CMD_P, D_CMD_RCS, D_CMD_Y, D_FLEX_NAV, D_GYRO_X, D_GYRO_Y,
-    ENGINE_OFF, ENGINE_UPPER, N_AUX, U_CONFIG, U_DPC, U_DYC, U_ENGINE, U_RCS, U_ROLL, U_T_CUT, U_T_IGN, Q, R, V, W
+    ENGINE_FIRST, ENGINE_OFF, ENGINE_UPPER, N_AUX, U_CONFIG, U_DPC, U_DYC, U_ENGINE, U_RCS, U_ROLL, U_T_CUT, U_T_IGN,
+    U_THROTTLE, Q, R, V, W
 )
 from savant_cli.models.sensors import (
     GYRO_MISALIGN, GYRO_POINTS, IMU_GYRO, N_GYROS, P_IMU_MISALIGN, GyroModel, gyro_step, misalignment
@@ -257,17 +261,18 @@ def handle_events(t: float, dt: float, x: np.ndarray, u: np.ndarray, d: np.ndarr
     (the upper-stage nozzle and its command start at null, a new modal set starts at rest,
     the reference point moves to the new configuration's CG), ignition lights the upper
     stage (the flight control fades its gains in from here), the item's jettison drops the
-    LES or fairing (the reference point moves again). Until separation the first-stage
-    motor's sensed vacuum thrust at ``t`` (``propulsion.first_stage_flow``, the motor
-    flown so far) is tracked: its largest value so far (``d[D_FS_PEAK]``, the thrust
-    fraction's reference) and its trapezoidal integral (``d[D_FS_IMPULSE]``, the impulse
-    the motor delivered); the motor's propellant at separation is kept in
+    LES or fairing (the reference point moves again). Until separation the first
+    stage's sensed vacuum thrust at ``t`` (``propulsion.first_stage_flow``, the stage
+    flown so far, at its held throttle) is tracked: its largest value so far
+    (``d[D_FS_PEAK]``, the thrust fraction's reference) and its trapezoidal integral
+    (``d[D_FS_IMPULSE]``, the impulse the stage delivered); its propellant at separation
+    (a liquid stage's residual) is kept in
     ``d[D_FS_PROP_SEP]``. After the cutoff command the upper stage's sensed thrust
     accumulates the same way in ``d[D_US_SD_IMPULSE]``. ``dt`` is the plant step (s), the
     trapezoids' width; ``work``: the scratch rows of :func:`work_array`."""
     f_sensed = 0.0
     if np.isnan(events[EV_SEPARATION]):
-        f_sensed = propulsion.first_stage_flow(x, tb, p, t)[0]
+        f_sensed = propulsion.first_stage_flow(x, tb, p, t, throttle.held(u[U_THROTTLE], p))[0]
         if t > 0.0:
             d[propulsion.D_FS_IMPULSE] += 0.5 * (d[propulsion.D_FS_LAST] + f_sensed) * dt
         d[propulsion.D_FS_LAST] = f_sensed
@@ -313,6 +318,8 @@ def separate(x: np.ndarray, u: np.ndarray, d: np.ndarray, p: np.ndarray, tb: np.
     u[U_CONFIG] = CONFIG_UPPER_LES
     u[U_ENGINE] = ENGINE_OFF
     x[int(p[propulsion.P_FS_TANK])] = 0.0
+    if p[propulsion.P_FS_LIQUID] != 0.0:  # a liquid stage's residual leaves with it
+        x[int(p[propulsion.P_FS_FUEL_TANK])] = 0.0
     actuator.rest(x, p)
     u[U_DPC] = 0.0
     u[U_DYC] = 0.0
@@ -424,6 +431,7 @@ def _advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0
     has_flex = int(p[flex.P_OFFSET]) >= 0
     peg_on = p[peg.P_ON] != 0.0
     perturbed = pert[loop_perturbation.AXIS] >= 0.0
+    throttled = p[throttle.P_ON] != 0.0
     for j in range(n_steps):
         k = k0 + j
         t = k * dt
@@ -492,6 +500,12 @@ def _advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0
                 qt.qmul_into(x[Q:Q + 4], q_imu, q_nav)
             roll_rate_error, engagement = fcs_step(d, q_nav, phase, sched_var, t - u[U_T_IGN], dt_fcs, ft)
             roll_gimbal.roll_gimbal_step(d, ft.roll_gimbal[phase], engagement, roll_rate_error, dt_fcs)
+            if throttled and int(u[U_ENGINE]) == ENGINE_FIRST:  # the engine controller's new setting, at once
+                accel = 0.0
+                if throttle.acceleration_limited(p):  # the accelerometer: specific force along body x
+                    derivative(t, x, u, p, tb, work[5], work[4])
+                    accel = work[5][rigid_body.A_ACCEL]
+                u[U_THROTTLE] = throttle.cycle(u[U_THROTTLE], t, accel, dt_fcs, p, tb)
         command_update = (k - sched.command_delay_steps) % rates.n_fcs == 0
         if command_update:  # the commands, after the loop delay
             u[U_DPC] = d[D_CMD_P]
@@ -520,6 +534,8 @@ def _advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0
         for i in (int(p[propulsion.P_FS_TANK]), int(p[propulsion.P_US_OX_TANK]), int(p[propulsion.P_US_FUEL_TANK])):
             if x[i] < 0.0:
                 x[i] = 0.0
+        if p[propulsion.P_FS_LIQUID] != 0.0 and x[int(p[propulsion.P_FS_FUEL_TANK])] < 0.0:
+            x[int(p[propulsion.P_FS_FUEL_TANK])] = 0.0
         jets = int(p[rcs.P_STATE_OFFSET])
         for i in (jets, jets + 1):
             x[i] = min(max(x[i], 0.0), 1.0)

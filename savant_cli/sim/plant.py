@@ -22,11 +22,11 @@ from numba import njit
 
 from savant_cli.models import (
     actuator, aero, atmosphere, blocks, cluster, earth, flex, gravity, mass as mass_model, propulsion, quaternion as qt,
-    rcs, rigid_body, slosh, twd, winds
+    rcs, rigid_body, slosh, throttle, twd, winds
 )
 from savant_cli.models.configurations import ENGINE_FIRST
 from savant_cli.models.layout import (
-    U_CONFIG, U_DPC, U_DYC, U_ENGINE, U_GUST, U_RCS, U_ROLL, U_T_CUT, U_T_IGN, Q, R, V, W
+    U_CONFIG, U_DPC, U_DYC, U_ENGINE, U_GUST, U_RCS, U_ROLL, U_T_CUT, U_T_IGN, U_THROTTLE, Q, R, V, W
 )
 
 #: Tabular data of the plant by name (SI, contiguous arrays); the fields are the tables
@@ -161,7 +161,9 @@ def compose(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarra
     xd[jets + 1] = rcs_neg_rate
     gimbal_pt = flex.PT_GIMBAL_FS if engine == ENGINE_FIRST else flex.PT_GIMBAL_US
     tgx, tgy, tgz = flex.rotation_at(x, config, p, tb, gimbal_pt, False)  # follower thrust
-    thrust, mdot_fs, mdot_us, thrust_vac = propulsion.thrust_and_flow(x, tb, p, engine, t, u[U_T_IGN], u[U_T_CUT], pres)
+    setting = throttle.held(u[U_THROTTLE], p)
+    thrust, mdot_fs, mdot_us, thrust_vac = propulsion.thrust_and_flow(x, tb, p, engine, t, u[U_T_IGN], u[U_T_CUT],
+                                                                      setting, pres)
     dp, dy, bias_p, bias_y = actuator.gimbal_angles(x, p, engine)
     rgx, rgy, rgz = propulsion.gimbal_arm(p, engine, cgx, cgy, cgz)
     dgx, dgy, dgz = flex.displacement_at(x, config, p, tb, gimbal_pt)  # the structure moves the gimbal
@@ -200,7 +202,7 @@ def compose(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarra
     alx, aly, alz = rigid_body.angular_acceleration(
         (ixx, iyy, izz, ixy, ixz, iyz), (wx, wy, wz),
         (max_ + mtx + mwx + msx + rcs_torque, may + mty + mwy + msy, maz + mtz + mwz + msz))
-    dm_fs, dm_lox, dm_lh2 = propulsion.propellant_rates(p, mdot_fs, mdot_us)
+    dm_fs, dm_fs_fuel, dm_lox, dm_lh2 = propulsion.propellant_rates(p, mdot_fs, mdot_us)
     # (one store per element: a tuple unpacked into array items compiles to slower code)
     xd[R] = vx
     xd[R + 1] = vy
@@ -216,6 +218,8 @@ def compose(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarra
     xd[W + 1] = aly
     xd[W + 2] = alz
     xd[int(p[propulsion.P_FS_TANK])] = dm_fs
+    if p[propulsion.P_FS_LIQUID] != 0.0:
+        xd[int(p[propulsion.P_FS_FUEL_TANK])] = dm_fs_fuel
     xd[int(p[propulsion.P_US_OX_TANK])] = dm_lox
     xd[int(p[propulsion.P_US_FUEL_TANK])] = dm_lh2
 
@@ -240,6 +244,7 @@ def compose(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarra
     propulsion.write_diagnostics(aux, thrust, thrust_vac, mtx, mty, mtz)
     mass_model.write_diagnostics(aux, mass_total, prop, cgx_t, cgy_t, cgz_t)
     rcs.write_diagnostics(aux, rcs_torque)
+    throttle.write_diagnostics(aux, setting)
     actuator.write_diagnostics(aux, dp, dy, ddp, ddy)
     rigid_body.write_diagnostics(aux, abx, aby, abz)
     twd.write_diagnostics(aux, mwx, mwy, mwz)

@@ -11,7 +11,7 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
 from savant_cli import constants, lifecycle
 from savant_cli.io.record import Signal
-from savant_cli.models import blocks, earth, layout, navigation, peg, quaternion as qt, roll_gimbal, slosh
+from savant_cli.models import blocks, earth, layout, navigation, peg, quaternion as qt, roll_gimbal, slosh, throttle
 from savant_cli.sim import compile_notice, engine, loop_perturbation
 from savant_cli.sim.build import SimModel
 from savant_cli.sim.plant import compose, derivative
@@ -325,6 +325,9 @@ def signals(result: SimResult, model: SimModel) -> dict[str, Signal]:
         s.update(guidance_signals(t, x[:, layout.R:layout.R + 3], d, model.p))
     if model.p[navigation.P_ON] != 0.0:
         s.update(navigation_signals(d))
+    if model.p[throttle.P_ON] != 0.0:
+        s["throttle"] = Signal(aux[:, throttle.A_SETTING], "1", "the first stage's throttle setting, fraction of rated "
+                               "vacuum thrust")
     if n_ch > 2:  # a cluster: every engine's channels, and the roll command the mixer spreads over them
         s["gimbal_angle"] = Signal(x[:, [lay.channel(k) for k in range(n_ch)]], "rad",
                                    "each engine's gimbal angles (pitch, yaw: the first engine's; pitch2, yaw2: the "

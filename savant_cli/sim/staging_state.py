@@ -89,9 +89,12 @@ def read_staging_state(path: Path, key: str = "phase.staging_state_file") -> Sta
     if d.size > layout.N_DISC or u.size > layout.N_INPUT:
         raise ConfigError(key, str(path), f"needs at most {layout.N_DISC} discrete and {layout.N_INPUT} input values")
     # discrete fields and inputs are only ever appended (models/__init__.py, models/layout.py):
-    # those a file was written without start at their initial zero
+    # those a file was written without start at their initial zero (the throttle at 1)
     d = np.concatenate([d, np.zeros(layout.N_DISC - d.size)])
+    written = u.size
     u = np.concatenate([u, np.zeros(layout.N_INPUT - u.size)])
+    if written <= layout.U_THROTTLE:  # written before the throttle: its vehicle burned at rated thrust
+        u[layout.U_THROTTLE] = 1.0
     x = np.array([doc["state"][n] for n in names], float)
     if not (np.all(np.isfinite(x)) and np.all(np.isfinite(d)) and np.all(np.isfinite(u))):
         raise ConfigError(key, str(path), "all values must be finite")

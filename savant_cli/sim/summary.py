@@ -11,6 +11,7 @@ from savant_cli.models import propulsion
 from savant_cli.models.layout import U_T_CUT
 from savant_cli.sim import engine
 from savant_cli.sim.run import SimResult
+from savant_cli.vehicle.two_stage import usable_load
 
 
 def orbit_elements(r_eci: np.ndarray, v_eci: np.ndarray, mu: float = constants.MU_EARTH) -> dict[str, float]:
@@ -157,8 +158,7 @@ def usable_propellant(lox_kg: float, lh2_kg: float, mixture_ratio: float) -> tup
     first), else ``"lh2"``.
     """
     lox, lh2 = max(float(lox_kg), 0.0), max(float(lh2_kg), 0.0)
-    burnable_lox = min(lox, mixture_ratio * lh2)
-    usable = burnable_lox * (1.0 + 1.0 / mixture_ratio)
+    usable = usable_load(mixture_ratio, lox, lh2)
     return usable, lox + lh2 - usable, "lox" if lox <= mixture_ratio * lh2 else "lh2"
 
 
@@ -174,7 +174,7 @@ def propulsion_keys(result: SimResult, p: np.ndarray) -> dict[str, float | str |
     ``limiting_propellant`` (:func:`usable_propellant`) of the final LOX and LH2 at the
     run's engine mixture ratio ``p[P_US_MR]``; ``first_stage_propellant_at_separation_kg``
     (None without a separation) and ``first_stage_total_impulse_Ns``, the vacuum impulse
-    the solid motor delivered to the vehicle up to separation (the sequencer's
+    the first stage delivered to the vehicle up to separation (the sequencer's
     trapezoid of the sensed thrust at the plant rate); ``shutdown_impulse_Ns``, the
     upper-stage vacuum impulse delivered after the cutoff command (the same trapezoid over
     the shutdown transient; None without a cutoff command)."""

@@ -30,7 +30,7 @@ from savant_cli.vehicle.keys import MAPPING, NAMED, NAMES, ROWS3, VEC2, VEC3, VE
 from savant_cli.vehicle.tables import MASS_TOLERANCE_KG, check_inertia, read_aero, read_mass, read_table, vec3
 from savant_cli.vehicle.tree import (
     BOOSTER, CONDITION_QUANTITIES, GIMBAL_AXES, ITEM, LIFTOFF, LIQUID, STAGE, TRACE, Condition, ConfigurationSpec,
-    EngineSpec, EventSpec, LiquidThrust, MovingMass, Part, RollJets, Sensors, Tank, ThrustTrace, VehicleTree
+    EngineSpec, EventSpec, LiquidThrust, MovingMass, Part, RollJets, Sensors, Tank, Throttle, ThrustTrace, VehicleTree
 )
 
 MAX_STAGES = 4
@@ -39,10 +39,12 @@ MOVING_MASS_KEYS = {"mass_kg": float, "cg_from_gimbal_m": float, "inertia_about_
 ENGINE_COMMON = {"source": str, "tanks": NAMES, "nozzle_exit_area_m2": float, "gimbal_m": VEC3,
                  "cant_deg": opt(VEC2), "gimbal_axes": opt(NAMES), "gimbal_limit_deg": opt(float),
                  "moving_mass": opt(MOVING_MASS_KEYS)}
+THROTTLE_KEYS = {"minimum": float, "maximum": opt(float), "rate_per_s": float, "table": opt(str),
+                 "axial_acceleration_limit_mps2": opt(float)}
 ENGINE_KEYS = {
     TRACE: {**ENGINE_COMMON, "thrust_table": str, "isp_vac_s": float, "isp_sl_s": float},
     LIQUID: {**ENGINE_COMMON, "thrust_vac_N": float, "isp_vac_s": float, "mixture_ratio": float,
-             "startup_table": str, "shutdown_impulse_Ns": float},
+             "startup_table": str, "shutdown_impulse_Ns": float, "throttle": opt(THROTTLE_KEYS)},
 }
 SLOSH_KEYS = {"table": str, "radius_m": float, "bottom_station_m": float, "density_kgm3": float,
               "reference_accel_mps2": float}
@@ -215,7 +217,36 @@ class _Reader:
             isp_vac_s=positive(f"{key}.isp_vac_s", section["isp_vac_s"]),
             mixture_ratio=positive(f"{key}.mixture_ratio", section["mixture_ratio"]),
             startup_time_s=st["time"], startup_fraction=frac,
-            shutdown_impulse_Ns=non_negative(f"{key}.shutdown_impulse_Ns", section["shutdown_impulse_Ns"]))
+            shutdown_impulse_Ns=non_negative(f"{key}.shutdown_impulse_Ns", section["shutdown_impulse_Ns"]),
+            throttle=self.throttle(section["throttle"], f"{key}.throttle") if section.get("throttle") else None)
+
+    def throttle(self, section: Mapping, key: str) -> Throttle:
+        """A liquid engine's throttle section (fractions of rated thrust)."""
+        check_keys(section, THROTTLE_KEYS, key)
+        maximum = float(section.get("maximum", 1.0))
+        if not 0.0 < maximum <= 1.0:
+            raise ConfigError(f"{key}.maximum", maximum, "must be within (0, 1] (a fraction of rated thrust)")
+        minimum = float(section["minimum"])
+        if not 0.0 < minimum <= maximum:
+            raise ConfigError(f"{key}.minimum", minimum, f"must be within (0, maximum = {maximum:g}]")
+        rate = positive(f"{key}.rate_per_s", section["rate_per_s"])
+        time_s = setting = None
+        if section.get("table") is not None:
+            path = self.vdir / section["table"]
+            tt, _ = read_table(path, "throttle")
+            setting = tt["throttle"]
+            outside = (setting < minimum) | (setting > maximum)
+            if np.any(outside):
+                raise ConfigError(f"{table_key(path)}:throttle", float(setting[np.argmax(outside)]),
+                                  f"a throttle setting must be within [minimum, maximum] = [{minimum:g}, {maximum:g}]")
+            time_s = tt["time"]
+        limit = section.get("axial_acceleration_limit_mps2")
+        if limit is not None:
+            limit = positive(f"{key}.axial_acceleration_limit_mps2", limit)
+        if time_s is None and limit is None:
+            raise ConfigError(key, dict(section), "a throttle needs a table, an axial_acceleration_limit_mps2 or both")
+        return Throttle(minimum=minimum, maximum=maximum, rate_per_s=rate, time_s=time_s, setting=setting,
+                        axial_acceleration_limit_mps2=limit)
 
     def roll_jets(self, rn: Mapping, key: str) -> RollJets:
         path = self.vdir / rn["thrust_table"]

@@ -53,6 +53,7 @@ TABLE_COLUMNS: dict[str, tuple[tuple[str, str | None], ...]] = {
     "base_force": (("time", "time"), ("base_force", "force")),
     "first_stage_thrust": (("time", "time"), ("thrust_vac", "force")),
     "startup": (("time", "time"), ("thrust_fraction", None)),
+    "throttle": (("time", "time"), ("throttle", None)),
     "rcs_thrust": (("altitude", "length"), ("thrust_vac", "force")),
     # one tank's slosh parameters vs liquid level (savant_cli/flex_slosh.py); the frequency
     # at the slosh section's reference acceleration, the mass's height above the tank bottom
@@ -64,7 +65,8 @@ TABLE_COLUMNS: dict[str, tuple[tuple[str, str | None], ...]] = {
 #: strictly increasing (a grid's rows with the first column slowest); refused, never sorted
 TABLE_AXES: dict[str, tuple[str, ...]] = {
     "mass": ("propellant_remaining",), "aero": ("mach", "alpha", "beta"), "base_force": ("time",),
-    "first_stage_thrust": ("time",), "startup": ("time",), "rcs_thrust": ("altitude",), "slosh": ("level",),
+    "first_stage_thrust": ("time",), "startup": ("time",), "throttle": ("time",), "rcs_thrust": ("altitude",),
+    "slosh": ("level",),
 }
 
 

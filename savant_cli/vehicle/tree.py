@@ -93,10 +93,28 @@ class ThrustTrace:
 
 
 @dataclass(frozen=True)
+class Throttle:
+    """A liquid engine's throttle: its command is ``maximum`` or the schedule's value at
+    mission time (``time_s``, ``setting``; None: no schedule), lowered, when
+    ``axial_acceleration_limit_mps2`` is set, to hold the sensed axial acceleration at the
+    limit; clamped to [``minimum``, ``maximum``] and changed at most ``rate_per_s``
+    (fraction of rated thrust per s). Settings are fractions of rated thrust
+    (``models/throttle.py``)."""
+
+    minimum: float
+    maximum: float
+    rate_per_s: float
+    time_s: np.ndarray | None = None
+    setting: np.ndarray | None = None
+    axial_acceleration_limit_mps2: float | None = None
+
+
+@dataclass(frozen=True)
 class LiquidThrust:
     """A liquid engine: rated vacuum thrust (N), Isp (s), oxidizer : fuel mixture ratio,
-    start transient (thrust fraction against time since the ignition command, s) and
-    shutdown impulse (N·s, the vacuum impulse after the cutoff command)."""
+    start transient (thrust fraction against time since the ignition command, s),
+    shutdown impulse (N·s, the vacuum impulse after the cutoff command) and its throttle
+    (None: it burns at rated thrust)."""
 
     thrust_vac_N: float
     isp_vac_s: float
@@ -104,6 +122,7 @@ class LiquidThrust:
     startup_time_s: np.ndarray
     startup_fraction: np.ndarray
     shutdown_impulse_Ns: float
+    throttle: Throttle | None = None
 
 
 @dataclass(frozen=True)

@@ -1,9 +1,10 @@
 """The two-stage vehicle the compiled plant flies today, as a view of the vehicle tree.
 
 The plant's models (``savant_cli/models/``) read a vehicle of one shape: a first stage
-of engines flown by their thrust trace (a solid motor), an upper stage of liquid engines
-drawing from an oxidizer and a fuel tank and carrying the roll jets (each stage one
-engine or a cluster of identical ones, ``models/cluster.py``), at most one jettisoned
+of engines flown by their thrust trace (a solid motor) or of liquid engines (each drawing
+from the stage's oxidizer and fuel tank, optionally throttled), an upper stage of liquid
+engines drawing from an oxidizer and a fuel tank and carrying the roll jets (each stage
+one engine or a cluster of identical ones, ``models/cluster.py``), at most one jettisoned
 item (LES or fairing),
 and three configurations (``stack``, ``upper_les``, ``upper``) reached by separation
 and the item's jettison. :func:`two_stage_view` derives these records from a loaded
@@ -20,11 +21,12 @@ from pathlib import Path
 
 import numpy as np
 
+from savant_cli.constants import G0, P0
 from savant_cli.errors import ConfigError
 from savant_cli.vehicle.tables import MASS_TOLERANCE_KG, AeroTable, MassTable
 from savant_cli.vehicle.tree import (
-    BOOSTER, GIMBAL_AXES, ITEM, LIFTOFF, EngineSpec, LiquidThrust, MovingMass, RollJets, Sensors, ThrustTrace,
-    VehicleTree
+    BOOSTER, GIMBAL_AXES, ITEM, LIFTOFF, LIQUID, TRACE, EngineSpec, LiquidThrust, MovingMass, RollJets, Sensors,
+    ThrustTrace, VehicleTree
 )
 
 #: The vehicle's configurations, in the order the aero and mass tables are stacked
@@ -61,9 +63,18 @@ class Mount:
 
 @dataclass(frozen=True)
 class FirstStage:
-    """Solid first stage. Thrust is vacuum thrust (N) vs time from liftoff (s); the
+    """First stage. Thrust is vacuum thrust (N) vs time from liftoff (s); the
     delivered thrust is ``F_vac - p A_exit``; mass flow ``F_vac / (g0 Isp_vac)``.
     Gimbal location in the structure frame (m); limit in rad.
+
+    A solid stage (``liquid`` None) is flown by its thrust table and burns
+    ``propellant_kg`` from one tank. A liquid stage (``liquid``: the engines' sums of
+    rated thrust and shutdown impulse, their Isp, mixture ratio, start transient and
+    throttle) burns its ``oxidizer_kg`` and ``fuel_kg`` (``propellant_kg`` is their sum)
+    at the mixture ratio until a tank is empty; its thrust table is the rated trace (the
+    start transient completing at liftoff, then rated thrust until the usable load,
+    :func:`usable_load`, is burned), for refusals and the jettison check only: the flight
+    and its predictions throttle it (``models/throttle.py``, ``sim/build.py``).
 
     A cluster of identical engines is one record of the whole stage: the thrust table and
     the exit area are the engines' sums, ``gimbal_m`` their mean gimbal point, ``engine``
@@ -84,6 +95,36 @@ class FirstStage:
     engine: Engine
     mounts: tuple[Mount, ...] = ()
     mixing_matrix: np.ndarray | None = None
+    liquid: LiquidThrust | None = None
+    oxidizer_kg: float = 0.0
+    fuel_kg: float = 0.0
+
+
+#: The rated trace's fall from burnout thrust to zero (s): the plant's first-stage thrust
+#: stops at the step a tank empties; the table only needs a strictly increasing time axis.
+BURNOUT_DROP_S = 0.01
+
+
+def usable_load(mixture_ratio: float, oxidizer_kg: float, fuel_kg: float) -> float:
+    """Propellant (kg) burned at the oxidizer : fuel ``mixture_ratio`` r before the first
+    tank is empty: ``min(M_ox, r M_fuel) (1 + 1/r)``."""
+    return min(oxidizer_kg, mixture_ratio * fuel_kg) * (1.0 + 1.0 / mixture_ratio)
+
+
+def startup_duration(liquid: LiquidThrust) -> float:
+    """The start transient's length (s): the last time of its table."""
+    return float(liquid.startup_time_s[-1])
+
+
+def rated_liquid_trace(liquid: LiquidThrust, oxidizer_kg: float, fuel_kg: float) -> tuple[np.ndarray, np.ndarray]:
+    """A liquid stage's rated trace: vacuum thrust (N) against mission time (s) with the
+    start transient ending at liftoff (ignition at ``−startup_duration``; what burns
+    before liftoff is not the liftoff load's), then the transient's final thrust until
+    the usable load is burned at ``F / (g0 Isp)``, then zero."""
+    t = liquid.startup_time_s - startup_duration(liquid)
+    f = liquid.startup_fraction * liquid.thrust_vac_N
+    t_burn = usable_load(liquid.mixture_ratio, oxidizer_kg, fuel_kg) * G0 * liquid.isp_vac_s / f[-1]
+    return np.concatenate([t, [t_burn, t_burn + BURNOUT_DROP_S]]), np.concatenate([f, [f[-1], 0.0]])
 
 
 @dataclass(frozen=True)
@@ -181,8 +222,19 @@ class Vehicle:
     #: the vehicle tree this view was derived from (None: built directly, as tests do)
     tree: VehicleTree | None = None
     #: the plant's propellant states, by the tanks' names in the vehicle file: the first
-    #: stage's motor, then the upper stage's oxidizer and fuel
-    tanks: tuple[str, str, str] = ("first_stage_propellant", "lox", "lh2")
+    #: stage's (a solid motor's one, or a liquid stage's oxidizer and fuel), then the
+    #: upper stage's oxidizer and fuel
+    tanks: tuple[str, ...] = ("first_stage_propellant", "lox", "lh2")
+
+    @property
+    def first_stage_tanks(self) -> tuple[str, ...]:
+        """The first stage's tanks: its motor's, or its oxidizer's and fuel's."""
+        return self.tanks[:-2]
+
+    @property
+    def upper_stage_tanks(self) -> tuple[str, str]:
+        """The upper stage's oxidizer and fuel tanks."""
+        return self.tanks[-2], self.tanks[-1]
 
 
 def check_consistency(v: Vehicle, mass_files: Mapping[str, str] | None = None) -> None:
@@ -233,11 +285,13 @@ def _refuse(key: str, value, what: str) -> None:
 def _stage_engines(tree: VehicleTree, part: str, source: str) -> tuple[EngineSpec, ...]:
     """The stage's engines: one or a cluster of identical ``source`` engines (the same
     thrust data, exit area, tanks, gimbal limit and moving mass; each gimbaled in pitch
-    and yaw, anywhere and at any cant), drawing on all of the stage's tanks."""
+    and yaw, anywhere and at any cant), drawing on all of the stage's tanks (a mixed
+    stage is refused: ``source`` is its first engine's)."""
     engines = tree.engines_of(part)
     key = tree.parts[part].key
     if not engines or any(e.source != source for e in engines):
-        _refuse(f"{key}.engines", [e.name for e in engines], f"the {part} stage's engines are {source} engines")
+        what = "liquid engines" if part != tree.stages()[0].name else "all trace or all liquid engines"
+        _refuse(f"{key}.engines", [e.name for e in engines], f"the {part} stage's engines are {what}")
     first = engines[0]
     for eng in engines:
         if eng.gimbal_axes != GIMBAL_AXES:
@@ -253,6 +307,28 @@ def _stage_engines(tree: VehicleTree, part: str, source: str) -> tuple[EngineSpe
         _refuse(f"{key}.tanks", list(tree.parts[part].tanks),
                 f"the stage's tanks are its engines', {list(first.tanks)}")
     return engines
+
+
+def _first_stage(tree: VehicleTree, first, engines: tuple[EngineSpec, ...]) -> FirstStage:
+    """The first stage's record: a cluster's sums, n × each engine's (exact for one)."""
+    n, gimbal, mounts = _cluster(engines)
+    eng = engines[0]
+    common = dict(nozzle_exit_area_m2=n * eng.nozzle_exit_area_m2, jettison_mass_kg=first.inert_mass_kg,
+                  gimbal_m=gimbal, gimbal_limit_rad=eng.gimbal_limit_rad, engine=eng.moving_mass, mounts=mounts,
+                  mixing_matrix=first.mixing_matrix)
+    if isinstance(eng.thrust, ThrustTrace):
+        grain = tree.tanks[eng.tanks[0]]
+        return FirstStage(thrust_time_s=eng.thrust.time_s, thrust_vac_N=n * eng.thrust.thrust_vac_N,
+                          isp_vac_s=eng.thrust.isp_vac_s, isp_sl_s=eng.thrust.isp_sl_s,
+                          propellant_kg=grain.propellant_kg, **common)
+    liquid = dataclasses.replace(eng.thrust, thrust_vac_N=n * eng.thrust.thrust_vac_N,
+                                 shutdown_impulse_Ns=n * eng.thrust.shutdown_impulse_Ns)
+    ox, fuel = (tree.tanks[t].propellant_kg for t in eng.tanks)
+    time_s, thrust = rated_liquid_trace(liquid, ox, fuel)
+    # sea-level Isp: the rated vacuum thrust less the back-pressure loss, at the same flow
+    isp_sl = liquid.isp_vac_s * max(1.0 - P0 * common["nozzle_exit_area_m2"] / liquid.thrust_vac_N, 0.0)
+    return FirstStage(thrust_time_s=time_s, thrust_vac_N=thrust, isp_vac_s=liquid.isp_vac_s, isp_sl_s=isp_sl,
+                      propellant_kg=ox + fuel, liquid=liquid, oxidizer_kg=ox, fuel_kg=fuel, **common)
 
 
 def _same(a, b) -> bool:
@@ -308,8 +384,12 @@ def two_stage_view(tree: VehicleTree) -> Vehicle:
     items = [p for p in tree.parts.values() if p.kind == ITEM]
     if len(items) > 1 or any(i.attached_to != upper.name for i in items):
         _refuse("vehicle.items", [i.name for i in items], f"at most one jettisoned item, on {upper.name}")
-    fs_engines, us_engines = _stage_engines(tree, first.name, "trace"), _stage_engines(tree, upper.name, "liquid")
+    fs_source = tree.engines_of(first.name)[0].source if first.engines else TRACE
+    fs_engines, us_engines = _stage_engines(tree, first.name, fs_source), _stage_engines(tree, upper.name, LIQUID)
     fs, us = fs_engines[0], us_engines[0]
+    if isinstance(us.thrust, LiquidThrust) and us.thrust.throttle is not None:
+        _refuse(f"{us.key}.throttle", "throttle", "the upper stage burns at rated thrust (its guidance, PEG, steers a "
+                                                  "constant-thrust burn); a throttle is the first stage's")
     if first.roll_jets is not None or upper.roll_jets is None:
         _refuse(f"{upper.key}.roll_jets", None, "roll jets on the upper stage only")
     if first.inert_mass_kg is None:
@@ -334,17 +414,11 @@ def two_stage_view(tree: VehicleTree) -> Vehicle:
                     f"this configuration's mass table is against {list(tanks)}")
     if not items:  # the upper stage alone from separation on
         configs.append(configs[1])
-    fs_thrust, us_thrust = fs.thrust, us.thrust
-    assert isinstance(fs_thrust, ThrustTrace) and isinstance(us_thrust, LiquidThrust)
-    grain, (ox, fuel) = tree.tanks[fs.tanks[0]], (tree.tanks[t] for t in us.tanks)
-    n_fs, fs_gimbal, fs_mounts = _cluster(fs_engines)
+    us_thrust = us.thrust
+    assert isinstance(us_thrust, LiquidThrust)
+    ox, fuel = (tree.tanks[t] for t in us.tanks)
+    first_stage = _first_stage(tree, first, fs_engines)
     n_us, us_gimbal, us_mounts = _cluster(us_engines)
-    first_stage = FirstStage(  # a cluster's sums: n × each engine's (exact for one)
-        thrust_time_s=fs_thrust.time_s, thrust_vac_N=n_fs * fs_thrust.thrust_vac_N, isp_vac_s=fs_thrust.isp_vac_s,
-        isp_sl_s=fs_thrust.isp_sl_s, nozzle_exit_area_m2=n_fs * fs.nozzle_exit_area_m2,
-        propellant_kg=grain.propellant_kg, jettison_mass_kg=first.inert_mass_kg, gimbal_m=fs_gimbal,
-        gimbal_limit_rad=fs.gimbal_limit_rad, engine=fs.moving_mass, mounts=fs_mounts,
-        mixing_matrix=first.mixing_matrix)
     upper_stage = UpperStage(
         thrust_vac_N=n_us * us_thrust.thrust_vac_N, isp_vac_s=us_thrust.isp_vac_s,
         mixture_ratio=us_thrust.mixture_ratio, nozzle_exit_area_m2=n_us * us.nozzle_exit_area_m2,
@@ -352,14 +426,15 @@ def two_stage_view(tree: VehicleTree) -> Vehicle:
         startup_fraction=us_thrust.startup_fraction, shutdown_impulse_Ns=n_us * us_thrust.shutdown_impulse_Ns,
         gimbal_m=us_gimbal, gimbal_limit_rad=us.gimbal_limit_rad, les_mass_kg=items[0].inert_mass_kg if items else 0.0,
         engine=us.moving_mass, mounts=us_mounts, mixing_matrix=upper.mixing_matrix)
-    tanks = (grain.name, ox.name, fuel.name)
+    fs_tanks = tuple(tree.tanks[t] for t in fs.tanks)
+    tanks = (*(t.name for t in fs_tanks), ox.name, fuel.name)
     separation = Trigger(-1, 0.0, "thrust_fraction", None, False, sep.when.below)
     never = Trigger(1, float("inf"))  # no item: no jettison
     events = Events(separation_thrust_fraction=sep.when.below, ignition_delay_s=ign.delay_s,
                     les_jettison_delay_s=jet.delay_s if jet is not None else float("inf"),
                     triggers=(separation, _trigger(ign, 0, tanks),
                               _trigger(jet, 1, tanks) if jet is not None else never))
-    keys = {"propellant_first": f"{grain.key}.propellant_kg",
+    keys = {"propellant_first": " + ".join(f"{t.key}.propellant_kg" for t in fs_tanks),
             "propellant_upper": f"{ox.key}.propellant_kg + {fuel.name}.propellant_kg",
             "jettison_mass": f"{first.key}.inert_mass_kg",
             "les_mass": f"{items[0].key}.mass_kg" if items else "vehicle.items",
