@@ -57,6 +57,21 @@ def _refusal(node_change, match: str, data_dir=None):
         load_vehicle(node, data_dir or SHIPPED / "ares_i")
 
 
+def _scheduled(tmp_path, rows: str, minimum: float, rate: float):
+    """The example's node with a throttle schedule of ``rows`` (``time_s,throttle`` CSV
+    lines) and no acceleration limit, and a copy of ares_i's data folder holding it."""
+    data = tmp_path / "ares_i"
+    data.mkdir()
+    for f in (SHIPPED / "ares_i").iterdir():
+        if f.is_file():
+            (data / f.name).symlink_to(f)
+    (data / "schedule.csv").write_text(f"time_s,throttle\n{rows}\n")
+    node = example_node(EXAMPLE)
+    node["stages"]["first_stage"]["engines"]["booster_engine"]["throttle"] = {
+        "minimum": minimum, "rate_per_s": rate, "table": "schedule.csv"}
+    return node, data
+
+
 # ----------------------------------------------------------------- the law
 def test_the_acceleration_limit_converges_at_the_closed_form_ratio():
     """a = (k F − L)/m: the fixed point k* = (m a_lim + L)/F, each cycle's error the last
@@ -86,16 +101,7 @@ def test_the_law_clamps_to_its_bounds_and_its_rate():
 
 
 def test_a_schedule_table_is_interpolated_linearly_and_held_past_its_ends(tmp_path):
-    data = tmp_path / "ares_i"
-    data.mkdir()
-    for f in (SHIPPED / "ares_i").iterdir():
-        if f.is_file():
-            (data / f.name).symlink_to(f)
-    (data / "bucket.csv").write_text("time_s,throttle\n0,1.0\n40,1.0\n42,0.7\n70,0.7\n80,0.9\n")
-    node = example_node(EXAMPLE)
-    node["stages"]["first_stage"]["engines"]["booster_engine"]["throttle"] = {
-        "minimum": 0.6, "rate_per_s": 0.05, "table": "bucket.csv"}
-    vehicle = load_vehicle(node, data)
+    vehicle = load_vehicle(*_scheduled(tmp_path, "0,1.0\n40,1.0\n42,0.7\n70,0.7\n80,0.9", minimum=0.6, rate=0.05))
     cfg = validate(compose_config(["sim.progress=false"]))
     guidance = read_guidance(prepare(cfg, hydra_search_dirs()).command_file)
     model = build_model(cfg, vehicle, guidance)
@@ -163,17 +169,8 @@ def test_a_bad_throttle_is_refused_naming_its_key(section, key, match):
 
 
 def test_a_setting_of_the_schedule_outside_the_bounds_is_refused_naming_the_column(tmp_path):
-    data = tmp_path / "ares_i"
-    data.mkdir()
-    for f in (SHIPPED / "ares_i").iterdir():
-        if f.is_file():
-            (data / f.name).symlink_to(f)
-    (data / "bad.csv").write_text("time_s,throttle\n0,1.0\n50,0.4\n")
-    node = example_node(EXAMPLE)
-    node["stages"]["first_stage"]["engines"]["booster_engine"]["throttle"] = {
-        "minimum": 0.5, "rate_per_s": 0.1, "table": "bad.csv"}
-    with pytest.raises(ConfigError, match=r"bad\.csv:throttle.*0\.4.*\[0\.5, 1\]"):
-        load_vehicle(node, data)
+    with pytest.raises(ConfigError, match=r"schedule\.csv:throttle.*0\.4.*\[0\.5, 1\]"):
+        load_vehicle(*_scheduled(tmp_path, "0,1.0\n50,0.4", minimum=0.5, rate=0.1))
 
 
 def test_a_throttle_on_the_upper_stage_and_a_mixed_first_stage_are_refused():

@@ -16,8 +16,9 @@ nominal thrust is the table's. A liquid first stage instead burns like the upper
 ``F_vac = k F_rated f(t − t_ign)`` with its start-up fraction ``f`` (ignition
 ``t_ign`` = minus the transient's length: full thrust at liftoff) and its throttle
 setting ``k`` (``models/throttle.py``; 1 unthrottled), ``ṁ = F_vac / (g0 Isp)`` split
-oxidizer : fuel by its mixture ratio, until either tank is empty. Upper stage (J-2X class): ``F_vac = F_rated f(t − t_ign)`` with the
-start-up thrust fraction ``f`` from a table; ``ṁ = F_vac / (g0 Isp)``, split LOX : LH2 by
+oxidizer : fuel by its mixture ratio, until either tank is empty. Upper stage (J-2X
+class): ``F_vac = F_rated f(t − t_ign)`` with the start-up thrust fraction ``f`` from a
+table; ``ṁ = F_vac / (g0 Isp)``, split LOX : LH2 by
 the mixture ratio. After the cutoff command at ``t_cut`` the thrust decays linearly to
 zero over ``T_sd = 2 I_sd / F_rated`` (the shutdown transient; ``I_sd`` the engine's
 shutdown impulse, ``upper_stage.shutdown_impulse_Ns``), so the impulse delivered after

@@ -86,12 +86,6 @@ def _contiguous(a) -> np.ndarray:
     return np.ascontiguousarray(a, dtype=np.int64 if a.dtype.kind in "iu" else np.float64)
 
 
-def plant_tables(cfg: SavantConfig, vehicle: Vehicle, slosh: SloshData | None = None,
-                 flex: FlexTables | None = None) -> PlantTables:
-    """Tabular plant data from the vehicle and the winds, flex and slosh configs."""
-    return plant_data(cfg, vehicle, slosh, flex)[1]
-
-
 def state_layout(cfg: SavantConfig, vehicle: Vehicle) -> layout.StateLayout:
     """The continuous-state layout of ``vehicle`` with the models switched on in ``cfg``."""
     engines = max(len(vehicle.first_stage.mounts), len(vehicle.upper_stage.mounts), 1)
