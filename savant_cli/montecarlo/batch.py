@@ -427,11 +427,16 @@ def execute(case: Case, todo: Iterable[int], journal: Journal, workers: int,
         stop = BatchStop("worker died", "a worker process died (killed or out of memory); the runs in flight were lost")
     except KeyboardInterrupt:
         stop = BatchStop("interrupted", "interrupted by the user")
-        terminate_workers(pool)  # the runs in flight are abandoned, not waited for
     except OutputWriteError as exc:  # the journal cannot take more runs: stop flying them
         stop = BatchStop("write failed", str(exc))
     finally:
-        pool.shutdown(wait=stop.reason == "done", cancel_futures=True)
+        if stop.reason != "done":
+            terminate_workers(pool)  # the runs in flight are abandoned, not waited for
+        # Always joined: the pool's manager thread closes its wake-up pipe as it ends, and
+        # one still running at exit races the interpreter's own wake-up call on that pipe
+        # ("OSError: Bad file descriptor" printed at exit, CPython 3.11). With the workers
+        # ended, the join returns as soon as the thread sees them gone.
+        pool.shutdown(wait=True, cancel_futures=True)
     return stop
 
 

@@ -18,9 +18,9 @@ on step boundaries, runs the discrete parts at their own rates with zero-order h
   (:class:`EventSchedule`, from the vehicle file's ``events``): separation when the
   sensed (vacuum) thrust of the flown first stage (its motor, or its liquid engines as
   throttled) falls below a fraction of its own flown peak (the peak is kept in the
-  discrete state), the upper-stage ignition and the item's (LES or fairing) jettison a delay after the event they count from and, with a
-  condition, once it holds (axial acceleration, altitude, dynamic pressure, a tank's
-  propellant); then the cutoff command; after the command the upper-stage thrust decays
+  discrete state), the upper-stage ignition and the item's (LES or fairing) jettison a
+  delay after the event they count from and, with a condition, once it holds (axial
+  acceleration, altitude, dynamic pressure, a tank's propellant); then the cutoff command; after the command the upper-stage thrust decays
   over its shutdown transient (``models/propulsion.py``) with guidance frozen (the last
   attitude command held), and the run stops when the decay ends: the insertion state
   includes the shutdown impulse.

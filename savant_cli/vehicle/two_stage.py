@@ -73,8 +73,9 @@ class FirstStage:
     throttle) burns its ``oxidizer_kg`` and ``fuel_kg`` (``propellant_kg`` is their sum)
     at the mixture ratio until a tank is empty; its thrust table is the rated trace (the
     start transient completing at liftoff, then rated thrust until the usable load,
-    :func:`usable_load`, is burned), for refusals and the jettison check only: the flight
-    and its predictions throttle it (``models/throttle.py``, ``sim/build.py``).
+    :func:`usable_load`, is burned): an unthrottled stage's nominal trace. The flight
+    throttles a throttled stage by its law (``models/throttle.py``), and its nominal
+    trace is that law's (``sim/build.py::nominal_first_stage_trace``).
 
     A cluster of identical engines is one record of the whole stage: the thrust table and
     the exit area are the engines' sums, ``gimbal_m`` their mean gimbal point, ``engine``
