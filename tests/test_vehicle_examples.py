@@ -31,13 +31,14 @@ def examples() -> dict[str, str]:
 
 
 def example_node(name: str) -> dict:
-    """The shipped ares_i vehicle node with the page's example ``name`` written over it
-    (the sections it :data:`REPLACES` emptied first, in place: the stages keep their order)."""
-    base = OmegaConf.load(SHIPPED / "ares_i.yaml").vehicle
+    """The page's example ``name`` written over the vehicle it :data:`BUILDS_ON` (the
+    shipped ares_i node, or another example's), the sections it :data:`REPLACES` emptied
+    first, in place: the stages and the events keep their order."""
+    builds_on = BUILDS_ON.get(name)
+    base = OmegaConf.create(example_node(builds_on)) if builds_on else OmegaConf.load(SHIPPED / "ares_i.yaml").vehicle
     for key in REPLACES.get(name, ()):
         OmegaConf.update(base, key, {}, merge=False)
-    over = [OmegaConf.create(examples()[b]) for b in BUILDS_ON.get(name, ())]
-    return OmegaConf.to_container(OmegaConf.merge(base, *over, OmegaConf.create(examples()[name])), resolve=True)
+    return OmegaConf.to_container(OmegaConf.merge(base, OmegaConf.create(examples()[name])), resolve=True)
 
 
 def _loaded(name: str):
@@ -111,17 +112,29 @@ def check_a_liquid_first_stage(vehicle):
     assert (rule.when, rule.threshold) == (engine.WHEN_THRUST_FRACTION, 0.02)
 
 
-#: examples written over another example of the page (merged in this order)
-BUILDS_ON = {"a-given-mixing-matrix": ("a-two-engine-cluster",)}
-#: sections of the shipped vehicle an example replaces whole (emptied before the merge)
-REPLACES = {"a-liquid-first-stage": ("stages.first_stage",)}
+def check_a_first_stage_cutoff(vehicle):
+    assert vehicle.first_stage.liquid.shutdown_impulse_Ns == 2.8e6
+    cut, sep = _rule(vehicle, engine.EV_FS_CUTOFF), _rule(vehicle, engine.EV_SEPARATION)
+    oxidizer_state = layout.N_STATE + vehicle.tanks.index("first_stage_lox")
+    assert (cut.after, cut.delay_s, cut.when, cut.of, cut.above, cut.threshold) == (
+        -1, 60.0, engine.WHEN_PROPELLANT, oxidizer_state, False, 5000.0)
+    assert (sep.after, sep.delay_s, sep.when, sep.threshold) == (engine.EV_FS_CUTOFF, 1.0, engine.WHEN_THRUST_FRACTION,
+                                                                 0.02)
+    assert vehicle.events.names == ("separation", "upper_stage_ignition", "les_jettison", "", "meco")
+
+
+#: the example of the page an example is written over (its own chain first)
+BUILDS_ON = {"a-given-mixing-matrix": "a-two-engine-cluster", "a-first-stage-cutoff": "a-liquid-first-stage"}
+#: sections of the vehicle it is written over that an example replaces whole (emptied before the merge)
+REPLACES = {"a-liquid-first-stage": ("stages.first_stage",), "a-first-stage-cutoff": ("events",)}
 CHECKS = {"jettison-on-a-condition": check_jettison_on_a_condition,
           "a-delay-arms-a-condition": check_a_delay_arms_a_condition,
           "composed-mass-properties": check_composed_mass_properties,
           "ignition-on-a-tank": check_ignition_on_a_tank,
           "a-two-engine-cluster": check_a_two_engine_cluster,
           "a-given-mixing-matrix": check_a_given_mixing_matrix,
-          "a-liquid-first-stage": check_a_liquid_first_stage}
+          "a-liquid-first-stage": check_a_liquid_first_stage,
+          "a-first-stage-cutoff": check_a_first_stage_cutoff}
 
 
 def test_every_example_on_the_page_has_a_check():

@@ -93,7 +93,7 @@ def _cosine_ramp(t: float, start: float, duration: float) -> float:
 def timed_events(vehicle: Vehicle) -> None:
     """Refuse a vehicle whose ignition or jettison waits for a condition: this reference
     places the events at their delays (after the predicted separation)."""
-    names = list(vehicle.tree.events) if vehicle.tree is not None else []
+    names = vehicle.events.names
     for slot in (1, 2):
         if vehicle.events.trigger(slot).quantity is not None:
             key = f"vehicle.events.{names[slot]}.when" if len(names) > slot else "vehicle.events"

@@ -140,6 +140,8 @@ U_ROLL = _INPUTS.scalar("roll_gimbal_command", "rad",
                        "roll command δr to the engines' gimbals: the most-deflected nozzle's angle")
 U_THROTTLE = _INPUTS.scalar("first_stage_throttle", "1", "the first stage's throttle setting, fraction of rated "
                            "thrust (read only when it is throttled: models/throttle.py)")
+U_FS_T_CUT = _INPUTS.scalar("first_stage_cutoff_command_time", "s",
+                            "a liquid first stage's cutoff command time, mission time (0: none yet; never at liftoff)")
 N_INPUT = blocks.INPUTS.size
 
 

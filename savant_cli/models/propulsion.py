@@ -16,7 +16,11 @@ nominal thrust is the table's. A liquid first stage instead burns like the upper
 ``F_vac = k F_rated f(t − t_ign)`` with its start-up fraction ``f`` (ignition
 ``t_ign`` = minus the transient's length: full thrust at liftoff) and its throttle
 setting ``k`` (``models/throttle.py``; 1 unthrottled), ``ṁ = F_vac / (g0 Isp)`` split
-oxidizer : fuel by its mixture ratio, until either tank is empty. Upper stage (J-2X
+oxidizer : fuel by its mixture ratio, until either tank is empty or, after a cutoff
+command at ``t_cut`` (a vehicle event shutting its engines down, ``sim/engine.py``), its
+shutdown transient ends: the thrust decays linearly from the command over
+``T_sd = 2 I_sd / F_rated`` (``I_sd`` its engines' summed shutdown impulse), the setting
+held from the command on, so the impulse after it is ``k I_sd``. Upper stage (J-2X
 class): ``F_vac = F_rated f(t − t_ign)`` with the start-up thrust fraction ``f`` from a
 table; ``ṁ = F_vac / (g0 Isp)``, split LOX : LH2 by
 the mixture ratio. After the cutoff command at ``t_cut`` the thrust decays linearly to
@@ -64,6 +68,8 @@ P_FS_THRUST = _PARAMS.scalar("first_stage.thrust_vac", "N", "liquid first stage'
 P_FS_MR = _PARAMS.scalar("first_stage.mixture_ratio", "1", "liquid first stage's oxidizer : fuel mass ratio")
 P_FS_IGNITION = _PARAMS.scalar("first_stage.ignition_time", "s",
                                "liquid first stage's ignition, mission time (minus its start transient's length)")
+P_FS_SHUTDOWN_TIME = _PARAMS.scalar("first_stage.shutdown_time", "s",
+                                    "a liquid first stage's thrust decay after its cutoff command, 2 I_sd / F_rated")
 P_FS_FUEL_TANK = _PARAMS.scalar("first_stage.fuel_state", "1",
                                 "index in x of a liquid first stage's fuel (kg; its oxidizer at first_stage.tank_state;"
                                 " read only when first_stage.liquid is 1)")
@@ -147,6 +153,7 @@ def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarra
         p[P_FS_THRUST] = fs.liquid.thrust_vac_N
         p[P_FS_MR] = fs.liquid.mixture_ratio
         p[P_FS_IGNITION] = -float(fs.liquid.startup_time_s[-1])
+        p[P_FS_SHUTDOWN_TIME] = 2.0 * fs.liquid.shutdown_impulse_Ns / fs.liquid.thrust_vac_N
         tables.update(fs_start_time=fs.liquid.startup_time_s, fs_start_frac=fs.liquid.startup_fraction)
 
 
@@ -171,19 +178,25 @@ def upper_stage_propellant(x: np.ndarray, p: np.ndarray) -> tuple[float, float]:
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def first_stage_flow(x: np.ndarray, tb: np.ndarray, p: np.ndarray, t: float, throttle: float) -> tuple[float, float]:
+def first_stage_flow(x: np.ndarray, tb: np.ndarray, p: np.ndarray, t: float, throttle: float,
+                     t_cut: float) -> tuple[float, float]:
     """Vacuum thrust (N) and mass flow (kg/s) of the first stage at mission time ``t``
     (s). A motor: ``ṁ = M F_tab(t) / I_tab``, ``F_vac = g0 Isp ṁ``, zero outside the
     table's time span and once its propellant state is empty. Liquid engines: ``F_vac =
-    throttle F_rated f(t − t_ign)``, ``ṁ = F_vac / (g0 Isp)``, zero once either tank is
-    empty (``throttle``: the setting it burns at, 1 unthrottled). The sequencer's sensed
-    thrust (chamber pressure) is this ``F_vac``."""
+    throttle F_rated f(t − t_ign)``, × the shutdown decay ``max(0, 1 − (t − t_cut)/T_sd)``
+    once the cutoff command at ``t_cut`` (s; 0 or less: none yet) is given, ``ṁ = F_vac /
+    (g0 Isp)``, zero once either tank is empty (``throttle``: the setting it burns at, 1
+    unthrottled). The sequencer's sensed thrust (chamber pressure) is this ``F_vac``."""
     if p[P_FS_LIQUID] != 0.0:
         if not (x[int(p[P_FS_TANK])] > 0.0 and x[int(p[P_FS_FUEL_TANK])] > 0.0):
             return 0.0, 0.0
         o_st, n_st = tab(tb, T_FS_START_TIME)
         f_vac = throttle * p[P_FS_THRUST] * interp1_at(tb, o_st, tab_offset(tb, T_FS_START_FRAC), n_st,
                                                       t - p[P_FS_IGNITION])
+        if t_cut > 0.0 and t > t_cut:
+            f_vac *= shutdown_decay(t - t_cut, p[P_FS_SHUTDOWN_TIME])
+            if not f_vac > 0.0:
+                return 0.0, 0.0
         return f_vac, f_vac / (G0 * p[P_FS_ISP])
     o_ft, n_ft = tab(tb, T_FS_TIME)
     if first_stage_propellant(x, p) <= 0.0 or t < tb[o_ft] or t > tb[o_ft + n_ft - 1]:
@@ -207,9 +220,15 @@ def upper_stage_thrust_vac(x: np.ndarray, tb: np.ndarray, p: np.ndarray, t: floa
     o_st, n_st = tab(tb, T_US_START_TIME)
     f_vac = interp1_at(tb, o_st, tab_offset(tb, T_US_START_FRAC), n_st, t - t_ign) * p[P_US_THRUST]
     if t_cut > 0.0 and t > t_cut:
-        t_sd = p[P_US_SHUTDOWN_TIME]
-        f_vac *= max(1.0 - (t - t_cut) / t_sd, 0.0) if t_sd > 0.0 else 0.0
+        f_vac *= shutdown_decay(t - t_cut, p[P_US_SHUTDOWN_TIME])
     return f_vac
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def shutdown_decay(since_s: float, t_sd: float) -> float:
+    """Fraction of the thrust at the cutoff command left ``since_s`` (s, > 0) after it: a
+    linear decay to zero over the shutdown transient ``t_sd`` (s; 0: at once)."""
+    return max(1.0 - since_s / t_sd, 0.0) if t_sd > 0.0 else 0.0
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -224,13 +243,14 @@ def propellant_remaining(x: np.ndarray, p: np.ndarray, config: int) -> float:
 
 @njit(cache=True, error_model="numpy", inline="always")
 def thrust_and_flow(x: np.ndarray, tb: np.ndarray, p: np.ndarray, engine: int, t: float, t_ign: float,
-                    t_cut: float, throttle: float, pres: float) -> tuple[float, float, float, float]:
+                    t_cut: float, throttle: float, fs_t_cut: float, pres: float) -> tuple[float, float, float, float]:
     """Delivered thrust (N), the first- and upper-stage mass flows (kg/s) and the vacuum
     thrust of the burning engine (N).
 
     ``engine`` is the engine phase, ``t`` mission time (s), ``t_ign`` the upper-stage
     ignition time (s), ``t_cut`` its cutoff command time (s; 0 or less: none yet),
-    ``throttle`` the first stage's setting (1 unthrottled), ``pres`` the ambient pressure
+    ``throttle`` the first stage's setting (1 unthrottled), ``fs_t_cut`` a liquid first
+    stage's cutoff command time (s; 0 or less: none yet), ``pres`` the ambient pressure
     (Pa).
     """
     thrust = 0.0
@@ -238,7 +258,7 @@ def thrust_and_flow(x: np.ndarray, tb: np.ndarray, p: np.ndarray, engine: int, t
     mdot_fs = 0.0
     mdot_us = 0.0
     if engine == ENGINE_FIRST:
-        f_vac, mdot_fs = first_stage_flow(x, tb, p, t, throttle)
+        f_vac, mdot_fs = first_stage_flow(x, tb, p, t, throttle, fs_t_cut)
         if mdot_fs > 0.0:
             thrust = max(f_vac - pres * p[P_FS_EXIT_AREA], 0.0)
     elif engine == ENGINE_UPPER:

@@ -348,7 +348,7 @@ def read_outcome(path: Path) -> RunOutcome:
     z = read_entry(path, hint)
     try:
         o = RunOutcome(int(z["run"]), str(z["status"]), str(z["message"]), float(z["t_final"]), float(z["wall_s"]),
-                       z["values"], [str(k) for k in z["summary_keys"]], z["summary"], z["events"],
+                       z["values"], [str(k) for k in z["summary_keys"]], z["summary"], _events(z["events"]),
                        z["histories"], z["margins"], z["checks"],
                        z["stage_wall_s"] if "stage_wall_s" in z else np.full(len(RUN_STAGES), np.nan))
     except (KeyError, ValueError, TypeError) as exc:
@@ -438,6 +438,15 @@ def execute(case: Case, todo: Iterable[int], journal: Journal, workers: int,
         # ended, the join returns as soon as the thread sees them gone.
         pool.shutdown(wait=True, cancel_futures=True)
     return stop
+
+
+def _events(written: np.ndarray) -> np.ndarray:
+    """A journal entry's event times in the slots of :data:`EVENT_NAMES` (an entry
+    written before the later slots existed has NaN there: those events had no slot)."""
+    events = np.full(len(EVENT_NAMES), np.nan)
+    written = np.asarray(written, dtype=float)
+    events[:written.size] = written
+    return events
 
 
 def shard_runs(n_runs: int, shards: int, shard: int) -> range:

@@ -233,7 +233,8 @@ def read_tables(g: h5py.Group) -> Tables:
                   else np.zeros((runs.size, 0)),
                   summary_keys, np.column_stack([g["summary"][k][()] for k in summary_keys]) if summary_keys
                   else np.zeros((runs.size, 0)),
-                  np.column_stack([g["events"][f"{n}_s"][()] for n in EVENT_NAMES]),
+                  np.column_stack([g["events"][f"{n}_s"][()] if f"{n}_s" in g["events"] else np.full(runs.size, np.nan)
+                                   for n in EVENT_NAMES]),  # (a file written before a later event's slot: NaN)
                   margins, [k for k in g["histories"] if k != "time"] if "histories" in g else [])
 
 

@@ -44,7 +44,7 @@ class SimModel:
     d0: np.ndarray
     u0: np.ndarray
     k0: int = 0  # first plant step (non-zero when starting from a staging state)
-    events0: np.ndarray = field(default_factory=lambda: np.full(4, np.nan))
+    events0: np.ndarray = field(default_factory=lambda: np.full(len(engine.EVENT_NAMES), np.nan))
     info: dict = field(default_factory=dict)
     layout: layout.StateLayout = field(default_factory=layout.StateLayout)
 
@@ -103,18 +103,22 @@ def rates(cfg: SavantConfig) -> Rates:
 
 def predicted_separation_time(vehicle: Vehicle, p: np.ndarray | None = None, tb: np.ndarray | None = None) -> float:
     """A prediction, from the nominal thrust trace alone, of the separation time (s): the
-    first time after the trace's peak when the thrust falls below the configured fraction
-    of that peak. The flight itself separates on board at the step its flown stage meets
-    the rule (``sim/engine.py``); this is only for what is needed before any flight (the
-    command table's first-stage samples, reference trajectories). A throttled liquid
-    stage's trace needs the run's parameters ``p`` and packed tables ``tb``
-    (:func:`nominal_first_stage_trace`)."""
-    time_s, thrust = nominal_first_stage_trace(vehicle, p, tb)
+    first time after the trace's peak, and once the separation is armed (from liftoff,
+    or its delay after a liquid first stage's cutoff), when the thrust falls below the
+    configured fraction of that peak. The flight itself separates on board at the step
+    its flown stage meets the rule (``sim/engine.py``); this is only for what is needed
+    before any flight (the command table's first-stage samples, reference trajectories).
+    A throttled or commanded-cutoff liquid stage's trace needs the run's parameters ``p``
+    and packed tables ``tb`` (:func:`first_stage_march`)."""
+    time_s, thrust, t_cut = first_stage_march(vehicle, p, tb)
     t = np.linspace(time_s[0], time_s[-1], 200001)
     f = np.interp(t, time_s, thrust)
     ipk = int(np.argmax(f))
-    below = np.nonzero(f[ipk:] < vehicle.events.separation_thrust_fraction * f[ipk])[0]
-    return float(t[ipk + below[0]]) if below.size else float(t[-1])
+    sep = vehicle.events.trigger(engine.EV_SEPARATION)
+    t_armed = (t_cut if sep.after == engine.EV_FS_CUTOFF else 0.0) + sep.delay_s
+    start = max(ipk, int(np.searchsorted(t, t_armed)))
+    below = np.nonzero(f[start:] < vehicle.events.separation_thrust_fraction * f[ipk])[0]
+    return float(t[start + below[0]]) if below.size else max(float(t[-1]), t_armed)  # (no thrust after the trace)
 
 
 #: The step of the throttled trace's march (s).
@@ -123,51 +127,113 @@ TRACE_STEP_S = 0.05
 
 def nominal_first_stage_trace(vehicle: Vehicle, p: np.ndarray | None = None,
                               tb: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """The first stage's nominal vacuum thrust (N) against mission time (s).
+    """The first stage's nominal vacuum thrust (N) against mission time (s)
+    (:func:`first_stage_march`)."""
+    time_s, thrust, _ = first_stage_march(vehicle, p, tb)
+    return time_s, thrust
 
-    A motor's, and an unthrottled liquid stage's, is its thrust table. A throttled liquid
-    stage's is marched at :data:`TRACE_STEP_S` with the flight's own throttle law
-    (``models/throttle.py::cycle``, each step a cycle), its sensed axial acceleration
-    taken as the vacuum thrust over the stack's mass at the propellant left (no drag, no
+
+def first_stage_march(vehicle: Vehicle, p: np.ndarray | None = None,
+                      tb: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, float]:
+    """The first stage's nominal vacuum thrust (N) against mission time (s), and its
+    cutoff time (s: a liquid stage's commanded cutoff, else the end of its burn; NaN for
+    a motor).
+
+    A motor's, and an unthrottled liquid stage's without a commanded cutoff, is its
+    thrust table. Otherwise the stage is marched at :data:`TRACE_STEP_S` with the
+    flight's own throttle law (``models/throttle.py::cycle``, each step a cycle; an
+    unthrottled stage at rated thrust), its sensed axial acceleration taken as the
+    vacuum thrust over the stack's mass at the propellant left (no drag, no
     back-pressure loss: an acceleration a little high, so the predicted throttling comes
-    a little early and the burn a little long), until the usable load is burned: the
-    table's own (trapezoidal) impulse is ``g0 Isp`` times the usable load."""
+    a little early and the burn a little long), until the cutoff's trigger holds
+    (``events.first_stage_cutoff``: its delay after liftoff is landed on; a tank's
+    propellant crossing its threshold is placed within the step by linear interpolation;
+    an axial acceleration at the step's end) or the usable load is burned. From the
+    cutoff the thrust decays linearly to zero over the engines' shutdown transient
+    ``2 I_sd / F_rated`` (``models/propulsion.py``), the setting held. The trace's own
+    (trapezoidal) impulse is ``g0 Isp`` times the propellant it burns."""
     fs = vehicle.first_stage
-    if fs.liquid is None or fs.liquid.throttle is None:
-        return fs.thrust_time_s, fs.thrust_vac_N
-    if p is None or tb is None:
+    cut = vehicle.events.trigger(engine.EV_FS_CUTOFF)
+    if fs.liquid is None:
+        return fs.thrust_time_s, fs.thrust_vac_N, float("nan")
+    throttled = fs.liquid.throttle is not None
+    if not throttled and not np.isfinite(cut.delay_s):
+        return fs.thrust_time_s, fs.thrust_vac_N, float(fs.thrust_time_s[-2])
+    if throttled and (p is None or tb is None):
         raise ValueError("a throttled first stage's trace needs the run's parameters and tables")
     stack = vehicle.configurations["stack"].mass
     rated = fs.liquid.thrust_vac_N * float(fs.liquid.startup_fraction[-1])
     flow_per_thrust = 1.0 / (constants.G0 * fs.isp_vac_s)
-    load = usable_load(fs.liquid.mixture_ratio, fs.oxidizer_kg, fs.fuel_kg)
+    mr = fs.liquid.mixture_ratio
+    load = usable_load(mr, fs.oxidizer_kg, fs.fuel_kg)
+    ox_tank = vehicle.first_stage_tanks[0]
+
+    def watched(burned: float, f: float) -> float:
+        """The cutoff condition's quantity with ``burned`` kg burned at thrust ``f`` (N)."""
+        if cut.quantity == "propellant_kg":
+            ox, fuel = fs.oxidizer_kg - burned * mr / (1.0 + mr), fs.fuel_kg - burned / (1.0 + mr)
+            return ox if cut.tank == ox_tank else fuel
+        return f / float(np.interp(fs.propellant_kg - burned, stack.propellant_kg, stack.mass_kg))
+
+    def holds(value: float) -> bool:
+        return value > cut.threshold if cut.above else value < cut.threshold
+
+    def cycle(k: float, t: float, accel: float) -> float:
+        return throttle.cycle(k, t, accel, TRACE_STEP_S, p, tb) if throttled else 1.0
+
     time_s = list(fs.thrust_time_s[fs.thrust_time_s < 0.0])
     thrust = list(fs.thrust_vac_N[fs.thrust_time_s < 0.0])
-    t, burned, k = 0.0, 0.0, throttle.start(p, tb)
+    t, burned, k = 0.0, 0.0, throttle.start(p, tb) if throttled else 1.0
     time_s.append(t)
     thrust.append(k * rated)
-    while True:
+    while not (t >= cut.delay_s and (cut.quantity is None or holds(watched(burned, k * rated)))):
         f = k * rated
         left = load - burned
-        if f * flow_per_thrust * TRACE_STEP_S < left:  # a cycle: the setting from the acceleration at its end
-            mass = float(np.interp(fs.propellant_kg - burned - f * flow_per_thrust * TRACE_STEP_S,
-                                   stack.propellant_kg, stack.mass_kg))
-            k_next = throttle.cycle(k, t + TRACE_STEP_S, f / mass, TRACE_STEP_S, p, tb)
-            burned_step = 0.5 * (f + k_next * rated) * flow_per_thrust * TRACE_STEP_S  # the table's trapezoid
-            if burned_step < left:
+        h = min(TRACE_STEP_S, cut.delay_s - t) if cut.delay_s > t else TRACE_STEP_S
+        burned_step = left
+        if f * flow_per_thrust * h < left:  # a cycle: the setting from the acceleration at its end
+            mass = float(np.interp(fs.propellant_kg - burned - f * flow_per_thrust * h, stack.propellant_kg,
+                                   stack.mass_kg))
+            k_next = cycle(k, t + h, f / mass) if h == TRACE_STEP_S else k  # (a step cut short: the setting held)
+            burned_step = 0.5 * (f + k_next * rated) * flow_per_thrust * h  # the table's trapezoid
+        if burned_step >= left:  # the last step, at the setting held: the load burned exactly
+            t += left / (f * flow_per_thrust)
+            time_s.append(t)
+            thrust.append(f)
+            time_s.append(t + BURNOUT_DROP_S)
+            thrust.append(0.0)
+            return np.asarray(time_s), np.asarray(thrust), t
+        if cut.quantity == "propellant_kg" and t + h >= cut.delay_s:
+            before, after = watched(burned, f), watched(burned + burned_step, k_next * rated)
+            if holds(after) and after != before:  # the crossing, within the step
+                s = min(max((cut.threshold - before) / (after - before), 0.0), 1.0)
+                h, k_next = s * h, k + s * (k_next - k)
+                burned_step = 0.5 * (f + k_next * rated) * flow_per_thrust * h
                 burned += burned_step
-                t += TRACE_STEP_S
+                t += h
                 k = k_next
                 time_s.append(t)
                 thrust.append(k * rated)
-                continue
-        t += left / (f * flow_per_thrust)  # the last step, at the setting held: the load burned exactly
+                break
+        burned += burned_step
+        t += h
+        k = k_next
         time_s.append(t)
-        thrust.append(f)
-        break
-    time_s.append(time_s[-1] + BURNOUT_DROP_S)
-    thrust.append(0.0)
-    return np.asarray(time_s), np.asarray(thrust)
+        thrust.append(k * rated)
+    t_cut, f_cut = t, k * rated
+    t_sd = 2.0 * fs.liquid.shutdown_impulse_Ns / fs.liquid.thrust_vac_N
+    left = load - burned
+    if t_sd > 0.0 and 0.5 * f_cut * t_sd * flow_per_thrust <= left:
+        time_s.append(t_cut + t_sd)
+        thrust.append(0.0)
+    elif t_sd > 0.0:  # a tank empties during the decay: f_cut (τ − τ²/2T) burns what is left
+        tau = t_sd * (1.0 - np.sqrt(1.0 - 2.0 * left / (f_cut * flow_per_thrust * t_sd)))
+        time_s += [t_cut + tau, t_cut + tau + BURNOUT_DROP_S]
+        thrust += [f_cut * (1.0 - tau / t_sd), 0.0]
+    else:
+        time_s.append(t_cut + BURNOUT_DROP_S)
+        thrust.append(0.0)
+    return np.asarray(time_s), np.asarray(thrust), t_cut
 
 
 def target_energy(cfg: SavantConfig) -> float:
@@ -234,7 +300,7 @@ WHEN_CODES = {None: engine.WHEN_NONE, "thrust_fraction": engine.WHEN_THRUST_FRAC
 
 def event_schedule(cfg: SavantConfig, vehicle: Vehicle, rt: Rates) -> EventSchedule:
     """The event rules and run limits of one run, from the vehicle's events and the config."""
-    triggers = [vehicle.events.trigger(k) for k in range(engine.N_SEQUENCE)]
+    triggers = [vehicle.events.trigger(k) for k in range(len(engine.EVENT_NAMES))]
     x_layout = state_layout(cfg, vehicle)
     return EventSchedule(
         rules=tuple(EventRule(after=int(tr.after), delay_s=float(tr.delay_s), when=WHEN_CODES[tr.quantity],

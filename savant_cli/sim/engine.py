@@ -15,15 +15,17 @@ on step boundaries, runs the discrete parts at their own rates with zero-order h
   Powered Explicit Guidance (``models/peg.py``), whose time to go (less the nominal
   shutdown impulse's lead) also commands the cutoff at the plant step nearest it;
 * the vehicle's events at the first step boundary at which their trigger holds
-  (:class:`EventSchedule`, from the vehicle file's ``events``): separation when the
-  sensed (vacuum) thrust of the flown first stage (its motor, or its liquid engines as
-  throttled) falls below a fraction of its own flown peak (the peak is kept in the
-  discrete state), the upper-stage ignition and the item's (LES or fairing) jettison a
-  delay after the event they count from and, with a condition, once it holds (axial
-  acceleration, altitude, dynamic pressure, a tank's propellant); then the cutoff command; after the command the upper-stage thrust decays
-  over its shutdown transient (``models/propulsion.py``) with guidance frozen (the last
-  attitude command held), and the run stops when the decay ends: the insertion state
-  includes the shutdown impulse.
+  (:class:`EventSchedule`, from the vehicle file's ``events``): a liquid first stage's
+  cutoff (its engines' shutdown command) a delay after liftoff and, with a condition,
+  once it holds; separation when the sensed (vacuum) thrust of the flown first stage (its
+  motor, or its liquid engines as throttled and shut down) falls below a fraction of its
+  own flown peak (the peak is kept in the discrete state), from liftoff or a delay after
+  the first stage's cutoff; the upper-stage ignition and the item's (LES or fairing)
+  jettison a delay after the event they count from and, with a condition, once it holds
+  (axial acceleration, altitude, dynamic pressure, a tank's propellant); then the cutoff
+  command; after the command the upper-stage thrust decays over its shutdown transient
+  (``models/propulsion.py``) with guidance frozen (the last attitude command held), and
+  the run stops when the decay ends: the insertion state includes the shutdown impulse.
 
 Python calls :func:`advance` in chunks so that a progress bar can be drawn and an
 interrupted or diverged run still returns what it computed.
@@ -48,8 +50,8 @@ from savant_cli.models.gravity import P_MU
 from savant_cli.models.guidance import D_TG, D_VG, SmootherGains, guidance_sample, smoother_step
 from savant_cli.models.layout import (
     CONFIG_STACK, CONFIG_UPPER, CONFIG_UPPER_LES, D_CMD_P, D_CMD_RCS, D_CMD_Y, D_FLEX_NAV, D_GYRO_X, D_GYRO_Y,
-    ENGINE_FIRST, ENGINE_OFF, ENGINE_UPPER, N_AUX, U_CONFIG, U_DPC, U_DYC, U_ENGINE, U_RCS, U_ROLL, U_T_CUT, U_T_IGN,
-    U_THROTTLE, Q, R, V, W
+    ENGINE_FIRST, ENGINE_OFF, ENGINE_UPPER, N_AUX, U_CONFIG, U_DPC, U_DYC, U_ENGINE, U_FS_T_CUT, U_RCS, U_ROLL, U_T_CUT,
+    U_T_IGN, U_THROTTLE, Q, R, V, W
 )
 from savant_cli.models.sensors import (
     GYRO_MISALIGN, GYRO_POINTS, IMU_GYRO, N_GYROS, P_IMU_MISALIGN, GyroModel, gyro_step, misalignment
@@ -75,8 +77,11 @@ EV_SEPARATION = 0
 EV_IGNITION = 1
 EV_LES = 2
 EV_CUTOFF = 3
-EVENT_NAMES = ("separation", "upper_stage_ignition", "les_jettison", "cutoff")
-N_SEQUENCE = 3  # the vehicle's events (the cutoff is guidance's)
+EV_FS_CUTOFF = 4
+EVENT_NAMES = ("separation", "upper_stage_ignition", "les_jettison", "cutoff", "first_stage_cutoff")
+#: The vehicle's event slots, in the order a step boundary checks them (the cutoff is
+#: guidance's; a liquid first stage's cutoff precedes its separation).
+SEQUENCE = (EV_FS_CUTOFF, EV_SEPARATION, EV_IGNITION, EV_LES)
 
 # what an event's condition watches (EventSchedule.when)
 WHEN_NONE = 0  # fires once armed
@@ -122,8 +127,10 @@ class EventSchedule(NamedTuple):
     Attributes
     ----------
     rules : tuple of EventRule
-        The vehicle's events, one per slot (``EV_SEPARATION``, ``EV_IGNITION``,
-        ``EV_LES``; the cutoff is guidance's; ``vehicle/two_stage.py::Trigger``): armed
+        One per slot of :data:`EVENT_NAMES`: the vehicle's events (:data:`SEQUENCE`;
+        ``vehicle/two_stage.py::Trigger``; a rule that never arms for an event the
+        vehicle does not have) and the cutoff's, which never arms (guidance commands
+        the cutoff). Armed
         ``delay_s`` after the event slot ``after`` fired (−1: liftoff), each fires at the
         first step boundary from then on at which its condition holds (``WHEN_NONE``: at
         once).
@@ -142,7 +149,7 @@ class EventSchedule(NamedTuple):
         ``models.command_schedule.SCHEDULES``.
     """
 
-    rules: tuple[EventRule, EventRule, EventRule]
+    rules: tuple[EventRule, EventRule, EventRule, EventRule, EventRule]
     cutoff_energy_j_kg: float
     max_time_s: float
     stop_at_separation: bool
@@ -256,33 +263,41 @@ def handle_events(t: float, dt: float, x: np.ndarray, u: np.ndarray, d: np.ndarr
                   events: np.ndarray, sched: EventSchedule, p: np.ndarray, tb: np.ndarray, work: np.ndarray) -> int:
     """Apply the vehicle's events at a step boundary; return a stop code.
 
-    Each event slot, in order, fires when it is :func:`armed` and its condition holds
-    (:func:`condition_holds`), and applies its actions: separation drops the first stage
-    (the upper-stage nozzle and its command start at null, a new modal set starts at rest,
-    the reference point moves to the new configuration's CG), ignition lights the upper
-    stage (the flight control fades its gains in from here), the item's jettison drops the
-    LES or fairing (the reference point moves again). Until separation the first
-    stage's sensed vacuum thrust at ``t`` (``propulsion.first_stage_flow``, the stage
-    flown so far, at its held throttle) is tracked: its largest value so far
+    Each event slot, in the order of :data:`SEQUENCE`, fires when it is :func:`armed` and
+    its condition holds (:func:`condition_holds`), and applies its actions: a liquid
+    first stage's cutoff commands its engines' shutdown (``u[U_FS_T_CUT]``: the thrust
+    decays over their shutdown transient, the throttle held), separation drops the first
+    stage (the upper-stage nozzle and its command start at null, a new modal set starts
+    at rest, the reference point moves to the new configuration's CG), ignition lights
+    the upper stage (the flight control fades its gains in from here), the item's
+    jettison drops the LES or fairing (the reference point moves again). Until separation
+    the first stage's sensed vacuum thrust at ``t`` (``propulsion.first_stage_flow``, the
+    stage flown so far, at its held throttle) is tracked: its largest value so far
     (``d[D_FS_PEAK]``, the thrust fraction's reference) and its trapezoidal integral
     (``d[D_FS_IMPULSE]``, the impulse the stage delivered); its propellant at separation
-    (a liquid stage's residual) is kept in
-    ``d[D_FS_PROP_SEP]``. After the cutoff command the upper stage's sensed thrust
+    (a liquid stage's residual) is kept in ``d[D_FS_PROP_SEP]``. A liquid first stage
+    whose tank runs dry before its cutoff command has its cutoff event then (no command:
+    ``u[U_FS_T_CUT]`` stays 0). After the cutoff command the upper stage's sensed thrust
     accumulates the same way in ``d[D_US_SD_IMPULSE]``. ``dt`` is the plant step (s), the
     trapezoids' width; ``work``: the scratch rows of :func:`work_array`."""
     f_sensed = 0.0
     if np.isnan(events[EV_SEPARATION]):
-        f_sensed = propulsion.first_stage_flow(x, tb, p, t, throttle.held(u[U_THROTTLE], p))[0]
+        f_sensed = propulsion.first_stage_flow(x, tb, p, t, throttle.held(u[U_THROTTLE], p), u[U_FS_T_CUT])[0]
         if t > 0.0:
             d[propulsion.D_FS_IMPULSE] += 0.5 * (d[propulsion.D_FS_LAST] + f_sensed) * dt
         d[propulsion.D_FS_LAST] = f_sensed
         if f_sensed > d[propulsion.D_FS_PEAK]:
             d[propulsion.D_FS_PEAK] = f_sensed
-    for k in range(N_SEQUENCE):
+        if np.isnan(events[EV_FS_CUTOFF]) and p[propulsion.P_FS_LIQUID] != 0.0 \
+                and not (x[int(p[propulsion.P_FS_TANK])] > 0.0 and x[int(p[propulsion.P_FS_FUEL_TANK])] > 0.0):
+            events[EV_FS_CUTOFF] = t  # a tank ran dry before any command: the engines' shutdown is now
+    for k in SEQUENCE:
         if not (armed(k, t, events, sched) and condition_holds(k, t, x, u, f_sensed, d, sched, p, tb, work)):
             continue
         events[k] = t
-        if k == EV_SEPARATION:
+        if k == EV_FS_CUTOFF:
+            u[U_FS_T_CUT] = t
+        elif k == EV_SEPARATION:
             d[propulsion.D_FS_PROP_SEP] = propulsion.first_stage_propellant(x, p)
             if sched.stop_at_separation:
                 return STOP_SEPARATION
@@ -500,7 +515,7 @@ def _advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0
                 qt.qmul_into(x[Q:Q + 4], q_imu, q_nav)
             roll_rate_error, engagement = fcs_step(d, q_nav, phase, sched_var, t - u[U_T_IGN], dt_fcs, ft)
             roll_gimbal.roll_gimbal_step(d, ft.roll_gimbal[phase], engagement, roll_rate_error, dt_fcs)
-            if throttled and int(u[U_ENGINE]) == ENGINE_FIRST:  # the engine controller's new setting, at once
+            if throttled and int(u[U_ENGINE]) == ENGINE_FIRST and not u[U_FS_T_CUT] > 0.0:  # its new setting, at once
                 accel = 0.0
                 if throttle.acceleration_limited(p):  # the accelerometer: specific force along body x
                     derivative(t, x, u, p, tb, work[5], work[4])

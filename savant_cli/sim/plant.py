@@ -26,7 +26,7 @@ from savant_cli.models import (
 )
 from savant_cli.models.configurations import ENGINE_FIRST
 from savant_cli.models.layout import (
-    U_CONFIG, U_DPC, U_DYC, U_ENGINE, U_GUST, U_RCS, U_ROLL, U_T_CUT, U_T_IGN, U_THROTTLE, Q, R, V, W
+    U_CONFIG, U_DPC, U_DYC, U_ENGINE, U_FS_T_CUT, U_GUST, U_RCS, U_ROLL, U_T_CUT, U_T_IGN, U_THROTTLE, Q, R, V, W
 )
 
 #: Tabular data of the plant by name (SI, contiguous arrays); the fields are the tables
@@ -163,7 +163,7 @@ def compose(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarra
     tgx, tgy, tgz = flex.rotation_at(x, config, p, tb, gimbal_pt, False)  # follower thrust
     setting = throttle.held(u[U_THROTTLE], p)
     thrust, mdot_fs, mdot_us, thrust_vac = propulsion.thrust_and_flow(x, tb, p, engine, t, u[U_T_IGN], u[U_T_CUT],
-                                                                      setting, pres)
+                                                                      setting, u[U_FS_T_CUT], pres)
     dp, dy, bias_p, bias_y = actuator.gimbal_angles(x, p, engine)
     rgx, rgy, rgz = propulsion.gimbal_arm(p, engine, cgx, cgy, cgz)
     dgx, dgy, dgz = flex.displacement_at(x, config, p, tb, gimbal_pt)  # the structure moves the gimbal

@@ -8,7 +8,7 @@ import numpy as np
 from savant_cli import constants
 from savant_cli.io.record import Signal
 from savant_cli.models import propulsion
-from savant_cli.models.layout import U_T_CUT
+from savant_cli.models.layout import U_FS_T_CUT, U_T_CUT
 from savant_cli.sim import engine
 from savant_cli.sim.run import SimResult
 from savant_cli.vehicle.two_stage import usable_load
@@ -190,6 +190,16 @@ def propulsion_keys(result: SimResult, p: np.ndarray) -> dict[str, float | str |
             "shutdown_impulse_Ns": float(d[propulsion.D_US_SD_IMPULSE]) if result.u[U_T_CUT] > 0.0 else None}
 
 
+def first_stage_cutoff_keys(result: SimResult) -> dict[str, float | str | None]:
+    """A liquid first stage's shutdown: ``time_first_stage_cutoff_s`` (None: its engines
+    still burned at the end of the run) and ``first_stage_shutdown``, ``"commanded"`` (by
+    its cutoff event) or ``"depletion"`` (a tank ran dry first: no propellant reserve at
+    the cutoff)."""
+    t_cut = _event(result, engine.EV_FS_CUTOFF)
+    how = None if t_cut is None else "commanded" if result.u[U_FS_T_CUT] > 0.0 else "depletion"
+    return {"time_first_stage_cutoff_s": t_cut, "first_stage_shutdown": how}
+
+
 #: the keys of :func:`navigation_keys`
 NAVIGATION_KEYS = ("navigation_position_error_m", "navigation_velocity_error_mps", "navigation_attitude_error_deg",
                    "navigated_perigee_altitude_km", "navigated_apogee_altitude_km", "navigated_inclination_deg")
@@ -270,6 +280,8 @@ def summarize(result: SimResult, sig: dict[str, Signal], study_wall_s: float | N
                                 _event(result, engine.EV_SEPARATION)))
     if p is not None:
         out.update(propulsion_keys(result, p))
+        if p[propulsion.P_FS_LIQUID] != 0.0:
+            out.update(first_stage_cutoff_keys(result))
     if target is not None:
         cut = not np.isnan(result.events[engine.EV_CUTOFF])
         out.update(insertion_errors(r_f, v_f, target) if cut else dict.fromkeys(INSERTION_KEYS))

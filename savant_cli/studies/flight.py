@@ -76,8 +76,8 @@ def control_steps(cfg: SavantConfig, times: list[float]) -> tuple[int, ...]:
 
 
 def events_of(result: SimResult) -> list[tuple[str, float]]:
-    """The events that happened, in engine order: ``(name, mission time s)``."""
-    return [(name, float(t)) for name, t in zip(EVENT_NAMES, result.events) if t == t]
+    """The events that happened, in the order they did: ``(name, mission time s)``."""
+    return sorted(((name, float(t)) for name, t in zip(EVENT_NAMES, result.events) if t == t), key=lambda e: e[1])
 
 
 def record(result: SimResult, sig: dict[str, Signal], summary: dict[str, Any], raw_cfg: DictConfig,

@@ -175,23 +175,29 @@ class Trigger:
     threshold: float = 0.0
 
 
-#: The plant's events, in slot order (sim/engine.py: EV_SEPARATION, EV_IGNITION, EV_LES).
-EVENT_ORDER = ("separation", "upper_stage_ignition", "les_jettison")
+#: The plant's events, in slot order (sim/engine.py: EVENT_NAMES): the ``cutoff`` is
+#: guidance's (no trigger of the vehicle's arms it), the ``first_stage_cutoff`` a liquid
+#: first stage's shutdown before its separation.
+EVENT_ORDER = ("separation", "upper_stage_ignition", "les_jettison", "cutoff", "first_stage_cutoff")
 
 
 @dataclass(frozen=True)
 class Events:
-    """Staging events: separation when the first-stage motor's vacuum thrust falls below
-    ``separation_thrust_fraction`` of its peak; the upper-stage ignition command
-    ``ignition_delay_s`` later; the LES (or fairing) jettison ``les_jettison_delay_s``
-    after that (infinite: none). ``triggers``: each event's whole trigger, in
-    :data:`EVENT_ORDER`, where the ignition and the jettison may also wait for a
-    condition."""
+    """Staging events: separation when the first stage's vacuum thrust falls below
+    ``separation_thrust_fraction`` of its peak (from liftoff, or a delay after a liquid
+    first stage's cutoff); the upper-stage ignition command ``ignition_delay_s`` later;
+    the LES (or fairing) jettison ``les_jettison_delay_s`` after that (infinite: none).
+    ``triggers``: each event's whole trigger, in :data:`EVENT_ORDER`, where the ignition,
+    the jettison and the first-stage cutoff may also wait for a condition (the guidance
+    cutoff's, and the first-stage cutoff's of a vehicle without one, never arm).
+    ``names``: each slot's event name in the vehicle file ("" for none; empty: built
+    without a file)."""
 
     separation_thrust_fraction: float
     ignition_delay_s: float
     les_jettison_delay_s: float
-    triggers: tuple[Trigger, Trigger, Trigger]
+    triggers: tuple[Trigger, Trigger, Trigger, Trigger, Trigger]
+    names: tuple[str, ...] = ()
 
     def trigger(self, slot: int) -> Trigger:
         """Event ``slot``'s trigger."""
@@ -351,12 +357,41 @@ def _cluster(engines: tuple[EngineSpec, ...]) -> tuple[float, np.ndarray, tuple[
     return float(len(engines)), mean, mounts
 
 
-def _event(tree: VehicleTree, name: str, after: str, jettison: tuple = (), ignite: tuple = ()):
+def _event(tree: VehicleTree, name: str, after: tuple[str, ...], jettison: tuple = (), ignite: tuple = (),
+           shutdown: tuple = ()):
+    """The event ``name``, refused unless it counts from one of ``after`` and its actions
+    are exactly these (``shutdown`` in any order)."""
     ev = tree.events[name]
-    if ev.after != after or ev.jettison != jettison or ev.ignite != ignite or ev.shutdown:
-        what = (f"after {after}" + (f", jettison {list(jettison)}" if jettison else "")
-                + (f", ignite {list(ignite)}" if ignite else ""))
+    if ev.after not in after or ev.jettison != jettison or ev.ignite != ignite \
+            or sorted(ev.shutdown) != sorted(shutdown):
+        what = (f"after {' or '.join(after)}" + (f", jettison {list(jettison)}" if jettison else "")
+                + (f", ignite {list(ignite)}" if ignite else "")
+                + (f", shut down {list(shutdown)}" if shutdown else ""))
         _refuse(ev.key, name, f"this event is: {what}")
+    return ev
+
+
+def _first_stage_cutoff(tree: VehicleTree, name: str, first, engines: tuple[EngineSpec, ...]):
+    """The first event when it shuts the first stage's engines down: a liquid stage's
+    cutoff, a delay after liftoff and optionally once a first-stage tank's propellant or
+    the axial acceleration crosses a value, the quantities the nominal trace can place
+    (``sim/build.py::first_stage_march``). None: the first event is the separation."""
+    ev = tree.events[name]
+    if not ev.shutdown:
+        return None
+    if engines[0].source != LIQUID:
+        _refuse(f"{ev.key}.shutdown", list(ev.shutdown), f"{first.name} is a solid motor, which burns to its end: only "
+                                                         f"a liquid first stage shuts down before its separation")
+    ev = _event(tree, name, (LIFTOFF,), shutdown=tuple(e.name for e in engines))
+    if not ev.delay_s > 0.0:
+        _refuse(f"{ev.key}.delay_s", ev.delay_s, "a cutoff armed after liftoff: a delay > 0 s (a condition then waits "
+                                                 "for its quantity)")
+    if ev.when is not None and ev.when.quantity not in ("propellant_kg", "axial_acceleration_mps2"):
+        _refuse(f"{ev.key}.when.quantity", ev.when.quantity,
+                "propellant_kg of a first-stage tank or axial_acceleration_mps2 (what the first stage's nominal "
+                "trace can place)")
+    if ev.when is not None and ev.when.quantity == "propellant_kg" and ev.when.of not in first.tanks:
+        _refuse(f"{ev.key}.when.of", ev.when.of, f"a tank of {first.name}: {list(first.tanks)}")
     return ev
 
 
@@ -396,18 +431,22 @@ def two_stage_view(tree: VehicleTree) -> Vehicle:
     if first.inert_mass_kg is None:
         _refuse(f"{first.key}.inert_mass_kg", None, "the first stage's inert mass, dropped at separation")
     names = list(tree.events)
+    cut = _first_stage_cutoff(tree, names[0], first, fs_engines) if names else None
+    if cut is not None:
+        names.pop(0)
     if len(names) != 2 + len(items):
-        _refuse("vehicle.events", names,
-                "separation, the upper-stage ignition" + (", the item's jettison" if items else ""))
-    sep = _event(tree, names[0], LIFTOFF, jettison=(first.name,))
+        _refuse("vehicle.events", list(tree.events),
+                "a liquid first stage's cutoff (optional), separation, the upper-stage ignition"
+                + (", the item's jettison" if items else ""))
+    sep = _event(tree, names[0], (LIFTOFF,) if cut is None else (LIFTOFF, cut.name), jettison=(first.name,))
     if sep.when is None or sep.when.quantity != "thrust_fraction" \
             or sep.when.of not in (first.name, *(e.name for e in fs_engines)) \
-            or sep.when.below is None or sep.delay_s != 0.0:
+            or sep.when.below is None or (sep.delay_s != 0.0 and sep.after == LIFTOFF):
         _refuse(f"{sep.key}.when", sep.when.quantity if sep.when else None,
                 f"separation when the thrust fraction of {first.name} (or one of its identical engines) falls below "
-                f"a value, from liftoff")
-    ign = _event(tree, names[1], sep.name, ignite=tuple(e.name for e in us_engines))
-    jet = _event(tree, names[2], ign.name, jettison=(items[0].name,)) if items else None
+                f"a value, from liftoff (or a delay after the first stage's cutoff)")
+    ign = _event(tree, names[1], (sep.name,), ignite=tuple(e.name for e in us_engines))
+    jet = _event(tree, names[2], (ign.name,), jettison=(items[0].name,)) if items else None
     configs = [tree.configurations[c] for _, c in tree.sequence]
     for c, tanks in zip(configs, (fs.tanks, us.tanks, us.tanks)):
         if set(c.mass_tanks) != set(tanks):
@@ -429,12 +468,16 @@ def two_stage_view(tree: VehicleTree) -> Vehicle:
         engine=us.moving_mass, mounts=us_mounts, mixing_matrix=upper.mixing_matrix)
     fs_tanks = tuple(tree.tanks[t] for t in fs.tanks)
     tanks = (*(t.name for t in fs_tanks), ox.name, fuel.name)
-    separation = Trigger(-1, 0.0, "thrust_fraction", None, False, sep.when.below)
-    never = Trigger(1, float("inf"))  # no item: no jettison
+    fs_cut_slot = EVENT_ORDER.index("first_stage_cutoff")
+    separation = Trigger(-1 if sep.after == LIFTOFF else fs_cut_slot, sep.delay_s, "thrust_fraction", None, False,
+                         sep.when.below)
+    never = Trigger(-1, float("inf"))  # an event this vehicle does not have, or guidance's cutoff
     events = Events(separation_thrust_fraction=sep.when.below, ignition_delay_s=ign.delay_s,
                     les_jettison_delay_s=jet.delay_s if jet is not None else float("inf"),
                     triggers=(separation, _trigger(ign, 0, tanks),
-                              _trigger(jet, 1, tanks) if jet is not None else never))
+                              _trigger(jet, 1, tanks) if jet is not None else never, never,
+                              _trigger(cut, -1, tanks) if cut is not None else never),
+                    names=(sep.name, ign.name, jet.name if jet is not None else "", "", cut.name if cut else ""))
     keys = {"propellant_first": " + ".join(f"{t.key}.propellant_kg" for t in fs_tanks),
             "propellant_upper": f"{ox.key}.propellant_kg + {fuel.name}.propellant_kg",
             "jettison_mass": f"{first.key}.inert_mass_kg",
