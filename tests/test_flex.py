@@ -216,10 +216,10 @@ def test_engine_feeds_gyros_rigid_plus_flex_rate_and_nav_unit_flex_rotation(conf
                               rate=np.zeros((2, 3)), speed=np.zeros(0))
     ft = fcs_tables(validate(compose_config()).controller)
     never = engine.EventRule(after=-1, delay_s=np.inf, when=engine.WHEN_NONE, of=-1, above=False, threshold=0.0)
-    sched = engine.EventSchedule(rules=(never,) * engine.N_SEQUENCE, cutoff_energy_j_kg=1.0e12, max_time_s=1.0e9,
+    sched = engine.EventSchedule(rules=(never,) * len(engine.EVENT_NAMES), cutoff_energy_j_kg=1.0e12, max_time_s=1.0e9,
                                  stop_at_separation=False, max_body_rate_rad_s=10.0, command_delay_steps=0, profile_schedule=0)
     d = np.zeros(layout.N_DISC)
-    events = np.full(4, np.nan)
+    events = np.full(len(engine.EVENT_NAMES), np.nan)
     n = 400
     log = np.empty((n // rates.n_log + 2, log_columns(lay.n)))
     status, done, _, detail = engine.advance(x, d, u, events, 0, n, rates, p, tb, ft, gyro, smoother, gt, sched,

@@ -172,7 +172,7 @@ def model():
 
 def _history(n: int, t_sep: float) -> tuple[SimResult, dict[str, Signal]]:
     t = np.arange(n) / FS
-    events = np.array([t_sep, t_sep + 1.5, t_sep + 31.5, np.nan])
+    events = np.array([t_sep, t_sep + 1.5, t_sep + 31.5, np.nan, np.nan])  # (sim/engine.py EVENT_NAMES)
     result = SimResult.__new__(SimResult)
     result.status, result.message, result.events, result.t_final = "complete", "cutoff", events, float(t[-1])
     zeros2 = np.zeros((n, 2))

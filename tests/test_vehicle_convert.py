@@ -37,11 +37,11 @@ DATA = shipped_config_dir() / "vehicle" / "small_launcher"
 
 
 def _records_equal(a, b, path="vehicle") -> None:
-    """Every number of the plant's records equal, array for array (the raw YAML sections
-    and the refusal keys aside)."""
+    """Every number of the plant's records equal, array for array (the raw YAML sections,
+    the refusal keys and the names the file gives aside)."""
     if dataclasses.is_dataclass(a):
         for f in dataclasses.fields(a):
-            if f.name not in ("keys", "tree", "slosh_spec", "tanks") \
+            if f.name not in ("keys", "tree", "slosh_spec", "tanks", "names") \
                     and not (isinstance(a, Mount) and f.name == "name"):  # (the tanks' and engines' names are names)
                 _records_equal(getattr(a, f.name), getattr(b, f.name), f"{path}.{f.name}")
     elif isinstance(a, tuple):
