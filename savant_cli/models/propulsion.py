@@ -188,16 +188,7 @@ def first_stage_flow(x: np.ndarray, tb: np.ndarray, p: np.ndarray, t: float, thr
     (g0 Isp)``, zero once either tank is empty (``throttle``: the setting it burns at, 1
     unthrottled). The sequencer's sensed thrust (chamber pressure) is this ``F_vac``."""
     if p[P_FS_LIQUID] != 0.0:
-        if not (x[int(p[P_FS_TANK])] > 0.0 and x[int(p[P_FS_FUEL_TANK])] > 0.0):
-            return 0.0, 0.0
-        o_st, n_st = tab(tb, T_FS_START_TIME)
-        f_vac = throttle * p[P_FS_THRUST] * interp1_at(tb, o_st, tab_offset(tb, T_FS_START_FRAC), n_st,
-                                                      t - p[P_FS_IGNITION])
-        if t_cut > 0.0 and t > t_cut:
-            f_vac *= shutdown_decay(t - t_cut, p[P_FS_SHUTDOWN_TIME])
-            if not f_vac > 0.0:
-                return 0.0, 0.0
-        return f_vac, f_vac / (G0 * p[P_FS_ISP])
+        return liquid_first_stage_flow(x, tb, p, t, throttle, t_cut)
     o_ft, n_ft = tab(tb, T_FS_TIME)
     if first_stage_propellant(x, p) <= 0.0 or t < tb[o_ft] or t > tb[o_ft + n_ft - 1]:
         return 0.0, 0.0
@@ -205,6 +196,22 @@ def first_stage_flow(x: np.ndarray, tb: np.ndarray, p: np.ndarray, t: float, thr
     if not mdot > 0.0:
         return 0.0, 0.0
     return G0 * p[P_FS_ISP] * mdot, mdot
+
+
+@njit(cache=True, error_model="numpy")  # a call, not inlined: a motor's every step stays as short as it was
+def liquid_first_stage_flow(x: np.ndarray, tb: np.ndarray, p: np.ndarray, t: float, throttle: float,
+                            t_cut: float) -> tuple[float, float]:
+    """:func:`first_stage_flow` of liquid engines."""
+    if not (x[int(p[P_FS_TANK])] > 0.0 and x[int(p[P_FS_FUEL_TANK])] > 0.0):
+        return 0.0, 0.0
+    o_st, n_st = tab(tb, T_FS_START_TIME)
+    f_vac = throttle * p[P_FS_THRUST] * interp1_at(tb, o_st, tab_offset(tb, T_FS_START_FRAC), n_st,
+                                                  t - p[P_FS_IGNITION])
+    if t_cut > 0.0 and t > t_cut:
+        f_vac *= shutdown_decay(t - t_cut, p[P_FS_SHUTDOWN_TIME])
+        if not f_vac > 0.0:
+            return 0.0, 0.0
+    return f_vac, f_vac / (G0 * p[P_FS_ISP])
 
 
 @njit(cache=True, error_model="numpy", inline="always")
