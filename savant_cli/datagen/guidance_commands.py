@@ -113,14 +113,14 @@ class Reference:
         params, self.tb = build.plant_data(cfg, vehicle)
         self.packed = pack_tables(self.tb)  # the plant's own kernels read these
         # the first stage's nominal trace (a throttled liquid stage's under the flight's own law)
-        self.fs_time, self.fs_thrust = build.nominal_first_stage_trace(vehicle, params, self.packed)
+        self.fs_time, self.fs_thrust, t_fs_cut = build.first_stage_march(vehicle, params, self.packed)
         self.r0, self.v0, self.q0 = build.pad_state(cfg, vehicle)
         ls = cfg.guidance.launch_site
         lat, lon = np.radians(ls.latitude_deg), np.radians(ls.longitude_deg)
         self.c_e2n = earth.dcm_ecef_to_ned(lat, lon)  # = ECI→launch frame at t = 0
         self.pad_heading = np.radians(ls.pad_heading_deg)
         # a prediction: no flight exists here (the flight separates on board)
-        self.t_sep = build.predicted_separation_time(vehicle, params, self.packed)
+        self.t_sep = build.separation_on_trace(vehicle, self.fs_time, self.fs_thrust, t_fs_cut)
         timed_events(vehicle)
         self.t_ign = self.t_sep + vehicle.events.ignition_delay_s
         self.t_les = self.t_ign + vehicle.events.les_jettison_delay_s

@@ -198,11 +198,17 @@ def first_stage_flow(x: np.ndarray, tb: np.ndarray, p: np.ndarray, t: float, thr
     return G0 * p[P_FS_ISP] * mdot, mdot
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def liquid_tank_dry(x: np.ndarray, p: np.ndarray) -> bool:
+    """Whether a liquid first stage's oxidizer or fuel is gone (its engines then stop)."""
+    return not (x[int(p[P_FS_TANK])] > 0.0 and x[int(p[P_FS_FUEL_TANK])] > 0.0)
+
+
 @njit(cache=True, error_model="numpy")  # a call, not inlined: a motor's every step stays as short as it was
 def liquid_first_stage_flow(x: np.ndarray, tb: np.ndarray, p: np.ndarray, t: float, throttle: float,
                             t_cut: float) -> tuple[float, float]:
     """:func:`first_stage_flow` of liquid engines."""
-    if not (x[int(p[P_FS_TANK])] > 0.0 and x[int(p[P_FS_FUEL_TANK])] > 0.0):
+    if liquid_tank_dry(x, p):
         return 0.0, 0.0
     o_st, n_st = tab(tb, T_FS_START_TIME)
     f_vac = throttle * p[P_FS_THRUST] * interp1_at(tb, o_st, tab_offset(tb, T_FS_START_FRAC), n_st,

@@ -110,7 +110,12 @@ def predicted_separation_time(vehicle: Vehicle, p: np.ndarray | None = None, tb:
     before any flight (the command table's first-stage samples, reference trajectories).
     A throttled or commanded-cutoff liquid stage's trace needs the run's parameters ``p``
     and packed tables ``tb`` (:func:`first_stage_march`)."""
-    time_s, thrust, t_cut = first_stage_march(vehicle, p, tb)
+    return separation_on_trace(vehicle, *first_stage_march(vehicle, p, tb))
+
+
+def separation_on_trace(vehicle: Vehicle, time_s: np.ndarray, thrust: np.ndarray, t_cut: float) -> float:
+    """:func:`predicted_separation_time` on a trace already marched
+    (:func:`first_stage_march`: vacuum thrust N vs mission time s, cutoff time s)."""
     t = np.linspace(time_s[0], time_s[-1], 200001)
     f = np.interp(t, time_s, thrust)
     ipk = int(np.argmax(f))

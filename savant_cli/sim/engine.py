@@ -288,8 +288,7 @@ def handle_events(t: float, dt: float, x: np.ndarray, u: np.ndarray, d: np.ndarr
         d[propulsion.D_FS_LAST] = f_sensed
         if f_sensed > d[propulsion.D_FS_PEAK]:
             d[propulsion.D_FS_PEAK] = f_sensed
-        if np.isnan(events[EV_FS_CUTOFF]) and p[propulsion.P_FS_LIQUID] != 0.0 \
-                and not (x[int(p[propulsion.P_FS_TANK])] > 0.0 and x[int(p[propulsion.P_FS_FUEL_TANK])] > 0.0):
+        if np.isnan(events[EV_FS_CUTOFF]) and p[propulsion.P_FS_LIQUID] != 0.0 and propulsion.liquid_tank_dry(x, p):
             events[EV_FS_CUTOFF] = t  # a tank ran dry before any command: the engines' shutdown is now
     for k in SEQUENCE:
         if not (armed(k, t, events, sched) and condition_holds(k, t, x, u, f_sensed, d, sched, p, tb, work)):
