@@ -430,13 +430,14 @@ def execute(case: Case, todo: Iterable[int], journal: Journal, workers: int,
     except OutputWriteError as exc:  # the journal cannot take more runs: stop flying them
         stop = BatchStop("write failed", str(exc))
     finally:
-        if stop.reason != "done":
+        if stop.reason == "interrupted":
             terminate_workers(pool)  # the runs in flight are abandoned, not waited for
-        # Always joined: the pool's manager thread closes its wake-up pipe as it ends, and
-        # one still running at exit races the interpreter's own wake-up call on that pipe
-        # ("OSError: Bad file descriptor" printed at exit, CPython 3.11). With the workers
-        # ended, the join returns as soon as the thread sees them gone.
-        pool.shutdown(wait=True, cancel_futures=True)
+        # An interrupted pool is joined too: its manager thread closes its wake-up pipe as it
+        # ends, and one still running at exit races the interpreter's own wake-up call on
+        # that pipe ("OSError: Bad file descriptor" printed at exit, CPython 3.11); with the
+        # workers ended the join returns as soon as the thread sees them gone. A failed
+        # write or a dead worker is not joined (a join there once hung a full-disk batch).
+        pool.shutdown(wait=stop.reason in ("done", "interrupted"), cancel_futures=True)
     return stop
 
 
