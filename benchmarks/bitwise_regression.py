@@ -67,6 +67,8 @@ NAMED_ADDITIONS = {
     rf"montecarlo/summary/({LOAD_KEYS})": "issue 15: the load indicators of every run",
     r"montecarlo@loads": "issue 15: the batch's q-alpha extremes and runs above the limit",
     r"montecarlo/events/first_stage_cutoff_s": "issue 29: a liquid first stage's cutoff event (NaN for a motor)",
+    r"montecarlo/events/booster_jettison_s": "issue 29: the strap-on boosters' jettison event (NaN without boosters)",
+    r"(.*/)?booster_thrust(@.*)?": "issue 29: the strap-on boosters' delivered thrust (0 without boosters)",
 }
 #: Deliberate additions to the JSON summaries, the CSV tables and the journal records
 #: (a key, a statistics row or a summary column only the new output holds), by name.

@@ -48,7 +48,8 @@ def tables(mass: float = 1000.0, inertia=(100.0, 400.0, 400.0, 0.0, 0.0, 0.0),
         wind_alt=ax, wind_north=np.zeros(2), wind_east=np.zeros(2),
         flex_freq=np.zeros((4, 1)), flex_zeta=np.zeros(1), flex_shape=np.zeros((4, 1, layout.N_POINTS, 6)),
         slosh_level=np.tile(ax, (2, 1)), slosh_data=np.zeros((2, 2, 4)), slosh_len=np.array([2, 2]),
-        mounts=MOUNTS,
+        mounts=MOUNTS, booster_time=ax, booster_thrust=np.zeros(2), booster_mount=np.zeros((1, 5)),
+        booster_mass_prop=np.zeros((1, 1)), booster_mass_data=np.zeros((1, 1, 10)), booster_mass_len=np.ones(1, int),
     )
 
 
@@ -92,6 +93,7 @@ def parameters(gravity_order: int = 0, aero: bool = False, thrust: bool = False,
     p[rcs.P_STATE_OFFSET] = lay.rcs
     p[actuator.P_VALVE_OFFSET], p[slosh.P_OFFSET], p[flex.P_OFFSET] = lay.valve, lay.slosh_offset, lay.flex
     p[propulsion.P_FS_PROP_FULL] = p[propulsion.P_US_PROP_FULL] = 1.0
+    p[propulsion.P_FS_CONFIGS] = 1.0  # the stack, then the upper stage's configurations
     p[slosh.P_AREF] = 9.80665
     p[cluster.P_UPPER_FIRST] = 1.0  # tables(): one engine a stage
     p[slosh.P_FREQ_SCALE] = p[slosh.P_ZETA_SCALE] = 1.0

@@ -17,6 +17,7 @@ from savant_cli.errors import ConfigError
 from savant_cli.io.record import FLOWN, STATUSES, Signal
 from savant_cli.models import actuator
 from savant_cli.paths import hydra_search_dirs
+from savant_cli.sim import engine
 from savant_cli.sim.health import assess
 from savant_cli.sim.oscillation import band_top_hz, find_limit_cycle, find_limit_cycles, find_slow_divergence
 from savant_cli.sim.run import SimResult
@@ -172,7 +173,8 @@ def model():
 
 def _history(n: int, t_sep: float) -> tuple[SimResult, dict[str, Signal]]:
     t = np.arange(n) / FS
-    events = np.array([t_sep, t_sep + 1.5, t_sep + 31.5, np.nan, np.nan])  # (sim/engine.py EVENT_NAMES)
+    events = np.full(len(engine.EVENT_NAMES), np.nan)  # (sim/engine.py EVENT_NAMES)
+    events[[engine.EV_SEPARATION, engine.EV_IGNITION, engine.EV_LES]] = t_sep, t_sep + 1.5, t_sep + 31.5
     result = SimResult.__new__(SimResult)
     result.status, result.message, result.events, result.t_final = "complete", "cutoff", events, float(t[-1])
     zeros2 = np.zeros((n, 2))

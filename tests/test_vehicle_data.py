@@ -533,11 +533,12 @@ def test_refuses_unknown_and_missing_keys(copy):
 
 # ===================================================================== reproducibility
 def test_generator_reproduces_shipped_tables(tmp_path):
-    """The shipped CSVs are exactly what the generator writes (the slosh tables have
-    their own generator and test)."""
-    from savant_cli.datagen import ares_i_tables as gen
+    """The shipped CSVs are exactly what the generators write: the vehicle's and the
+    strap-on booster example's (the slosh tables have their own generator and test)."""
+    from savant_cli.datagen import ares_i_tables as gen, strap_on_boosters
 
     gen.write_all(tmp_path)
+    strap_on_boosters.write_all(tmp_path)
     shipped = sorted(p.name for p in DATA_DIR.glob("*.csv") if not p.name.startswith("slosh_"))
     assert shipped == sorted(p.name for p in tmp_path.glob("*.csv"))
     for name in shipped:

@@ -120,13 +120,31 @@ def check_a_first_stage_cutoff(vehicle):
         -1, 60.0, engine.WHEN_PROPELLANT, oxidizer_state, False, 5000.0)
     assert (sep.after, sep.delay_s, sep.when, sep.threshold) == (engine.EV_FS_CUTOFF, 1.0, engine.WHEN_THRUST_FRACTION,
                                                                  0.02)
-    assert vehicle.events.names == ("separation", "upper_stage_ignition", "les_jettison", "", "meco")
+    assert vehicle.events.names == ("separation", "upper_stage_ignition", "les_jettison", "", "meco", "")
+
+
+def check_strap_on_boosters(vehicle):
+    b = vehicle.boosters
+    assert b.names == ("booster_left", "booster_right") and b.engines == ("booster_left_motor", "booster_right_motor")
+    np.testing.assert_array_equal(b.nozzle_m, [[91.5, -2.755, 0.0], [91.5, 2.755, 0.0]])
+    np.testing.assert_array_equal(b.cant_rad, 0.0)
+    assert (b.propellant_kg, b.inert_mass_kg, b.isp_vac_s, b.nozzle_exit_area_m2) == (44200.0, 5100.0, 279.0, 2.0)
+    drop = _rule(vehicle, engine.EV_BOOSTER_JETTISON)
+    assert (drop.after, drop.delay_s, drop.when, drop.of, drop.threshold) == (
+        -1, 0.0, engine.WHEN_BOOSTER_THRUST_FRACTION, 0, 0.02)
+    assert vehicle.events.names[engine.EV_BOOSTER_JETTISON] == "booster_jettison"
+    # the jettison leaves the stack as shipped, the sequence after it unchanged
+    shipped = load_vehicle(OmegaConf.load(SHIPPED / "ares_i.yaml").vehicle, SHIPPED / "ares_i")
+    assert list(vehicle.configurations)[1:] == list(shipped.configurations)
+    for name, c in shipped.configurations.items():
+        np.testing.assert_array_equal(vehicle.configurations[name].mass.mass_kg, c.mass.mass_kg)
 
 
 #: the example of the page an example is written over (its own chain first)
 BUILDS_ON = {"a-given-mixing-matrix": "a-two-engine-cluster", "a-first-stage-cutoff": "a-liquid-first-stage"}
 #: sections of the vehicle it is written over that an example replaces whole (emptied before the merge)
-REPLACES = {"a-liquid-first-stage": ("stages.first_stage",), "a-first-stage-cutoff": ("events",)}
+REPLACES = {"a-liquid-first-stage": ("stages.first_stage",), "a-first-stage-cutoff": ("events",),
+            "strap-on-boosters": ("events",)}
 CHECKS = {"jettison-on-a-condition": check_jettison_on_a_condition,
           "a-delay-arms-a-condition": check_a_delay_arms_a_condition,
           "composed-mass-properties": check_composed_mass_properties,
@@ -134,7 +152,8 @@ CHECKS = {"jettison-on-a-condition": check_jettison_on_a_condition,
           "a-two-engine-cluster": check_a_two_engine_cluster,
           "a-given-mixing-matrix": check_a_given_mixing_matrix,
           "a-liquid-first-stage": check_a_liquid_first_stage,
-          "a-first-stage-cutoff": check_a_first_stage_cutoff}
+          "a-first-stage-cutoff": check_a_first_stage_cutoff,
+          "strap-on-boosters": check_strap_on_boosters}
 
 
 def test_every_example_on_the_page_has_a_check():

@@ -110,6 +110,11 @@ class Reference:
         self.cfg = cfg
         self.vehicle = vehicle
         self.prog = prog
+        if vehicle.boosters is not None:
+            raise ConfigError("vehicle.boosters", list(vehicle.boosters.names),
+                              "none: this generator's reference ascent flies the stages alone (its mass and thrust "
+                              "leave the boosters out); give the vehicle a command file made without them "
+                              "(docs/vehicles.md, \"Strap-on boosters\")")
         params, self.tb = build.plant_data(cfg, vehicle)
         self.packed = pack_tables(self.tb)  # the plant's own kernels read these
         # the first stage's nominal trace (a throttled liquid stage's under the flight's own law)

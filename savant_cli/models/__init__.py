@@ -19,7 +19,8 @@ from savant_cli.models import command_schedule, peg  # noqa: F401  (appended: ol
 from savant_cli.models import navigation  # noqa: F401  (appended likewise)
 from savant_cli.models import roll_gimbal  # noqa: F401  (appended likewise)
 from savant_cli.models import throttle  # noqa: F401  (appended likewise)
+from savant_cli.models import boosters  # noqa: F401  (appended likewise)
 
 #: The models that build plant parameters and tables, in build order.
 PLANT_MODELS = (earth, gravity, atmosphere, winds, propulsion, actuator, rcs, mass, aero, twd, slosh, flex, cluster,
-                sensors, peg, navigation, throttle)
+                sensors, peg, navigation, throttle, boosters)

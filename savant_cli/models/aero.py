@@ -13,7 +13,7 @@ trilinearly in Mach, α and β and held beyond the table)::
 The coefficients are about the moment reference point (MRP, structure frame); the
 structure frame has x aft from the nose, z up, so ``r_cg→mrp = diag(−1, 1, −1)(mrp − cg)``
 in body axes. The base force (N along body X) is a table against mission time per
-configuration. The three configurations' tables are resampled onto one common grid
+configuration. The configurations' tables are resampled onto one common grid
 (lossless for a multilinear interpolant; see :func:`common_grid`). Source: SAVANT §III,
 "Aerodynamics"; the default tables are generated (``datagen/ares_i_tables.py``).
 """
@@ -24,9 +24,8 @@ import numpy as np
 from numba import njit
 
 from savant_cli.models import blocks
-from savant_cli.models.configurations import N_CONFIG
 from savant_cli.models.interp import locate_at, tab, tab_offset, trilinear_at
-from savant_cli.vehicle import AERO_COEFFICIENTS, CONFIG_NAMES
+from savant_cli.vehicle import AERO_COEFFICIENTS
 
 C_CA, C_CY, C_CN, C_ROLL, C_PITCH, C_YAW = range(len(AERO_COEFFICIENTS))  # the coefficient axis
 N_COEF = len(AERO_COEFFICIENTS)
@@ -49,10 +48,10 @@ _TABLES = blocks.TABLES.block("aero")
 T_MACH = _TABLES.table("aero_mach", "1", "(nM,) Mach breakpoints, common to the configurations")
 T_ALPHA = _TABLES.table("aero_alpha", "rad", "(nA,) angle-of-attack breakpoints")
 T_BETA = _TABLES.table("aero_beta", "rad", "(nB,) sideslip breakpoints")
-T_COEF = _TABLES.table("aero_coef", "1", "(3 configurations, 6 COEFFICIENTS, nM, nA, nB) coefficients")
-T_REF = _TABLES.table("aero_ref", "m^2, m", "(3, REFERENCE) reference area, lengths and MRP per configuration")
-T_BASE_TIME = _TABLES.table("base_time", "s", "(3, nb) base-force time axis per configuration (padded)")
-T_BASE_FORCE = _TABLES.table("base_force", "N", "(3, nb) base force along body X")
+T_COEF = _TABLES.table("aero_coef", "1", "(configurations, 6 COEFFICIENTS, nM, nA, nB) coefficients")
+T_REF = _TABLES.table("aero_ref", "m^2, m", "(configurations, REFERENCE) reference area, lengths and MRP per configuration")
+T_BASE_TIME = _TABLES.table("base_time", "s", "(configurations, nb) base-force time axis per configuration (padded)")
+T_BASE_FORCE = _TABLES.table("base_force", "N", "(configurations, nb) base force along body X")
 T_BASE_LEN = _TABLES.table("base_len", "1", "(3,) valid rows of each base-force table")
 _AUX = blocks.DIAGNOSTICS.block("aero")
 A_MACH = _AUX.scalar("mach", "1", "Mach number", blocks.Logged("mach"))
@@ -89,20 +88,20 @@ _GRID_CACHE: list[tuple[tuple, tuple]] = []  # (the aero objects, the resampled 
 
 
 def common_grid(vehicle) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The three configurations' aero tables resampled onto the union of their axes.
+    """The configurations' aero tables resampled onto the union of their axes.
 
     Multilinear interpolation of a multilinear interpolant at refined nodes reproduces it
     exactly, and clamping outside a table is the same before and after, so this is
-    lossless; it lets the kernel hold one (3, 6, nM, nA, nB) array. The result is kept
+    lossless; it lets the kernel hold one (configurations, 6, nM, nA, nB) array. The result is kept
     for the same (immutable) aero objects, so a batch of models of one vehicle resamples
     once; callers must not modify the returned arrays in place.
 
     Returns
     -------
     tuple of ndarray
-        Mach, α (rad), β (rad), coefficients (3, 6, nM, nA, nB), reference (3, 7).
+        Mach, α (rad), β (rad), coefficients (configurations, 6, nM, nA, nB), reference (configurations, 7).
     """
-    aeros = tuple(vehicle.configurations[n].aero for n in CONFIG_NAMES)
+    aeros = tuple(c.aero for c in vehicle.configurations.values())
     for key, grid in _GRID_CACHE:
         if all(a is b for a, b in zip(key, aeros)):
             return grid
@@ -121,7 +120,7 @@ def _resample(aeros: tuple):
     alpha = np.unique(np.concatenate([a.alpha_rad for a in aeros]))
     beta = np.unique(np.concatenate([a.beta_rad for a in aeros]))
     mg, ag, bg = np.meshgrid(mach, alpha, beta, indexing="ij")
-    coef = np.empty((N_CONFIG, N_COEF, mach.size, alpha.size, beta.size))
+    coef = np.empty((len(aeros), N_COEF, mach.size, alpha.size, beta.size))
     for c, a in enumerate(aeros):
         pts = np.stack([np.clip(mg, a.mach[0], a.mach[-1]),
                         np.clip(ag, a.alpha_rad[0], a.alpha_rad[-1]),
@@ -137,7 +136,7 @@ def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarra
     """Coefficients on the common grid, references and base forces; ``environment.aero``."""
     p[P_ON] = 1.0 if inputs.cfg.environment.aero else 0.0
     mach, alpha, beta, coef, ref = common_grid(inputs.vehicle)
-    aeros = [inputs.vehicle.configurations[n].aero for n in CONFIG_NAMES]
+    aeros = [c.aero for c in inputs.vehicle.configurations.values()]
     base_time, base_len = blocks.stack_padded([a.base_time_s for a in aeros])
     base_force, _ = blocks.stack_padded([a.base_force_N for a in aeros])
     tables.update(aero_mach=mach, aero_alpha=alpha, aero_beta=beta, aero_coef=coef, aero_ref=ref,
@@ -164,7 +163,7 @@ def air_data(ub: float, vb: float, wb: float, rho: float, sos: float):
 def base_force(tb: np.ndarray, config: int, t: float) -> float:
     """Base force along body X (N) of a configuration at mission time ``t`` (s)."""
     o_bt, n_bt = tab(tb, T_BASE_TIME)
-    nb = n_bt // N_CONFIG
+    nb = n_bt // tab(tb, T_BASE_LEN)[1]  # padded rows per configuration
     ib_, wb_ = locate_at(tb, o_bt + config * nb, int(tb[tab_offset(tb, T_BASE_LEN) + config]), t)
     o_bf = tab_offset(tb, T_BASE_FORCE) + config * nb + ib_
     return (1.0 - wb_) * tb[o_bf] + wb_ * tb[o_bf + 1]

@@ -31,9 +31,10 @@ from numba import njit
 
 from savant_cli.flex_slosh import FIRST_STAGE_KEYS, POINT_KEYS
 from savant_cli.models import blocks
-from savant_cli.models.configurations import CONFIG_STACK
 from savant_cli.models.interp import tab, tab_offset
-from savant_cli.models.propulsion import P_FS_PROP_FULL, P_US_PROP_FULL, first_stage_propellant, upper_stage_propellant
+from savant_cli.models.propulsion import (
+    P_FS_CONFIGS, P_FS_PROP_FULL, P_US_PROP_FULL, first_stage_propellant, upper_stage_propellant
+)
 
 # Points where the plant and the sensors use mode shapes, and the vehicle YAML key
 # (``flex.nodes.<key>``) of each; a point may average several nodes.
@@ -108,7 +109,7 @@ def flex_sets(x: np.ndarray, config: int, p: np.ndarray) -> tuple[int, int, floa
     set until separation, the ignition set after. With ``propellant`` the weight is the
     fraction of the stage's propellant burned.
     """
-    if config == CONFIG_STACK:
+    if config < p[P_FS_CONFIGS]:
         a, frac = 0, first_stage_propellant(x, p) / p[P_FS_PROP_FULL]
     else:
         lox, lh2 = upper_stage_propellant(x, p)

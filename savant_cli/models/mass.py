@@ -14,9 +14,7 @@ import numpy as np
 from numba import njit
 
 from savant_cli.models import blocks
-from savant_cli.models.configurations import N_CONFIG
 from savant_cli.models.interp import locate_at, tab, tab_offset
-from savant_cli.vehicle import CONFIG_NAMES
 
 COLUMNS = blocks.Record(
     "mass-properties row",
@@ -35,9 +33,9 @@ M_MASS, M_CG_X, M_CG_Y, M_CG_Z, M_IXX, M_IYY, M_IZZ, M_IXY, M_IXZ, M_IYZ = COLUM
 N_COLUMNS = COLUMNS.size
 
 _TABLES = blocks.TABLES.block("mass")
-T_PROP = _TABLES.table("mass_prop", "kg", "(3 configurations, n) propellant remaining, ascending (padded)")
-T_DATA = _TABLES.table("mass_data", "kg, m, kg*m^2", "(3, n, COLUMNS) mass-properties rows")
-T_LEN = _TABLES.table("mass_len", "1", "(3,) valid rows per configuration")
+T_PROP = _TABLES.table("mass_prop", "kg", "(configurations, n) propellant remaining, ascending (padded)")
+T_DATA = _TABLES.table("mass_data", "kg, m, kg*m^2", "(configurations, n, COLUMNS) mass-properties rows")
+T_LEN = _TABLES.table("mass_len", "1", "(configurations,) valid rows per configuration")
 _AUX = blocks.DIAGNOSTICS.block("mass")
 A_MASS = _AUX.scalar("mass", "kg", "vehicle mass", blocks.Logged("mass"))  # slosh masses included
 A_CG = _AUX.array("cg", 3, "m", "CG location",  # slosh masses included
@@ -57,8 +55,9 @@ def write_diagnostics(aux: np.ndarray, mass: float, propellant: float, cgx: floa
 
 
 def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarray]) -> None:
-    """The vehicle's three mass-properties tables, stacked."""
-    masses = [inputs.vehicle.configurations[n].mass for n in CONFIG_NAMES]
+    """The vehicle's mass-properties tables, one per configuration in the order the
+    sequence reaches them, stacked."""
+    masses = [c.mass for c in inputs.vehicle.configurations.values()]
     prop, n = blocks.stack_padded([m.propellant_kg for m in masses])
     data, _ = blocks.stack_padded([np.column_stack([m.mass_kg, m.cg_m, m.inertia_kgm2]) for m in masses])
     tables.update(mass_prop=prop, mass_data=data, mass_len=n)
@@ -74,10 +73,19 @@ def mass_properties(tb: np.ndarray, config: int, prop_kg: float):
         ``(m kg, cg_x, cg_y, cg_z m (structure), Ixx, Iyy, Izz, Ixy, Ixz, Iyz kg·m²)``,
         the last three as inertia-tensor elements (the negative products of inertia).
     """
-    o_mp, n_mp = tab(tb, T_PROP)
-    nm = n_mp // N_CONFIG  # padded rows per configuration
-    i0, w = locate_at(tb, o_mp + config * nm, int(tb[tab_offset(tb, T_LEN) + config]), prop_kg)
-    r0 = tab_offset(tb, T_DATA) + (config * nm + i0) * N_COLUMNS
+    return stacked_row(tb, T_PROP, T_DATA, T_LEN, config, prop_kg)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def stacked_row(tb: np.ndarray, t_prop: int, t_data: int, t_len: int, k: int, prop_kg: float):
+    """The row of table ``k`` of a stack of mass-properties tables (propellant axis field
+    ``t_prop``, rows ``t_data``, valid lengths ``t_len``, as :func:`build` packs them)
+    at ``prop_kg``: linear between rows, held beyond the table; returned as
+    :func:`mass_properties` returns it."""
+    o_mp, n_mp = tab(tb, t_prop)
+    nm = n_mp // tab(tb, t_len)[1]  # padded rows per table
+    i0, w = locate_at(tb, o_mp + k * nm, int(tb[tab_offset(tb, t_len) + k]), prop_kg)
+    r0 = tab_offset(tb, t_data) + (k * nm + i0) * N_COLUMNS
     r1 = r0 + N_COLUMNS
     a = 1.0 - w
     return (a * tb[r0 + M_MASS] + w * tb[r1 + M_MASS],

@@ -47,7 +47,7 @@ from numba import njit
 
 from savant_cli import constants
 from savant_cli.models import blocks
-from savant_cli.models.configurations import CONFIG_STACK, ENGINE_FIRST, ENGINE_UPPER
+from savant_cli.models.configurations import ENGINE_FIRST, ENGINE_UPPER
 from savant_cli.models.interp import interp1_at, tab, tab_offset
 
 G0 = constants.G0
@@ -84,6 +84,8 @@ P_FS_TANK = _PARAMS.scalar("first_stage.tank_state", "1",
                            "index in x of the first-stage motor's propellant, or a liquid stage's oxidizer (kg)")
 P_US_OX_TANK = _PARAMS.scalar("upper_stage.oxidizer_state", "1", "index in x of the upper stage's LOX (kg)")
 P_US_FUEL_TANK = _PARAMS.scalar("upper_stage.fuel_state", "1", "index in x of the upper stage's LH2 (kg)")
+P_FS_CONFIGS = _PARAMS.scalar("first_stage.configurations", "1",
+                              "configurations flown with the first stage attached: the sequence's first n")
 P_FS_GIMBAL = _PARAMS.record("first_stage.gimbal", GIMBAL, "first-stage gimbal point")
 P_US_GIMBAL = _PARAMS.record("upper_stage.gimbal", GIMBAL, "upper-stage gimbal point")
 
@@ -132,6 +134,7 @@ def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarra
     p[P_FS_EXIT_AREA] = fs.nozzle_exit_area_m2
     p[P_FS_FLOW_PER_THRUST] = fs.propellant_kg / table_impulse(fs.thrust_time_s, fs.thrust_vac_N)
     p[P_FS_PROP_FULL] = fs.propellant_kg
+    p[P_FS_CONFIGS] = inputs.vehicle.first_stage_configurations
     p[P_US_THRUST] = us.thrust_vac_N
     p[P_US_ISP] = us.isp_vac_s
     p[P_US_MR] = us.mixture_ratio
@@ -189,13 +192,25 @@ def first_stage_flow(x: np.ndarray, tb: np.ndarray, p: np.ndarray, t: float, thr
     unthrottled). The sequencer's sensed thrust (chamber pressure) is this ``F_vac``."""
     if p[P_FS_LIQUID] != 0.0:
         return liquid_first_stage_flow(x, tb, p, t, throttle, t_cut)
-    o_ft, n_ft = tab(tb, T_FS_TIME)
-    if first_stage_propellant(x, p) <= 0.0 or t < tb[o_ft] or t > tb[o_ft + n_ft - 1]:
+    return trace_flow(tb, T_FS_TIME, T_FS_THRUST, first_stage_propellant(x, p), p[P_FS_FLOW_PER_THRUST], p[P_FS_ISP],
+                      t)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def trace_flow(tb: np.ndarray, t_time: int, t_thrust: int, propellant_kg: float, flow_per_thrust: float,
+               isp_vac_s: float, t: float) -> tuple[float, float]:
+    """Vacuum thrust (N) and mass flow (kg/s) at mission time ``t`` (s) of a motor flown by
+    its thrust table (time field ``t_time``, thrust field ``t_thrust``) holding
+    ``propellant_kg``: ``ṁ = (M / I_tab) F_tab(t)`` (``flow_per_thrust`` = M / I_tab),
+    ``F_vac = g0 Isp ṁ``; zero outside the table's time span and once the propellant is
+    gone."""
+    o_ft, n_ft = tab(tb, t_time)
+    if propellant_kg <= 0.0 or t < tb[o_ft] or t > tb[o_ft + n_ft - 1]:
         return 0.0, 0.0
-    mdot = p[P_FS_FLOW_PER_THRUST] * interp1_at(tb, o_ft, tab_offset(tb, T_FS_THRUST), n_ft, t)
+    mdot = flow_per_thrust * interp1_at(tb, o_ft, tab_offset(tb, t_thrust), n_ft, t)
     if not mdot > 0.0:
         return 0.0, 0.0
-    return G0 * p[P_FS_ISP] * mdot, mdot
+    return G0 * isp_vac_s * mdot, mdot
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -246,9 +261,9 @@ def shutdown_decay(since_s: float, t_sd: float) -> float:
 
 @njit(cache=True, error_model="numpy", inline="always")
 def propellant_remaining(x: np.ndarray, p: np.ndarray, config: int) -> float:
-    """Propellant of the burning configuration (kg): first stage on the stack, LOX + LH2
-    after separation (the mass tables' argument)."""
-    if config == CONFIG_STACK:
+    """Propellant of the burning configuration (kg): the first stage's while it is
+    attached, LOX + LH2 after separation (the mass tables' argument)."""
+    if config < p[P_FS_CONFIGS]:
         return first_stage_propellant(x, p)
     lox, lh2 = upper_stage_propellant(x, p)
     return lox + lh2

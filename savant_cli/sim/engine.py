@@ -15,7 +15,10 @@ on step boundaries, runs the discrete parts at their own rates with zero-order h
   Powered Explicit Guidance (``models/peg.py``), whose time to go (less the nominal
   shutdown impulse's lead) also commands the cutoff at the plant step nearest it;
 * the vehicle's events at the first step boundary at which their trigger holds
-  (:class:`EventSchedule`, from the vehicle file's ``events``): a liquid first stage's
+  (:class:`EventSchedule`, from the vehicle file's ``events``): the strap-on boosters'
+  jettison (a delay after liftoff and, with a condition, once it holds: a booster's
+  sensed vacuum thrust below a fraction of its own flown peak, or any other quantity;
+  a separation before it takes them along); a liquid first stage's
   cutoff (its engines' shutdown command) a delay after liftoff and, with a condition,
   once it holds; separation when the sensed (vacuum) thrust of the flown first stage (its
   motor, or its liquid engines as throttled and shut down) falls below a fraction of its
@@ -40,8 +43,8 @@ from numba import njit
 
 from savant_cli.io.guidance_file import GuidanceTable
 from savant_cli.models import (
-    actuator, aero, earth, flex, navigation, peg, propulsion, quaternion as qt, rcs, rigid_body, roll_gimbal, slosh,
-    throttle
+    actuator, aero, boosters, earth, flex, navigation, peg, propulsion, quaternion as qt, rcs, rigid_body, roll_gimbal,
+    slosh, throttle
 )
 from savant_cli.models.command_schedule import BY_TIME, D_PROFILE_OFFSET, D_PROFILE_RATE, profile_time
 from savant_cli.models.earth import A_ALT, P_E2, P_OMEGA_E, P_RE
@@ -49,9 +52,8 @@ from savant_cli.models.fcs import FCS_COAST, FCS_STACK, FCS_UPPER, FcsTables, fc
 from savant_cli.models.gravity import P_MU
 from savant_cli.models.guidance import D_TG, D_VG, SmootherGains, guidance_sample, smoother_step
 from savant_cli.models.layout import (
-    CONFIG_STACK, CONFIG_UPPER, CONFIG_UPPER_LES, D_CMD_P, D_CMD_RCS, D_CMD_Y, D_FLEX_NAV, D_GYRO_X, D_GYRO_Y,
-    ENGINE_FIRST, ENGINE_OFF, ENGINE_UPPER, N_AUX, U_CONFIG, U_DPC, U_DYC, U_ENGINE, U_FS_T_CUT, U_RCS, U_ROLL, U_T_CUT,
-    U_T_IGN, U_THROTTLE, Q, R, V, W
+    D_CMD_P, D_CMD_RCS, D_CMD_Y, D_FLEX_NAV, D_GYRO_X, D_GYRO_Y, ENGINE_FIRST, ENGINE_OFF, ENGINE_UPPER, N_AUX,
+    U_CONFIG, U_DPC, U_DYC, U_ENGINE, U_FS_T_CUT, U_RCS, U_ROLL, U_T_CUT, U_T_IGN, U_THROTTLE, Q, R, V, W
 )
 from savant_cli.models.sensors import (
     GYRO_MISALIGN, GYRO_POINTS, IMU_GYRO, N_GYROS, P_IMU_MISALIGN, GyroModel, gyro_step, misalignment
@@ -78,10 +80,13 @@ EV_IGNITION = 1
 EV_LES = 2
 EV_CUTOFF = 3
 EV_FS_CUTOFF = 4
-EVENT_NAMES = ("separation", "upper_stage_ignition", "les_jettison", "cutoff", "first_stage_cutoff")
+EV_BOOSTER_JETTISON = 5
+EVENT_NAMES = ("separation", "upper_stage_ignition", "les_jettison", "cutoff", "first_stage_cutoff",
+               "booster_jettison")
 #: The vehicle's event slots, in the order a step boundary checks them (the cutoff is
-#: guidance's; a liquid first stage's cutoff precedes its separation).
-SEQUENCE = (EV_FS_CUTOFF, EV_SEPARATION, EV_IGNITION, EV_LES)
+#: guidance's; the boosters' jettison and a liquid first stage's cutoff precede the
+#: separation).
+SEQUENCE = (EV_BOOSTER_JETTISON, EV_FS_CUTOFF, EV_SEPARATION, EV_IGNITION, EV_LES)
 
 # what an event's condition watches (EventSchedule.when)
 WHEN_NONE = 0  # fires once armed
@@ -90,6 +95,7 @@ WHEN_AXIAL_ACCELERATION = 2  # sensed specific force along body x, m/s²
 WHEN_ALTITUDE = 3  # geodetic altitude of the CG, m
 WHEN_DYNAMIC_PRESSURE = 4  # Pa
 WHEN_PROPELLANT = 5  # propellant remaining in a tank (a state of x), kg
+WHEN_BOOSTER_THRUST_FRACTION = 6  # a booster's sensed vacuum thrust over its own flown peak
 
 
 class EventRule(NamedTuple):
@@ -104,8 +110,9 @@ class EventRule(NamedTuple):
     when : int
         The condition's quantity (``WHEN_*``).
     of : int
-        The propellant state a ``WHEN_PROPELLANT`` condition reads (its index in ``x``; −1
-        otherwise).
+        The propellant state a ``WHEN_PROPELLANT`` condition reads (its index in ``x``),
+        or the booster a ``WHEN_BOOSTER_THRUST_FRACTION`` watches (its number); −1
+        otherwise.
     above : bool
         The condition holds above the threshold (else below).
     threshold : float
@@ -149,7 +156,7 @@ class EventSchedule(NamedTuple):
         ``models.command_schedule.SCHEDULES``.
     """
 
-    rules: tuple[EventRule, EventRule, EventRule, EventRule, EventRule]
+    rules: tuple[EventRule, EventRule, EventRule, EventRule, EventRule, EventRule]
     cutoff_energy_j_kg: float
     max_time_s: float
     stop_at_separation: bool
@@ -229,12 +236,13 @@ def armed(k: int, t: float, events: np.ndarray, sched: EventSchedule) -> bool:
 
 
 @njit(cache=True, error_model="numpy")
-def condition_holds(k: int, t: float, x: np.ndarray, u: np.ndarray, f_sensed: float, d: np.ndarray,
-                    sched: EventSchedule, p: np.ndarray, tb: np.ndarray, work: np.ndarray) -> bool:
+def condition_holds(k: int, t: float, x: np.ndarray, u: np.ndarray, f_sensed: float, f_booster: float,
+                    d: np.ndarray, sched: EventSchedule, p: np.ndarray, tb: np.ndarray, work: np.ndarray) -> bool:
     """Whether the condition of armed event slot ``k`` holds at the step boundary ``t``.
 
-    A thrust fraction compares the first-stage motor's sensed vacuum thrust ``f_sensed``
-    (N) with the fraction of its flown peak; the propellant reads its state in ``x``; the
+    A thrust fraction compares the first stage's sensed vacuum thrust ``f_sensed`` (N),
+    or the watched booster's ``f_booster`` (N), with the fraction of its own flown peak;
+    the propellant reads its state in ``x``; the
     axial acceleration, altitude and dynamic pressure come from one evaluation of the
     plant at ``t`` (its diagnostics, into the scratch rows of ``work``)."""
     rule = sched.rules[k]
@@ -244,6 +252,8 @@ def condition_holds(k: int, t: float, x: np.ndarray, u: np.ndarray, f_sensed: fl
     limit = rule.threshold
     if when == WHEN_THRUST_FRACTION:
         value, limit = f_sensed, limit * d[propulsion.D_FS_PEAK]
+    elif when == WHEN_BOOSTER_THRUST_FRACTION:
+        value, limit = f_booster, limit * d[boosters.D_PEAK]
     elif when == WHEN_PROPELLANT:
         value = x[rule.of]
     else:
@@ -264,11 +274,14 @@ def handle_events(t: float, dt: float, x: np.ndarray, u: np.ndarray, d: np.ndarr
     """Apply the vehicle's events at a step boundary; return a stop code.
 
     Each event slot, in the order of :data:`SEQUENCE`, fires when it is :func:`armed` and
-    its condition holds (:func:`condition_holds`), and applies its actions: a liquid
+    its condition holds (:func:`condition_holds`), and applies its actions: the boosters'
+    jettison drops them (:func:`drop_boosters`; their watched booster's sensed thrust and
+    its flown peak, ``d[boosters.D_PEAK]``, are tracked while they are attached), a liquid
     first stage's cutoff commands its engines' shutdown (``u[U_FS_T_CUT]``: the thrust
     decays over their shutdown transient, the throttle held), separation drops the first
-    stage (the upper-stage nozzle and its command start at null, a new modal set starts
-    at rest, the reference point moves to the new configuration's CG), ignition lights
+    stage (with its boosters, if still attached; the upper-stage nozzle and its command
+    start at null, a new modal set starts at rest, the reference point moves to the new
+    configuration's CG), ignition lights
     the upper stage (the flight control fades its gains in from here), the item's
     jettison drops the LES or fairing (the reference point moves again). Until separation
     the first stage's sensed vacuum thrust at ``t`` (``propulsion.first_stage_flow``, the
@@ -290,24 +303,35 @@ def handle_events(t: float, dt: float, x: np.ndarray, u: np.ndarray, d: np.ndarr
             d[propulsion.D_FS_PEAK] = f_sensed
         if np.isnan(events[EV_FS_CUTOFF]) and p[propulsion.P_FS_LIQUID] != 0.0 and propulsion.liquid_tank_dry(x, p):
             events[EV_FS_CUTOFF] = t  # a tank ran dry before any command: the engines' shutdown is now
+    f_booster = 0.0
+    boosted = p[boosters.P_N_BOOSTERS] > 0.0 and np.isnan(events[EV_BOOSTER_JETTISON])
+    if boosted and sched.rules[EV_BOOSTER_JETTISON].when == WHEN_BOOSTER_THRUST_FRACTION:
+        f_booster = boosters.flow(x, tb, p, t, sched.rules[EV_BOOSTER_JETTISON].of)[0]
+        d[boosters.D_PEAK] = max(d[boosters.D_PEAK], f_booster)
     for k in SEQUENCE:
-        if not (armed(k, t, events, sched) and condition_holds(k, t, x, u, f_sensed, d, sched, p, tb, work)):
+        if not (armed(k, t, events, sched) and condition_holds(k, t, x, u, f_sensed, f_booster, d, sched, p, tb,
+                                                                work)):
             continue
         events[k] = t
         if k == EV_FS_CUTOFF:
             u[U_FS_T_CUT] = t
+        elif k == EV_BOOSTER_JETTISON:
+            drop_boosters(x, u, d, p, tb)
+            boosted = False
         elif k == EV_SEPARATION:
             d[propulsion.D_FS_PROP_SEP] = propulsion.first_stage_propellant(x, p)
             if sched.stop_at_separation:
                 return STOP_SEPARATION
+            if boosted:  # the stage takes its boosters along: they leave with it, now
+                events[EV_BOOSTER_JETTISON] = t
+                drop_boosters(x, u, d, p, tb)
+                boosted = False
             separate(x, u, d, p, tb)
         elif k == EV_IGNITION:
             u[U_ENGINE] = ENGINE_UPPER
             u[U_T_IGN] = t  # the flight control fades its gains in from here (models/fcs.py)
         else:
-            cg_les = reference_cg(x, p, tb, np.int64(CONFIG_UPPER_LES))
-            u[U_CONFIG] = CONFIG_UPPER
-            move_reference(x, cg_les, reference_cg(x, p, tb, np.int64(CONFIG_UPPER)))
+            next_configuration(x, u, p, tb)
     if int(u[U_ENGINE]) == ENGINE_UPPER:
         if u[U_T_CUT] > 0.0:  # shutdown transient: the impulse after the command (trapezoid)
             f_us = propulsion.upper_stage_thrust_vac(x, tb, p, t, u[U_T_IGN], u[U_T_CUT])
@@ -323,13 +347,38 @@ def handle_events(t: float, dt: float, x: np.ndarray, u: np.ndarray, d: np.ndarr
 
 
 @njit(cache=True, error_model="numpy")
+def next_configuration(x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarray) -> None:
+    """A jettison: the vehicle flies the next configuration of its sequence (the
+    configurations are numbered in the order the events reach them), and the reference
+    point moves to that configuration's CG (position and velocity of every structural
+    point unchanged: :func:`move_reference`)."""
+    config = int(u[U_CONFIG])
+    cg_before = reference_cg(x, p, tb, config)
+    u[U_CONFIG] = config + 1
+    move_reference(x, cg_before, reference_cg(x, p, tb, config + 1))
+
+
+@njit(cache=True, error_model="numpy")
+def drop_boosters(x: np.ndarray, u: np.ndarray, d: np.ndarray, p: np.ndarray, tb: np.ndarray) -> None:
+    """The boosters' jettison: the next configuration (:func:`next_configuration`), their
+    propellant left (summed, kg) kept in ``d[boosters.D_PROP_JET]`` and their states
+    emptied (it leaves with them)."""
+    next_configuration(x, u, p, tb)
+    tank = int(p[boosters.P_TANK])
+    left = 0.0
+    for i in range(tank, tank + int(p[boosters.P_N_BOOSTERS])):
+        left += x[i]
+        x[i] = 0.0
+    d[boosters.D_PROP_JET] = left
+
+
+@njit(cache=True, error_model="numpy")
 def separate(x: np.ndarray, u: np.ndarray, d: np.ndarray, p: np.ndarray, tb: np.ndarray) -> None:
-    """First-stage separation's actions on the state: the upper-stage configuration, its
-    engine not yet lit, its nozzle (and its command, not the first stage's last one) at
+    """First-stage separation's actions on the state: the next configuration
+    (:func:`next_configuration`, the upper stage's), its engine not yet lit, its nozzle (and its command, not the first stage's last one) at
     null, the new modal set at rest, the reference point at the new configuration's CG
     (position and velocity of every structural point unchanged)."""
-    cg_stack = reference_cg(x, p, tb, np.int64(CONFIG_STACK))  # (not a literal: one compile for every config)
-    u[U_CONFIG] = CONFIG_UPPER_LES
+    next_configuration(x, u, p, tb)
     u[U_ENGINE] = ENGINE_OFF
     x[int(p[propulsion.P_FS_TANK])] = 0.0
     if p[propulsion.P_FS_LIQUID] != 0.0:  # a liquid stage's residual leaves with it
@@ -341,7 +390,6 @@ def separate(x: np.ndarray, u: np.ndarray, d: np.ndarray, p: np.ndarray, tb: np.
     fo = int(p[flex.P_OFFSET])
     if fo >= 0:  # new modal set: its modes start at rest (paper: liftoff → ignition set)
         x[fo:fo + 2 * int(p[flex.P_N_MODES])] = 0.0
-    move_reference(x, cg_stack, reference_cg(x, p, tb, np.int64(CONFIG_UPPER_LES)))
     reset_phase(d)
     roll_gimbal.reset(d)
 
@@ -550,6 +598,9 @@ def _advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0
                 x[i] = 0.0
         if p[propulsion.P_FS_LIQUID] != 0.0 and x[int(p[propulsion.P_FS_FUEL_TANK])] < 0.0:
             x[int(p[propulsion.P_FS_FUEL_TANK])] = 0.0
+        for i in range(int(p[boosters.P_TANK]), int(p[boosters.P_TANK] + p[boosters.P_N_BOOSTERS])):
+            if x[i] < 0.0:
+                x[i] = 0.0
         jets = int(p[rcs.P_STATE_OFFSET])
         for i in (jets, jets + 1):
             x[i] = min(max(x[i], 0.0), 1.0)

@@ -113,9 +113,10 @@ def _stage_masks(t: np.ndarray, result: SimResult) -> list[np.ndarray]:
 
 def _quiet_pieces(t: np.ndarray, result: SimResult, quiet_s: float) -> list[tuple[str, np.ndarray]]:
     """(stage, sample indices) of each contiguous stretch of a stage that lies outside
-    the ``quiet_s`` after liftoff, a liquid first stage's cutoff, separation, upper-stage
-    ignition and LES jettison."""
-    starts = [float(t[0]), result.events[engine.EV_FS_CUTOFF], result.events[engine.EV_SEPARATION],
+    the ``quiet_s`` after liftoff, the boosters' jettison, a liquid first stage's cutoff,
+    separation, upper-stage ignition and LES jettison."""
+    starts = [float(t[0]), result.events[engine.EV_BOOSTER_JETTISON], result.events[engine.EV_FS_CUTOFF],
+              result.events[engine.EV_SEPARATION],
               result.events[engine.EV_IGNITION], result.events[engine.EV_LES]]
     quiet = np.ones(t.size, bool)
     for te in starts:

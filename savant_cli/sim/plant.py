@@ -21,8 +21,8 @@ import numpy as np
 from numba import njit
 
 from savant_cli.models import (
-    actuator, aero, atmosphere, blocks, cluster, earth, flex, gravity, mass as mass_model, propulsion, quaternion as qt,
-    rcs, rigid_body, slosh, throttle, twd, winds
+    actuator, aero, atmosphere, blocks, boosters, cluster, earth, flex, gravity, mass as mass_model, propulsion,
+    quaternion as qt, rcs, rigid_body, slosh, throttle, twd, winds
 )
 from savant_cli.models.configurations import ENGINE_FIRST
 from savant_cli.models.layout import (
@@ -68,10 +68,15 @@ def mass_state(x: np.ndarray, p: np.ndarray, tb: np.ndarray, config: int):
         structure axes, inertia about the rigid part's CG in body axes (tensor elements);
         the rigid part leaves the slosh masses out when slosh is on (else it is the
         whole vehicle), and each tank is a :class:`~savant_cli.models.slosh.SloshTank`
-        (zeros with slosh off).
+        (zeros with slosh off). In the liftoff configuration of a vehicle with strap-on
+        boosters each booster's full-load row is exchanged for its row at its own
+        propellant (:func:`~savant_cli.models.boosters.exchange`).
     """
     prop = propulsion.propellant_remaining(x, p, config)
     mass, cgx, cgy, cgz, ixx, iyy, izz, ixy, ixz, iyz = mass_model.mass_properties(tb, config, prop)
+    if config == 0 and p[boosters.P_N_BOOSTERS] > 0.0:  # the boosters burn their own propellant
+        mass, cgx, cgy, cgz, ixx, iyy, izz, ixy, ixz, iyz = boosters.exchange(
+            x, p, tb, mass, cgx, cgy, cgz, ixx, iyy, izz, ixy, ixz, iyz)
     whole = (mass, cgx, cgy, cgz)
     tank0 = tank1 = slosh.SloshTank(0.0, 0.0, 0.0, 0.0, 0.0)
     if int(p[slosh.P_OFFSET]) >= 0:  # the rigid part leaves the slosh masses out
@@ -174,6 +179,12 @@ def compose(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarra
     fwx, fwy, fwz, twy, twz, mwx, mwy, mwz = twd_part
     rcs_torque = rcs.roll_torque(x, tb, p, alt, pres)
     fex, fey, fez = fax + ftx, fay + fty, faz + ftz  # external, non-gravitational
+    booster_thrust = 0.0
+    if p[boosters.P_N_BOOSTERS] > 0.0:  # strap-on boosters: their thrust and moment join the stage's
+        booster_thrust, fbx, fby, fbz, mbx, mby, mbz = boosters.loads(x, tb, p, t, pres, config == 0, cgx, cgy, cgz,
+                                                                      xd)
+        fex, fey, fez = fex + fbx, fey + fby, fez + fbz
+        mtx, mty, mtz = mtx + mbx, mty + mby, mtz + mbz
     fsx0 = fsy0 = fsz0 = fsx1 = fsy1 = fsz1 = 0.0
     msx = msy = msz = 0.0
     w_s0 = w_s1 = 0.0
@@ -242,6 +253,7 @@ def compose(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarra
     winds.write_diagnostics(aux, wind_n, wind_e, wind_d)
     gravity.write_diagnostics(aux, gx, gy, gz)
     propulsion.write_diagnostics(aux, thrust, thrust_vac, mtx, mty, mtz)
+    boosters.write_diagnostics(aux, booster_thrust)
     mass_model.write_diagnostics(aux, mass_total, prop, cgx_t, cgy_t, cgz_t)
     rcs.write_diagnostics(aux, rcs_torque)
     throttle.write_diagnostics(aux, setting)

@@ -7,7 +7,7 @@ import numpy as np
 
 from savant_cli import constants
 from savant_cli.io.record import Signal
-from savant_cli.models import propulsion
+from savant_cli.models import boosters, propulsion
 from savant_cli.models.layout import U_FS_T_CUT, U_T_CUT
 from savant_cli.sim import engine
 from savant_cli.sim.run import SimResult
@@ -200,6 +200,15 @@ def first_stage_cutoff_keys(result: SimResult) -> dict[str, float | str | None]:
     return {"time_first_stage_cutoff_s": t_cut, "first_stage_shutdown": how}
 
 
+def booster_keys(result: SimResult) -> dict[str, float | None]:
+    """Strap-on boosters' jettison: ``time_booster_jettison_s`` and
+    ``booster_propellant_at_jettison_kg`` (their propellant left then, summed; both None
+    while they are still attached at the end of the run)."""
+    t_jet = _event(result, engine.EV_BOOSTER_JETTISON)
+    return {"time_booster_jettison_s": t_jet,
+            "booster_propellant_at_jettison_kg": None if t_jet is None else float(result.d[boosters.D_PROP_JET])}
+
+
 #: the keys of :func:`navigation_keys`
 NAVIGATION_KEYS = ("navigation_position_error_m", "navigation_velocity_error_mps", "navigation_attitude_error_deg",
                    "navigated_perigee_altitude_km", "navigated_apogee_altitude_km", "navigated_inclination_deg")
@@ -282,6 +291,8 @@ def summarize(result: SimResult, sig: dict[str, Signal], study_wall_s: float | N
         out.update(propulsion_keys(result, p))
         if p[propulsion.P_FS_LIQUID] != 0.0:
             out.update(first_stage_cutoff_keys(result))
+        if p[boosters.P_N_BOOSTERS] > 0.0:
+            out.update(booster_keys(result))
     if target is not None:
         cut = not np.isnan(result.events[engine.EV_CUTOFF])
         out.update(insertion_errors(r_f, v_f, target) if cut else dict.fromkeys(INSERTION_KEYS))

@@ -4,12 +4,13 @@ The plant's models (``savant_cli/models/``) read a vehicle of one shape: a first
 of engines flown by their thrust trace (a solid motor) or of liquid engines (each drawing
 from the stage's oxidizer and fuel tank, optionally throttled), an upper stage of liquid
 engines drawing from an oxidizer and a fuel tank and carrying the roll jets (each stage
-one engine or a cluster of identical ones, ``models/cluster.py``), at most one jettisoned
-item (LES or fairing),
-and three configurations (``stack``, ``upper_les``, ``upper``) reached by separation
-and the item's jettison. :func:`two_stage_view` derives these records from a loaded
+one engine or a cluster of identical ones, ``models/cluster.py``), optionally identical
+strap-on solid boosters on the first stage (fixed nozzles, lit at liftoff, jettisoned
+together first), at most one jettisoned item (LES or fairing), and the configurations
+the sequence reaches (``boosted`` with boosters, then ``stack``, ``upper_les``,
+``upper``). :func:`two_stage_view` derives these records from a loaded
 :class:`~savant_cli.vehicle.tree.VehicleTree` and refuses, naming the key, a tree the
-plant cannot fly yet (more stages, boosters, clusters, other event sequences).
+plant cannot fly yet (more stages, other boosters, other event sequences).
 """
 
 from __future__ import annotations
@@ -154,6 +155,43 @@ class UpperStage:
     mixing_matrix: np.ndarray | None = None
 
 
+@dataclass(frozen=True)
+class Boosters:
+    """Strap-on boosters on the first stage: identical solid motors (each one ``trace``
+    engine on its own tank), lit at liftoff, with fixed nozzles (no TVC), jettisoned
+    together by one event. Each burns its ``propellant_kg`` in the shape of the thrust
+    table (vacuum thrust N vs mission time s) at ``isp_vac_s``, as a solid first stage
+    does (docs/models.md, "Propulsion"), its delivered thrust ``F_vac − p A_exit`` along
+    its nozzle's cant (pitch, yaw, rad) at its nozzle (structure frame, m). ``mass``: each
+    booster's own mass properties against its own propellant, exchanged in flight for its
+    full-load row of the liftoff configuration's table (``models/mass.py``).
+
+    Attributes
+    ----------
+    names, tanks, engines : tuple of str
+        Each booster's part, tank and engine name, in the order written.
+    """
+
+    names: tuple[str, ...]
+    tanks: tuple[str, ...]
+    engines: tuple[str, ...]
+    thrust_time_s: np.ndarray
+    thrust_vac_N: np.ndarray
+    isp_vac_s: float
+    isp_sl_s: float
+    nozzle_exit_area_m2: float
+    propellant_kg: float
+    inert_mass_kg: float
+    nozzle_m: np.ndarray
+    cant_rad: np.ndarray
+    mass: tuple[MassTable, ...]
+
+    @property
+    def count(self) -> int:
+        """The number of boosters."""
+        return len(self.names)
+
+
 #: Roll-control jets (the upper stage's).
 Rcs = RollJets
 
@@ -173,12 +211,16 @@ class Trigger:
     tank: str | None = None
     above: bool = False
     threshold: float = 0.0
+    #: a thrust fraction's booster (its position in :attr:`Boosters.names`; None: the
+    #: first stage's)
+    booster: int | None = None
 
 
 #: The plant's events, in slot order (sim/engine.py: EVENT_NAMES): the ``cutoff`` is
 #: guidance's (no trigger of the vehicle's arms it), the ``first_stage_cutoff`` a liquid
-#: first stage's shutdown before its separation.
-EVENT_ORDER = ("separation", "upper_stage_ignition", "les_jettison", "cutoff", "first_stage_cutoff")
+#: first stage's shutdown before its separation, the ``booster_jettison`` the strap-on
+#: boosters' before it.
+EVENT_ORDER = ("separation", "upper_stage_ignition", "les_jettison", "cutoff", "first_stage_cutoff", "booster_jettison")
 
 
 @dataclass(frozen=True)
@@ -188,15 +230,16 @@ class Events:
     first stage's cutoff); the upper-stage ignition command ``ignition_delay_s`` later;
     the LES (or fairing) jettison ``les_jettison_delay_s`` after that (infinite: none).
     ``triggers``: each event's whole trigger, in :data:`EVENT_ORDER`, where the ignition,
-    the jettison and the first-stage cutoff may also wait for a condition (the guidance
-    cutoff's, and the first-stage cutoff's of a vehicle without one, never arm).
+    the jettison, the first-stage cutoff and the boosters' jettison may also wait for a
+    condition (the guidance cutoff's, and those of events a vehicle does not have,
+    never arm).
     ``names``: each slot's event name in the vehicle file ("" for none; empty: built
     without a file)."""
 
     separation_thrust_fraction: float
     ignition_delay_s: float
     les_jettison_delay_s: float
-    triggers: tuple[Trigger, Trigger, Trigger, Trigger, Trigger]
+    triggers: tuple[Trigger, ...]
     names: tuple[str, ...] = ()
 
     def trigger(self, slot: int) -> Trigger:
@@ -232,6 +275,16 @@ class Vehicle:
     #: stage's (a solid motor's one, or a liquid stage's oxidizer and fuel), then the
     #: upper stage's oxidizer and fuel
     tanks: tuple[str, ...] = ("first_stage_propellant", "lox", "lh2")
+    #: the configurations flown with the first stage attached: the first n of
+    #: :attr:`configurations` (which are in the order the sequence reaches them)
+    first_stage_configurations: int = 1
+    #: the strap-on boosters (None: none); their tanks' states follow :attr:`tanks`
+    boosters: Boosters | None = None
+
+    @property
+    def booster_tanks(self) -> tuple[str, ...]:
+        """Each booster's tank (empty without boosters)."""
+        return self.boosters.tanks if self.boosters is not None else ()
 
     @property
     def first_stage_tanks(self) -> tuple[str, ...]:
@@ -413,10 +466,8 @@ def two_stage_view(tree: VehicleTree) -> Vehicle:
     stages = tree.stages()
     if len(stages) != 2:
         _refuse("vehicle.stages", [s.name for s in stages], "two stages")
-    boosters = [p.name for p in tree.parts.values() if p.kind == BOOSTER]
-    if boosters:
-        _refuse("vehicle.boosters", boosters, "no boosters")
     first, upper = stages
+    boosters = _boosters(tree, first, [p for p in tree.parts.values() if p.kind == BOOSTER])
     items = [p for p in tree.parts.values() if p.kind == ITEM]
     if len(items) > 1 or any(i.attached_to != upper.name for i in items):
         _refuse("vehicle.items", [i.name for i in items], f"at most one jettisoned item, on {upper.name}")
@@ -431,12 +482,14 @@ def two_stage_view(tree: VehicleTree) -> Vehicle:
     if first.inert_mass_kg is None:
         _refuse(f"{first.key}.inert_mass_kg", None, "the first stage's inert mass, dropped at separation")
     names = list(tree.events)
+    drop = _booster_jettison(tree, names.pop(0), boosters) if boosters is not None and names else None
     cut = _first_stage_cutoff(tree, names[0], first, fs_engines) if names else None
     if cut is not None:
         names.pop(0)
     if len(names) != 2 + len(items):
         _refuse("vehicle.events", list(tree.events),
-                "a liquid first stage's cutoff (optional), separation, the upper-stage ignition"
+                ("the boosters' jettison, " if boosters is not None else "")
+                + "a liquid first stage's cutoff (optional), separation, the upper-stage ignition"
                 + (", the item's jettison" if items else ""))
     sep = _event(tree, names[0], (LIFTOFF,) if cut is None else (LIFTOFF, cut.name), jettison=(first.name,))
     if sep.when is None or sep.when.quantity != "thrust_fraction" \
@@ -448,12 +501,15 @@ def two_stage_view(tree: VehicleTree) -> Vehicle:
     ign = _event(tree, names[1], (sep.name,), ignite=tuple(e.name for e in us_engines))
     jet = _event(tree, names[2], (ign.name,), jettison=(items[0].name,)) if items else None
     configs = [tree.configurations[c] for _, c in tree.sequence]
-    for c, tanks in zip(configs, (fs.tanks, us.tanks, us.tanks)):
+    n_fs = 1 if boosters is None else 2  # the configurations flown with the first stage
+    for i, c in enumerate(configs):
+        tanks = fs.tanks if i < n_fs else us.tanks
         if set(c.mass_tanks) != set(tanks):
             _refuse(f"{c.key}.mass_tanks", list(c.mass_tanks),
                     f"this configuration's mass table is against {list(tanks)}")
     if not items:  # the upper stage alone from separation on
-        configs.append(configs[1])
+        configs.append(configs[-1])
+    slots = (("boosted",) if boosters is not None else ()) + CONFIG_NAMES
     us_thrust = us.thrust
     assert isinstance(us_thrust, LiquidThrust)
     ox, fuel = (tree.tanks[t] for t in us.tanks)
@@ -468,16 +524,19 @@ def two_stage_view(tree: VehicleTree) -> Vehicle:
         engine=us.moving_mass, mounts=us_mounts, mixing_matrix=upper.mixing_matrix)
     fs_tanks = tuple(tree.tanks[t] for t in fs.tanks)
     tanks = (*(t.name for t in fs_tanks), ox.name, fuel.name)
+    all_tanks = tanks + (boosters.tanks if boosters is not None else ())
     fs_cut_slot = EVENT_ORDER.index("first_stage_cutoff")
     separation = Trigger(-1 if sep.after == LIFTOFF else fs_cut_slot, sep.delay_s, "thrust_fraction", None, False,
                          sep.when.below)
     never = Trigger(-1, float("inf"))  # an event this vehicle does not have, or guidance's cutoff
     events = Events(separation_thrust_fraction=sep.when.below, ignition_delay_s=ign.delay_s,
                     les_jettison_delay_s=jet.delay_s if jet is not None else float("inf"),
-                    triggers=(separation, _trigger(ign, 0, tanks),
-                              _trigger(jet, 1, tanks) if jet is not None else never, never,
-                              _trigger(cut, -1, tanks) if cut is not None else never),
-                    names=(sep.name, ign.name, jet.name if jet is not None else "", "", cut.name if cut else ""))
+                    triggers=(separation, _trigger(ign, 0, all_tanks),
+                              _trigger(jet, 1, all_tanks) if jet is not None else never, never,
+                              _trigger(cut, -1, all_tanks) if cut is not None else never,
+                              _booster_trigger(drop, boosters, all_tanks) if drop is not None else never),
+                    names=(sep.name, ign.name, jet.name if jet is not None else "", "", cut.name if cut else "",
+                           drop.name if drop is not None else ""))
     keys = {"propellant_first": " + ".join(f"{t.key}.propellant_kg" for t in fs_tanks),
             "propellant_upper": f"{ox.key}.propellant_kg + {fuel.name}.propellant_kg",
             "jettison_mass": f"{first.key}.inert_mass_kg",
@@ -488,12 +547,114 @@ def two_stage_view(tree: VehicleTree) -> Vehicle:
             "mixing_matrix.upper_stage": f"{upper.key}.mixing_matrix"}
     vehicle = Vehicle(
         name=tree.name, description=tree.description, length_m=tree.length_m,
-        configurations={n: Configuration(n, c.aero, c.mass) for n, c in zip(CONFIG_NAMES, configs)},
+        configurations={n: Configuration(n, c.aero, c.mass) for n, c in zip(slots, configs)},
         first_stage=first_stage, upper_stage=upper_stage, rcs=upper.roll_jets, sensors=tree.sensors, events=events,
         data_dir=tree.data_dir, flex_spec=tree.flex_spec, slosh_spec=_slosh_spec(tree, ox.name, fuel.name),
-        qalpha_limit_Pa_deg=tree.qalpha_limit_Pa_deg, keys=keys, tree=tree, tanks=tanks)
-    check_consistency(vehicle, {n: c.mass_file for n, c in zip(CONFIG_NAMES, configs)})
+        qalpha_limit_Pa_deg=tree.qalpha_limit_Pa_deg, keys=keys, tree=tree, tanks=tanks,
+        first_stage_configurations=n_fs, boosters=boosters)
+    check_consistency(vehicle, {n: c.mass_file for n, c in zip(slots, configs)})
+    if boosters is not None:
+        check_boosters(vehicle, configs[0], [tree.parts[b].key for b in boosters.names])
     return vehicle
+
+
+def _boosters(tree: VehicleTree, first, parts: list) -> Boosters | None:
+    """The strap-on boosters' record (:class:`Boosters`), or a refusal naming the first
+    key outside what the plant flies: identical boosters on the first stage, each one
+    trace engine on its own tank with a fixed nozzle, lit at liftoff, with its own
+    inert mass and mass table."""
+    if not parts:
+        return None
+    engines = []
+    for part in parts:
+        if part.attached_to != first.name:
+            _refuse(f"{part.key}.attached_to", part.attached_to, f"boosters on the first stage, {first.name}")
+        if part.roll_jets is not None:
+            _refuse(f"{part.key}.roll_jets", "roll_jets", "a booster has no roll jets")
+        if len(part.engines) != 1 or len(part.tanks) != 1:
+            _refuse(f"{part.key}.engines", list(part.engines), "a booster is one trace engine (a solid motor) on its "
+                                                               "one tank")
+        eng = tree.engines[part.engines[0]]
+        if eng.source != TRACE:
+            _refuse(f"{eng.key}.source", eng.source, "a booster is a solid motor: source trace")
+        if eng.gimbal_axes:
+            _refuse(f"{eng.key}.gimbal_axes", list(eng.gimbal_axes), "a booster's nozzle is fixed: [] (no TVC)")
+        if eng.name in tree.ignited_later():
+            _refuse(f"{eng.key}", eng.name, "a booster lights at liftoff (no event ignites it)")
+        for what, value in (("mass_table", part.mass), ("inert_mass_kg", part.inert_mass_kg)):
+            if value is None:
+                _refuse(f"{part.key}.{what}", None, "each booster's own mass table and inert mass: its mass is "
+                                                    "composed in flight against its own propellant")
+        engines.append(eng)
+    first_part, first_engine = parts[0], engines[0]
+    for part, eng in zip(parts, engines):
+        for key, value, other in (
+                (f"{eng.key}.thrust", eng.thrust, first_engine.thrust),
+                (f"{eng.key}.nozzle_exit_area_m2", eng.nozzle_exit_area_m2, first_engine.nozzle_exit_area_m2),
+                (f"{tree.tanks[eng.tanks[0]].key}.propellant_kg", tree.tanks[eng.tanks[0]].propellant_kg,
+                 tree.tanks[first_engine.tanks[0]].propellant_kg),
+                (f"{part.key}.inert_mass_kg", part.inert_mass_kg, first_part.inert_mass_kg)):
+            if not _same(value, other):
+                _refuse(key, part.name, f"the boosters are identical but for their place, cant and mass table "
+                                        f"(as {first_part.name})")
+    trace = first_engine.thrust
+    assert isinstance(trace, ThrustTrace)
+    return Boosters(
+        names=tuple(p.name for p in parts), tanks=tuple(e.tanks[0] for e in engines),
+        engines=tuple(e.name for e in engines), thrust_time_s=trace.time_s, thrust_vac_N=trace.thrust_vac_N,
+        isp_vac_s=trace.isp_vac_s, isp_sl_s=trace.isp_sl_s, nozzle_exit_area_m2=first_engine.nozzle_exit_area_m2,
+        propellant_kg=tree.tanks[first_engine.tanks[0]].propellant_kg, inert_mass_kg=float(first_part.inert_mass_kg),
+        nozzle_m=np.array([e.gimbal_m for e in engines], dtype=float),
+        cant_rad=np.array([e.cant_rad for e in engines], dtype=float), mass=tuple(p.mass for p in parts))
+
+
+def _booster_jettison(tree: VehicleTree, name: str, boosters: Boosters):
+    """The first event of a vehicle with boosters: their jettison, all together, from
+    liftoff (a delay and optionally a condition: a booster's thrust fraction, its tail-off,
+    or any quantity of the vehicle or a tank)."""
+    ev = tree.events[name]
+    if sorted(ev.jettison) != sorted(boosters.names):
+        _refuse(f"{ev.key}.jettison", list(ev.jettison), f"the first event jettisons the boosters, all together: "
+                                                         f"{list(boosters.names)}")
+    return _event(tree, name, (LIFTOFF,), jettison=ev.jettison)
+
+
+def _booster_trigger(ev, boosters: Boosters, tanks: tuple[str, ...]) -> Trigger:
+    """The boosters' jettison's trigger: a thrust fraction is one booster's (named, or by
+    its engine), below a value; any other condition as :func:`_trigger`'s."""
+    if ev.when is None or ev.when.quantity != "thrust_fraction":
+        return _trigger(ev, -1, tanks)
+    which = boosters.names if ev.when.of in boosters.names else boosters.engines
+    if ev.when.of not in which or ev.when.below is None:
+        _refuse(f"{ev.key}.when", ev.when.of, f"the thrust fraction of a booster ({', '.join(boosters.names)}, or its "
+                                              f"engine) below a value")
+    return Trigger(-1, ev.delay_s, "thrust_fraction", None, False, ev.when.below, booster=which.index(ev.when.of))
+
+
+def check_boosters(v: Vehicle, boosted, keys: list[str]) -> None:
+    """Refuse boosters' mass tables that disagree with their load and inert mass, or
+    with the liftoff configuration's table (which holds the boosters at their full
+    load: minus their full masses it must equal the stack without them at every
+    propellant level of the stage), all within :data:`MASS_TOLERANCE_KG`."""
+    b = v.boosters
+    tol = MASS_TOLERANCE_KG
+    for table, key in zip(b.mass, keys):
+        if table.propellant_kg[0] > tol or abs(table.propellant_kg[-1] - b.propellant_kg) > tol:
+            raise ConfigError(f"{key}.mass_table", [float(table.propellant_kg[0]), float(table.propellant_kg[-1])],
+                              f"a booster's table runs from 0 to its load, {b.propellant_kg:.1f} kg")
+        if abs(table.mass_kg[0] - b.inert_mass_kg) > tol:
+            raise ConfigError(f"{key}.inert_mass_kg", b.inert_mass_kg, f"must equal the booster's mass at 0 "
+                                                                       f"propellant ({table.mass_kg[0]:.1f} kg) "
+                                                                       f"within {tol:g} kg")
+    stack = v.configurations["stack"].mass
+    full = sum(float(t.mass_kg[-1]) for t in b.mass)
+    diff = np.interp(stack.propellant_kg, boosted.mass.propellant_kg, boosted.mass.mass_kg) - full - stack.mass_kg
+    worst = int(np.argmax(np.abs(diff)))
+    if abs(diff[worst]) > tol:
+        raise ConfigError(boosted.mass_file, float(diff[worst] + stack.mass_kg[worst] + full),
+                          f"the liftoff configuration's mass with the boosters full minus their full masses "
+                          f"({full:.1f} kg) must equal the stack's without them ({stack.mass_kg[worst]:.1f} kg at "
+                          f"{stack.propellant_kg[worst]:.1f} kg of the stage's propellant) within {tol:g} kg")
 
 
 def _slosh_spec(tree: VehicleTree, ox: str, fuel: str) -> dict | None:

@@ -1,0 +1,164 @@
+"""Strap-on boosters: identical solid motors on the first stage, lit at liftoff, with
+fixed nozzles, jettisoned together (docs/vehicles.md, "Strap-on boosters").
+
+Each booster burns its own propellant state in the shape of the boosters' vacuum-thrust
+table exactly as the first-stage motor does (``propulsion.trace_flow``, the one kernel
+of both: ``ṁᵢ = M F_tab(t) / I_tab``, ``F_vac,i = g0 Isp ṁᵢ``) and pushes
+``max(F_vac,i − p A_exit, 0)`` along its nozzle's fixed cant at its nozzle point
+(``propulsion.thrust_loads``). While the boosters are attached (the liftoff
+configuration, number 0) the vehicle's mass properties are that configuration's table,
+which holds them at their full load, with each booster's full-load row exchanged for
+its own table's row at its own propellant (:func:`exchange`).
+
+Its discrete fields are declared after every other model's (``models/__init__.py``):
+older staging-state files stay valid.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from savant_cli.models import blocks
+from savant_cli.models.interp import tab_offset
+from savant_cli.models.mass import N_COLUMNS, stacked_row
+from savant_cli.models.propulsion import P_ON, table_impulse, thrust_loads, trace_flow
+
+_PARAMS = blocks.PARAMETERS.block("boosters")
+P_N_BOOSTERS = _PARAMS.scalar("count", "1", "strap-on boosters (0: none)")
+P_TANK = _PARAMS.scalar("tank_state", "1", "index in x of the first booster's propellant (kg; the others follow it)")
+P_ISP = _PARAMS.scalar("isp_vac", "s", "each booster's vacuum specific impulse")
+P_EXIT_AREA = _PARAMS.scalar("exit_area", "m^2", "each booster's nozzle exit area")
+P_FLOW_PER_THRUST = _PARAMS.scalar("flow_per_table_thrust", "kg/(N*s)", "each booster's load / table impulse")
+P_PROP_FULL = _PARAMS.scalar("propellant_full", "kg", "each booster's propellant at liftoff")
+
+_TABLES = blocks.TABLES.block("boosters")
+T_TIME = _TABLES.table("booster_time", "s", "each booster's thrust table, mission time")
+T_THRUST = _TABLES.table("booster_thrust", "N", "each booster's vacuum thrust at T_TIME")
+MOUNT = blocks.Record("booster nozzle", ("x", "m", "structure x"), ("y", "m", "structure y"),
+                      ("z", "m", "structure z"), ("cant_pitch", "rad", "fixed cant, pitch"),
+                      ("cant_yaw", "rad", "fixed cant, yaw"))
+N_MOUNT = MOUNT.size
+T_MOUNT = _TABLES.table("booster_mount", "m, rad", "(boosters, MOUNT) each booster's nozzle and cant")
+T_MASS_PROP = _TABLES.table("booster_mass_prop", "kg", "(boosters, n) each booster's own propellant, ascending "
+                            "(padded)")
+T_MASS_DATA = _TABLES.table("booster_mass_data", "kg, m, kg*m^2", "(boosters, n, mass COLUMNS) each booster's own "
+                            "mass-properties rows")
+T_MASS_LEN = _TABLES.table("booster_mass_len", "1", "(boosters,) valid rows per booster")
+
+_AUX = blocks.DIAGNOSTICS.block("boosters")
+A_THRUST = _AUX.scalar("thrust", "N", "the strap-on boosters' delivered thrust, summed",
+                       blocks.Logged("booster_thrust"))
+_DISCRETE = blocks.DISCRETE.block("boosters")
+D_PROP_JET = _DISCRETE.scalar("propellant_at_jettison", "kg",
+                              "the boosters' propellant left at their jettison, summed (0 before)")
+D_PEAK = _DISCRETE.scalar("peak_thrust", "N", "largest sensed vacuum thrust so far of the booster whose thrust "
+                          "fraction the boosters' jettison watches")
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def write_diagnostics(aux: np.ndarray, thrust: float) -> None:
+    """Write the boosters' delivered thrust (N, summed) into ``aux``."""
+    aux[A_THRUST] = thrust
+
+
+def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarray]) -> None:
+    """The boosters' parameters and tables (placeholders, never read, without boosters)."""
+    b = inputs.vehicle.boosters
+    if b is None:
+        tables.update(booster_time=np.array([0.0, 1.0]), booster_thrust=np.zeros(2), booster_mount=np.zeros((1, N_MOUNT)),
+                      booster_mass_prop=np.zeros((1, 1)), booster_mass_data=np.zeros((1, 1, N_COLUMNS)),
+                      booster_mass_len=np.ones(1, dtype=np.int64))
+        return
+    p[P_N_BOOSTERS] = b.count
+    p[P_TANK] = inputs.layout.tank(b.tanks[0])
+    if [inputs.layout.tank(t) for t in b.tanks] != list(range(int(p[P_TANK]), int(p[P_TANK]) + b.count)):
+        raise RuntimeError("the boosters' propellant states must be consecutive")
+    p[P_ISP] = b.isp_vac_s
+    p[P_EXIT_AREA] = b.nozzle_exit_area_m2
+    p[P_FLOW_PER_THRUST] = b.propellant_kg / table_impulse(b.thrust_time_s, b.thrust_vac_N)
+    p[P_PROP_FULL] = b.propellant_kg
+    prop, n = blocks.stack_padded([m.propellant_kg for m in b.mass])
+    data, _ = blocks.stack_padded([np.column_stack([m.mass_kg, m.cg_m, m.inertia_kgm2]) for m in b.mass])
+    tables.update(booster_time=b.thrust_time_s, booster_thrust=b.thrust_vac_N,
+                  booster_mount=np.column_stack([b.nozzle_m, b.cant_rad]),
+                  booster_mass_prop=prop, booster_mass_data=data, booster_mass_len=n)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def flow(x: np.ndarray, tb: np.ndarray, p: np.ndarray, t: float, i: int) -> tuple[float, float]:
+    """Vacuum thrust (N) and mass flow (kg/s) of booster ``i`` at mission time ``t`` (s):
+    ``propulsion.trace_flow`` of its table and its own propellant state (the
+    sequencer's sensed thrust)."""
+    return trace_flow(tb, T_TIME, T_THRUST, x[int(p[P_TANK]) + i], p[P_FLOW_PER_THRUST], p[P_ISP], t)
+
+
+@njit(cache=True, error_model="numpy")  # a call: the vehicles without boosters never enter it
+def loads(x: np.ndarray, tb: np.ndarray, p: np.ndarray, t: float, pres: float, attached: bool,
+          cgx: float, cgy: float, cgz: float, xd: np.ndarray):
+    """The boosters' delivered thrust (N, summed), force (N) and moment about the CG
+    (N·m), body axes, with each booster's propellant rate written into ``xd`` (kg/s; 0
+    once ``attached`` is False: jettisoned, its state emptied).
+
+    Each booster's delivered thrust ``max(F_vac − p A_exit, 0)`` (``pres``: ambient
+    pressure, Pa) acts at its nozzle along its fixed cant (``propulsion.thrust_loads``,
+    the arm from the CG ``cgx, cgy, cgz``, structure frame, m)."""
+    tank = int(p[P_TANK])
+    thrust = fx = fy = fz = mx = my = mz = 0.0
+    for i in range(int(p[P_N_BOOSTERS])):
+        if not attached:
+            xd[tank + i] = 0.0
+            continue
+        f_vac, mdot = flow(x, tb, p, t, i)
+        xd[tank + i] = -mdot
+        f = max(f_vac - pres * p[P_EXIT_AREA], 0.0) if mdot > 0.0 and p[P_ON] != 0.0 else 0.0
+        m = tab_offset(tb, T_MOUNT) + i * N_MOUNT
+        ax, ay, az, bx, by, bz = thrust_loads(f, tb[m + 3], tb[m + 4], -(tb[m] - cgx), tb[m + 1] - cgy,
+                                              -(tb[m + 2] - cgz))
+        thrust += f
+        fx += ax
+        fy += ay
+        fz += az
+        mx += bx
+        my += by
+        mz += bz
+    return thrust, fx, fy, fz, mx, my, mz
+
+
+@njit(cache=True, error_model="numpy")  # a call: the vehicles without boosters never enter it
+def exchange(x: np.ndarray, p: np.ndarray, tb: np.ndarray, m: float, cgx: float, cgy: float, cgz: float,
+             ixx: float, iyy: float, izz: float, ixy: float, ixz: float, iyz: float):
+    """The liftoff configuration's mass properties ``m, cg…, i…`` (as
+    ``mass.mass_properties`` returns them: its table holds the boosters at their full
+    load) with each booster's full-load row exchanged for its row at its own propellant
+    (its state in ``x``), by the parallel-axis theorem about the table's CG ``C₀``::
+
+        M = m + Σ (mₙ − m_f),    e = Σ (mₙ dₙ − m_f d_f) / M,    d = S (c − C₀)
+        J = J₀ + Σ [Jₙ + mₙ (|dₙ|² E − dₙ dₙᵀ) − J_f − m_f (|d_f|² E − d_f d_fᵀ)] − M (|e|² E − e eᵀ)
+
+    (``S = diag(−1, 1, −1)``: structure to body axes; ``J`` tensors about the CGs, body
+    axes). The new CG is ``C₀ + S e``. Returns the same tuple for the new whole."""
+    tank = int(p[P_TANK])
+    full = p[P_PROP_FULL]
+    sx = sy = sz = 0.0  # first moment about C₀, body axes
+    mass = m
+    for i in range(int(p[P_N_BOOSTERS])):
+        for sign, prop in ((-1.0, full), (1.0, x[tank + i])):
+            mb, bx, by, bz, jxx, jyy, jzz, jxy, jxz, jyz = stacked_row(tb, T_MASS_PROP, T_MASS_DATA, T_MASS_LEN, i,
+                                                                       prop)
+            dx, dy, dz = -(bx - cgx), by - cgy, -(bz - cgz)
+            w = sign * mb
+            mass += w
+            sx += w * dx
+            sy += w * dy
+            sz += w * dz
+            ixx += sign * jxx + w * (dy * dy + dz * dz)
+            iyy += sign * jyy + w * (dx * dx + dz * dz)
+            izz += sign * jzz + w * (dx * dx + dy * dy)
+            ixy += sign * jxy - w * dx * dy
+            ixz += sign * jxz - w * dx * dz
+            iyz += sign * jyz - w * dy * dz
+    ex, ey, ez = sx / mass, sy / mass, sz / mass
+    return (mass, cgx - ex, cgy + ey, cgz - ez,
+            ixx - mass * (ey * ey + ez * ez), iyy - mass * (ex * ex + ez * ez), izz - mass * (ex * ex + ey * ey),
+            ixy + mass * ex * ey, ixz + mass * ex * ez, iyz + mass * ey * ez)

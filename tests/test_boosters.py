@@ -1,0 +1,364 @@
+"""Strap-on boosters on the first stage (``vehicle/two_stage.py``, ``models/propulsion.py``,
+``models/mass.py``, ``sim/engine.py``): the worked example of docs/vehicles.md, two
+GEM-63-class solid motors without TVC beside the ares_i first stage, jettisoned on their
+own thrust tail-off.
+
+References: the parallel-axis composition of ``vehicle/composition.py`` (numpy, at
+load) for the plant's in-flight exchange of each booster's full-load row for its row at
+its own propellant; numpy's cross products for a canted booster's thrust moment; the
+booster's thrust trace itself for the tail-off step; the rigid body's velocity field for
+the momentum across the jettison (the boosters leave with the velocity of their own CG,
+the rest keeps its own, and the sum is the whole's before).
+"""
+
+from __future__ import annotations
+
+import copy
+
+import numpy as np
+import pytest
+
+from conftest import compose_config
+from savant_cli import constants
+from savant_cli.config import validate
+from savant_cli.datagen import strap_on_boosters
+from savant_cli.datagen.guidance_commands import Program, Reference
+from savant_cli.errors import ConfigError
+from savant_cli.io.guidance_file import read_guidance
+from savant_cli.linear.plant import linearize_plant
+from savant_cli.models import boosters, layout, mass as mass_model, propulsion, quaternion as qt
+from savant_cli.paths import hydra_search_dirs, shipped_config_dir
+from savant_cli.sim import engine
+from savant_cli.sim.build import build_model, plant_data
+from savant_cli.sim.plant import derivative, mass_state
+from savant_cli.sim.run import signals, simulate
+from savant_cli.sim.setup import prepare
+from savant_cli.sim.summary import summarize
+from savant_cli.vehicle import load_vehicle
+from savant_cli.vehicle.composition import combine
+from test_vehicle_examples import example_node
+
+SHIPPED = shipped_config_dir() / "vehicle"
+EXAMPLE = "strap-on-boosters"
+LOAD = 44200.0  # each booster's propellant, kg (the page's)
+INERT = 5100.0  # each booster's inert mass, kg
+TAIL_OFF = 0.02  # the jettison's thrust fraction
+
+
+def _vehicle(node: dict | None = None):
+    return load_vehicle(node or example_node(EXAMPLE), SHIPPED / "ares_i")
+
+
+def _cfg(*overrides: str):
+    return validate(compose_config(["sim.progress=false", *overrides]))
+
+
+def _model(vehicle=None):
+    cfg = _cfg()
+    return build_model(cfg, vehicle or _vehicle(), read_guidance(prepare(cfg, hydra_search_dirs()).command_file))
+
+
+def _booster_states(model) -> list[int]:
+    return [model.layout.tank(t) for t in model.layout.tanks if t.startswith("booster_")]
+
+
+# ------------------------------------------------------------------ the data
+
+
+def test_the_booster_tables_hold_the_load_and_the_impulse():
+    rows = strap_on_boosters.thrust_table()
+    impulse = np.trapezoid(rows[:, 1], rows[:, 0])
+    assert impulse == pytest.approx(constants.G0 * 279.0 * LOAD, rel=1e-12)
+    left, right = (strap_on_boosters.mass_table(s) for s in (-1.0, 1.0))
+    np.testing.assert_allclose(left[:, 1], INERT + left[:, 0], rtol=1e-15)  # mass = inert + propellant
+    np.testing.assert_array_equal(left[:, 3], -right[:, 3])  # mirror images in y
+    np.testing.assert_array_equal(left[:, 5:], right[:, 5:])
+    # the full booster: a thin case, a solid nozzle and a solid grain on one axis, by hand
+    b = strap_on_boosters.BOOSTER
+    case_x, noz_x, grain_x = (0.5 * (b[f"{k}_fore_m"] + b[f"{k}_aft_m"]) for k in ("case", "nozzle", "grain"))
+    cg = (b["case_kg"] * case_x + b["nozzle_kg"] * noz_x + LOAD * grain_x) / (INERT + LOAD)
+    assert right[-1, 2] == pytest.approx(cg, rel=1e-14)
+    ixx = b["case_kg"] * 0.64 + 0.5 * b["nozzle_kg"] * 0.36 + 0.5 * LOAD * 0.64
+    assert right[-1, 5] == pytest.approx(ixx, rel=1e-14)
+
+
+def test_the_example_loads_four_configurations_with_the_boosters_burning_in_the_first():
+    v = _vehicle()
+    assert list(v.configurations) == ["boosted", "stack", "upper_les", "upper"]
+    assert v.first_stage_configurations == 2 and v.boosters.count == 2
+    assert v.booster_tanks == ("booster_left_grain", "booster_right_grain")
+    trig = v.events.trigger(engine.EV_BOOSTER_JETTISON)
+    assert (trig.quantity, trig.booster, trig.threshold, trig.after) == ("thrust_fraction", 0, TAIL_OFF, -1)
+    # the liftoff configuration (composed: the boosters at their full load) less the
+    # boosters is the stack without them, at every level of the stage's propellant
+    boosted, stack = v.configurations["boosted"].mass, v.configurations["stack"].mass
+    np.testing.assert_allclose(boosted.mass_kg - 2 * (INERT + LOAD), stack.mass_kg, rtol=1e-13)
+
+
+# ------------------------------------------------------------- mass in flight
+
+
+@pytest.mark.parametrize("left,right", [(LOAD, LOAD), (20000.0, 20000.0), (30000.0, 5000.0), (0.0, 44200.0)])
+def test_the_boosters_mass_in_flight_is_the_parallel_axis_composition_of_the_parts(left, right):
+    """The plant's liftoff configuration with its boosters at (left, right) kg against
+    the numpy composition of its parts: the first stage at a row of its own table, the
+    upper stage full, the LES, and each booster at its row for its own propellant."""
+    v = _vehicle()
+    model = _model(v)
+    parts = v.tree.parts
+    first = parts["first_stage"].mass
+    core = float(first.propellant_kg[len(first.propellant_kg) * 2 // 3])  # a row: the composed table is exact there
+    x = model.x0.copy()
+    x[model.layout.tank("grain")] = core
+    x[_booster_states(model)] = left, right
+    whole = mass_state(x, model.p, model.packed_tables, 0)[1]
+    m, cx, cy, cz, ixx, iyy, izz, ixy, ixz, iyz = mass_model.mass_properties(model.packed_tables, 0, core)
+    m, cx, cy, cz, *inertia = boosters.exchange(x, model.p, model.packed_tables, m, cx, cy, cz, ixx, iyy,
+                                                           izz, ixy, ixz, iyz)
+
+    def row(table, prop):
+        return (float(np.interp(prop, table.propellant_kg, table.mass_kg)),
+                np.array([np.interp(prop, table.propellant_kg, table.cg_m[:, k]) for k in range(3)]),
+                np.array([np.interp(prop, table.propellant_kg, table.inertia_kgm2[:, k]) for k in range(6)]))
+
+    upper = parts["upper_stage"].mass
+    pieces = [row(first, core), row(upper, upper.propellant_kg[-1]),
+              (parts["les"].inert_mass_kg, parts["les"].cg_m, parts["les"].inertia_kgm2),
+              row(parts["booster_left"].mass, left), row(parts["booster_right"].mass, right)]
+    ref_m, ref_cg, ref_i = combine(np.array([q[0] for q in pieces]), np.array([q[1] for q in pieces]),
+                                   np.array([q[2] for q in pieces]))
+    assert m == pytest.approx(ref_m, rel=1e-14) and whole[0] == m
+    np.testing.assert_allclose([cx, cy, cz], ref_cg, rtol=1e-13, atol=1e-12)
+    # the plant returns tensor elements: the products' negatives
+    np.testing.assert_allclose(inertia, [*ref_i[:3], *(-ref_i[3:])], rtol=1e-11, atol=1e-4)
+    assert (cy == 0.0) == (left == right)  # a symmetric pair keeps the CG on the axis
+
+
+# ---------------------------------------------------------------- thrust
+
+
+def test_a_canted_booster_pushes_along_its_cant_at_its_arm():
+    """Each booster's delivered thrust along its fixed cant, at its nozzle, against
+    numpy's cross product r × F (body axes)."""
+    node = example_node(EXAMPLE)
+    node["boosters"]["booster_right"]["engines"]["booster_right_motor"]["cant_deg"] = [2.0, -3.0]
+    model = _model(_vehicle(node))
+    p, tb = model.p, model.packed_tables
+    x = model.x0.copy()
+    t, pres, cg = 40.0, 30000.0, np.array([60.0, 0.1, -0.05])
+    xd = np.zeros_like(x)
+    thrust, fx, fy, fz, mx, my, mz = boosters.loads(x, tb, p, t, pres, True, *cg, xd)
+    s_to_b = np.array([-1.0, 1.0, -1.0])
+    f_total, m_total, each = np.zeros(3), np.zeros(3), []
+    for i, (nozzle, cant) in enumerate(((np.array([91.5, -2.755, 0.0]), (0.0, 0.0)),
+                                        (np.array([91.5, 2.755, 0.0]), np.radians([2.0, -3.0])))):
+        f_vac, mdot = boosters.flow(x, tb, p, t, i)
+        assert mdot == pytest.approx(f_vac / (constants.G0 * 279.0), rel=1e-15)
+        f = f_vac - pres * 2.0
+        each.append(f)
+        cp, cy = cant
+        force = f * np.array([np.cos(cp) * np.cos(cy), -np.sin(cy), np.sin(cp) * np.cos(cy)])
+        f_total += force
+        m_total += np.cross((nozzle - cg) * s_to_b, force)
+        assert xd[_booster_states(model)[i]] == -mdot
+    assert thrust == pytest.approx(sum(each), rel=1e-15)
+    np.testing.assert_allclose([fx, fy, fz], f_total, rtol=1e-14)
+    np.testing.assert_allclose([mx, my, mz], m_total, rtol=1e-12, atol=1e-6 * abs(m_total).max())
+    # jettisoned: no thrust and the states still
+    xd[:] = 1.0
+    assert boosters.loads(x, tb, p, t, pres, False, *cg, xd) == (0.0,) * 7
+    assert np.all(xd[_booster_states(model)] == 0.0)
+
+
+# ---------------------------------------------------------------- the events
+
+
+def _at_boundary(model, t: float):
+    """The state at the example's liftoff, its clock moved to ``t`` (s), ready for one
+    call of the engine's event logic."""
+    x, d, u = model.x0.copy(), model.d0.copy(), model.u0.copy()
+    x[layout.W:layout.W + 3] = (0.01, -0.02, 0.005)  # a rotating body: the reference moves with its velocity field
+    events = np.full(len(engine.EVENT_NAMES), np.nan)
+    return x, d, u, events
+
+
+def _momentum(x, p, tb, config, states=()) -> tuple[float, np.ndarray]:
+    """Mass (kg) and linear momentum (ECI, kg m/s) of the configuration ``config``
+    from its reference point's velocity (that point is the CG)."""
+    m = mass_state(x, p, tb, config)[1][0]
+    return m, m * x[layout.V:layout.V + 3]
+
+
+def test_the_jettison_conserves_mass_and_momentum():
+    """Boosters at 300 kg each past their table's end (no thrust: the fraction holds):
+    the jettison fires, the mass drops by the boosters' whole mass, and the momentum the
+    rest keeps plus what the boosters carry away (their CGs' velocity in the rigid
+    velocity field) is the whole's."""
+    model = _model()
+    p, tb = model.p, model.packed_tables
+    x, d, u, events = _at_boundary(model, 100.0)
+    left = 300.0
+    x[_booster_states(model)] = left
+    d[boosters.D_PEAK] = 1.5e6
+    m0, p0 = _momentum(x, p, tb, 0)
+    cg0 = np.array(mass_state(x, p, tb, 0)[1][1:])
+    dropped = []
+    for table in _vehicle().boosters.mass:
+        dropped.append((float(np.interp(left, table.propellant_kg, table.mass_kg)),
+                         np.array([np.interp(left, table.propellant_kg, table.cg_m[:, k]) for k in range(3)])))
+    status = engine.handle_events(100.0, model.rates.dt, x, u, d, events, model.sched, p, tb,
+                                  engine.work_array(x.size))
+    assert status == engine.RUNNING and events[engine.EV_BOOSTER_JETTISON] == 100.0
+    assert np.isnan(events[engine.EV_SEPARATION]) and u[layout.U_CONFIG] == 1
+    assert np.all(x[_booster_states(model)] == 0.0) and d[boosters.D_PROP_JET] == 2 * left
+    m1, p1 = _momentum(x, p, tb, 1)
+    assert m0 - m1 == pytest.approx(sum(b[0] for b in dropped), rel=1e-9)
+    c_b2i = qt.dcm(x[layout.Q:layout.Q + 4])
+    w = x[layout.W:layout.W + 3]
+    carried = np.zeros(3)
+    for mb, cb in dropped:  # each booster's CG velocity: v_cg0 + C (ω × Δ), Δ in body axes
+        carried += mb * (p0 / m0 + c_b2i @ np.cross(w, (cb - cg0) * np.array([-1.0, 1.0, -1.0])))
+    np.testing.assert_allclose(p1 + carried, p0, rtol=0.0, atol=1e-12 * np.linalg.norm(p0))
+
+
+def test_a_separation_before_the_boosters_jettison_takes_them_along():
+    model = _model()
+    p, tb = model.p, model.packed_tables
+    x, d, u, events = _at_boundary(model, 50.0)
+    x[model.layout.tank("grain")] = 0.0  # the core's thrust gone: its thrust fraction holds
+    d[propulsion.D_FS_PEAK] = 1.6e7
+    loads = x[_booster_states(model)].copy()
+    engine.handle_events(50.0, model.rates.dt, x, u, d, events, model.sched, p, tb, engine.work_array(x.size))
+    assert events[engine.EV_SEPARATION] == events[engine.EV_BOOSTER_JETTISON] == 50.0
+    assert u[layout.U_CONFIG] == 2 and u[layout.U_ENGINE] == layout.ENGINE_OFF
+    assert d[boosters.D_PROP_JET] == loads.sum()
+
+
+@pytest.fixture(scope="module")
+def flight():
+    model = _model()
+    result = simulate(model, progress=False)
+    return model, result, signals(result, model)
+
+
+@pytest.mark.slow
+def test_the_boosters_leave_at_the_first_step_their_thrust_falls_below_the_fraction(flight):
+    """The plant step of the jettison against the booster's own trace: the first step
+    boundary at which its vacuum thrust is below 2 % of its peak."""
+    model, result, sig = flight
+    assert result.status == "complete"
+    dt = model.rates.dt
+    rows = strap_on_boosters.thrust_table()  # the flown trace: its impulse is the load's exactly
+    steps = np.arange(0.0, rows[-1, 0] + dt, dt)
+    f = np.interp(steps, rows[:, 0], rows[:, 1], right=0.0)
+    after_peak = steps >= steps[np.argmax(f)]
+    expected = steps[np.flatnonzero(after_peak & (f < TAIL_OFF * f.max()))[0]]
+    t_jet = result.events[engine.EV_BOOSTER_JETTISON]
+    assert t_jet == pytest.approx(expected, abs=1e-9)
+    assert t_jet < result.events[engine.EV_SEPARATION]
+    t = sig["time"].data
+    assert np.all(sig["booster_thrust"].data[t >= t_jet + dt] == 0.0)
+    pres = sig["pressure"].data[0]  # the pad's
+    assert sig["booster_thrust"].data[0] == pytest.approx(2 * (rows[0, 1] - pres * 2.0), rel=1e-9)  # the CSV's digits
+    # what the boosters held at the jettison: their load less the flown trace's impulse
+    burned = np.trapezoid(np.interp(np.linspace(0, t_jet, 200001), rows[:, 0], rows[:, 1]),
+                          np.linspace(0, t_jet, 200001)) / (constants.G0 * 279.0)
+    assert result.d[boosters.D_PROP_JET] == pytest.approx(2 * (LOAD - burned), rel=1e-3)
+
+
+@pytest.mark.slow
+def test_the_summary_reports_the_jettison_and_leaves_the_boosters_propellant_out(flight):
+    model, result, sig = flight
+    out = summarize(result, sig, p=model.p, qalpha_limit=160000.0)
+    assert out["time_booster_jettison_s"] == result.events[engine.EV_BOOSTER_JETTISON]
+    assert out["booster_propellant_at_jettison_kg"] == pytest.approx(3.6, abs=0.05)  # the page's
+    assert out["max_qalpha_Pa_deg"] == pytest.approx(125e3, rel=0.01) and not out["qalpha_limit_exceeded"]
+    assert out["booster_propellant_at_jettison_kg"] == pytest.approx(float(result.d[boosters.D_PROP_JET]))
+    lay = model.layout
+    core = [lay.tank(t) for t in lay.tanks if not t.startswith("booster_")]
+    assert out["propellant_remaining_kg"] == pytest.approx(float(result.x[core[1:]].sum()))
+    assert out["status"] == "complete"
+
+
+@pytest.mark.slow
+def test_the_linear_plant_in_the_boosted_phase_turns_on_the_composed_inertia():
+    """At 40 s, boosters burning: the linear plant's pitch acceleration per radian of the
+    first stage's gimbal is the stage's delivered thrust times its arm from the CG over
+    the pitch inertia, ``F (x_g − x_cg) / I_yy``, with the CG and inertia those of the
+    numpy composition of the parts at the snapshot's propellant (2e-3: the finite
+    differences and the tables' interpolation); the stack's I_yy without the boosters
+    would miss by 9 %."""
+    model = _model()
+    step = int(round(40.0 / model.rates.dt))
+    snap = simulate(model, progress=False, snapshot_steps=(step,), t_stop=41.0).snapshots[step]
+    lin = linearize_plant(model, snap)
+    row = list(lin.z_index).index(layout.W + 1)  # pitch rate q
+    col = list(lin.z_index).index(model.layout.channel(0))  # the pitch gimbal angle
+    aux, xd = np.zeros(layout.N_AUX), np.zeros(snap.x.size)
+    derivative(snap.t, snap.x, snap.u, model.p, model.packed_tables, aux, xd)
+    v = _vehicle()
+    parts = v.tree.parts
+    core = snap.x[model.layout.tank("grain")]
+
+    def row_at(table, prop):
+        return (float(np.interp(prop, table.propellant_kg, table.mass_kg)),
+                np.array([np.interp(prop, table.propellant_kg, table.cg_m[:, k]) for k in range(3)]),
+                np.array([np.interp(prop, table.propellant_kg, table.inertia_kgm2[:, k]) for k in range(6)]))
+
+    upper = parts["upper_stage"].mass
+    pieces = [row_at(parts["first_stage"].mass, core), row_at(upper, upper.propellant_kg[-1]),
+              (parts["les"].inert_mass_kg, parts["les"].cg_m, parts["les"].inertia_kgm2)]
+    pieces += [row_at(parts[b].mass, snap.x[s]) for b, s in zip(("booster_left", "booster_right"),
+                                                                 _booster_states(model))]
+    _, cg, inertia = combine(np.array([q[0] for q in pieces]), np.array([q[1] for q in pieces]),
+                             np.array([q[2] for q in pieces]))
+    arm = v.first_stage.gimbal_m[0] - cg[0]
+    expected = aux[propulsion.A_THRUST] * arm / inertia[1]
+    assert lin.sys.A[row, col] == pytest.approx(expected, rel=2e-3)
+    stack = v.configurations["stack"].mass  # the same stage without its boosters' inertia
+    i_stack = np.interp(core, stack.propellant_kg, stack.inertia_kgm2[:, 1])
+    assert abs(lin.sys.A[row, col] / (aux[propulsion.A_THRUST] * arm / i_stack) - 1.0) > 0.05
+
+
+# ----------------------------------------------------------------- refusals
+
+
+@pytest.mark.parametrize("change,key", [
+    (lambda n: n["boosters"]["booster_left"]["engines"]["booster_left_motor"].update(
+        gimbal_axes=["pitch"], gimbal_limit_deg=5.0,
+        moving_mass={"mass_kg": 500.0, "cg_from_gimbal_m": 1.0, "inertia_about_gimbal_kgm2": 600.0}),
+     "vehicle.boosters.booster_left.engines.booster_left_motor.gimbal_axes"),
+    (lambda n: n["boosters"]["booster_right"].update(attached_to="upper_stage"),
+     "vehicle.boosters.booster_right.attached_to"),
+    (lambda n: n["boosters"]["booster_right"]["engines"]["booster_right_motor"].update(isp_vac_s=270.0),
+     "vehicle.boosters.booster_right.engines.booster_right_motor.thrust"),
+    (lambda n: n["boosters"]["booster_right"].update(inert_mass_kg=5200.0),
+     "vehicle.boosters.booster_right.inert_mass_kg"),
+    (lambda n: n["events"]["booster_jettison"]["when"].update(of="five_segment_motor"),
+     "vehicle.events.booster_jettison.when"),
+])
+def test_a_booster_outside_what_the_plant_flies_is_refused_naming_the_key(change, key):
+    node = copy.deepcopy(example_node(EXAMPLE))
+    change(node)
+    with pytest.raises(ConfigError) as info:
+        _vehicle(node)
+    assert info.value.key == key
+
+
+def test_a_liftoff_table_that_disagrees_with_the_boosters_is_refused():
+    node = copy.deepcopy(example_node(EXAMPLE))
+    node["configurations"]["boosted_stack"] = node["configurations"].pop("stack_with_boosters")
+    node["configurations"]["boosted_stack"]["mass_table"] = "mass_stack.csv"  # the stack alone: no boosters
+    with pytest.raises(ConfigError, match="minus their full masses") as info:
+        _vehicle(node)
+    assert info.value.key == "mass_stack.csv"
+
+
+def test_flex_and_the_command_generator_refuse_boosters_naming_the_key():
+    v = _vehicle()
+    with pytest.raises(ConfigError) as info:
+        plant_data(_cfg("flex=on"), v)
+    assert info.value.key == "flex"
+    with pytest.raises(ConfigError) as info:
+        Reference(_cfg(), v, Program())
+    assert info.value.key == "vehicle.boosters"
