@@ -14,6 +14,7 @@ the rest keeps its own, and the sum is the whole's before).
 from __future__ import annotations
 
 import copy
+import dataclasses
 
 import numpy as np
 import pytest
@@ -27,6 +28,7 @@ from savant_cli.errors import ConfigError
 from savant_cli.io.guidance_file import read_guidance
 from savant_cli.linear.plant import linearize_plant
 from savant_cli.models import boosters, layout, mass as mass_model, propulsion, quaternion as qt
+from savant_cli.montecarlo.targets import apply_samples, resolve
 from savant_cli.paths import hydra_search_dirs, shipped_config_dir
 from savant_cli.sim import engine
 from savant_cli.sim.build import build_model, plant_data
@@ -168,6 +170,72 @@ def test_a_canted_booster_pushes_along_its_cant_at_its_arm():
     xd[:] = 1.0
     assert boosters.loads(x, tb, p, t, pres, False, *cg, xd) == (0.0,) * 7
     assert np.all(xd[_booster_states(model)] == 0.0)
+
+
+def _csv_trace() -> np.ndarray:
+    """The boosters' thrust table as shipped (the plant's own numbers)."""
+    return np.loadtxt(SHIPPED / "ares_i" / "booster_thrust.csv", delimiter=",", comments="#", skiprows=3)
+
+
+def test_a_booster_burn_rate_compresses_its_trace_and_keeps_its_impulse():
+    """Booster burn rates 1.03 and 0.97: each booster's vacuum thrust is ``k F(k t)`` of
+    its table (the table's impulse is the load's, so its scale is 1), its impulse the
+    load's ``g0 Isp M`` in a burn ``1/k`` as long, and the pair's thrust difference
+    turns the vehicle in yaw by the arm of their nozzles (numpy's cross products)."""
+    v = _vehicle()
+    rates = np.array([1.03, 0.97])
+    v = dataclasses.replace(v, boosters=dataclasses.replace(v.boosters, burn_rate=rates))
+    model = _model(v)
+    p, tb = model.p, model.packed_tables
+    x = model.x0.copy()
+    rows = _csv_trace()
+    scale = constants.G0 * 279.0 * LOAD / np.trapezoid(rows[:, 1], rows[:, 0])
+    assert scale == pytest.approx(1.0, rel=1e-9)
+    times = np.linspace(0.0, 100.0, 400001)
+    for i, k in enumerate(rates):
+        thrust = np.array([boosters.flow(x, tb, p, t, i)[0] for t in times])
+        expected = k * scale * np.interp(k * times, rows[:, 0], rows[:, 1], right=0.0)
+        np.testing.assert_allclose(thrust, expected, rtol=1e-13, atol=1e-6)
+        assert np.trapezoid(thrust, times) == pytest.approx(constants.G0 * 279.0 * LOAD, rel=1e-6)
+    t, pres, cg = 50.0, 20000.0, np.array([60.0, 0.0, 0.0])
+    xd = np.zeros_like(x)
+    _, fx, fy, fz, mx, my, mz = boosters.loads(x, tb, p, t, pres, True, *cg, xd)
+    moment = np.zeros(3)
+    for y, k in zip((-2.755, 2.755), rates):
+        f = k * scale * np.interp(k * t, rows[:, 0], rows[:, 1]) - pres * 2.0
+        moment += np.cross((np.array([91.5, y, 0.0]) - cg) * np.array([-1.0, 1.0, -1.0]), [f, 0.0, 0.0])
+    np.testing.assert_allclose([mx, my, mz], moment, rtol=1e-12, atol=1e-6)
+    assert mz > 0.0  # the left booster pushes harder: the nose turns right (positive yaw, body z down)
+
+
+def test_booster_dispersion_targets_scale_one_booster_or_all():
+    cfg = _cfg()
+    v = _vehicle()
+    one = resolve("d.target", "tables.boosters.booster_right.burn_rate", cfg, v, hydra_search_dirs())
+    both = resolve("d.target", "tables.boosters.burn_rate", cfg, v, hydra_search_dirs())
+    applied = apply_samples(cfg, v, [(one, "scale", 1.02), (both, "scale", 0.99)], {}).vehicle
+    np.testing.assert_allclose(applied.boosters.burn_rate, [0.99, 0.99 * 1.02], rtol=1e-15)
+    for text, vehicle in (("tables.boosters.booster_middle.burn_rate", v),
+                          ("tables.boosters.burn_rate", _vehicle(example_node("a-liquid-first-stage")))):
+        with pytest.raises(ConfigError) as info:
+            resolve("dispersions.items.x.target", text, cfg, vehicle, hydra_search_dirs())
+        assert info.value.key == "dispersions.items.x.target"
+
+
+def test_a_first_stage_mass_dispersion_reaches_the_configuration_with_the_boosters():
+    """``tables.first_stage.dry_mass`` and ``tables.stack.cg_x`` change every
+    configuration flown with the first stage, the boosters' included."""
+    cfg = _cfg()
+    v = _vehicle()
+    dry = resolve("d", "tables.first_stage.dry_mass", cfg, v, hydra_search_dirs())
+    cg = resolve("d", "tables.stack.cg_x", cfg, v, hydra_search_dirs())
+    applied = apply_samples(cfg, v, [(dry, "offset", 500.0), (cg, "offset", 0.1)], {}).vehicle
+    for name in ("boosted", "stack"):
+        np.testing.assert_allclose(applied.configurations[name].mass.mass_kg,
+                                   v.configurations[name].mass.mass_kg + 500.0, rtol=1e-15)
+        np.testing.assert_allclose(applied.configurations[name].mass.cg_m[:, 0],
+                                   v.configurations[name].mass.cg_m[:, 0] + 0.1, rtol=1e-15)
+    np.testing.assert_array_equal(applied.configurations["upper"].mass.mass_kg, v.configurations["upper"].mass.mass_kg)
 
 
 # ---------------------------------------------------------------- the events

@@ -3,7 +3,8 @@ fixed nozzles, jettisoned together (docs/vehicles.md, "Strap-on boosters").
 
 Each booster burns its own propellant state in the shape of the boosters' vacuum-thrust
 table exactly as the first-stage motor does (``propulsion.trace_flow``, the one kernel
-of both: ``ṁᵢ = M F_tab(t) / I_tab``, ``F_vac,i = g0 Isp ṁᵢ``) and pushes
+of both: ``ṁᵢ = kᵢ M F_tab(kᵢ t) / I_tab``, ``F_vac,i = g0 Isp ṁᵢ``, with its own
+burn-rate factor ``kᵢ``, 1 unless dispersed: load and impulse conserved) and pushes
 ``max(F_vac,i − p A_exit, 0)`` along its nozzle's fixed cant at its nozzle point
 (``propulsion.thrust_loads``). While the boosters are attached (the liftoff
 configuration, number 0) the vehicle's mass properties are that configuration's table,
@@ -45,6 +46,7 @@ T_MASS_PROP = _TABLES.table("booster_mass_prop", "kg", "(boosters, n) each boost
 T_MASS_DATA = _TABLES.table("booster_mass_data", "kg, m, kg*m^2", "(boosters, n, mass COLUMNS) each booster's own "
                             "mass-properties rows")
 T_MASS_LEN = _TABLES.table("booster_mass_len", "1", "(boosters,) valid rows per booster")
+T_RATE = _TABLES.table("booster_burn_rate", "1", "(boosters,) each booster's burn-rate factor k: k F_tab(k t)")
 
 _AUX = blocks.DIAGNOSTICS.block("boosters")
 A_THRUST = _AUX.scalar("thrust", "N", "the strap-on boosters' delivered thrust, summed",
@@ -68,7 +70,7 @@ def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarra
     if b is None:
         tables.update(booster_time=np.array([0.0, 1.0]), booster_thrust=np.zeros(2), booster_mount=np.zeros((1, N_MOUNT)),
                       booster_mass_prop=np.zeros((1, 1)), booster_mass_data=np.zeros((1, 1, N_COLUMNS)),
-                      booster_mass_len=np.ones(1, dtype=np.int64))
+                      booster_mass_len=np.ones(1, dtype=np.int64), booster_burn_rate=np.ones(1))
         return
     p[P_N_BOOSTERS] = b.count
     p[P_TANK] = inputs.layout.tank(b.tanks[0])
@@ -82,15 +84,17 @@ def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarra
     data, _ = blocks.stack_padded([np.column_stack([m.mass_kg, m.cg_m, m.inertia_kgm2]) for m in b.mass])
     tables.update(booster_time=b.thrust_time_s, booster_thrust=b.thrust_vac_N,
                   booster_mount=np.column_stack([b.nozzle_m, b.cant_rad]),
-                  booster_mass_prop=prop, booster_mass_data=data, booster_mass_len=n)
+                  booster_mass_prop=prop, booster_mass_data=data, booster_mass_len=n,
+                  booster_burn_rate=np.ones(b.count) if b.burn_rate is None else np.asarray(b.burn_rate, float))
 
 
 @njit(cache=True, error_model="numpy", inline="always")
 def flow(x: np.ndarray, tb: np.ndarray, p: np.ndarray, t: float, i: int) -> tuple[float, float]:
     """Vacuum thrust (N) and mass flow (kg/s) of booster ``i`` at mission time ``t`` (s):
-    ``propulsion.trace_flow`` of its table and its own propellant state (the
-    sequencer's sensed thrust)."""
-    return trace_flow(tb, T_TIME, T_THRUST, x[int(p[P_TANK]) + i], p[P_FLOW_PER_THRUST], p[P_ISP], t)
+    ``propulsion.trace_flow`` of its table and its own propellant state at its burn rate
+    ``k``, ``ṁ = k (M / I_tab) F_tab(k t)`` (the sequencer's sensed thrust)."""
+    k = tb[tab_offset(tb, T_RATE) + i]
+    return trace_flow(tb, T_TIME, T_THRUST, x[int(p[P_TANK]) + i], k * p[P_FLOW_PER_THRUST], p[P_ISP], k * t)
 
 
 @njit(cache=True, error_model="numpy")  # a call: the vehicles without boosters never enter it

@@ -24,7 +24,7 @@ from scipy.special import ndtr, ndtri
 
 from savant_cli.config import DispersionApply, DispersionDist, DispersionSetConfig, DispersionSpec, SavantConfig
 from savant_cli.errors import ConfigError
-from savant_cli.montecarlo.targets import TABLE_TARGETS, Target, apply_samples, load_group_option, resolve
+from savant_cli.montecarlo.targets import Target, apply_samples, load_group_option, resolve, table_target
 from savant_cli.vehicle import Vehicle
 
 APPLY = tuple(DispersionApply)
@@ -152,9 +152,9 @@ def _one(key: str, spec: DispersionSpec, target: Target) -> Dispersion:
     if spec.dist not in DISTS:
         raise ConfigError(f"{key}.dist", spec.dist, f"must be one of {', '.join(DISTS)}")
     _check_fields(key, spec)
-    if target.kind == "tables" and spec.apply not in TABLE_TARGETS[target.key][1]:
+    if target.kind == "tables" and spec.apply not in table_target(target.key)[1]:
         raise ConfigError(f"{key}.apply", spec.apply,
-                          f"{target.key} takes apply: {' or '.join(TABLE_TARGETS[target.key][1])}")
+                          f"{target.key} takes apply: {' or '.join(table_target(target.key)[1])}")
     if target.kind == "group" and (spec.apply != "value" or spec.dist not in ("choice", "constant")):
         raise ConfigError(f"{key}.dist", spec.dist, f"the group {target.key} takes apply: value with dist choice or "
                           f"constant of its options ({', '.join(target.choices)})")

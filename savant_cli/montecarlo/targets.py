@@ -54,7 +54,10 @@ TABLE_TARGETS: dict[str, tuple[str, tuple[str, ...], str]] = {
     "tables.upper_stage.lox_load": ("1", ("scale",), "LOX loaded × k (tank fill); the upper-stage mass tables "
                                                      "rescaled to the new total, the stack carries the difference"),
     "tables.upper_stage.lh2_load": ("1", ("scale",), "LH2 loaded × k (tank fill); as lox_load"),
-    "tables.first_stage.dry_mass": ("kg", ("offset",), "mass added at the CG of the stack configuration"),
+    "tables.first_stage.dry_mass": ("kg", ("offset",), "mass added at the CG of the configurations flown with the "
+                                                       "first stage"),
+    "tables.boosters.burn_rate": ("1", ("scale",), "every strap-on booster's burn rate × k (their common propellant "
+                                                   "temperature): as first_stage.burn_rate"),
     "tables.upper_stage.dry_mass": ("kg", ("offset",), "mass added at the CG of every configuration"),
     **{f"tables.{c}.cg_{ax}": ("m", ("offset",), f"CG shift along structure {ax} ({c})")
        for c in ("stack", "upper") for ax in "xyz"},
@@ -62,6 +65,10 @@ TABLE_TARGETS: dict[str, tuple[str, tuple[str, ...], str]] = {
     **{f"tables.aero.{k}": ("1", ("scale",), f"aerodynamic coefficient {k} × k, every configuration")
        for k in AERO_COEFFICIENTS},
 }
+#: One booster's burn rate, ``tables.boosters.<booster>.burn_rate`` (its units, apply, what).
+BOOSTER_BURN_RATE = re.compile(r"^tables\.boosters\.([A-Za-z_][A-Za-z0-9_]*)\.burn_rate$")
+BOOSTER_BURN_RATE_TARGET = ("1", ("scale",), "one strap-on booster's burn rate × k (motor to motor), on top of "
+                                             "tables.boosters.burn_rate: the thrust imbalance between boosters")
 GROUP_TARGETS = ("winds",)
 #: Targets that no longer exist, with why and what replaces them.
 RETIRED_TARGETS = {
@@ -149,14 +156,28 @@ def _units(name: str) -> str:
     return "1"
 
 
+def table_target(name: str) -> tuple[str, tuple[str, ...], str] | None:
+    """The units, allowed ``apply`` and description of the vehicle-table target
+    ``name`` (None: not one)."""
+    return TABLE_TARGETS.get(name) or (BOOSTER_BURN_RATE_TARGET if BOOSTER_BURN_RATE.match(name) else None)
+
+
 def resolve(key: str, text: str, cfg: SavantConfig, vehicle: Vehicle, search_dirs: list[Path]) -> Target:
     """The target named ``text`` (``key``: the spec key named in errors)."""
-    if text in TABLE_TARGETS:
-        return Target(text, "tables", units=TABLE_TARGETS[text][0])
+    if text.startswith("tables.boosters.") and table_target(text) is not None:
+        names = vehicle.boosters.names if vehicle.boosters is not None else ()
+        match = BOOSTER_BURN_RATE.match(text)
+        if not names or (match and match.group(1) not in names):
+            known = ["tables.boosters.burn_rate", *(f"tables.boosters.{n}.burn_rate" for n in names)]
+            raise ConfigError(key, text, ("one of " + ", ".join(known)) if names else
+                              "none: this vehicle has no strap-on boosters")
+    if table_target(text) is not None:
+        return Target(text, "tables", units=table_target(text)[0])
     if text in RETIRED_TARGETS:
         raise ConfigError(key, text, RETIRED_TARGETS[text])
     if text.startswith("tables."):
-        raise ConfigError(key, text, "unknown table target; known: " + ", ".join(TABLE_TARGETS))
+        raise ConfigError(key, text, "unknown table target; known: " + ", ".join(TABLE_TARGETS)
+                          + ", tables.boosters.<booster>.burn_rate")
     if text in GROUP_TARGETS:
         return Target(text, "group", choices=tuple(_group_options(text, search_dirs)))
     path = parse_path(key, text)
@@ -252,6 +273,12 @@ def _replace(obj: Any, path: tuple, value: Any) -> Any:
     return dataclasses.replace(obj, **{head: value if not rest else _replace(getattr(obj, head), rest, value)})
 
 
+def first_stage_configurations(vehicle: Vehicle) -> tuple[str, ...]:
+    """The configurations flown with the first stage attached (``stack``, and before it
+    the configuration with the boosters): a ``stack`` target applies to each."""
+    return tuple(vehicle.configurations)[:vehicle.first_stage_configurations]
+
+
 def _mass(vehicle: Vehicle, configs: tuple[str, ...], change) -> Vehicle:
     confs = dict(vehicle.configurations)
     for c in configs:
@@ -301,8 +328,22 @@ def _upper_load(vehicle: Vehicle, name: str, k_tank: float) -> Vehicle:
         return dataclasses.replace(m, mass_kg=mass, cg_m=np.ascontiguousarray(cg))
 
     vehicle = _mass(vehicle, UPPER_CONFIGS, lambda m: load_scaled(m, k))
-    vehicle = _mass(vehicle, ("stack",), stack)
+    vehicle = _mass(vehicle, first_stage_configurations(vehicle), stack)
     return dataclasses.replace(vehicle, upper_stage=dataclasses.replace(us, lox_kg=lox, lh2_kg=lh2))
+
+
+def _booster_rate(vehicle: Vehicle, name: str, v: float) -> Vehicle:
+    """Every booster's burn rate × ``v`` (``tables.boosters.burn_rate``) or one's."""
+    if not v > 0.0:
+        raise ConfigError(name, v, "burn-rate factor must be positive")
+    b = vehicle.boosters
+    rate = np.ones(b.count) if b.burn_rate is None else np.array(b.burn_rate, float)
+    match = BOOSTER_BURN_RATE.match(name)
+    if match:
+        rate[b.names.index(match.group(1))] *= v
+    else:
+        rate *= v
+    return dataclasses.replace(vehicle, boosters=dataclasses.replace(b, burn_rate=rate))
 
 
 def _apply_table(vehicle: Vehicle, name: str, v: float) -> Vehicle:
@@ -311,6 +352,8 @@ def _apply_table(vehicle: Vehicle, name: str, v: float) -> Vehicle:
     if fs.liquid is not None and name in ("tables.first_stage.burn_rate", "tables.first_stage.propellant_load"):
         raise ConfigError(name, v, "disperses a solid motor's trace or grain; this first stage is liquid (disperse "
                                    "its tanks' loads in the vehicle file)")
+    if name.startswith("tables.boosters."):
+        return _booster_rate(vehicle, name, v)
     if name == "tables.first_stage.burn_rate":
         if not v > 0.0:
             raise ConfigError(name, v, "burn-rate factor must be positive")
@@ -319,15 +362,15 @@ def _apply_table(vehicle: Vehicle, name: str, v: float) -> Vehicle:
     if name == "tables.first_stage.propellant_load":
         if not v > 0.0:
             raise ConfigError(name, v, "propellant-load factor must be positive")
-        vehicle = _mass(vehicle, ("stack",), lambda m: load_scaled(m, v))
+        vehicle = _mass(vehicle, first_stage_configurations(vehicle), lambda m: load_scaled(m, v))
         return dataclasses.replace(vehicle, first_stage=dataclasses.replace(fs, propellant_kg=fs.propellant_kg * v))
     if name in ("tables.upper_stage.lox_load", "tables.upper_stage.lh2_load"):
         return _upper_load(vehicle, name, v)
     if name.endswith("dry_mass"):
-        configs = ("stack",) if ".first_stage." in name else ("stack", *UPPER_CONFIGS)
+        configs = first_stage_configurations(vehicle) + (() if ".first_stage." in name else UPPER_CONFIGS)
         return _mass(vehicle, configs, lambda m: dataclasses.replace(m, mass_kg=m.mass_kg + v))
     config = name.split(".")[1]
-    configs = (config,) if config == "stack" else UPPER_CONFIGS
+    configs = first_stage_configurations(vehicle) if config == "stack" else UPPER_CONFIGS
     if name.endswith("inertia"):
         if not v > 0.0:
             raise ConfigError(name, v, "inertia factor must be positive")

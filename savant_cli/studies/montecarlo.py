@@ -37,7 +37,7 @@ from savant_cli.montecarlo.batch import (
 from savant_cli.montecarlo.inventory import inventory, ranges_text
 from savant_cli.montecarlo.outputs import write_outputs
 from savant_cli.montecarlo.spec import DispersionSet, parse
-from savant_cli.montecarlo.targets import TABLE_TARGETS
+from savant_cli.montecarlo.targets import table_target
 from savant_cli.paths import hydra_search_dirs, resolve_data_path
 from savant_cli.plots.montecarlo_batch import draw_figures
 from savant_cli.processes import default_workers
@@ -96,7 +96,7 @@ def dispersion_table(dset: DispersionSet) -> list[dict[str, Any]]:
     """Name, target, apply, distribution and units of each dispersion (HDF5 attributes)."""
     rows = []
     for d in dset.items:
-        units = TABLE_TARGETS[d.target.key][0] if d.target.kind == "tables" else d.target.units
+        units = table_target(d.target.key)[0] if d.target.kind == "tables" else d.target.units
         row = {"name": d.name, "target": d.target.key, "apply": d.apply, "dist": d.dist,
                "units": "1" if d.apply == "scale" else units, "source": d.source}
         if d.target.kind == "group":

@@ -185,6 +185,9 @@ class Boosters:
     nozzle_m: np.ndarray
     cant_rad: np.ndarray
     mass: tuple[MassTable, ...]
+    #: each booster's burn-rate factor k (None: 1 each): it burns ``k F_tab(k t)``, its
+    #: load and impulse the same in a burn ``1/k`` as long (a Monte Carlo dispersion)
+    burn_rate: np.ndarray | None = None
 
     @property
     def count(self) -> int:
