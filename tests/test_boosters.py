@@ -16,8 +16,10 @@ from __future__ import annotations
 import copy
 import dataclasses
 
+import h5py
 import numpy as np
 import pytest
+from omegaconf import OmegaConf
 
 from conftest import compose_config
 from savant_cli import constants
@@ -38,6 +40,7 @@ from savant_cli.sim.setup import prepare
 from savant_cli.sim.summary import summarize
 from savant_cli.vehicle import load_vehicle
 from savant_cli.vehicle.composition import combine
+from test_end_to_end import run
 from test_vehicle_examples import example_node
 
 SHIPPED = shipped_config_dir() / "vehicle"
@@ -386,6 +389,48 @@ def test_the_linear_plant_in_the_boosted_phase_turns_on_the_composed_inertia():
     stack = v.configurations["stack"].mass  # the same stage without its boosters' inertia
     i_stack = np.interp(core, stack.propellant_kg, stack.inertia_kgm2[:, 1])
     assert abs(lin.sys.A[row, col] / (aux[propulsion.A_THRUST] * arm / i_stack) - 1.0) > 0.05
+
+
+@pytest.mark.slow
+def test_a_monte_carlo_batch_of_the_boosted_vehicle_from_a_users_folder(tmp_path):
+    """The example as a user would fly it: a vehicle file and a dispersion set of their
+    own (``-cd my_configs``, the shipped tables by an absolute ``data_dir``, ares_i's
+    guidance and controller allowed), the shipped items plus each booster's own burn rate; the first
+    stage of four runs. Each
+    run's boosters leave when the left booster's trace, compressed by its burn rate
+    ``k``, falls below 2 % of its peak: the nominal time over ``k`` (within a plant
+    step each side)."""
+    folder = tmp_path / "my_configs"
+    (folder / "vehicle").mkdir(parents=True)
+    (folder / "dispersions").mkdir()
+    shipped = OmegaConf.load(SHIPPED / "ares_i.yaml")
+    node = example_node(EXAMPLE)
+    node.update(name="strap_on", data_dir=str(SHIPPED / "ares_i"))
+    defaults = [d if "/dispersions" not in str(d) else {"override /dispersions": "strap_on"}
+                for d in OmegaConf.to_container(shipped.defaults)]
+    (folder / "vehicle" / "strap_on.yaml").write_text(
+        "# @package _global_\n" + OmegaConf.to_yaml(OmegaConf.create({"defaults": defaults, "vehicle": node})))
+    dispersions = OmegaConf.load(shipped_config_dir() / "dispersions" / "ares_i.yaml")
+    dispersions.name = "strap_on"
+    for b in ("booster_left", "booster_right"):
+        dispersions["items"][f"{b}_rate"] = {"target": f"tables.boosters.{b}.burn_rate", "apply": "scale",
+                                          "sigma": 0.01, "source": "[E] motor to motor, ±3 % at 3σ"}
+    OmegaConf.save(dispersions, folder / "dispersions" / "strap_on.yaml")
+    proc = run(["run", "-cd", str(folder), "vehicle=strap_on", "study=montecarlo", "phase=first_stage",
+                "study.n_runs=4", "study.workers=2", "sim.progress=false", "output.plots=false",
+                "guidance.allow_other_vehicle=true", "controller.allow_other_vehicle=true",  # ares_i's, as the page says
+                f"hydra.run.dir={tmp_path / 'out'}"], cwd=tmp_path)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    with h5py.File(tmp_path / "out" / "savant.h5") as f:
+        mc = f["montecarlo"]
+        assert list(mc["runs/status"].asstr()[()]) == ["complete"] * 4
+        k_left = mc["dispersions/booster_left_rate"][()]
+        t_jet = mc["events/booster_jettison_s"][()]
+        t_sep = mc["events/separation_s"][()]
+        assert k_left[0] == 1.0 and np.all(k_left[1:] != 1.0)
+        assert t_jet[0] == pytest.approx(94.665, abs=1e-9)
+        np.testing.assert_allclose(t_jet, t_jet[0] / k_left, atol=2 * 0.005)
+        assert np.all(t_jet < t_sep)
 
 
 # ----------------------------------------------------------------- refusals
