@@ -32,7 +32,7 @@ from savant_cli.linear.plant import linearize_plant
 from savant_cli.models import boosters, layout, mass as mass_model, propulsion, quaternion as qt
 from savant_cli.montecarlo.targets import apply_samples, resolve
 from savant_cli.paths import hydra_search_dirs, shipped_config_dir
-from savant_cli.sim import engine
+from savant_cli.sim import build, engine
 from savant_cli.sim.build import build_model, plant_data
 from savant_cli.sim.plant import derivative, mass_state
 from savant_cli.sim.run import signals, simulate
@@ -431,6 +431,39 @@ def test_a_monte_carlo_batch_of_the_boosted_vehicle_from_a_users_folder(tmp_path
         assert t_jet[0] == pytest.approx(94.665, abs=1e-9)
         np.testing.assert_allclose(t_jet, t_jet[0] / k_left, atol=2 * 0.005)
         assert np.all(t_jet < t_sep)
+
+
+def _liquid_core_with_boosters(limit_mps2: float):
+    """docs/vehicles.md's liquid first stage with the example's boosters, its throttle
+    holding ``limit_mps2``."""
+    node = example_node("a-liquid-first-stage")
+    ex = example_node(EXAMPLE)
+    node["boosters"] = ex["boosters"]
+    node["configurations"]["stack_with_boosters"] = dict(ex["configurations"]["stack_with_boosters"],
+                                                         mass_tanks=["first_stage_lox", "rp1"])
+    node["events"] = {"booster_jettison": ex["events"]["booster_jettison"], **node["events"]}
+    node["stages"]["first_stage"]["engines"]["booster_engine"]["throttle"]["axial_acceleration_limit_mps2"] = limit_mps2
+    return _vehicle(node)
+
+
+@pytest.mark.slow
+def test_the_nominal_trace_of_a_throttled_core_carries_the_boosters(monkeypatch):
+    """A liquid core holding 22 m/s² with the boosters burning (its throttle comes off
+    full at about 54 s, the boosters leave at 94.7 s): the nominal trace, whose
+    drag-free acceleration is a little high, predicts the separation a little late; a
+    trace without the boosters' thrust and mass predicts it early, by more."""
+    v = _liquid_core_with_boosters(22.0)
+    model = _model(v)
+    result = simulate(model, progress=False)
+    sig = signals(result, model)
+    t_sep = result.events[engine.EV_SEPARATION]
+    setting = sig["throttle"].data
+    assert sig["time"].data[np.argmax(setting < 1.0)] < result.events[engine.EV_BOOSTER_JETTISON]
+    predicted = model.info["predicted_separation_time_s"]
+    assert 0.0 < predicted - t_sep < 2.0
+    monkeypatch.setattr(build, "booster_trace", lambda vehicle: None)
+    without = build.predicted_separation_time(v, model.p, model.packed_tables)
+    assert without < t_sep and t_sep - without > predicted - t_sep
 
 
 # ----------------------------------------------------------------- refusals

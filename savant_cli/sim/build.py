@@ -22,6 +22,7 @@ from savant_cli.models.fcs import FcsTables, fcs_tables
 from savant_cli.models.guidance import SmootherGains, smoother_gains
 from savant_cli.models.sensors import GYRO_MISALIGN, GyroModel, build_gyro, gyro_steady_state, misalignment
 from savant_cli.sim import engine
+from savant_cli.sim.booster_trace import booster_trace
 from savant_cli.sim.engine import EventRule, EventSchedule, Rates
 from savant_cli.sim.plant import PlantTables, mass_state, pack_tables
 from savant_cli.vehicle import Vehicle
@@ -152,9 +153,10 @@ def first_stage_march(vehicle: Vehicle, p: np.ndarray | None = None,
     thrust table. Otherwise the stage is marched at :data:`TRACE_STEP_S` with the
     flight's own throttle law (``models/throttle.py::cycle``, each step a cycle; an
     unthrottled stage at rated thrust), its sensed axial acceleration taken as the
-    vacuum thrust over the stack's mass at the propellant left (no drag, no
-    back-pressure loss: an acceleration a little high, so the predicted throttling comes
-    a little early and the burn a little long), until the cutoff's trigger holds
+    vacuum thrust over the stack's mass at the propellant left, the strap-on boosters'
+    nominal thrust and mass added until their predicted jettison (``sim/booster_trace.py``;
+    no drag, no back-pressure loss: an acceleration a little high, so the predicted
+    throttling comes a little early and the burn a little long), until the cutoff's trigger holds
     (``events.first_stage_cutoff``: its delay after liftoff is landed on; a tank's
     propellant crossing its threshold is placed within the step by linear interpolation;
     an axial acceleration at the step's end) or the usable load is burned. From the
@@ -176,13 +178,24 @@ def first_stage_march(vehicle: Vehicle, p: np.ndarray | None = None,
     mr = fs.liquid.mixture_ratio
     load = usable_load(mr, fs.oxidizer_kg, fs.fuel_kg)
     ox_tank = vehicle.first_stage_tanks[0]
+    boosters = booster_trace(vehicle)
 
-    def watched(burned: float, f: float) -> float:
-        """The cutoff condition's quantity with ``burned`` kg burned at thrust ``f`` (N)."""
+    def accel(t: float, f: float, left_kg: float) -> float:
+        """The drag-free axial acceleration at ``t`` (s) with the stage's vacuum thrust ``f``
+        (N) and ``left_kg`` of its propellant: the boosters' thrust and mass added while
+        they are attached."""
+        mass = float(np.interp(left_kg, stack.propellant_kg, stack.mass_kg))
+        if boosters is None:
+            return f / mass
+        f_b, m_b = boosters.at(t)
+        return (f + f_b) / (mass + m_b)
+
+    def watched(t: float, burned: float, f: float) -> float:
+        """The cutoff condition's quantity at ``t`` with ``burned`` kg burned at thrust ``f`` (N)."""
         if cut.quantity == "propellant_kg":
             ox, fuel = fs.oxidizer_kg - burned * mr / (1.0 + mr), fs.fuel_kg - burned / (1.0 + mr)
             return ox if cut.tank == ox_tank else fuel
-        return f / float(np.interp(fs.propellant_kg - burned, stack.propellant_kg, stack.mass_kg))
+        return accel(t, f, fs.propellant_kg - burned)
 
     def holds(value: float) -> bool:
         return value > cut.threshold if cut.above else value < cut.threshold
@@ -195,15 +208,14 @@ def first_stage_march(vehicle: Vehicle, p: np.ndarray | None = None,
     t, burned, k = 0.0, 0.0, throttle.start(p, tb) if throttled else 1.0
     time_s.append(t)
     thrust.append(k * rated)
-    while not (t >= cut.delay_s and (cut.quantity is None or holds(watched(burned, k * rated)))):
+    while not (t >= cut.delay_s and (cut.quantity is None or holds(watched(t, burned, k * rated)))):
         f = k * rated
         left = load - burned
         h = min(TRACE_STEP_S, cut.delay_s - t) if cut.delay_s > t else TRACE_STEP_S
         burned_step = left
         if f * flow_per_thrust * h < left:  # a cycle: the setting from the acceleration at its end
-            mass = float(np.interp(fs.propellant_kg - burned - f * flow_per_thrust * h, stack.propellant_kg,
-                                   stack.mass_kg))
-            k_next = cycle(k, t + h, f / mass) if h == TRACE_STEP_S else k  # (a step cut short: the setting held)
+            a_end = accel(t + h, f, fs.propellant_kg - burned - f * flow_per_thrust * h)
+            k_next = cycle(k, t + h, a_end) if h == TRACE_STEP_S else k  # (a step cut short: the setting held)
             burned_step = 0.5 * (f + k_next * rated) * flow_per_thrust * h  # the table's trapezoid
         if burned_step >= left:  # the last step, at the setting held: the load burned exactly
             t += left / (f * flow_per_thrust)
@@ -213,7 +225,7 @@ def first_stage_march(vehicle: Vehicle, p: np.ndarray | None = None,
             thrust.append(0.0)
             return np.asarray(time_s), np.asarray(thrust), t
         if cut.quantity == "propellant_kg" and t + h >= cut.delay_s:
-            before, after = watched(burned, f), watched(burned + burned_step, k_next * rated)
+            before, after = watched(t, burned, f), watched(t + h, burned + burned_step, k_next * rated)
             if holds(after) and after != before:  # the crossing, within the step
                 s = min(max((cut.threshold - before) / (after - before), 0.0), 1.0)
                 h, k_next = s * h, k + s * (k_next - k)
