@@ -1,23 +1,28 @@
-"""Cost per plant step of an engine cluster: the shipped ares_i against the same vehicle
-with its first-stage motor split into a ring of six engines (each a sixth of the thrust
-and of the moving mass, twelve gimbal channels through the mixer), flown in turn in one
-process so the machine's drift falls on both alike.
+"""Cost per plant step of an engine cluster and of strap-on boosters: the shipped ares_i
+against the same vehicle with its first-stage motor split into a ring of six engines
+(each a sixth of the thrust and of the moving mass, twelve gimbal channels through the
+mixer), and against docs/vehicles.md's strap-on booster example (two boosters, their
+thrust and in-flight mass composition until their jettison), flown in turn in one
+process so the machine's drift falls on all alike.
 
     python benchmarks/cluster_speed.py [--rounds 7] [--engines 6] [overrides ...]
 
 Each round flies each vehicle once, after one warm-up flight each (numba's cache loaded
 or compiled). Prints the median wall time per plant step of each, the median real-time
-factors, and the ratio of the medians.
+factors, and the ratios of the medians to ares_i's.
 """
 
 from __future__ import annotations
 
 import argparse
 import dataclasses
+import re
 import statistics
+from pathlib import Path
 
 import numpy as np
 from hydra import compose, initialize_config_dir
+from omegaconf import OmegaConf
 
 from savant_cli.config import validate
 from savant_cli.io.guidance_file import read_guidance
@@ -25,10 +30,12 @@ from savant_cli.paths import hydra_search_dirs, shipped_config_dir
 from savant_cli.sim.build import build_model
 from savant_cli.sim.run import simulate
 from savant_cli.sim.setup import prepare
+from savant_cli.vehicle import load_vehicle
 from savant_cli.vehicle.tree import MovingMass
 from savant_cli.vehicle.two_stage import Mount
 
 RING_M = 1.5  # the ring's radius, m
+PAGE = Path(__file__).resolve().parents[1] / "docs" / "vehicles.md"
 
 
 def ring_first_stage(vehicle, n: int):
@@ -40,6 +47,17 @@ def ring_first_stage(vehicle, n: int):
                    for i, t in enumerate(theta))
     moving = MovingMass(fs.engine.mass_kg / n, fs.engine.cg_from_gimbal_m, fs.engine.inertia_about_gimbal_kgm2 / n)
     return dataclasses.replace(vehicle, first_stage=dataclasses.replace(fs, engine=moving, mounts=mounts))
+
+
+def strap_on_boosters():
+    """docs/vehicles.md's ``strap-on-boosters`` example over the shipped ares_i (its events
+    replaced, as the page says)."""
+    block = re.search(r"```yaml\n# example: strap-on-boosters\n(.*?)```", PAGE.read_text(encoding="utf-8"), re.S)
+    folder = shipped_config_dir() / "vehicle"
+    base = OmegaConf.load(folder / "ares_i.yaml").vehicle
+    OmegaConf.update(base, "events", {}, merge=False)
+    node = OmegaConf.to_container(OmegaConf.merge(base, OmegaConf.create(block.group(1))), resolve=True)
+    return load_vehicle(node, folder / "ares_i")
 
 
 def main() -> None:
@@ -54,7 +72,8 @@ def main() -> None:
     guidance = read_guidance(prep.command_file)
     models = {"ares_i": prep.model,
               f"{args.engines}-engine first stage": build_model(cfg, ring_first_stage(prep.vehicle, args.engines),
-                                                               guidance)}
+                                                               guidance),
+              "two strap-on boosters": build_model(cfg, strap_on_boosters(), guidance)}
     per_step = {name: [] for name in models}
     rtf = {name: [] for name in models}
     for model in models.values():
@@ -68,8 +87,9 @@ def main() -> None:
     for name in models:
         print(f"{name:24s} {1e6 * statistics.median(per_step[name]):7.2f} µs per plant step, "
               f"real-time factor {statistics.median(rtf[name]):7.0f}")
-    single, cluster = (statistics.median(v) for v in per_step.values())
-    print(f"cost per step, cluster / single: {cluster / single:.3f} (medians of {args.rounds} rounds)")
+    single, *others = (statistics.median(v) for v in per_step.values())
+    for name, cost in zip(list(models)[1:], others):
+        print(f"cost per step, {name} / ares_i: {cost / single:.3f} (medians of {args.rounds} rounds)")
 
 
 if __name__ == "__main__":

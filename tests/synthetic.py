@@ -48,9 +48,9 @@ def tables(mass: float = 1000.0, inertia=(100.0, 400.0, 400.0, 0.0, 0.0, 0.0),
         wind_alt=ax, wind_north=np.zeros(2), wind_east=np.zeros(2),
         flex_freq=np.zeros((4, 1)), flex_zeta=np.zeros(1), flex_shape=np.zeros((4, 1, layout.N_POINTS, 6)),
         slosh_level=np.tile(ax, (2, 1)), slosh_data=np.zeros((2, 2, 4)), slosh_len=np.array([2, 2]),
-        mounts=MOUNTS, booster_time=ax, booster_thrust=np.zeros(2), booster_mount=np.zeros((1, 5)),
+        mounts=MOUNTS, booster_time=ax, booster_thrust=np.zeros(2), booster_mount=np.zeros((1, 6)),
         booster_mass_prop=np.zeros((1, 1)), booster_mass_data=np.zeros((1, 1, 10)), booster_mass_len=np.ones(1, int),
-        booster_burn_rate=np.ones(1),
+        booster_burn_rate=np.ones(1), booster_full=np.zeros((1, 10)),
     )
 
 

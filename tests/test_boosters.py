@@ -454,7 +454,7 @@ def test_a_monte_carlo_batch_of_the_boosted_vehicle_from_a_users_folder(tmp_path
     OmegaConf.save(dispersions, folder / "dispersions" / "strap_on.yaml")
     proc = run(["run", "-cd", str(folder), "vehicle=strap_on", "study=montecarlo", "phase=first_stage",
                 "study.n_runs=4", "study.workers=2", "sim.progress=false", "output.plots=false",
-                "guidance.allow_other_vehicle=true", "controller.allow_other_vehicle=true",  # ares_i's, as the page says
+                "guidance.allow_other_vehicle=true", "controller.allow_other_vehicle=true",  # ares_i's (the page)
                 f"hydra.run.dir={tmp_path / 'out'}"], cwd=tmp_path)
     assert proc.returncode == 0, proc.stdout + proc.stderr
     with h5py.File(tmp_path / "out" / "savant.h5") as f:

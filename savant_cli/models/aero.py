@@ -49,7 +49,8 @@ T_MACH = _TABLES.table("aero_mach", "1", "(nM,) Mach breakpoints, common to the 
 T_ALPHA = _TABLES.table("aero_alpha", "rad", "(nA,) angle-of-attack breakpoints")
 T_BETA = _TABLES.table("aero_beta", "rad", "(nB,) sideslip breakpoints")
 T_COEF = _TABLES.table("aero_coef", "1", "(configurations, 6 COEFFICIENTS, nM, nA, nB) coefficients")
-T_REF = _TABLES.table("aero_ref", "m^2, m", "(configurations, REFERENCE) reference area, lengths and MRP per configuration")
+T_REF = _TABLES.table("aero_ref", "m^2, m", "(configurations, REFERENCE) reference area, lengths and MRP per "
+                      "configuration")
 T_BASE_TIME = _TABLES.table("base_time", "s", "(configurations, nb) base-force time axis per configuration (padded)")
 T_BASE_FORCE = _TABLES.table("base_force", "N", "(configurations, nb) base force along body X")
 T_BASE_LEN = _TABLES.table("base_len", "1", "(3,) valid rows of each base-force table")

@@ -5,11 +5,12 @@ Each booster burns its own propellant state in the shape of the boosters' vacuum
 table exactly as the first-stage motor does (``propulsion.trace_flow``, the one kernel
 of both: ``ṁᵢ = kᵢ M F_tab(kᵢ t) / I_tab``, ``F_vac,i = g0 Isp ṁᵢ``, with its own
 burn-rate factor ``kᵢ``, 1 unless dispersed: load and impulse conserved) and pushes
-``max(F_vac,i − p A_exit, 0)`` along its nozzle's fixed cant at its nozzle point
-(``propulsion.thrust_loads``). While the boosters are attached (the liftoff
-configuration, number 0) the vehicle's mass properties are that configuration's table,
-which holds them at their full load, with each booster's full-load row exchanged for
-its own table's row at its own propellant (:func:`exchange`).
+``max(F_vac,i − p A_exit, 0)`` along its nozzle's fixed cant at its nozzle point (the
+thrust line of ``propulsion.thrust_loads``, its direction computed once). While the
+boosters are attached (the liftoff configuration, number 0) the vehicle's mass
+properties are that configuration's table, which holds them at their full load, with
+each booster's full-load row exchanged for its own table's row at its own propellant
+(:func:`exchange`).
 
 Its discrete fields are declared after every other model's (``models/__init__.py``):
 older staging-state files stay valid.
@@ -23,7 +24,7 @@ from numba import njit
 from savant_cli.models import blocks
 from savant_cli.models.interp import tab_offset
 from savant_cli.models.mass import N_COLUMNS, stacked_row
-from savant_cli.models.propulsion import P_ON, table_impulse, thrust_loads, trace_flow
+from savant_cli.models.propulsion import P_ON, table_impulse, trace_flow
 
 _PARAMS = blocks.PARAMETERS.block("boosters")
 P_N_BOOSTERS = _PARAMS.scalar("count", "1", "strap-on boosters (0: none)")
@@ -31,22 +32,23 @@ P_TANK = _PARAMS.scalar("tank_state", "1", "index in x of the first booster's pr
 P_ISP = _PARAMS.scalar("isp_vac", "s", "each booster's vacuum specific impulse")
 P_EXIT_AREA = _PARAMS.scalar("exit_area", "m^2", "each booster's nozzle exit area")
 P_FLOW_PER_THRUST = _PARAMS.scalar("flow_per_table_thrust", "kg/(N*s)", "each booster's load / table impulse")
-P_PROP_FULL = _PARAMS.scalar("propellant_full", "kg", "each booster's propellant at liftoff")
 
 _TABLES = blocks.TABLES.block("boosters")
 T_TIME = _TABLES.table("booster_time", "s", "each booster's thrust table, mission time")
 T_THRUST = _TABLES.table("booster_thrust", "N", "each booster's vacuum thrust at T_TIME")
 MOUNT = blocks.Record("booster nozzle", ("x", "m", "structure x"), ("y", "m", "structure y"),
-                      ("z", "m", "structure z"), ("cant_pitch", "rad", "fixed cant, pitch"),
-                      ("cant_yaw", "rad", "fixed cant, yaw"))
+                      ("z", "m", "structure z"), ("thrust_x", "1", "unit thrust direction at its fixed cant, body x"),
+                      ("thrust_y", "1", "body y"), ("thrust_z", "1", "body z"))
 N_MOUNT = MOUNT.size
-T_MOUNT = _TABLES.table("booster_mount", "m, rad", "(boosters, MOUNT) each booster's nozzle and cant")
+T_MOUNT = _TABLES.table("booster_mount", "m, 1", "(boosters, MOUNT) each booster's nozzle and thrust direction")
 T_MASS_PROP = _TABLES.table("booster_mass_prop", "kg", "(boosters, n) each booster's own propellant, ascending "
                             "(padded)")
 T_MASS_DATA = _TABLES.table("booster_mass_data", "kg, m, kg*m^2", "(boosters, n, mass COLUMNS) each booster's own "
                             "mass-properties rows")
 T_MASS_LEN = _TABLES.table("booster_mass_len", "1", "(boosters,) valid rows per booster")
 T_RATE = _TABLES.table("booster_burn_rate", "1", "(boosters,) each booster's burn-rate factor k: k F_tab(k t)")
+T_FULL = _TABLES.table("booster_full", "kg, m, kg*m^2", "(boosters, mass COLUMNS) each booster's own row at its full "
+                       "load (inertia as tensor elements)")
 
 _AUX = blocks.DIAGNOSTICS.block("boosters")
 A_THRUST = _AUX.scalar("thrust", "N", "the strap-on boosters' delivered thrust, summed",
@@ -68,9 +70,11 @@ def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarra
     """The boosters' parameters and tables (placeholders, never read, without boosters)."""
     b = inputs.vehicle.boosters
     if b is None:
-        tables.update(booster_time=np.array([0.0, 1.0]), booster_thrust=np.zeros(2), booster_mount=np.zeros((1, N_MOUNT)),
+        tables.update(booster_time=np.array([0.0, 1.0]), booster_thrust=np.zeros(2),
+                      booster_mount=np.zeros((1, N_MOUNT)),
                       booster_mass_prop=np.zeros((1, 1)), booster_mass_data=np.zeros((1, 1, N_COLUMNS)),
-                      booster_mass_len=np.ones(1, dtype=np.int64), booster_burn_rate=np.ones(1))
+                      booster_mass_len=np.ones(1, dtype=np.int64), booster_burn_rate=np.ones(1),
+                      booster_full=np.zeros((1, N_COLUMNS)))
         return
     p[P_N_BOOSTERS] = b.count
     p[P_TANK] = inputs.layout.tank(b.tanks[0])
@@ -79,13 +83,22 @@ def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarra
     p[P_ISP] = b.isp_vac_s
     p[P_EXIT_AREA] = b.nozzle_exit_area_m2
     p[P_FLOW_PER_THRUST] = b.propellant_kg / table_impulse(b.thrust_time_s, b.thrust_vac_N)
-    p[P_PROP_FULL] = b.propellant_kg
     prop, n = blocks.stack_padded([m.propellant_kg for m in b.mass])
     data, _ = blocks.stack_padded([np.column_stack([m.mass_kg, m.cg_m, m.inertia_kgm2]) for m in b.mass])
     tables.update(booster_time=b.thrust_time_s, booster_thrust=b.thrust_vac_N,
-                  booster_mount=np.column_stack([b.nozzle_m, b.cant_rad]),
+                  booster_mount=np.column_stack([b.nozzle_m, thrust_direction(b.cant_rad)]),
                   booster_mass_prop=prop, booster_mass_data=data, booster_mass_len=n,
-                  booster_burn_rate=np.ones(b.count) if b.burn_rate is None else np.asarray(b.burn_rate, float))
+                  booster_burn_rate=np.ones(b.count) if b.burn_rate is None else np.asarray(b.burn_rate, float),
+                  booster_full=np.array([[m.mass_kg[-1], *m.cg_m[-1], *m.inertia_kgm2[-1, :3], *-m.inertia_kgm2[-1, 3:]]
+                                         for m in b.mass]))
+
+
+def thrust_direction(cant_rad: np.ndarray) -> np.ndarray:
+    """Unit thrust directions (body axes, ``(n, 3)``) of nozzles at fixed cants ``(n, 2)``
+    (pitch, yaw, rad): ``(cos δp cos δy, −sin δy, sin δp cos δy)``, the thrust line of
+    ``propulsion.thrust_loads`` (computed once: the cants never move)."""
+    pitch, yaw = np.asarray(cant_rad, float).T
+    return np.column_stack([np.cos(pitch) * np.cos(yaw), -np.sin(yaw), np.sin(pitch) * np.cos(yaw)])
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -105,8 +118,9 @@ def loads(x: np.ndarray, tb: np.ndarray, p: np.ndarray, t: float, pres: float, a
     once ``attached`` is False: jettisoned, its state emptied).
 
     Each booster's delivered thrust ``max(F_vac − p A_exit, 0)`` (``pres``: ambient
-    pressure, Pa) acts at its nozzle along its fixed cant (``propulsion.thrust_loads``,
-    the arm from the CG ``cgx, cgy, cgz``, structure frame, m)."""
+    pressure, Pa) acts at its nozzle along its fixed cant's direction
+    (:func:`thrust_direction`), its moment ``r × F`` with the arm ``r`` from the CG
+    ``cgx, cgy, cgz`` (structure frame, m) in body axes."""
     tank = int(p[P_TANK])
     thrust = fx = fy = fz = mx = my = mz = 0.0
     for i in range(int(p[P_N_BOOSTERS])):
@@ -117,8 +131,9 @@ def loads(x: np.ndarray, tb: np.ndarray, p: np.ndarray, t: float, pres: float, a
         xd[tank + i] = -mdot
         f = max(f_vac - pres * p[P_EXIT_AREA], 0.0) if mdot > 0.0 and p[P_ON] != 0.0 else 0.0
         m = tab_offset(tb, T_MOUNT) + i * N_MOUNT
-        ax, ay, az, bx, by, bz = thrust_loads(f, tb[m + 3], tb[m + 4], -(tb[m] - cgx), tb[m + 1] - cgy,
-                                              -(tb[m + 2] - cgz))
+        rx, ry, rz = -(tb[m] - cgx), tb[m + 1] - cgy, -(tb[m + 2] - cgz)
+        ax, ay, az = f * tb[m + 3], f * tb[m + 4], f * tb[m + 5]
+        bx, by, bz = ry * az - rz * ay, rz * ax - rx * az, rx * ay - ry * ax
         thrust += f
         fx += ax
         fy += ay
@@ -138,18 +153,24 @@ def exchange(x: np.ndarray, p: np.ndarray, tb: np.ndarray, m: float, cgx: float,
     (its state in ``x``), by the parallel-axis theorem about the table's CG ``C₀``::
 
         M = m + Σ (mₙ − m_f),    e = Σ (mₙ dₙ − m_f d_f) / M,    d = S (c − C₀)
-        J = J₀ + Σ [Jₙ + mₙ (|dₙ|² E − dₙ dₙᵀ) − J_f − m_f (|d_f|² E − d_f d_fᵀ)] − M (|e|² E − e eᵀ)
+        J = J₀ + Σ [Jₙ + mₙ (|dₙ|² E − dₙ dₙᵀ) − J_f − m_f (|d_f|² E − d_f d_fᵀ)]
+              − M (|e|² E − e eᵀ)
 
     (``S = diag(−1, 1, −1)``: structure to body axes; ``J`` tensors about the CGs, body
     axes). The new CG is ``C₀ + S e``. Returns the same tuple for the new whole."""
     tank = int(p[P_TANK])
-    full = p[P_PROP_FULL]
+    full = tab_offset(tb, T_FULL)
     sx = sy = sz = 0.0  # first moment about C₀, body axes
     mass = m
     for i in range(int(p[P_N_BOOSTERS])):
-        for sign, prop in ((-1.0, full), (1.0, x[tank + i])):
-            mb, bx, by, bz, jxx, jyy, jzz, jxy, jxz, jyz = stacked_row(tb, T_MASS_PROP, T_MASS_DATA, T_MASS_LEN, i,
-                                                                       prop)
+        for sign in (-1.0, 1.0):
+            if sign < 0.0:  # the full-load row, read once at the build
+                r = full + i * N_COLUMNS
+                mb, bx, by, bz, jxx, jyy, jzz, jxy, jxz, jyz = (tb[r], tb[r + 1], tb[r + 2], tb[r + 3], tb[r + 4],
+                                                                tb[r + 5], tb[r + 6], tb[r + 7], tb[r + 8], tb[r + 9])
+            else:
+                mb, bx, by, bz, jxx, jyy, jzz, jxy, jxz, jyz = stacked_row(tb, T_MASS_PROP, T_MASS_DATA, T_MASS_LEN,
+                                                                           i, x[tank + i])
             dx, dy, dz = -(bx - cgx), by - cgy, -(bz - cgz)
             w = sign * mb
             mass += w

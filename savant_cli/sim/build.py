@@ -62,9 +62,9 @@ def model_inputs(cfg: SavantConfig, vehicle: Vehicle, slosh: SloshData | None = 
     if cfg.slosh.enabled and slosh is None:
         slosh = load_slosh(vehicle, cfg.slosh)
     if cfg.flex.enabled and vehicle.boosters is not None:
-        raise ConfigError("flex", "on", f"off for a vehicle with strap-on boosters ({', '.join(vehicle.boosters.names)})"
-                                        f": the flexible body does not carry the boosters' loads yet (docs/vehicles.md,"
-                                        f" \"What flies today\")")
+        names = ", ".join(vehicle.boosters.names)
+        raise ConfigError("flex", "on", f"off for a vehicle with strap-on boosters ({names}): the flexible body does "
+                                        f"not carry the boosters' loads yet (docs/vehicles.md, \"What flies today\")")
     if cfg.flex.enabled and flex is None:
         flex = load_flex(vehicle, cfg.flex, cfg.sim.plant_rate_hz)
     return blocks.ModelInputs(cfg=cfg, vehicle=vehicle, layout=state_layout(cfg, vehicle),

@@ -375,7 +375,8 @@ def drop_boosters(x: np.ndarray, u: np.ndarray, d: np.ndarray, p: np.ndarray, tb
 @njit(cache=True, error_model="numpy")
 def separate(x: np.ndarray, u: np.ndarray, d: np.ndarray, p: np.ndarray, tb: np.ndarray) -> None:
     """First-stage separation's actions on the state: the next configuration
-    (:func:`next_configuration`, the upper stage's), its engine not yet lit, its nozzle (and its command, not the first stage's last one) at
+    (:func:`next_configuration`, the upper stage's), its engine not yet lit, its nozzle
+    (and its command, not the first stage's last one) at
     null, the new modal set at rest, the reference point at the new configuration's CG
     (position and velocity of every structural point unchanged)."""
     next_configuration(x, u, p, tb)
