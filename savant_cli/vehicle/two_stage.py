@@ -164,7 +164,8 @@ class Boosters:
     does (docs/models.md, "Propulsion"), its delivered thrust ``F_vac − p A_exit`` along
     its nozzle's cant (pitch, yaw, rad) at its nozzle (structure frame, m). ``mass``: each
     booster's own mass properties against its own propellant, exchanged in flight for its
-    full-load row of the liftoff configuration's table (``models/mass.py``).
+    full-load row of the liftoff configuration's table (``models/boosters.py``);
+    ``burn_rate``: each booster's burn-rate factor (None: 1 each).
 
     Attributes
     ----------
