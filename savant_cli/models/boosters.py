@@ -23,8 +23,8 @@ from numba import njit
 
 from savant_cli.models import blocks
 from savant_cli.models.interp import tab_offset
-from savant_cli.models.mass import N_COLUMNS, stacked_row
-from savant_cli.models.propulsion import P_ON, table_impulse, trace_flow
+from savant_cli.models.mass import N_COLUMNS, stacked_row, stacked_tables
+from savant_cli.models.propulsion import P_ON, table_impulse, thrust_loads, trace_flow
 
 _PARAMS = blocks.PARAMETERS.block("boosters")
 P_N_BOOSTERS = _PARAMS.scalar("count", "1", "strap-on boosters (0: none)")
@@ -83,8 +83,7 @@ def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarra
     p[P_ISP] = b.isp_vac_s
     p[P_EXIT_AREA] = b.nozzle_exit_area_m2
     p[P_FLOW_PER_THRUST] = b.propellant_kg / table_impulse(b.thrust_time_s, b.thrust_vac_N)
-    prop, n = blocks.stack_padded([m.propellant_kg for m in b.mass])
-    data, _ = blocks.stack_padded([np.column_stack([m.mass_kg, m.cg_m, m.inertia_kgm2]) for m in b.mass])
+    prop, data, n = stacked_tables(list(b.mass))
     tables.update(booster_time=b.thrust_time_s, booster_thrust=b.thrust_vac_N,
                   booster_mount=np.column_stack([b.nozzle_m, thrust_direction(b.cant_rad)]),
                   booster_mass_prop=prop, booster_mass_data=data, booster_mass_len=n,
@@ -95,10 +94,9 @@ def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarra
 
 def thrust_direction(cant_rad: np.ndarray) -> np.ndarray:
     """Unit thrust directions (body axes, ``(n, 3)``) of nozzles at fixed cants ``(n, 2)``
-    (pitch, yaw, rad): ``(cos δp cos δy, −sin δy, sin δp cos δy)``, the thrust line of
-    ``propulsion.thrust_loads`` (computed once: the cants never move)."""
-    pitch, yaw = np.asarray(cant_rad, float).T
-    return np.column_stack([np.cos(pitch) * np.cos(yaw), -np.sin(yaw), np.sin(pitch) * np.cos(yaw)])
+    (pitch, yaw, rad): the force of ``propulsion.thrust_loads`` for a unit thrust
+    (computed once: the cants never move)."""
+    return np.array([thrust_loads(1.0, float(pitch), float(yaw), 0.0, 0.0, 0.0)[:3] for pitch, yaw in cant_rad])
 
 
 @njit(cache=True, error_model="numpy", inline="always")

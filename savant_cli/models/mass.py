@@ -57,10 +57,17 @@ def write_diagnostics(aux: np.ndarray, mass: float, propellant: float, cgx: floa
 def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarray]) -> None:
     """The vehicle's mass-properties tables, one per configuration in the order the
     sequence reaches them, stacked."""
-    masses = [c.mass for c in inputs.vehicle.configurations.values()]
+    prop, data, n = stacked_tables([c.mass for c in inputs.vehicle.configurations.values()])
+    tables.update(mass_prop=prop, mass_data=data, mass_len=n)
+
+
+def stacked_tables(masses: list) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Mass tables (:class:`~savant_cli.vehicle.tables.MassTable`) stacked as
+    :func:`stacked_row` reads them: propellant axes ``(k, n)`` (kg), rows ``(k, n,
+    COLUMNS)`` and valid lengths ``(k,)`` (padded by repeating each last row)."""
     prop, n = blocks.stack_padded([m.propellant_kg for m in masses])
     data, _ = blocks.stack_padded([np.column_stack([m.mass_kg, m.cg_m, m.inertia_kgm2]) for m in masses])
-    tables.update(mass_prop=prop, mass_data=data, mass_len=n)
+    return prop, data, n
 
 
 @njit(cache=True, error_model="numpy", inline="always")

@@ -115,9 +115,8 @@ def _quiet_pieces(t: np.ndarray, result: SimResult, quiet_s: float) -> list[tupl
     """(stage, sample indices) of each contiguous stretch of a stage that lies outside
     the ``quiet_s`` after liftoff, the boosters' jettison, a liquid first stage's cutoff,
     separation, upper-stage ignition and LES jettison."""
-    starts = [float(t[0]), result.events[engine.EV_BOOSTER_JETTISON], result.events[engine.EV_FS_CUTOFF],
-              result.events[engine.EV_SEPARATION],
-              result.events[engine.EV_IGNITION], result.events[engine.EV_LES]]
+    starts = [float(t[0]), *(result.events[k] for k in (engine.EV_BOOSTER_JETTISON, engine.EV_FS_CUTOFF,
+                                                         engine.EV_SEPARATION, engine.EV_IGNITION, engine.EV_LES))]
     quiet = np.ones(t.size, bool)
     for te in starts:
         if np.isfinite(te):
