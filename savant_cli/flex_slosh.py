@@ -24,9 +24,10 @@ from savant_cli.vehicle import Vehicle, read_table
 
 #: The plant's points that use mode shapes, by their key under the vehicle YAML's
 #: ``flex.nodes`` (a point may average several nodes), in the order of the shape tables'
-#: point axis (``models/flex.py``'s ``PT_*`` indices).
+#: point axis (``models/flex.py``'s ``PT_*`` indices); each sloshing tank's point
+#: (``slosh_<tank>``) follows them, in the order of the slosh tanks (:func:`point_keys`).
 POINT_KEYS = ("imu", "rate_gyro_upper_stage", "rate_gyro_first_stage", "rcs", "gimbal_first_stage",
-              "gimbal_upper_stage", "slosh_lox", "slosh_lh2")
+              "gimbal_upper_stage")
 #: The points on the first stage: absent from the upper-stage modal sets (zero shapes).
 FIRST_STAGE_KEYS = ("rate_gyro_first_stage", "gimbal_first_stage")
 #: The modal data sets (file names in the flex folder), in the order of the tables.
@@ -43,9 +44,23 @@ class FlexTables:
     sets: tuple[ModalSet, ...]
 
 
+def point_keys(vehicle: Vehicle) -> tuple[str, ...]:
+    """The keys of every flex point of ``vehicle``: :data:`POINT_KEYS`, then
+    ``slosh_<tank>`` for each tank with a slosh section, in the order of its slosh tanks."""
+    return POINT_KEYS + tuple(f"slosh_{t}" for t in (vehicle.slosh_spec or {}))
+
+
+def first_stage_keys(vehicle: Vehicle) -> tuple[str, ...]:
+    """The flex points on the first stage (zero shapes in the upper-stage sets):
+    :data:`FIRST_STAGE_KEYS` and the first stage's sloshing tanks'."""
+    return FIRST_STAGE_KEYS + tuple(f"slosh_{t}" for t in (vehicle.slosh_spec or {})
+                                    if t in vehicle.first_stage_tanks)
+
+
 @dataclass(frozen=True)
 class SloshTank:
-    """One tank: table vs liquid level and geometry (SI)."""
+    """One tank: table vs liquid level and geometry (SI), its reference acceleration and
+    the configurations its stage is aboard in (the first ``configurations``)."""
 
     name: str
     level_m: np.ndarray
@@ -56,12 +71,15 @@ class SloshTank:
     radius_m: float
     bottom_station_m: float
     density_kgm3: float
+    reference_accel_mps2: float
+    configurations: int
 
 
 @dataclass(frozen=True)
 class SloshData:
-    reference_accel_mps2: float
-    tanks: tuple[SloshTank, SloshTank]  # LOX, LH2
+    """Every sloshing tank, in the order of the vehicle's propellant states."""
+
+    tanks: tuple[SloshTank, ...]
 
 
 def _spec(vehicle: Vehicle, section: str) -> dict:
@@ -96,7 +114,8 @@ def load_flex(vehicle: Vehicle, fcfg: FlexOnConfig, plant_rate_hz: float) -> Fle
     if not folder.is_dir():
         raise ConfigError(f"{key}.directory", str(folder), "modal data folder not found")
     nodes = spec.get("nodes") or {}
-    for pk in POINT_KEYS:
+    keys, first_keys = point_keys(vehicle), first_stage_keys(vehicle)
+    for pk in keys:
         ids = nodes.get(pk)
         if not isinstance(ids, (list, tuple)) or not ids or not all(isinstance(i, int) for i in ids):
             raise ConfigError(f"{key}.nodes.{pk}", ids, "must be a non-empty list of integer node ids")
@@ -114,11 +133,11 @@ def load_flex(vehicle: Vehicle, fcfg: FlexOnConfig, plant_rate_hz: float) -> Fle
         raise ConfigError("flex.n_modes", n, f"the highest retained mode ({in_use.max() / 2 / np.pi:.1f} Hz) must stay "
                           f"below sim.plant_rate_hz / 8 = {plant_rate_hz / 8:g} Hz for the RK4 step; keep fewer "
                           "modes or raise sim.plant_rate_hz")
-    shapes = np.zeros((len(sets), n, len(POINT_KEYS), 6))
+    shapes = np.zeros((len(sets), n, len(keys), 6))
     for s, ms in enumerate(sets):
         upper = s >= 2
-        for pt, pk in enumerate(POINT_KEYS):
-            if upper and pk in FIRST_STAGE_KEYS:
+        for pt, pk in enumerate(keys):
+            if upper and pk in first_keys:
                 continue  # the first stage is gone in the upper-stage sets
             shapes[s, :, pt, :] = ms.at_nodes(nodes[pk], f"{key}.nodes.{pk}")[:n]
     shapes *= fcfg.shape_scale
@@ -126,11 +145,11 @@ def load_flex(vehicle: Vehicle, fcfg: FlexOnConfig, plant_rate_hz: float) -> Fle
     return FlexTables(frequency_rad_s=freq, damping=zeta, shapes=shapes, sets=sets)
 
 
-def _tank(name: str, key: str, node: dict, vdir: Path, load_kg: float) -> SloshTank:
-    for k in ("table", "radius_m", "bottom_station_m", "density_kgm3"):
+def _tank(name: str, key: str, node: dict, vdir: Path, load_kg: float, configurations: int) -> SloshTank:
+    for k in ("table", "radius_m", "bottom_station_m", "density_kgm3", "reference_accel_mps2"):
         if k not in node:
             raise ConfigError(f"{key}.{k}", None, "missing")
-    for k in ("radius_m", "density_kgm3"):
+    for k in ("radius_m", "density_kgm3", "reference_accel_mps2"):
         if not float(node[k]) > 0.0:
             raise ConfigError(f"{key}.{k}", node[k], "must be positive")
     path = vdir / str(node["table"])
@@ -154,22 +173,18 @@ def _tank(name: str, key: str, node: dict, vdir: Path, load_kg: float) -> SloshT
         raise ConfigError(column["slosh_mass"], float(cols["slosh_mass"].max()), "exceeds the liquid mass at its level")
     return SloshTank(name=name, level_m=level, frequency_rad_s=2.0 * np.pi * cols["frequency"],
                      damping=cols["damping"], mass_kg=cols["slosh_mass"], height_m=cols["slosh_height"],
-                     radius_m=radius, bottom_station_m=float(node["bottom_station_m"]), density_kgm3=density)
+                     radius_m=radius, bottom_station_m=float(node["bottom_station_m"]), density_kgm3=density,
+                     reference_accel_mps2=float(node["reference_accel_mps2"]), configurations=configurations)
 
 
 def load_slosh(vehicle: Vehicle, scfg: SloshOnConfig) -> SloshData:
-    """Read the LOX and LH2 slosh tables and check they cover each tank."""
+    """Read every sloshing tank's table and check it covers the tank."""
     spec = _spec(vehicle, "slosh")
-    for k in spec:
-        if k not in ("reference_accel_mps2", "lox", "lh2"):
-            raise ConfigError(f"vehicle.slosh.{k}", spec[k], "unknown key; allowed: reference_accel_mps2, lox, lh2")
-    a_ref = float(spec.get("reference_accel_mps2", 0.0))
-    if not a_ref > 0.0:
-        raise ConfigError(vehicle.keys.get("slosh.lox", "vehicle.slosh") + ".reference_accel_mps2", a_ref,
-                          "must be positive")
     vdir = Path(vehicle.data_dir or ".")
-    us = vehicle.upper_stage
-    keys = {name: vehicle.keys.get(f"slosh.{name}", f"vehicle.slosh.{name}") for name in ("lox", "lh2")}
-    tanks = (_tank("lox", keys["lox"], spec.get("lox") or {}, vdir, us.lox_kg),
-             _tank("lh2", keys["lh2"], spec.get("lh2") or {}, vdir, us.lh2_kg))
-    return SloshData(reference_accel_mps2=a_ref, tanks=tanks)
+    n_configs = len(vehicle.configurations)
+    tanks = []
+    for name, node in spec.items():
+        aboard = vehicle.first_stage_configurations if name in vehicle.first_stage_tanks else n_configs
+        tanks.append(_tank(name, vehicle.keys.get(f"slosh.{name}", f"vehicle.slosh.{name}"), node, vdir,
+                           vehicle.tank_load_kg(name), aboard))
+    return SloshData(tanks=tuple(tanks))

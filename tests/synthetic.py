@@ -16,10 +16,11 @@ from savant_cli.sim.plant import PlantTables
 TANKS = ("first_stage_propellant", "lox", "lh2")
 
 
-def state_layout(**optional) -> layout.StateLayout:
+def state_layout(slosh: bool = False, **optional) -> layout.StateLayout:
     """The synthetic vehicle's state layout with the optional blocks ``optional``
-    (:class:`~savant_cli.models.layout.StateLayout`'s ``simplex``, ``slosh``, ``n_modes``)."""
-    return layout.StateLayout(tanks=TANKS, **optional)
+    (:class:`~savant_cli.models.layout.StateLayout`'s ``simplex``, ``n_modes``); ``slosh``:
+    the LOX and LH2 tanks slosh."""
+    return layout.StateLayout(tanks=TANKS, slosh_tanks=("lox", "lh2") if slosh else (), **optional)
 
 
 #: The layout without optional blocks, and the indices tests address in it.
@@ -47,7 +48,7 @@ def tables(mass: float = 1000.0, inertia=(100.0, 400.0, 400.0, 0.0, 0.0, 0.0),
         rcs_alt=ax, rcs_thrust=np.zeros(2), atm_alt=atm_alt, atm_lnp=atm_lnp, atm_lnrho=atm_lnrho,
         wind_alt=ax, wind_north=np.zeros(2), wind_east=np.zeros(2),
         flex_freq=np.zeros((4, 1)), flex_zeta=np.zeros(1), flex_shape=np.zeros((4, 1, layout.N_POINTS, 6)),
-        slosh_level=np.tile(ax, (2, 1)), slosh_data=np.zeros((2, 2, 4)), slosh_len=np.array([2, 2]),
+        slosh_level=np.tile(ax, (2, 1)), slosh_data=np.zeros((2, 2, 4)), slosh_len=np.array([2, 2]),  # two tanks
         mounts=MOUNTS, booster_time=ax, booster_thrust=np.zeros(2), booster_mount=np.zeros((1, 6)),
         booster_mass_prop=np.zeros((1, 1)), booster_mass_data=np.zeros((1, 1, 10)), booster_mass_len=np.ones(1, int),
         booster_burn_rate=np.ones(1), booster_full=np.zeros((1, 10)),
@@ -95,9 +96,12 @@ def parameters(gravity_order: int = 0, aero: bool = False, thrust: bool = False,
     p[actuator.P_VALVE_OFFSET], p[slosh.P_OFFSET], p[flex.P_OFFSET] = lay.valve, lay.slosh_offset, lay.flex
     p[propulsion.P_FS_PROP_FULL] = p[propulsion.P_US_PROP_FULL] = 1.0
     p[propulsion.P_FS_CONFIGS] = 1.0  # the stack, then the upper stage's configurations
-    p[slosh.P_AREF] = 9.80665
     p[cluster.P_UPPER_FIRST] = 1.0  # tables(): one engine a stage
     p[slosh.P_FREQ_SCALE] = p[slosh.P_ZETA_SCALE] = 1.0
+    p[slosh.P_N_TANKS] = len(lay.slosh_tanks)
+    for j, tank in enumerate(lay.slosh_tanks):  # aboard in every configuration
+        base = slosh.P_TANKS + j * slosh.N_TANK_FIELDS
+        p[base + slosh.K_AREF], p[base + slosh.K_LIQUID], p[base + slosh.K_CONFIGS] = 9.80665, lay.tank(tank), 3.0
     return p
 
 

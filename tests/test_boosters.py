@@ -116,7 +116,7 @@ def test_the_boosters_mass_in_flight_is_the_parallel_axis_composition_of_the_par
     x = model.x0.copy()
     x[model.layout.tank("grain")] = core
     x[_booster_states(model)] = left, right
-    whole = mass_state(x, model.p, model.packed_tables, 0)[1]
+    whole = mass_state(x, model.p, model.packed_tables, 0, np.zeros(layout.N_AUX))[1]
     m, cx, cy, cz, ixx, iyy, izz, ixy, ixz, iyz = mass_model.mass_properties(model.packed_tables, 0, core)
     m, cx, cy, cz, *inertia = boosters.exchange(x, model.p, model.packed_tables, m, cx, cy, cz, ixx, iyy,
                                                            izz, ixy, ixz, iyz)
@@ -256,7 +256,7 @@ def _at_boundary(model, t: float):
 def _momentum(x, p, tb, config, states=()) -> tuple[float, np.ndarray]:
     """Mass (kg) and linear momentum (ECI, kg m/s) of the configuration ``config``
     from its reference point's velocity (that point is the CG)."""
-    m = mass_state(x, p, tb, config)[1][0]
+    m = mass_state(x, p, tb, config, np.zeros(layout.N_AUX))[1][0]
     return m, m * x[layout.V:layout.V + 3]
 
 
@@ -316,7 +316,7 @@ def test_every_jettison_keeps_the_mass_and_the_momentum(event, tol):
     x0, config, x1, dropped = _jettison(model, event)
     m0, p0 = _momentum(x0, p, tb, config)
     m1, p1 = _momentum(x1, p, tb, config + 1)
-    cg0 = np.array(mass_state(x0, p, tb, config)[1][1:])
+    cg0 = np.array(mass_state(x0, p, tb, config, np.zeros(layout.N_AUX))[1][1:])
     assert m0 - m1 == pytest.approx(sum(b[0] for b in dropped), rel=10 * tol)
     c_b2i = qt.dcm(x0[layout.Q:layout.Q + 4])
     w = x0[layout.W:layout.W + 3]

@@ -35,7 +35,7 @@ def test_core_state_order_is_the_staging_file_order():
     the rigid body, the vehicle's tanks in order, the gimbal channels, the roll jets, then
     the optional blocks; a model imported out of order would silently move them."""
     assert layout.STATE_NAMES[:layout.W + 3][-3:] == ["p", "q", "r"]
-    lay = layout.StateLayout(tanks=("grain", "lox", "lh2"), simplex=True, slosh=True, n_modes=2)
+    lay = layout.StateLayout(tanks=("grain", "lox", "lh2"), simplex=True, slosh_tanks=("lox", "lh2"), n_modes=2)
     assert (layout.R, layout.V, layout.Q, layout.W, layout.N_STATE) == (0, 3, 6, 10, 13)
     assert ([lay.tank(t) for t in lay.tanks], lay.channel(0), lay.channel(1), lay.rcs, lay.n_core) == (
         [13, 14, 15], 16, 19, 22, 24)

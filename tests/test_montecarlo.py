@@ -298,3 +298,28 @@ def test_margins_of_every_run_and_their_spread(tmp_path):
     assert rows["rigid"]["runs_below_requirement"] == 1 and rows["aero"]["runs_below_requirement"] == 0
     assert rows["aero"]["worst"] == -7.5 and rows["aero"]["worst_run"] == 1  # the critical crossings: -9, -7.5, -11
     assert rows["aero"]["min"] == -11.0 and rows["aero"]["max"] == -7.5
+
+
+def test_slosh_modes_are_named_by_the_vehicles_tanks(case, tmp_path):
+    """A vehicle's first two sloshing tanks take the slosh codes every batch wrote before
+    (3, 4: ``slosh_lox``, ``slosh_lh2`` for the default names), its others −1, −2; the
+    batch's manifest records tanks other than the default, and its tables, spread and
+    verdicts name the modes by them."""
+    from savant_cli.linear.requirements import DEFAULT_SLOSH_TANKS, mode_code, mode_name
+    from savant_cli.montecarlo.analysis import margin_spread
+    from savant_cli.montecarlo.storage import write_tables
+
+    tanks = ("first_stage_lox", "rp1", "lox", "lh2")
+    codes = [mode_code(f"slosh_{t}", tanks) for t in tanks]
+    assert codes == [3, 4, -1, -2]
+    assert [mode_name(c, tanks) for c in codes] == [f"slosh_{t}" for t in tanks]
+    assert [mode_code(m) for m in ("slosh_lox", "slosh_lh2", "closed_loop", "flex_1")] == [3, 4, 5, 6]
+    assert [mode_name(c) for c in (3, 4, 7)] == ["slosh_lox", "slosh_lh2", "flex_2"]
+    Journal(tmp_path / "runs", case.cfg, case.dispersions.names, tanks)
+    assert write_tables(None, inventory([tmp_path / "runs"]), [], [], np.zeros(0)).slosh_tanks == tanks
+    Journal(tmp_path / "default" / "runs", case.cfg, case.dispersions.names)
+    default = inventory([tmp_path / "default" / "runs"])
+    assert "slosh_tanks" not in default.manifest
+    assert write_tables(None, default, [], [], np.zeros(0)).slosh_tanks == DEFAULT_SLOSH_TANKS
+    table = np.array([[0, 55.0, 0, 0, 1, 40.0, 0.6, -2, 1], [0, 55.0, 0, 0, 1, 35.0, 0.6, 3, 1]])
+    assert {r["mode"] for r in margin_spread(table, tanks)} == {"slosh_lh2", "slosh_first_stage_lox"}

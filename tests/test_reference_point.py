@@ -99,12 +99,17 @@ def test_slosh_on_starts_from_the_same_pad():
     vehicle = off.vehicle
     cg_whole = _cg(vehicle, "stack", off.model.x0[off.model.layout.tank("grain")])
     # the rigid part's CG, by hand from the plant's slosh masses and stations at the start
+    from savant_cli.models import slosh
     from savant_cli.sim.plant import mass_state
 
-    _, whole, rigid, tank0, tank1 = mass_state(on.model.x0, on.model.p, on.model.packed_tables, CONFIG_STACK)
+    m = on.model
+    _, whole, rigid = mass_state(m.x0, m.p, m.packed_tables, CONFIG_STACK, np.zeros(layout.N_AUX))
     np.testing.assert_allclose(whole[1:], cg_whole, rtol=1e-12)
-    m_rigid = whole[0] - tank0[3] - tank1[3]
-    cg_rigid_x = (whole[0] * whole[1] - tank0[3] * tank0[4] - tank1[3] * tank1[4]) / m_rigid
+    tanks = [slosh.slosh_tank(m.packed_tables, m.p, j, m.x0[m.layout.tank(name)])
+             for j, name in enumerate(m.layout.slosh_tanks)]
+    assert m.layout.slosh_tanks == ("lox", "lh2")
+    m_rigid = whole[0] - sum(t.mass_kg for t in tanks)
+    cg_rigid_x = (whole[0] * whole[1] - sum(t.mass_kg * t.station_m for t in tanks)) / m_rigid
     assert rigid[1] == pytest.approx(cg_rigid_x, rel=1e-12) and abs(cg_rigid_x - cg_whole[0]) > 0.05
     r_off, v_off = point_state(off.model.x0, cg_whole)
     r_on, v_on = point_state(on.model.x0, np.array(rigid[1:4]))

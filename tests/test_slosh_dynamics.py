@@ -11,7 +11,7 @@ import pytest
 import synthetic
 from savant_cli.models import gravity, layout, propulsion, slosh
 from savant_cli.sim.engine import rk4, work_array
-from savant_cli.sim.plant import pack_tables
+from savant_cli.sim.plant import derivative, mass_state, pack_tables
 
 A_REF = 9.80665
 
@@ -26,7 +26,8 @@ def _setup(w_ref: float, zeta: float, m_s: float, accel: float, inertia: float =
     p[propulsion.P_US_THRUST] = accel * 1.0e6
     p[propulsion.P_US_ISP] = 1e12  # no mass flow: constant acceleration
     p[propulsion.P_US_GIMBAL:propulsion.P_US_GIMBAL + 3] = (40.0, 0.0, 0.0)
-    p[slosh.P_AREF] = A_REF
+    for j in range(2):
+        p[slosh.P_TANKS + slosh.N_TANK_FIELDS * j + slosh.K_AREF] = A_REF
     for j, bottom in enumerate((30.0, 15.0)):
         p[slosh.P_TANKS + slosh.N_TANK_FIELDS * j:slosh.P_TANKS + slosh.N_TANK_FIELDS * j + 3] = (2.75, bottom, 1000.0)
     u = synthetic.coast_inputs()
@@ -89,3 +90,36 @@ def test_slosh_force_is_the_reaction_on_the_vehicle():
         rk4(k * dt, x, u, dt, p, tb, aux, work)
     assert abs(lateral_momentum() - p0) < 1e-9 * 5.0e3 * 0.2 * 2 * np.pi * 0.4
     assert np.max(np.abs(x[[so, so + 2]])) > 0.01  # it did oscillate
+
+
+def test_a_jettisoned_tank_leaves_the_vehicle_and_holds_its_states():
+    """Tank 1 aboard only in configurations below 2 (its stage gone in the upper stage's
+    configuration 2, where the synthetic plant flies): its states' rates are zero, its
+    level, frequency and force too, and the rigid part is the whole vehicle less tank 0's
+    slosh mass only; tank 0 still oscillates at its closed-form coupled frequency."""
+    w_ref, zeta, m_s, accel = 2 * np.pi * 0.5, 0.02, 200.0, 2.0 * A_REF
+    tb, p, u, x, lay = _setup(w_ref, zeta, m_s, accel)
+    p[slosh.P_TANKS + slosh.N_TANK_FIELDS + slosh.K_CONFIGS] = layout.CONFIG_UPPER  # gone in CONFIG_UPPER
+    so = lay.slosh_offset
+    x[so] = 0.05
+    x[so + 4:so + 8] = (0.03, -0.02, 0.1, 0.2)  # the gone tank's mass, displaced and moving
+    aux, xd = np.zeros(layout.N_AUX), np.zeros(x.size)
+    derivative(0.0, x, u, p, tb, aux, xd)
+    assert np.all(xd[so + 4:so + 8] == 0.0)
+    assert aux[slosh.A_LEVEL + 1] == aux[slosh.A_FREQUENCY + 1] == 0.0
+    assert np.all(aux[slosh.A_FORCE + 3:slosh.A_FORCE + 6] == 0.0)
+    rigid = mass_state(x, p, tb, layout.CONFIG_UPPER, np.zeros(layout.N_AUX))[2]
+    assert rigid[0] == 1.0e6 - m_s
+    # the remaining tank: free oscillation at ω_ref √(a/a_ref) √(1 + m_s/m_r)
+    dt, n = 0.002, 20000
+    work = work_array(x.size)
+    hist = np.empty(n)
+    for k in range(n):
+        rk4(k * dt, x, u, dt, p, tb, aux, work)
+        hist[k] = x[so]
+    np.testing.assert_array_equal(x[so + 4:so + 8], (0.03, -0.02, 0.1, 0.2))
+    t = (np.arange(n) + 1) * dt
+    up = np.nonzero((hist[:-1] < 0) & (hist[1:] >= 0))[0]
+    tc = t[up] - hist[up] * dt / (hist[up + 1] - hist[up])
+    w_expected = w_ref * np.sqrt(accel / A_REF) * np.sqrt(1.0 + m_s / (1.0e6 - m_s))
+    assert 2 * np.pi / np.mean(np.diff(tc)) / np.sqrt(1 - zeta**2) == pytest.approx(w_expected, rel=0.01)

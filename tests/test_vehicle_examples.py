@@ -140,8 +140,18 @@ def check_strap_on_boosters(vehicle):
         np.testing.assert_array_equal(vehicle.configurations[name].mass.mass_kg, c.mass.mass_kg)
 
 
+def check_first_stage_slosh(vehicle):
+    # every tank with a slosh section, by the file's names, in the order of the propellant states
+    assert tuple(vehicle.slosh_spec) == vehicle.tanks == ("first_stage_lox", "rp1", "lox", "lh2")
+    assert vehicle.slosh_spec["rp1"]["table"] == "slosh_rp1.csv"
+    assert vehicle.keys["slosh.rp1"] == "vehicle.stages.first_stage.tanks.rp1.slosh"
+    cfg = validate(task_config(compose_config(["slosh=on"], None)))
+    assert build.state_layout(cfg, vehicle).slosh_tanks == vehicle.tanks
+
+
 #: the example of the page an example is written over (its own chain first)
-BUILDS_ON = {"a-given-mixing-matrix": "a-two-engine-cluster", "a-first-stage-cutoff": "a-liquid-first-stage"}
+BUILDS_ON = {"a-given-mixing-matrix": "a-two-engine-cluster", "a-first-stage-cutoff": "a-liquid-first-stage",
+             "first-stage-slosh": "a-liquid-first-stage"}
 #: sections of the vehicle it is written over that an example replaces whole (emptied before the merge)
 REPLACES = {"a-liquid-first-stage": ("stages.first_stage",), "a-first-stage-cutoff": ("events",),
             "strap-on-boosters": ("events",)}
@@ -153,7 +163,8 @@ CHECKS = {"jettison-on-a-condition": check_jettison_on_a_condition,
           "a-given-mixing-matrix": check_a_given_mixing_matrix,
           "a-liquid-first-stage": check_a_liquid_first_stage,
           "a-first-stage-cutoff": check_a_first_stage_cutoff,
-          "strap-on-boosters": check_strap_on_boosters}
+          "strap-on-boosters": check_strap_on_boosters,
+          "first-stage-slosh": check_first_stage_slosh}
 
 
 def test_every_example_on_the_page_has_a_check():

@@ -20,7 +20,7 @@ class SloshOffConfig:
 
 @dataclass
 class SloshOnConfig:
-    """``slosh=on``: LOX and LH2 spring-mass slosh from the vehicle's tables."""
+    """``slosh=on``: a spring-mass slosh mode in every tank with a ``slosh`` section."""
 
     name: str = "on"
     enabled: bool = MISSING

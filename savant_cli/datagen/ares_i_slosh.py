@@ -167,7 +167,7 @@ class Tank:
         return liquid_level_m(self.load_kg, self.density_kg_m3, self.radius_m)
 
 
-def _barrel_baffles(full_height_m: float) -> RingBaffles:
+def barrel_baffles(full_height_m: float) -> RingBaffles:
     """[E] Rings every :data:`BAFFLE_SPACING_M` from half a spacing above the bottom to
     the last one below the full level."""
     low = 0.5 * BAFFLE_SPACING_M
@@ -179,11 +179,11 @@ def _barrel_baffles(full_height_m: float) -> RingBaffles:
 LOX = Tank("lox", "upper-stage LOX tank", load_kg=M_LOX,        # [D] 114,315 kg: 135.1 t [P] at MR 5.5
            density_kg_m3=1141.0,                                 # [E] saturated LOX at ~90 K
            kinematic_viscosity_m2_s=1.7e-7,                      # [E] ~1.9e-4 Pa s / 1141 kg/m^3
-           baffles=_barrel_baffles(M_LOX / (1141.0 * np.pi * TANK_RADIUS_M**2)))
+           baffles=barrel_baffles(M_LOX / (1141.0 * np.pi * TANK_RADIUS_M**2)))
 LH2 = Tank("lh2", "upper-stage LH2 tank", load_kg=M_LH2,        # [D] 20,785 kg: 135.1 t [P] at MR 5.5
            density_kg_m3=70.85,                                  # [E] saturated LH2 at ~20 K
            kinematic_viscosity_m2_s=1.9e-7,                      # [E] ~1.35e-5 Pa s / 70.85 kg/m^3
-           baffles=_barrel_baffles(M_LH2 / (70.85 * np.pi * TANK_RADIUS_M**2)))
+           baffles=barrel_baffles(M_LH2 / (70.85 * np.pi * TANK_RADIUS_M**2)))
 TANKS = (LOX, LH2)
 
 HEADER = ["level_m", "frequency_hz", "damping", "slosh_mass_kg", "slosh_height_m"]

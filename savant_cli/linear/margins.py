@@ -53,7 +53,7 @@ class MarginRow:
         The requirement band: ``"rigid/aero"``, ``"slosh"`` or ``"flex"``.
     mode : str
         The open-loop mode that makes the crossing (``rigid``, ``aero``, ``integrator``,
-        ``slosh_lox``, ``slosh_lh2``, ``flex_<n>``; :mod:`savant_cli.linear.modes`), or
+        ``slosh_<tank>``, ``flex_<n>``; :mod:`savant_cli.linear.modes`), or
         ``""`` when labelled by frequency band alone.
     meets_requirement : bool or None
         Its verdict against the requirement set (:mod:`savant_cli.linear.requirements`),

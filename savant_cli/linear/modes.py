@@ -2,7 +2,7 @@
 pole(s) that dominate the loop near its frequency (issue 12 item 6).
 
 The loop's states are named by where they come from (:func:`state_groups`): the plant's
-``rigid`` (velocity, attitude, rate), ``actuator``, ``slosh_lox``, ``slosh_lh2`` and
+``rigid`` (velocity, attitude, rate), ``actuator``, ``slosh_<tank>`` (one per sloshing tank) and
 ``flex_<n>`` states, the gyro filters (``sensor``), the loop delay (``delay``), and the
 flight control's ``integrator`` and ``filter`` states. Each eigenvalue λ_j of the loop's
 A is shared among the groups by its participation factors |v_kj w_jk| (right and left
@@ -61,10 +61,8 @@ CONTROLLER_ROLL = ("integrator",) + ("filter",) * 8
 
 def plant_group(name: str) -> str:
     """Group of a linear plant state by its name (``linear/plant.py::linear_states``)."""
-    if name.startswith("slosh_lox"):
-        return "slosh_lox"
-    if name.startswith("slosh_lh2"):
-        return "slosh_lh2"
+    if name.startswith("slosh_"):  # slosh_<tank>_{y,z,y_dot,z_dot}: the tank's group
+        return name.removesuffix("_dot").rsplit("_", 1)[0]
     if name.startswith("flex_q"):
         return "flex_" + name[len("flex_q"):].split("_")[0]
     if re.fullmatch(r"d[py]\d*(_dot|_ddot|_piston)?", name) or name.startswith("valve"):

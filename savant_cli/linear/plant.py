@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import control as ct
 import numpy as np
 
-from savant_cli.models import actuator, aero, layout, quaternion as qt, sensors
+from savant_cli.models import actuator, aero, layout, quaternion as qt, sensors, slosh
 from savant_cli.models.flex import flex_point
 from savant_cli.models.sensors import misalignment
 from savant_cli.sim.build import SimModel
@@ -65,10 +65,17 @@ def rolls_by_gimbal(model: SimModel) -> bool:
     return bool(np.any(model.fcs.roll_gimbal != 0.0))
 
 
-def linear_states(model: SimModel) -> tuple[list[str], np.ndarray]:
-    """Names of the linear states and the index in ``x`` each comes from; attitude
-    coordinates carry the index ``Q + 1 + axis`` (their quaternion vector component)."""
+def linear_states(model: SimModel, config: int = 0) -> tuple[list[str], np.ndarray]:
+    """Names of the linear states in configuration ``config`` and the index in ``x`` each
+    comes from; attitude coordinates carry the index ``Q + 1 + axis`` (their quaternion
+    vector component). The slosh states of a tank whose stage is gone are left out (held,
+    they would be poles at the origin that nothing moves)."""
     lay = model.layout
+    gone = set()
+    for j in range(len(lay.slosh_tanks)):
+        if config >= model.p[slosh.P_TANKS + j * slosh.N_TANK_FIELDS + slosh.K_CONFIGS]:
+            start = lay.slosh_offset + slosh.N_PER_TANK * j
+            gone.update(range(start, start + slosh.N_PER_TANK))
     full = lay.names()
     idx = list(range(layout.V, layout.V + 3))
     names = ["dv_x", "dv_y", "dv_z", "dtheta_x", "dtheta_y", "dtheta_z"]
@@ -78,7 +85,7 @@ def linear_states(model: SimModel) -> tuple[list[str], np.ndarray]:
     channels = range(lay.channel_offset, lay.channel_offset + layout.N_PER_CHANNEL * len(lay.channels))
     idx += list(channels)
     names += [full[i] for i in channels]
-    extra = [i for i in range(lay.n_core, lay.n)]
+    extra = [i for i in range(lay.n_core, lay.n) if i not in gone]
     idx += extra
     names += [full[i] for i in extra]
     return names, np.asarray(idx)
@@ -100,7 +107,7 @@ def _steps(model: SimModel, idx: np.ndarray, mode: str, rel_step: float) -> np.n
             h[j] = STEP["act"][(i - lay.channel_offset) % layout.N_PER_CHANNEL]
         elif lay.simplex and lay.valve <= i < lay.valve + layout.N_VALVE_PER_CHANNEL * len(lay.channels):
             h[j] = STEP["valve"]
-        elif lay.slosh and lay.slosh_offset <= i < lay.slosh_offset + 8:
+        elif lay.slosh and lay.slosh_offset <= i < lay.slosh_offset + slosh.N_PER_TANK * len(lay.slosh_tanks):
             h[j] = STEP["slosh"][((i - lay.slosh_offset) % 4) // 2]
         else:  # flex: q then q̇, scaled by the largest rotation per unit coordinate
             mode_i = (i - lay.flex) % lay.n_modes
@@ -183,7 +190,7 @@ def linearize_plant(model: SimModel, snap: Snapshot, mode: str = "auto", rel_ste
         ``gyro_*`` rad/s) and ``gimbal_pitch, gimbal_yaw, alpha, beta`` (rad).
     """
     tb = model.packed_tables
-    names, idx = linear_states(model)
+    names, idx = linear_states(model, int(snap.u[layout.U_CONFIG]))
     h = _steps(model, idx, mode, rel_step)
     n = idx.size
     x0, u0, t = snap.x, snap.u.copy(), snap.t

@@ -9,7 +9,8 @@ its bending-mode peaks and its closed-loop poles:
 - ``aero``: the gain-reduction margin of the aerodynamically unstable vehicle against
   ``aero.gain_dB``; ``integrator`` (the rigid body's low side without an aerodynamic
   instability) against ``rigid.gain_reduction_dB``;
-- ``slosh_lox``, ``slosh_lh2``: every crossing against ``slosh.gain_dB``/``phase_deg``;
+- ``slosh_<tank>`` (ares_i: ``slosh_lox``, ``slosh_lh2``): every crossing against
+  ``slosh.gain_dB``/``phase_deg``;
 - ``flex_<n>``, with the stage's requirement of that mode
   (``requirements.flex.<stage>``):
 
@@ -61,7 +62,7 @@ class Check:
     axis : str
         Loop (``pitch``, ``yaw``), or ``""`` for the closed loop.
     mode : str
-        The mode checked (``rigid``, ``aero``, ``integrator``, ``slosh_lox``,
+        The mode checked (``rigid``, ``aero``, ``integrator``, ``slosh_<tank>``,
         ``flex_<n>`` …) or ``closed_loop``.
     criterion : str
         ``gain margin``, ``gain-reduction margin``, ``phase margin``, ``attenuation``
@@ -309,43 +310,68 @@ def summary(points: list[PointVerdict], req: RequirementSet) -> dict:
 CRITERIA = ("gain margin", "gain-reduction margin", "phase margin", "attenuation", "stability")
 #: Stages, by code.
 STAGES = ("first_stage", "upper_stage")
-#: Mode names with a fixed code; ``flex_<n>`` is ``len(FIXED_MODES) - 1 + n``.
+#: Mode names with a fixed code; ``flex_<n>`` is ``len(FIXED_MODES) - 1 + n``. The two
+#: slosh entries are the codes of a vehicle's first two sloshing tanks, named here for
+#: the default tank names (:data:`DEFAULT_SLOSH_TANKS`); its further tanks' codes are
+#: −1, −2, … (:func:`mode_code`).
 FIXED_MODES = ("rigid", "aero", "integrator", "slosh_lox", "slosh_lh2", "closed_loop")
+#: The sloshing tanks a batch's codes name when it records none (ares_i's and
+#: small_launcher's, and every batch written before tanks were named by the vehicle).
+DEFAULT_SLOSH_TANKS = ("lox", "lh2")
+_SLOSH_CODES = (FIXED_MODES.index("slosh_lox"), FIXED_MODES.index("slosh_lh2"))
 #: Loops, by code (−1: none, the closed loop).
 AXIS_NAMES = ("pitch", "yaw", "roll")
 #: Columns of :func:`checks_array`.
 CHECK_ARRAY_COLUMNS = ("time_s", "axis", "mode", "criterion", "value", "required", "frequency_hz", "passed", "stage")
 
 
-def mode_code(mode: str) -> int:
-    """Integer code of a mode label (``rigid`` … ``closed_loop``, ``flex_<n>``)."""
+def mode_code(mode: str, slosh_tanks: Sequence[str] = DEFAULT_SLOSH_TANKS) -> int:
+    """Integer code of a mode label (``rigid`` … ``closed_loop``, ``flex_<n>``,
+    ``slosh_<tank>`` for a tank of ``slosh_tanks``, the vehicle's sloshing tanks in order:
+    the first two take the fixed slosh codes, the others −1, −2, …)."""
     if mode.startswith("flex_"):
         return len(FIXED_MODES) - 1 + int(mode[5:])
+    if mode.startswith("slosh_"):
+        k = list(slosh_tanks).index(mode[len("slosh_"):])
+        return _SLOSH_CODES[k] if k < len(_SLOSH_CODES) else len(_SLOSH_CODES) - 1 - k
     return FIXED_MODES.index(mode)
 
 
-def mode_name(code: int) -> str:
-    """The mode label of :func:`mode_code`."""
+def mode_name(code: int, slosh_tanks: Sequence[str] = DEFAULT_SLOSH_TANKS) -> str:
+    """The mode label of :func:`mode_code` (the same ``slosh_tanks``)."""
+    if code < 0:
+        return f"slosh_{slosh_tanks[len(_SLOSH_CODES) - 1 - code]}"
+    if code in _SLOSH_CODES:
+        return f"slosh_{slosh_tanks[_SLOSH_CODES.index(code)]}"
     return FIXED_MODES[code] if code < len(FIXED_MODES) else f"flex_{code - len(FIXED_MODES) + 1}"
 
 
-def checks_array(verdicts: Sequence[PointVerdict]) -> np.ndarray:
+def slosh_mode_tanks(tanks: Sequence[str]) -> tuple[str, ...]:
+    """The tanks the slosh mode codes of a vehicle with sloshing ``tanks`` name: its own,
+    or :data:`DEFAULT_SLOSH_TANKS` when it has none."""
+    return tuple(tanks) or DEFAULT_SLOSH_TANKS
+
+
+def checks_array(verdicts: Sequence[PointVerdict], slosh_tanks: Sequence[str] = DEFAULT_SLOSH_TANKS) -> np.ndarray:
     """Every check of the points as rows of :data:`CHECK_ARRAY_COLUMNS` (codes for the
-    strings)."""
-    rows = [(c.time_s, AXIS_NAMES.index(c.axis) if c.axis else -1, mode_code(c.mode), CRITERIA.index(c.criterion),
+    strings; slosh modes as :func:`mode_code` of ``slosh_tanks``)."""
+    rows = [(c.time_s, AXIS_NAMES.index(c.axis) if c.axis else -1, mode_code(c.mode, slosh_tanks),
+             CRITERIA.index(c.criterion),
              c.value, c.required, c.frequency_hz, float(c.passed), STAGES.index(v.stage))
             for v in verdicts for c in v.checks]
     return np.array(rows, dtype=float).reshape(-1, len(CHECK_ARRAY_COLUMNS))
 
 
-def verdicts_of_array(rows: np.ndarray) -> list[PointVerdict]:
-    """The point verdicts of :func:`checks_array` rows (without row verdicts)."""
+def verdicts_of_array(rows: np.ndarray, slosh_tanks: Sequence[str] = DEFAULT_SLOSH_TANKS) -> list[PointVerdict]:
+    """The point verdicts of :func:`checks_array` rows (without row verdicts; the same
+    ``slosh_tanks``)."""
     points: dict[float, list[Check]] = {}
     stage: dict[float, str] = {}
     for t, ax, mode, crit, value, required, f, passed, st in rows:
         unit = {"stability": "1/s", "phase margin": "deg"}.get(CRITERIA[int(crit)], "dB")
         points.setdefault(float(t), []).append(
-            Check(float(t), AXIS_NAMES[int(ax)] if ax >= 0 else "", mode_name(int(mode)), CRITERIA[int(crit)],
+            Check(float(t), AXIS_NAMES[int(ax)] if ax >= 0 else "", mode_name(int(mode), slosh_tanks),
+                  CRITERIA[int(crit)],
                   float(value), float(required), unit, float(f), bool(passed)))
         stage[float(t)] = STAGES[int(st)]
     return [PointVerdict(t, stage[t], tuple(cs), ()) for t, cs in points.items()]

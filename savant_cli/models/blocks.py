@@ -51,12 +51,17 @@ class Logged:
     when : callable or None
         ``when(model)`` (the built :class:`savant_cli.sim.build.SimModel`) is true when
         the field means something in the run (its model is on); None: always logged.
+    columns_of : callable or None
+        ``columns_of(model)``: the columns of a field sized for the most a vehicle may
+        have (one per sloshing tank, say), of which a run logs the first
+        ``len(columns_of(model))``; None: ``columns``.
     """
 
     name: str
     columns: tuple[str, ...] = ()
     frame: str = ""
     when: Callable[[Any], bool] | None = None
+    columns_of: Callable[[Any], tuple[str, ...]] | None = None
 
 
 @dataclass(frozen=True)
@@ -119,7 +124,7 @@ class Vector:
             raise ValueError(f"{self.name}: field {model}.{name} needs units ('1' when dimensionless)")
         if any(f.model == model and f.name == name for f in self.fields):
             raise ValueError(f"{self.name}: field {model}.{name} declared twice")
-        if logged is not None and len(logged.columns) != (0 if size == 1 else size):
+        if logged is not None and logged.columns_of is None and len(logged.columns) != (0 if size == 1 else size):
             raise ValueError(f"{self.name}: field {model}.{name} of {size} entries logged with columns "
                              f"{logged.columns}")
         index = self.size

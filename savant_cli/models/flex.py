@@ -7,7 +7,7 @@ Each mode ``i`` (unit generalized mass, SI: q in √kg·m) obeys::
 
 with φ the translation and σ the rotation mode shape at a point (body axes). Loaded
 points: the active gimbal (thrust plus the tail-wags-dog force, and the tail-wags-dog
-torque), the roll jets (their torque) and the two slosh masses (their forces). The
+torque), the roll jets (their torque) and every tank's slosh mass (its force). The
 structure's rotation at a point is ``Σ σ_i(pt) q_i`` and its displacement
 ``Σ φ_i(pt) q_i``: at the gimbal the rotation turns the thrust line (follower thrust) and
 the displacement moves the point the thrust and the tail-wags-dog force act at (their
@@ -30,7 +30,7 @@ import numpy as np
 from numba import njit
 
 from savant_cli.flex_slosh import FIRST_STAGE_KEYS, POINT_KEYS
-from savant_cli.models import blocks
+from savant_cli.models import blocks, slosh
 from savant_cli.models.interp import tab, tab_offset
 from savant_cli.models.propulsion import (
     P_FS_CONFIGS, P_FS_PROP_FULL, P_US_PROP_FULL, first_stage_propellant, upper_stage_propellant
@@ -44,9 +44,8 @@ PT_GYRO_FS = 2
 PT_RCS = 3
 PT_GIMBAL_FS = 4
 PT_GIMBAL_US = 5
-PT_SLOSH_LOX = 6
-PT_SLOSH_LH2 = 7
-N_POINTS = 8
+N_POINTS = 6  # the points every vehicle has; the sloshing tanks' follow, one each
+PT_SLOSH = N_POINTS  # the first sloshing tank's point (tank j at PT_SLOSH + j)
 # POINT_KEYS (the YAML key of each point, in PT_ order), FIRST_STAGE_KEYS and FLEX_SETS (the
 # modal data sets, in this order in the packed tables) are vehicle-data names: they live
 # with the reader (savant_cli/flex_slosh.py), which arranges the data in their order.
@@ -71,7 +70,8 @@ P_SWITCH = _PARAMS.scalar("switching", "1", "0: liftoff set then ignition set; 1
 _TABLES = blocks.TABLES.block("flex")
 T_FREQ = _TABLES.table("flex_freq", "rad/s", "(4 FLEX_SETS, n_modes) modal frequencies")
 T_ZETA = _TABLES.table("flex_zeta", "1", "(n_modes,) modal damping ratios")
-T_SHAPE = _TABLES.table("flex_shape", "SI", "(4, n_modes, N_POINTS, SHAPE) mode shapes at the points, body axes")
+T_SHAPE = _TABLES.table("flex_shape", "SI", "(4, n_modes, n_points, SHAPE) mode shapes at the points (N_POINTS, "
+                         "then one per sloshing tank), body axes")
 _AUX = blocks.DIAGNOSTICS.block("flex")
 A_GIMBAL_ROTATION = _AUX.array("gimbal_rotation", 3, "rad", "flex rotation at the active gimbal (turns the thrust)",
                                blocks.Logged("flex_gimbal_rotation", ("roll", "pitch", "yaw"), "body",
@@ -120,6 +120,12 @@ def flex_sets(x: np.ndarray, config: int, p: np.ndarray) -> tuple[int, int, floa
 
 
 @njit(cache=True, error_model="numpy", inline="always")
+def point_count(tb: np.ndarray) -> int:
+    """The points of the shape table: :data:`N_POINTS` and one per sloshing tank."""
+    return tab(tb, T_SHAPE)[1] // (4 * tab(tb, T_ZETA)[1] * N_SHAPE)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
 def _shape_sum(x: np.ndarray, config: int, p: np.ndarray, tb: np.ndarray, pt: int, rate: bool,
                component: int) -> tuple[float, float, float]:
     """``Σ_i s_i(pt) q_i`` (or ``q̇_i``) for the three shape entries from ``component``
@@ -133,10 +139,11 @@ def _shape_sum(x: np.ndarray, config: int, p: np.ndarray, tb: np.ndarray, pt: in
     sa, sb, w = flex_sets(x, config, p)
     o_sh = tab_offset(tb, T_SHAPE)
     nd = tab(tb, T_ZETA)[1]  # modes in the data
+    npt = point_count(tb)
     for i in range(nm):
         qi = x[fo + nm + i] if rate else x[fo + i]
-        ia = o_sh + ((sa * nd + i) * N_POINTS + pt) * N_SHAPE + component
-        ib = o_sh + ((sb * nd + i) * N_POINTS + pt) * N_SHAPE + component
+        ia = o_sh + ((sa * nd + i) * npt + pt) * N_SHAPE + component
+        ib = o_sh + ((sb * nd + i) * npt + pt) * N_SHAPE + component
         rx += ((1.0 - w) * tb[ia] + w * tb[ib]) * qi
         ry += ((1.0 - w) * tb[ia + 1] + w * tb[ib + 1]) * qi
         rz += ((1.0 - w) * tb[ia + 2] + w * tb[ib + 2]) * qi
@@ -192,46 +199,47 @@ class StructuralLoads(NamedTuple):
         The engine-inertia reaction torque about body y and z at the gimbal, N·m.
     rcs_torque_nm : float
         Roll-jet torque about body x at the jets, N·m.
-    lox_slosh_force_n, lh2_slosh_force_n : tuple of 3 float
-        Force of each tank's slosh mass on the structure, N.
+
+    The slosh masses' forces on the structure are the slosh model's diagnostics
+    (``slosh.A_FORCE``, one per sloshing tank).
     """
 
     gimbal_force_n: tuple[float, float, float]
     gimbal_torque_nm: tuple[float, float]
     rcs_torque_nm: float
-    lox_slosh_force_n: tuple[float, float, float]
-    lh2_slosh_force_n: tuple[float, float, float]
 
 
 @njit(cache=True, error_model="numpy", inline="always")
 def modal_rates(x: np.ndarray, config: int, p: np.ndarray, tb: np.ndarray, gimbal_pt: int,
-                loads: StructuralLoads, xd: np.ndarray) -> None:
+                loads: StructuralLoads, aux: np.ndarray, xd: np.ndarray) -> None:
     """Modal equations into ``xd`` under the ``loads`` at the flex points (the active
-    gimbal point ``gimbal_pt``, the jets, the slosh masses). Nothing when flex is off."""
+    gimbal point ``gimbal_pt``, the jets) and the slosh masses' forces (``aux``). Nothing
+    when flex is off."""
     fo = int(p[P_OFFSET])
     if fo < 0:
         return
     fgx, fgy, fgz = loads.gimbal_force_n
     tgy, tgz = loads.gimbal_torque_nm
     rcs_torque = loads.rcs_torque_nm
-    f_lox_x, f_lox_y, f_lox_z = loads.lox_slosh_force_n
-    f_lh2_x, f_lh2_y, f_lh2_z = loads.lh2_slosh_force_n
     nmod = int(p[P_N_MODES])
     sa, sb, w = flex_sets(x, config, p)
     o_sh = tab_offset(tb, T_SHAPE)
     o_fz = tab_offset(tb, T_ZETA)
     o_ff = tab_offset(tb, T_FREQ)
     nd = tab(tb, T_ZETA)[1]  # modes in the data
+    npt = point_count(tb)
+    n_slosh = slosh.tank_count(p)
     for i in range(nmod):
         wi = (1.0 - w) * tb[o_ff + sa * nd + i] + w * tb[o_ff + sb * nd + i]
-        base_a = o_sh + (sa * nd + i) * N_POINTS * N_SHAPE
-        base_b = o_sh + (sb * nd + i) * N_POINTS * N_SHAPE
-        # generalized force over the loaded points, in point order (jets, gimbal, LOX, LH2)
+        base_a = o_sh + (sa * nd + i) * npt * N_SHAPE
+        base_b = o_sh + (sb * nd + i) * npt * N_SHAPE
+        # generalized force over the loaded points, in point order (jets, gimbal, slosh masses)
         gen = 0.0
         gen += point_work(tb, base_a, base_b, w, PT_RCS, 0.0, 0.0, 0.0, rcs_torque, 0.0, 0.0)
         gen += point_work(tb, base_a, base_b, w, gimbal_pt, fgx, fgy, fgz, 0.0, tgy, tgz)
-        gen += point_work(tb, base_a, base_b, w, PT_SLOSH_LOX, f_lox_x, f_lox_y, f_lox_z, 0.0, 0.0, 0.0)
-        gen += point_work(tb, base_a, base_b, w, PT_SLOSH_LH2, f_lh2_x, f_lh2_y, f_lh2_z, 0.0, 0.0, 0.0)
+        for j in range(n_slosh):
+            k = slosh.A_FORCE + 3 * j
+            gen += point_work(tb, base_a, base_b, w, PT_SLOSH + j, aux[k], aux[k + 1], aux[k + 2], 0.0, 0.0, 0.0)
         qi = x[fo + i]
         qdi = x[fo + nmod + i]
         xd[fo + i] = qdi

@@ -19,8 +19,9 @@ compiled models read their offsets from ``p``):
 * roll jets: the thrust fractions of the positive and negative jets (1);
 * simplex power valves: ``[r, ṙ]`` per channel (valve flow as no-load piston rate, rad/s),
   only with the simplex actuator;
-* slosh: LOX [y, z, ẏ, ż], LH2 [y, z, ẏ, ż] (slosh-mass lateral displacement from the tank
-  centerline, body axes, m and m/s), only with slosh on;
+* slosh: ``[y, z, ẏ, ż]`` per sloshing tank, in the order of the propellant states
+  (slosh-mass lateral displacement from the tank centerline, body axes, m and m/s), only
+  with slosh on;
 * flex: q₁ … q_N, then q̇₁ … q̇_N (modal coordinates, unit generalized mass in SI:
   √kg·m and √kg·m/s), only with flex on.
 """
@@ -39,13 +40,13 @@ from savant_cli.models.fcs import (  # noqa: F401  (discrete-state indices)
 )
 from savant_cli.models.flex import (  # noqa: F401
     FIRST_STAGE_POINTS, N_POINTS, POINT_KEYS, PT_GIMBAL_FS, PT_GIMBAL_US, PT_GYRO_FS, PT_GYRO_US, PT_IMU, PT_RCS,
-    PT_SLOSH_LH2, PT_SLOSH_LOX
+    PT_SLOSH
 )
 from savant_cli.models.guidance import D_QG, D_QS, D_TG, D_VG, D_VS  # noqa: F401
 from savant_cli.models.rcs import N_JET_STATES, STATE_NAMES as _RCS_NAMES  # noqa: F401
 from savant_cli.models.rigid_body import STATE_NAMES as _RIGID_NAMES, Q, R, V, W  # noqa: F401
 from savant_cli.models.sensors import D_GYRO_X, D_GYRO_Y, GYRO_MISALIGN, GYRO_POINTS  # noqa: F401
-from savant_cli.models.slosh import N_PER_TANK as N_SLOSH_PER_TANK, N_TANKS  # noqa: F401
+from savant_cli.models.slosh import MAX_TANKS as MAX_SLOSH_TANKS, N_PER_TANK as N_SLOSH_PER_TANK  # noqa: F401
 
 N_STATE = blocks.STATE.size  # the rigid body; the vehicle's and the optional blocks follow
 N_PARAM = blocks.PARAMETERS.size
@@ -74,16 +75,16 @@ class StateLayout:
         The gimbal channels' names (``p``, ``y``: the states ``dp``, ``dy`` …), in order.
     simplex : bool
         Simplex actuators (adds 2 power-valve states per channel).
-    slosh : bool
-        LOX and LH2 slosh (8 states).
+    slosh_tanks : sequence of str
+        The sloshing tanks (4 states each), in the order of ``tanks``; empty: slosh off.
     n_modes : int
         Retained flexible modes (2 states each).
     """
 
     def __init__(self, tanks: tuple[str, ...] | list[str] = (), channels: tuple[str, ...] | list[str] = PITCH_YAW,
-                 simplex: bool = False, slosh: bool = False, n_modes: int = 0) -> None:
-        self.tanks, self.channels = tuple(tanks), tuple(channels)
-        self.simplex, self.slosh, self.n_modes = bool(simplex), bool(slosh), int(n_modes)
+                 simplex: bool = False, slosh_tanks: tuple[str, ...] | list[str] = (), n_modes: int = 0) -> None:
+        self.tanks, self.channels, self.slosh_tanks = tuple(tanks), tuple(channels), tuple(slosh_tanks)
+        self.simplex, self.slosh, self.n_modes = bool(simplex), bool(self.slosh_tanks), int(n_modes)
         pos = N_STATE + len(self.tanks)
         self.channel_offset = pos
         pos += N_PER_CHANNEL * len(self.channels)
@@ -92,8 +93,8 @@ class StateLayout:
         self.n_core = pos  # the states every run of this vehicle has
         self.valve = pos if simplex else -1
         pos += N_VALVE_PER_CHANNEL * len(self.channels) if simplex else 0
-        self.slosh_offset = pos if slosh else -1
-        pos += N_TANKS * N_SLOSH_PER_TANK if slosh else 0
+        self.slosh_offset = pos if self.slosh else -1
+        pos += len(self.slosh_tanks) * N_SLOSH_PER_TANK
         self.flex = pos if n_modes > 0 else -1
         pos += 2 * n_modes
         self.n = pos
@@ -116,9 +117,8 @@ class StateLayout:
         if self.simplex:
             for c in self.channels:
                 names += [f"valve_{c}", f"valve_{c}_dot"]
-        if self.slosh:
-            for tank in ("lox", "lh2"):
-                names += [f"slosh_{tank}_y", f"slosh_{tank}_z", f"slosh_{tank}_y_dot", f"slosh_{tank}_z_dot"]
+        for tank in self.slosh_tanks:
+            names += [f"slosh_{tank}_y", f"slosh_{tank}_z", f"slosh_{tank}_y_dot", f"slosh_{tank}_z_dot"]
         names += [f"flex_q{i + 1}" for i in range(self.n_modes)]
         names += [f"flex_q{i + 1}_dot" for i in range(self.n_modes)]
         return names

@@ -1,4 +1,9 @@
-"""Propellant slosh: one spring-mass pendulum analogue per upper-stage tank (LOX, LH2).
+"""Propellant slosh: one spring-mass analogue per sloshing tank, on any stage.
+
+The vehicle file gives a tank a ``slosh`` section (``savant_cli.flex_slosh``); every such
+tank, in the order of the vehicle's propellant states, carries one slosh mass here (at
+most :data:`MAX_TANKS`). A tank rides with its stage: in the configurations after its
+stage is jettisoned its mass is gone and its states are held.
 
 Each tank's first lateral slosh mode is a point mass ``m_s`` on the tank centerline at
 the height ``h_s`` above the tank bottom, on a lateral spring and damper, with the
@@ -33,9 +38,10 @@ from numba import njit
 from savant_cli.models import blocks
 from savant_cli.models.interp import locate_at, tab, tab_offset
 from savant_cli.models.mass import minus_point_mass
+from savant_cli.vehicle.tree import MAX_SLOSH_TANKS
 
-N_TANKS = 2  # 0 LOX, 1 LH2
-TANK_NAMES = ("lox", "lh2")
+#: Sloshing tanks a vehicle may have (the size of the per-tank diagnostics).
+MAX_TANKS = MAX_SLOSH_TANKS
 STATE = blocks.Record(
     "slosh mass",
     ("y", "m", "lateral displacement from the tank centerline, body Y"),
@@ -59,64 +65,75 @@ TANK = blocks.Record(
     ("radius", "m", "tank radius"),
     ("bottom_station", "m", "tank bottom, structure x"),
     ("density", "kg/m^3", "liquid density"),
+    ("reference_accel", "m/s^2", "axial acceleration at which the tank's tabulated frequency holds"),
+    ("liquid_state", "1", "index in x of the propellant state the liquid level follows"),
+    ("configurations", "1", "the tank is aboard in the configurations below this number"),
 )
-K_RADIUS, K_BOTTOM, K_DENSITY = TANK.offsets
+K_RADIUS, K_BOTTOM, K_DENSITY, K_AREF, K_LIQUID, K_CONFIGS = TANK.offsets
 N_TANK_FIELDS = TANK.size
+
+MODE = blocks.Record(
+    "a tank's slosh mode at its level",
+    ("frequency", "rad/s", "slosh frequency at the tank's reference acceleration"),
+    ("damping", "1", "damping ratio"),
+    ("mass", "kg", "slosh mass (0 when the tank is not aboard)"),
+    ("station", "m", "slosh-mass station, structure x"),
+)
+M_FREQ, M_ZETA, M_MASS, M_STATION = MODE.offsets
+N_MODE = MODE.size
 
 _PARAMS = blocks.PARAMETERS.block("slosh")
 P_OFFSET = _PARAMS.scalar("state_offset", "1", "offset of the slosh states in x (−1: slosh off)")
-P_AREF = _PARAMS.scalar("reference_accel", "m/s^2", "axial acceleration of the frequency tables")
+P_N_TANKS = _PARAMS.scalar("n_tanks", "1", "sloshing tanks (0 with slosh off)")
 P_FREQ_SCALE = _PARAMS.scalar("frequency_scale", "1", "multiplier of the tabulated frequencies")
 P_ZETA_SCALE = _PARAMS.scalar("damping_scale", "1", "multiplier of the tabulated damping")
-P_TANKS = _PARAMS.record("lox", TANK, "LOX tank")
-_PARAMS.record("lh2", TANK, "LH2 tank (follows the LOX record)")
+P_TANKS = _PARAMS.record("tank0", TANK, "first sloshing tank")
+for _j in range(1, MAX_TANKS):
+    _PARAMS.record(f"tank{_j}", TANK, f"sloshing tank {_j} (records follow one another)")
 _TABLES = blocks.TABLES.block("slosh")
-T_LEVEL = _TABLES.table("slosh_level", "m", "(2 tanks, n) liquid level, increasing (padded)")
-T_DATA = _TABLES.table("slosh_data", "rad/s, 1, kg, m", "(2, n, COLUMNS) slosh parameters at T_LEVEL")
-T_LEN = _TABLES.table("slosh_len", "1", "(2,) valid rows per tank")
+T_LEVEL = _TABLES.table("slosh_level", "m", "(n_tanks, n) liquid level, increasing (padded)")
+T_DATA = _TABLES.table("slosh_data", "rad/s, 1, kg, m", "(n_tanks, n, COLUMNS) slosh parameters at T_LEVEL")
+T_LEN = _TABLES.table("slosh_len", "1", "(n_tanks,) valid rows per tank")
+
+
+def _tank_columns(suffixes: tuple[str, ...]):
+    """The logged columns of a per-tank diagnostic: ``<tank><suffix>`` for each of the
+    run's sloshing tanks (their names in the vehicle file)."""
+    return lambda model: tuple(f"{tank}{s}" for tank in model.layout.slosh_tanks for s in suffixes)
+
+
 _AUX = blocks.DIAGNOSTICS.block("slosh")
-A_FREQUENCY = _AUX.array("frequency", 2, "rad/s", "slosh frequency per tank")
-A_LEVEL = _AUX.array("level", 2, "m", "liquid level above the tank bottom",
-                     blocks.Logged("liquid_level", ("lox", "lh2"), "", lambda model: model.layout.slosh))
-A_FORCE = _AUX.array("force", 6, "N", "force of the slosh masses on the vehicle",
-                     blocks.Logged("slosh_force", ("lox_x", "lox_y", "lox_z", "lh2_x", "lh2_y", "lh2_z"), "body",
-                                   lambda model: model.layout.slosh))
-
-
-@njit(cache=True, error_model="numpy", inline="always")
-def write_diagnostics(aux: np.ndarray, w0: float, w1: float, level0: float, level1: float,
-                      fx0: float, fy0: float, fz0: float, fx1: float, fy1: float, fz1: float) -> None:
-    """Write each tank's slosh frequency (rad/s), liquid level (m) and the force of its
-    slosh mass on the vehicle (N, body axes), tank 0 (LOX) then tank 1 (LH2), into ``aux``."""
-    aux[A_FREQUENCY] = w0
-    aux[A_FREQUENCY + 1] = w1
-    aux[A_LEVEL] = level0
-    aux[A_LEVEL + 1] = level1
-    aux[A_FORCE] = fx0
-    aux[A_FORCE + 1] = fy0
-    aux[A_FORCE + 2] = fz0
-    aux[A_FORCE + 3] = fx1
-    aux[A_FORCE + 4] = fy1
-    aux[A_FORCE + 5] = fz1
+A_FREQUENCY = _AUX.array("frequency", MAX_TANKS, "rad/s", "slosh frequency per tank (0 once its stage is gone)")
+A_LEVEL = _AUX.array("level", MAX_TANKS, "m", "liquid level above the tank bottom",
+                     blocks.Logged("liquid_level", (), "", lambda model: model.layout.slosh, _tank_columns(("",))))
+A_FORCE = _AUX.array("force", 3 * MAX_TANKS, "N", "force of the slosh masses on the vehicle",
+                     blocks.Logged("slosh_force", (), "body", lambda model: model.layout.slosh,
+                                   _tank_columns(("_x", "_y", "_z"))))
+A_MODE = _AUX.array("mode", N_MODE * MAX_TANKS, "rad/s, 1, kg, m",
+                    "each tank's mode at its level (MODE): the mass-properties step hands it to the loads")
 
 
 def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarray]) -> None:
-    """The ``slosh`` group and the vehicle's slosh tables (placeholders when off)."""
+    """The ``slosh`` group and the vehicle's slosh tables (placeholders when off): each
+    sloshing tank's geometry, reference acceleration, liquid state and the configurations
+    its stage is aboard in."""
     s = inputs.cfg.slosh
     p[P_OFFSET] = inputs.layout.slosh_offset
     p[P_FREQ_SCALE] = s.frequency_scale if s.enabled else 1.0
     p[P_ZETA_SCALE] = s.damping_scale if s.enabled else 1.0
-    p[P_AREF] = 1.0
     sl = inputs.slosh
+    p[P_N_TANKS] = 0.0 if sl is None else len(sl.tanks)
     if sl is None:
-        tables.update(slosh_level=np.tile([0.0, 1.0], (2, 1)), slosh_data=np.zeros((2, 2, N_COLUMNS)),
-                      slosh_len=np.array([2, 2]))
+        tables.update(slosh_level=np.tile([0.0, 1.0], (1, 1)), slosh_data=np.zeros((1, 2, N_COLUMNS)),
+                      slosh_len=np.array([2]))
         return
-    p[P_AREF] = sl.reference_accel_mps2
     for j, tank in enumerate(sl.tanks):
         base = P_TANKS + j * N_TANK_FIELDS
         p[base + K_RADIUS], p[base + K_BOTTOM], p[base + K_DENSITY] = (tank.radius_m, tank.bottom_station_m,
                                                                         tank.density_kgm3)
+        p[base + K_AREF] = tank.reference_accel_mps2
+        p[base + K_LIQUID] = inputs.layout.tank(tank.name)
+        p[base + K_CONFIGS] = tank.configurations
     level, n = blocks.stack_padded([t.level_m for t in sl.tanks])
     data, _ = blocks.stack_padded([np.column_stack([t.frequency_rad_s, t.damping, t.mass_kg, t.height_m])
                                    for t in sl.tanks])
@@ -175,7 +192,7 @@ def slosh_tank(tb: np.ndarray, p: np.ndarray, j: int, liquid_kg: float) -> Slosh
     radius, density = p[base + K_RADIUS], p[base + K_DENSITY]
     level = max(liquid_kg, 0.0) / (density * np.pi * radius * radius)
     o_l, n_l = tab(tb, T_LEVEL)
-    ns = n_l // N_TANKS
+    ns = n_l // int(p[P_N_TANKS])
     i, w = locate_at(tb, o_l + j * ns, int(tb[tab_offset(tb, T_LEN) + j]), level)
     r0 = tab_offset(tb, T_DATA) + (j * ns + i) * N_COLUMNS
     r1 = r0 + N_COLUMNS
@@ -188,28 +205,85 @@ def slosh_tank(tb: np.ndarray, p: np.ndarray, j: int, liquid_kg: float) -> Slosh
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def rigid_part(mass, cgx, cgy, cgz, ixx, iyy, izz, ixy, ixz, iyz, ms0, xs0, ms1, xs1):
+def tank_count(p: np.ndarray) -> int:
+    """The sloshing tanks of the run (0 with slosh off)."""
+    return int(p[P_N_TANKS]) if p[P_OFFSET] >= 0.0 else 0
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def stored_tank(aux: np.ndarray, j: int) -> SloshTank:
+    """Tank ``j``'s mode as :func:`tank_modes` stored it in ``aux``."""
+    k = A_MODE + j * N_MODE
+    return SloshTank(aux[A_LEVEL + j], aux[k + M_FREQ], aux[k + M_ZETA], aux[k + M_MASS], aux[k + M_STATION])
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def tank_modes(x: np.ndarray, p: np.ndarray, tb: np.ndarray, config: int, aux: np.ndarray) -> None:
+    """Every sloshing tank's mode at its liquid level in configuration ``config`` into
+    ``aux`` (its level and :data:`MODE`): zeros for a tank whose stage is gone."""
+    for j in range(tank_count(p)):
+        base = P_TANKS + j * N_TANK_FIELDS
+        tank = SloshTank(0.0, 0.0, 0.0, 0.0, 0.0)
+        if config < p[base + K_CONFIGS]:
+            tank = slosh_tank(tb, p, j, x[int(p[base + K_LIQUID])])
+        k = A_MODE + j * N_MODE
+        aux[A_LEVEL + j] = tank.level_m
+        aux[k + M_FREQ] = tank.frequency_rad_s
+        aux[k + M_ZETA] = tank.damping
+        aux[k + M_MASS] = tank.mass_kg
+        aux[k + M_STATION] = tank.station_m
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def rigid_part(p: np.ndarray, aux: np.ndarray, mass, cgx, cgy, cgz, ixx, iyy, izz, ixy, ixz, iyz):
     """Mass (kg), CG (structure, m) and inertia about its own CG (body, kg·m², tensor
-    elements) of the vehicle without the two slosh masses ``ms`` at stations ``xs`` on
-    the tank centerlines."""
-    m_r = mass - ms0 - ms1
-    cgx_r = (mass * cgx - ms0 * xs0 - ms1 * xs1) / m_r
+    elements) of the vehicle without the slosh masses of :func:`tank_modes` (``aux``), at
+    their stations on the tank centerlines."""
+    n = tank_count(p)
+    m_r = mass
+    moment_x = mass * cgx
+    for j in range(n):
+        k = A_MODE + j * N_MODE
+        m_r -= aux[k + M_MASS]
+        moment_x -= aux[k + M_MASS] * aux[k + M_STATION]
+    cgx_r = moment_x / m_r
     cgy_r = mass * cgy / m_r
     cgz_r = mass * cgz / m_r
     # remove each slosh mass (offset from the total CG), then move to the rigid CG
-    ixx, iyy, izz, ixy, ixz, iyz = minus_point_mass(ixx, iyy, izz, ixy, ixz, iyz, ms0, -(xs0 - cgx), -cgy, cgz)
-    ixx, iyy, izz, ixy, ixz, iyz = minus_point_mass(ixx, iyy, izz, ixy, ixz, iyz, ms1, -(xs1 - cgx), -cgy, cgz)
+    for j in range(n):
+        k = A_MODE + j * N_MODE
+        ixx, iyy, izz, ixy, ixz, iyz = minus_point_mass(ixx, iyy, izz, ixy, ixz, iyz, aux[k + M_MASS],
+                                                        -(aux[k + M_STATION] - cgx), -cgy, cgz)
     ixx, iyy, izz, ixy, ixz, iyz = minus_point_mass(ixx, iyy, izz, ixy, ixz, iyz, m_r, -(cgx_r - cgx),
                                                     cgy_r - cgy, -(cgz_r - cgz))
     return m_r, cgx_r, cgy_r, cgz_r, ixx, iyy, izz, ixy, ixz, iyz
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def frequency_ratio(p: np.ndarray, fex: float, fey: float, fez: float, mass_total: float) -> float:
-    """``√(a / a_ref)`` for the external non-gravitational force ``fe`` (N, body) on the
-    whole vehicle of mass ``mass_total`` (kg)."""
+def add_loads(x: np.ndarray, p: np.ndarray, aux: np.ndarray, fex: float, fey: float, fez: float, mass_total: float,
+              cg: tuple[float, float, float]) -> tuple[float, float, float, float, float, float]:
+    """The external non-gravitational force ``fe`` (N, body) plus every slosh mass's
+    force on the vehicle, and the slosh masses' moment about the rigid CG ``cg``
+    (structure, m; N·m, body). Each tank's frequency at the current acceleration and its
+    force go into ``aux`` (the modal equations and the rates read them)."""
+    fx, fy, fz = fex, fey, fez
+    msx = msy = msz = 0.0
+    n = tank_count(p)
+    if n == 0:
+        return fx, fy, fz, msx, msy, msz
     f_mag = np.sqrt(fex * fex + fey * fey + fez * fez) / mass_total
-    return np.sqrt(f_mag / p[P_AREF])
+    fx_spec = fex / mass_total  # axial specific force; the masses ride axially with the tank
+    for j in range(n):
+        tank = stored_tank(aux, j)
+        w = tank.frequency_rad_s * np.sqrt(f_mag / p[P_TANKS + j * N_TANK_FIELDS + K_AREF])
+        fsx, fsy, fsz, mx, my, mz = tank_force(x, int(p[P_OFFSET]) + N_PER_TANK * j, tank, w, fx_spec, cg)
+        aux[A_FREQUENCY + j] = w
+        aux[A_FORCE + 3 * j] = fsx
+        aux[A_FORCE + 3 * j + 1] = fsy
+        aux[A_FORCE + 3 * j + 2] = fsz
+        fx, fy, fz = fx + fsx, fy + fsy, fz + fsz
+        msx, msy, msz = msx + mx, msy + my, msz + mz
+    return fx, fy, fz, msx, msy, msz
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -250,14 +324,26 @@ def tank_rates(x: np.ndarray, k: int, tank: SloshTank, w: float, motion: RigidMo
     xd[k + S_ZDOT] = -2.0 * zeta * w * vz - w * w * x[k + S_Z] - acc_z
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def rates(x: np.ndarray, p: np.ndarray, aux: np.ndarray, config: int, motion: RigidMotion, xd: np.ndarray) -> None:
+    """Every tank's slosh-mass equations into ``xd`` on the rigid part's ``motion``
+    (modes and frequencies from :func:`tank_modes` and :func:`add_loads`); the states of
+    a tank whose stage is gone (configuration ``config``) are held."""
+    so = int(p[P_OFFSET])
+    for j in range(tank_count(p)):
+        k = so + N_PER_TANK * j
+        if config < p[P_TANKS + j * N_TANK_FIELDS + K_CONFIGS]:
+            tank_rates(x, k, stored_tank(aux, j), aux[A_FREQUENCY + j], motion, xd)
+        else:
+            xd[k + S_Y] = xd[k + S_Z] = xd[k + S_YDOT] = xd[k + S_ZDOT] = 0.0
+
+
 @njit(cache=True, error_model="numpy")
 def contain(x: np.ndarray, p: np.ndarray) -> None:
     """Keep every slosh mass inside its tank: at the wall it stops (its outward velocity
     is removed), the paper's only wall interaction. Nothing when slosh is off."""
     so = int(p[P_OFFSET])
-    if so < 0:
-        return
-    for tank in range(N_TANKS):
+    for tank in range(tank_count(p)):
         k = so + N_PER_TANK * tank
         radius = p[P_TANKS + tank * N_TANK_FIELDS + K_RADIUS]
         r = np.sqrt(x[k + S_Y] ** 2 + x[k + S_Z] ** 2)

@@ -12,7 +12,7 @@ import numpy as np
 
 from savant_cli.config import ReliabilitySpec, RequirementSet
 from savant_cli.io.record import FAILURE_CLASSES
-from savant_cli.linear.requirements import mode_name, verdict_line, verdicts_of_array
+from savant_cli.linear.requirements import DEFAULT_SLOSH_TANKS, mode_name, verdict_line, verdicts_of_array
 from savant_cli.montecarlo.batch import AXIS_CODES, BAND_CODES, KIND_CODES
 from savant_cli.montecarlo.insertion import insertion_statistics
 from savant_cli.montecarlo.inventory import ranges_text
@@ -42,10 +42,10 @@ def percentile_rows(names: list[str], data: np.ndarray, runs: np.ndarray) -> lis
     return rows
 
 
-def margin_spread(margins: np.ndarray) -> list[dict[str, Any]]:
+def margin_spread(margins: np.ndarray, slosh_tanks: tuple[str, ...] = DEFAULT_SLOSH_TANKS) -> list[dict[str, Any]]:
     """Per (time, axis, kind, mode): the critical crossing of each run (smallest |margin|),
     then its spread over the runs, and how many runs' critical crossing misses its
-    requirement."""
+    requirement (slosh modes named by ``slosh_tanks``, the batch's)."""
     rows = []
     if not margins.size:
         return rows
@@ -60,7 +60,8 @@ def margin_spread(margins: np.ndarray) -> list[dict[str, Any]]:
         vals = np.array([v for v, _ in crit.values()])
         p = np.percentile(vals, PERCENTILES)
         rows.append({"time_s": float(t), "axis": AXIS_CODES[int(ax)], "kind": KIND_CODES[int(kd)],
-                     "mode": mode_name(int(md)), "band": BAND_CODES[int(sel[0, 4])], "runs": int(vals.size),
+                     "mode": mode_name(int(md), slosh_tanks), "band": BAND_CODES[int(sel[0, 4])],
+                     "runs": int(vals.size),
                      "worst": float(vals[np.argmin(np.abs(vals))]), "worst_run": int(runs[np.argmin(np.abs(vals))]),
                      "min": float(vals.min()), "min_run": int(runs[np.argmin(vals)]),
                      "max": float(vals.max()), "max_run": int(runs[np.argmax(vals)]),
@@ -69,11 +70,12 @@ def margin_spread(margins: np.ndarray) -> list[dict[str, Any]]:
     return rows
 
 
-def requirement_verdicts(checks: np.ndarray, requirement_set: str) -> dict[str, Any]:
+def requirement_verdicts(checks: np.ndarray, requirement_set: str,
+                         slosh_tanks: tuple[str, ...] = DEFAULT_SLOSH_TANKS) -> dict[str, Any]:
     """The batch's requirement verdict from every run's checks: how many runs were judged
     (those with a linear point) and pass, the one-line verdict, and each failing run's
-    worst offender."""
-    per_run = {int(r): verdicts_of_array(checks[checks[:, 0] == r, 1:]) for r in np.unique(checks[:, 0])}
+    worst offender (slosh modes named by ``slosh_tanks``, the batch's)."""
+    per_run = {int(r): verdicts_of_array(checks[checks[:, 0] == r, 1:], slosh_tanks) for r in np.unique(checks[:, 0])}
     failed = []
     for run, vs in per_run.items():
         bad = [v for v in vs if not v.passed]
@@ -228,11 +230,11 @@ def analyse(tb: Tables, expected: list[int], missing: list[int], dispersions: li
     insertion = insertion_statistics(tb.runs, tb.message, tb.summary_keys, tb.summary, spec.reserve_probability,
                                      spec.confidence)
     loads = load_extremes(tb, dispersions)
-    verdict = requirement_verdicts(tb.checks, set_name)
+    verdict = requirement_verdicts(tb.checks, set_name, tb.slosh_tanks)
     ok = tb.ok
     stats = percentile_rows(tb.summary_keys, tb.summary[ok], tb.runs[ok])
     disp_stats = percentile_rows([d["name"] for d in dispersions], tb.values[tb.runs > 0], tb.runs[tb.runs > 0])
-    spread = margin_spread(tb.margins)
+    spread = margin_spread(tb.margins, tb.slosh_tanks)
     failures = [{"run": int(r), "status": s, "message": m, "t_final_s": t}
                 for r, s, m, t in zip(tb.runs, tb.status, tb.message, tb.t_final) if s != "complete"]
     counts = {s: tb.status.count(s) for s in sorted(set(tb.status))}

@@ -31,7 +31,9 @@ import numpy as np
 from savant_cli.config import LinearStudyConfig, SavantConfig
 from savant_cli.errors import ConfigError, DamagedFileError, OutputWriteError
 from savant_cli.io.atomic import write_text_atomic
-from savant_cli.linear.requirements import AXIS_NAMES, CHECK_ARRAY_COLUMNS, checks_array, mode_code
+from savant_cli.linear.requirements import (
+    AXIS_NAMES, CHECK_ARRAY_COLUMNS, DEFAULT_SLOSH_TANKS, checks_array, mode_code, slosh_mode_tanks
+)
 from savant_cli.montecarlo.journal import read_entry, write_entry
 from savant_cli.montecarlo.spec import DispersionSet
 from savant_cli.montecarlo.targets import apply_samples, build_dispersed
@@ -129,6 +131,7 @@ def _margins(case: Case, model: SimModel, result, sig: dict) -> tuple[np.ndarray
     from savant_cli.linear.point_analysis import analyse
 
     rows, verdicts = [], []
+    tanks = batch_slosh_tanks(case.vehicle)
     dt_fcs = model.rates.dt * model.rates.n_fcs
     lin_cfg = case.linear
     t_sep = float(result.events[EVENT_NAMES.index("separation")])
@@ -140,8 +143,14 @@ def _margins(case: Case, model: SimModel, result, sig: dict) -> tuple[np.ndarray
         if window is None or not window[0] <= snap.t < window[1]:
             verdicts.append(a.verdict)
         rows += [(r.time_s, AXIS_CODES.index(r.axis), KIND_CODES.index(r.kind), BAND_CODES.index(r.band), r.value,
-                  r.frequency_hz, mode_code(r.mode), float(r.meets_requirement)) for r in a.rows]
-    return np.array(rows, dtype=float).reshape(-1, len(MARGIN_ARRAY_COLUMNS)), checks_array(verdicts)
+                  r.frequency_hz, mode_code(r.mode, tanks), float(r.meets_requirement)) for r in a.rows]
+    return np.array(rows, dtype=float).reshape(-1, len(MARGIN_ARRAY_COLUMNS)), checks_array(verdicts, tanks)
+
+
+def batch_slosh_tanks(vehicle: Any) -> tuple[str, ...]:
+    """The sloshing tanks a batch's slosh mode codes name (``linear/requirements.py::
+    mode_code``): the vehicle's (:func:`slosh_mode_tanks`)."""
+    return slosh_mode_tanks(tuple(vehicle.slosh_spec or ()))
 
 
 def fly_run(case: Case, run: int, keep: bool = False):
@@ -281,7 +290,8 @@ def read_manifest(path: Path) -> dict:
 class Journal:
     """The ``runs/`` folder of a batch: one checked ``run_NNNNNN.npz`` per finished run."""
 
-    def __init__(self, folder: Path, cfg: SavantConfig, names: list[str]) -> None:
+    def __init__(self, folder: Path, cfg: SavantConfig, names: list[str],
+                 slosh_tanks: tuple[str, ...] = DEFAULT_SLOSH_TANKS) -> None:
         self.folder = folder
         try:
             folder.mkdir(parents=True, exist_ok=True)
@@ -289,6 +299,8 @@ class Journal:
             raise OutputWriteError(folder / "manifest.json", exc) from exc
         manifest = {"fingerprint": fingerprint(cfg), "n_runs": cfg.study.n_runs, "seed": cfg.study.seed,
                     "dispersions": names}
+        if tuple(slosh_tanks) != DEFAULT_SLOSH_TANKS:  # the tanks the runs' slosh mode codes name
+            manifest["slosh_tanks"] = list(slosh_tanks)
         path = folder / "manifest.json"
         if path.is_file():
             old = read_manifest(path)

@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from savant_cli.io.record import FLOWN
-from savant_cli.linear.requirements import CHECK_ARRAY_COLUMNS
+from savant_cli.linear.requirements import CHECK_ARRAY_COLUMNS, DEFAULT_SLOSH_TANKS
 from savant_cli.montecarlo.batch import MARGIN_ARRAY_COLUMNS
 
 N_MARGIN = 1 + len(MARGIN_ARRAY_COLUMNS)  # run, then the margin row
@@ -34,6 +34,8 @@ class Tables:
     margins: np.ndarray  # (m, 9): run, then batch.MARGIN_ARRAY_COLUMNS
     history_names: list[str]
     checks: np.ndarray = field(default_factory=lambda: np.zeros((0, 1 + len(CHECK_ARRAY_COLUMNS))))  # run, checks
+    #: the sloshing tanks the slosh mode codes of ``margins`` and ``checks`` name
+    slosh_tanks: tuple[str, ...] = DEFAULT_SLOSH_TANKS
 
     @property
     def ok(self) -> np.ndarray:

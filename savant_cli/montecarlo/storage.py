@@ -22,7 +22,9 @@ from omegaconf import OmegaConf
 
 from savant_cli.config import RequirementSet
 from savant_cli.io.atomic import write_text_atomic
-from savant_cli.linear.requirements import CHECK_ARRAY_COLUMNS, CRITERIA, STAGES, mode_code, mode_name
+from savant_cli.linear.requirements import (
+    CHECK_ARRAY_COLUMNS, CRITERIA, DEFAULT_SLOSH_TANKS, STAGES, mode_code, mode_name
+)
 from savant_cli.montecarlo.analysis import PERCENTILES, Analysis
 from savant_cli.montecarlo.batch import AXIS_CODES, BAND_CODES, KIND_CODES, MARGIN_ARRAY_COLUMNS, read_outcome
 from savant_cli.montecarlo.inventory import Inventory, ranges_text
@@ -92,7 +94,8 @@ def write_tables(h5: h5py.Group | None, inv: Inventory, runs: list[int], history
     return Tables(np.asarray(runs), status, message, t_final, wall, values, keys,
                   np.column_stack([summary_cols[k] for k in keys]) if keys else np.zeros((n, 0)), events,
                   np.vstack(margins) if margins else np.zeros((0, N_MARGIN)), history_names,
-                  np.vstack(checks) if checks else np.zeros((0, N_CHECK)))
+                  np.vstack(checks) if checks else np.zeros((0, N_CHECK)),
+                  tuple(inv.manifest.get("slosh_tanks", DEFAULT_SLOSH_TANKS)))
 
 
 def _strings(items: list[str]) -> np.ndarray:
@@ -162,21 +165,24 @@ def write_group(g: h5py.Group, tb: Tables, an: Analysis, inv: Inventory, expecte
     for j, k in enumerate(tb.summary_keys):
         sg.create_dataset(k, data=tb.summary[:, j])
     mg = g.create_group("margins")
+    if tb.slosh_tanks != DEFAULT_SLOSH_TANKS:  # the tanks the slosh modes' codes name
+        mg.attrs["slosh_tanks"] = list(tb.slosh_tanks)
     for j, col in enumerate(("run",) + MARGIN_ARRAY_COLUMNS):
         data = tb.margins[:, j]
         if col in ("axis", "kind", "band"):
             codes = {"axis": AXIS_CODES, "kind": KIND_CODES, "band": BAND_CODES}[col]
             mg.create_dataset(col, data=_strings([codes[int(c)] for c in data]))
         elif col == "mode":
-            mg.create_dataset(col, data=_strings([mode_name(int(c)) for c in data]))
+            mg.create_dataset(col, data=_strings([mode_name(int(c), tb.slosh_tanks) for c in data]))
         else:
             mg.create_dataset(col, data=data.astype(int) if col == "run" else data.astype(bool)
                               if col == "meets_requirement" else data)
-    write_checks(g.create_group("requirements", track_order=True), tb.checks, an.verdict, requirements)
+    write_checks(g.create_group("requirements", track_order=True), tb.checks, an.verdict, requirements,
+                 tb.slosh_tanks)
 
 
 def write_checks(g: h5py.Group, checks: np.ndarray, verdict: dict[str, Any],
-                 requirements: RequirementSet | None) -> None:
+                 requirements: RequirementSet | None, slosh_tanks: tuple[str, ...] = DEFAULT_SLOSH_TANKS) -> None:
     """Group ``montecarlo/requirements``: attributes ``set`` (JSON), ``verdict`` (the one
     line), ``passed``; ``checks/<column>`` (every check of every run: ``run`` and
     ``linear/requirements.py::CHECK_ARRAY_COLUMNS``, names for the codes) and
@@ -193,13 +199,15 @@ def write_checks(g: h5py.Group, checks: np.ndarray, verdict: dict[str, Any],
         The batch's verdict (``montecarlo/analysis.py::requirement_verdicts``).
     requirements : RequirementSet or None
         The set the checks were judged against; None: no ``set`` attribute.
+    slosh_tanks : tuple of str
+        The tanks the checks' slosh mode codes name.
     """
     if requirements is not None:
         g.attrs["set"] = json.dumps(OmegaConf.to_container(OmegaConf.structured(requirements)))
     g.attrs["verdict"] = verdict["line"]
     g.attrs["passed"] = bool(verdict["passed"])
     cg = g.create_group("checks", track_order=True)
-    names = {"axis": lambda c: AXIS_CODES[int(c)] if c >= 0 else "", "mode": lambda c: mode_name(int(c)),
+    names = {"axis": lambda c: AXIS_CODES[int(c)] if c >= 0 else "", "mode": lambda c: mode_name(int(c), slosh_tanks),
              "criterion": lambda c: CRITERIA[int(c)], "stage": lambda c: STAGES[int(c)]}
     for j, col in enumerate(("run",) + CHECK_ARRAY_COLUMNS):
         data = checks[:, j]
@@ -220,11 +228,12 @@ def read_tables(g: h5py.Group) -> Tables:
     summary_keys = list(g["summary"])
     runs = g["runs/run"][()]
     m = g["margins"]
+    tanks = tuple(str(t) for t in m.attrs.get("slosh_tanks", DEFAULT_SLOSH_TANKS))
     margins = np.zeros((0, N_MARGIN))
     if m["run"].size:
         codes = {col: np.array([names.index(s) for s in m[col].asstr()[()]], dtype=float)
                  for col, names in (("axis", AXIS_CODES), ("kind", KIND_CODES), ("band", BAND_CODES))}
-        codes["mode"] = np.array([mode_code(s) for s in m["mode"].asstr()[()]], dtype=float)
+        codes["mode"] = np.array([mode_code(s, tanks) for s in m["mode"].asstr()[()]], dtype=float)
         margins = np.column_stack([m["run"][()]] + [codes[c] if c in codes else m[c][()].astype(float)
                                                     for c in MARGIN_ARRAY_COLUMNS])
     return Tables(runs, list(g["runs/status"].asstr()[()]), list(g["runs/message"].asstr()[()]),

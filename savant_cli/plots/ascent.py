@@ -30,6 +30,7 @@ Drawn when the model is on:
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -92,6 +93,9 @@ class FigureSpec:
     title: str
     panels: tuple[Panel, ...]
     requires: str | None = None  # drawn only when this signal is in the run
+    #: the panels of a run, for a figure whose panels follow the vehicle (one per tank);
+    #: None: :attr:`panels`
+    panels_of: Callable[[RunRecord], tuple[Panel, ...]] | None = None
 
 
 def _rpy_panels(actual: str, command: str | None, unit: str, what: str, wrap: bool = False) -> tuple[Panel, ...]:
@@ -102,6 +106,17 @@ def _rpy_panels(actual: str, command: str | None, unit: str, what: str, wrap: bo
             lines.append(Line(command, i, f"{axis} commanded", dashed=True))
         panels.append(Panel(f"{axis} {what}", unit, tuple(lines), wrap_degrees=wrap))
     return tuple(panels)
+
+
+def _slosh_panels(record: RunRecord) -> tuple[Panel, ...]:
+    """A panel per sloshing tank (its mass's displacement, the columns ``<tank>_y``,
+    ``<tank>_z`` of ``slosh_position``), then every tank's slosh frequency."""
+    tanks = record.signals["slosh_frequency"].columns
+    return tuple(Panel(f"{tank.upper()} slosh mass", "m", (Line("slosh_position", 2 * j, "y"),
+                                                           Line("slosh_position", 2 * j + 1, "z")))
+                 for j, tank in enumerate(tanks)) + (
+        Panel("slosh frequency", "Hz",
+              tuple(Line("slosh_frequency", j, tank.upper()) for j, tank in enumerate(tanks))),)
 
 
 #: The seven ascent figures, in the paper's order.
@@ -142,11 +157,7 @@ FIGURES: tuple[FigureSpec, ...] = (
         for k, axis in ((1, "pitch"), (2, "yaw"))
         for g, name in ((0, "upper-stage"), (1, "IMU"), (2, "first-stage"))
     ), requires="flex_q"),
-    FigureSpec("slosh.png", "Propellant slosh", (
-        Panel("LOX slosh mass", "m", (Line("slosh_position", 0, "y"), Line("slosh_position", 1, "z"))),
-        Panel("LH2 slosh mass", "m", (Line("slosh_position", 2, "y"), Line("slosh_position", 3, "z"))),
-        Panel("slosh frequency", "Hz", (Line("slosh_frequency", 0, "LOX"), Line("slosh_frequency", 1, "LH2"))),
-    ), requires="slosh_position"),
+    FigureSpec("slosh.png", "Propellant slosh", (), requires="slosh_frequency", panels_of=_slosh_panels),
     FigureSpec("guidance.png", "Powered Explicit Guidance", (
         Panel("time to go", "s", (Line("peg_time_to_go", None, "t_go"),)),
         Panel("velocity to go", "m/s", (Line("peg_velocity_to_go_magnitude", None, "|v_go|"),)),
@@ -227,13 +238,14 @@ LOAD_SIGNALS = ("q_alpha", "q_beta", "q_alpha_total")
 def _panels(spec: FigureSpec, record: RunRecord) -> tuple[RunRecord, list[Panel]]:
     """The record (with the derived load signals when the figure draws them) and the
     panels of ``spec`` it has the signals for (none: the figure is not drawn)."""
-    if any(line.signal in LOAD_SIGNALS for p in spec.panels for line in p.lines):
+    if spec.requires is not None and spec.requires not in record.signals:
+        return record, []
+    all_panels = spec.panels if spec.panels_of is None else spec.panels_of(record)
+    if any(line.signal in LOAD_SIGNALS for p in all_panels for line in p.lines):
         derived = load_signals(record.signals)
         if derived:
             record = dataclasses.replace(record, signals={**record.signals, **derived})
-    if spec.requires is not None and spec.requires not in record.signals:
-        return record, []
-    return record, [p for p in spec.panels if p.lines[0].signal in record.signals
+    return record, [p for p in all_panels if p.lines[0].signal in record.signals
                     and _column(record.signals[p.lines[0].signal], p.lines[0].column) is not None]
 
 

@@ -95,7 +95,8 @@ def state_layout(cfg: SavantConfig, vehicle: Vehicle) -> layout.StateLayout:
     """The continuous-state layout of ``vehicle`` with the models switched on in ``cfg``."""
     engines = max(len(vehicle.first_stage.mounts), len(vehicle.upper_stage.mounts), 1)
     return layout.StateLayout(tanks=vehicle.tanks + vehicle.booster_tanks, channels=layout.channel_names(engines),
-                              simplex=cfg.actuator.name == "simplex", slosh=cfg.slosh.enabled,
+                              simplex=cfg.actuator.name == "simplex",
+                              slosh_tanks=tuple(vehicle.slosh_spec or ()) if cfg.slosh.enabled else (),
                               n_modes=cfg.flex.n_modes if cfg.flex.enabled else 0)
 
 
@@ -365,7 +366,7 @@ def build_model(cfg: SavantConfig, vehicle: Vehicle, guidance: GuidanceTable) ->
     x0[x_layout.tank(fuel)] = vehicle.upper_stage.lh2_kg
     # the pad state is the whole vehicle's CG; with slosh on the state's reference point
     # is the rigid part's (the slosh masses left out): move it there
-    _, whole, rigid, _, _ = mass_state(x0, p, pack_tables(tb), layout.CONFIG_STACK)
+    _, whole, rigid = mass_state(x0, p, pack_tables(tb), layout.CONFIG_STACK, np.zeros(layout.N_AUX))
     rigid_body.move_reference(x0, rigid[1] - whole[1], rigid[2] - whole[2], rigid[3] - whole[3])
 
     d0 = np.zeros(layout.N_DISC)

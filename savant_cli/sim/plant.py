@@ -32,6 +32,7 @@ from savant_cli.models.layout import (
 #: Tabular data of the plant by name (SI, contiguous arrays); the fields are the tables
 #: the models declare, in field-number order (``blocks.TABLES``).
 PlantTables = namedtuple("PlantTables", blocks.TABLES.names())
+N_AUX = blocks.DIAGNOSTICS.size
 
 
 def pack_tables(tb: PlantTables) -> np.ndarray:
@@ -57,20 +58,20 @@ def derivative_state(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: 
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def mass_state(x: np.ndarray, p: np.ndarray, tb: np.ndarray, config: int):
+def mass_state(x: np.ndarray, p: np.ndarray, tb: np.ndarray, config: int, aux: np.ndarray):
     """Mass properties of ``config`` in state ``x``.
 
     Returns
     -------
     tuple
         ``(propellant kg, (mass kg, CG x, y, z m) of the whole vehicle, (mass, CG x, y, z,
-        Ixx, Iyy, Izz, Ixy, Ixz, Iyz) of the rigid part, tank 0, tank 1)``: CGs in
-        structure axes, inertia about the rigid part's CG in body axes (tensor elements);
-        the rigid part leaves the slosh masses out when slosh is on (else it is the
-        whole vehicle), and each tank is a :class:`~savant_cli.models.slosh.SloshTank`
-        (zeros with slosh off). In the liftoff configuration of a vehicle with strap-on
-        boosters each booster's full-load row is exchanged for its row at its own
-        propellant (:func:`~savant_cli.models.boosters.exchange`).
+        Ixx, Iyy, Izz, Ixy, Ixz, Iyz) of the rigid part)``: CGs in structure axes, inertia
+        about the rigid part's CG in body axes (tensor elements); the rigid part leaves the
+        slosh masses out when slosh is on (else it is the whole vehicle), and each
+        sloshing tank's mode at its level goes into ``aux``
+        (:func:`~savant_cli.models.slosh.tank_modes`). In the liftoff configuration of a
+        vehicle with strap-on boosters each booster's full-load row is exchanged for its
+        row at its own propellant (:func:`~savant_cli.models.boosters.exchange`).
     """
     prop = propulsion.propellant_remaining(x, p, config)
     mass, cgx, cgy, cgz, ixx, iyy, izz, ixy, ixz, iyz = mass_model.mass_properties(tb, config, prop)
@@ -78,22 +79,18 @@ def mass_state(x: np.ndarray, p: np.ndarray, tb: np.ndarray, config: int):
         mass, cgx, cgy, cgz, ixx, iyy, izz, ixy, ixz, iyz = boosters.exchange(
             x, p, tb, mass, cgx, cgy, cgz, ixx, iyy, izz, ixy, ixz, iyz)
     whole = (mass, cgx, cgy, cgz)
-    tank0 = tank1 = slosh.SloshTank(0.0, 0.0, 0.0, 0.0, 0.0)
-    if int(p[slosh.P_OFFSET]) >= 0:  # the rigid part leaves the slosh masses out
-        lox, lh2 = propulsion.upper_stage_propellant(x, p)
-        tank0 = slosh.slosh_tank(tb, p, 0, lox)
-        tank1 = slosh.slosh_tank(tb, p, 1, lh2)
+    if slosh.tank_count(p) > 0:  # the rigid part leaves the slosh masses out
+        slosh.tank_modes(x, p, tb, config, aux)
         mass, cgx, cgy, cgz, ixx, iyy, izz, ixy, ixz, iyz = slosh.rigid_part(
-            mass, cgx, cgy, cgz, ixx, iyy, izz, ixy, ixz, iyz, tank0.mass_kg, tank0.station_m, tank1.mass_kg,
-            tank1.station_m)
-    return prop, whole, (mass, cgx, cgy, cgz, ixx, iyy, izz, ixy, ixz, iyz), tank0, tank1
+            p, aux, mass, cgx, cgy, cgz, ixx, iyy, izz, ixy, ixz, iyz)
+    return prop, whole, (mass, cgx, cgy, cgz, ixx, iyy, izz, ixy, ixz, iyz)
 
 
 @njit(cache=True, error_model="numpy")
 def reference_cg(x: np.ndarray, p: np.ndarray, tb: np.ndarray, config: int) -> tuple[float, float, float]:
     """The state's reference point in configuration ``config``: the CG (structure axes,
     m) of the rigid part (:func:`mass_state`)."""
-    rigid = mass_state(x, p, tb, config)[2]
+    rigid = mass_state(x, p, tb, config, np.zeros(N_AUX))[2]
     return rigid[1], rigid[2], rigid[3]
 
 
@@ -152,10 +149,9 @@ def compose(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarra
     vair, alpha, beta, mach, qbar = aero.air_data(ub, vb, wb, rho, sos)
 
     # ------------------------------------------------------- mass properties
-    prop, whole, rigid, tank0, tank1 = mass_state(x, p, tb, config)
+    prop, whole, rigid = mass_state(x, p, tb, config, aux)
     mass_total, cgx_t, cgy_t, cgz_t = whole
     mass, cgx, cgy, cgz, ixx, iyy, izz, ixy, ixz, iyz = rigid
-    slosh_at = int(p[slosh.P_OFFSET])  # first slosh state, −1 when slosh is off
 
     # ------------------------------------------------- forces and moments
     fax, fay, faz, max_, may, maz = aero.aero_loads(tb, p, config, t, mach, alpha, beta, qbar, cgx, cgy, cgz)
@@ -185,28 +181,13 @@ def compose(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarra
                                                                       xd)
         fex, fey, fez = fex + fbx, fey + fby, fez + fbz
         mtx, mty, mtz = mtx + mbx, mty + mby, mtz + mbz
-    fsx0 = fsy0 = fsz0 = fsx1 = fsy1 = fsz1 = 0.0
-    msx = msy = msz = 0.0
-    w_s0 = w_s1 = 0.0
-    if slosh_at >= 0:
-        a_ratio = slosh.frequency_ratio(p, fex, fey, fez, mass_total)
-        w_s0 = tank0.frequency_rad_s * a_ratio
-        w_s1 = tank1.frequency_rad_s * a_ratio
-        fx_spec = fex / mass_total  # axial specific force; the masses ride axially with the tank
-        fsx0, fsy0, fsz0, mlx, mly, mlz = slosh.tank_force(x, slosh_at, tank0, w_s0, fx_spec, (cgx, cgy, cgz))
-        msx += mlx
-        msy += mly
-        msz += mlz
-        fsx1, fsy1, fsz1, mhx, mhy, mhz = slosh.tank_force(x, slosh_at + slosh.N_PER_TANK, tank1, w_s1, fx_spec,
-                                                           (cgx, cgy, cgz))
-        msx += mhx
-        msy += mhy
-        msz += mhz
+    # the rigid part carries the slosh masses' forces too
+    frx, fry, frz, msx, msy, msz = slosh.add_loads(x, p, aux, fex, fey, fez, mass_total, (cgx, cgy, cgz))
 
     # ------------------------------------------------------- equations of motion
-    abx = (fex + fsx0 + fsx1) / mass
-    aby = (fey + fsy0 + fsy1) / mass
-    abz = (fez + fsz0 + fsz1) / mass
+    abx = frx / mass
+    aby = fry / mass
+    abz = frz / mass
     dvx, dvy, dvz = rigid_body.inertial_acceleration(m00, m01, m02, m10, m11, m12, m20, m21, m22,
                                                      abx, aby, abz, gx, gy, gz)
     dq0, dq1, dq2, dq3 = qt.rate_xyz(q0, q1, q2, q3, wx, wy, wz)
@@ -235,13 +216,11 @@ def compose(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarra
     xd[int(p[propulsion.P_US_FUEL_TANK])] = dm_lh2
 
     # ------------------------------------------------------- auxiliary states
-    if slosh_at >= 0:
+    if slosh.tank_count(p) > 0:
         motion = slosh.RigidMotion((cgx, cgy, cgz), (aby, abz), (wx, wy, wz), (alx, aly, alz))
-        slosh.tank_rates(x, slosh_at, tank0, w_s0, motion, xd)
-        slosh.tank_rates(x, slosh_at + slosh.N_PER_TANK, tank1, w_s1, motion, xd)
-    loads = flex.StructuralLoads((ftx + fwx, fty + fwy, ftz + fwz), (twy, twz), rcs_torque, (fsx0, fsy0, fsz0),
-                                 (fsx1, fsy1, fsz1))
-    flex.modal_rates(x, config, p, tb, gimbal_pt, loads, xd)
+        slosh.rates(x, p, aux, config, motion, xd)
+    loads = flex.StructuralLoads((ftx + fwx, fty + fwy, ftz + fwz), (twy, twz), rcs_torque)
+    flex.modal_rates(x, config, p, tb, gimbal_pt, loads, aux, xd)
 
     # ------------------------------------------------------------ diagnostics
     earth.write_altitude(aux, alt)
@@ -260,5 +239,4 @@ def compose(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarra
     actuator.write_diagnostics(aux, dp, dy, ddp, ddy)
     rigid_body.write_diagnostics(aux, abx, aby, abz)
     twd.write_diagnostics(aux, mwx, mwy, mwz)
-    slosh.write_diagnostics(aux, w_s0, w_s1, tank0.level_m, tank1.level_m, fsx0, fsy0, fsz0, fsx1, fsy1, fsz1)
     flex.write_diagnostics(aux, tgx, tgy, tgz)

@@ -268,8 +268,9 @@ def logged_diagnostics(aux: np.ndarray, model: SimModel) -> dict[str, Signal]:
     for f in blocks.DIAGNOSTICS.fields:
         lg = f.logged
         if lg is not None and (lg.when is None or lg.when(model)):
-            data = aux[:, f.index] if f.size == 1 else aux[:, f.index:f.index + f.size]
-            out[lg.name] = Signal(data, f.units, f.description, lg.columns, lg.frame)
+            columns = lg.columns if lg.columns_of is None else lg.columns_of(model)
+            data = aux[:, f.index] if f.size == 1 else aux[:, f.index:f.index + (len(columns) or f.size)]
+            out[lg.name] = Signal(data, f.units, f.description, columns, lg.frame)
     return out
 
 
@@ -340,16 +341,15 @@ def signals(result: SimResult, model: SimModel) -> dict[str, Signal]:
         s["actuator_valve_flow"] = Signal(x[:, [lay.valve + layout.N_VALVE_PER_CHANNEL * k for k in range(n_ch)]],
                                           "rad/s", "simplex power-valve flow as no-load ram rate", channels, "body")
     if lay.slosh:
-        so = lay.slosh_offset
-        yz = ("lox_y", "lox_z", "lh2_y", "lh2_z")
-        lox, lh2 = so, so + slosh.N_PER_TANK
-        s["slosh_position"] = Signal(x[:, [lox + slosh.S_Y, lox + slosh.S_Z, lh2 + slosh.S_Y, lh2 + slosh.S_Z]], "m",
+        tanks = lay.slosh_tanks
+        yz = tuple(f"{tank}_{axis}" for tank in tanks for axis in ("y", "z"))
+        starts = [lay.slosh_offset + slosh.N_PER_TANK * j for j in range(len(tanks))]
+        s["slosh_position"] = Signal(x[:, [k + o for k in starts for o in (slosh.S_Y, slosh.S_Z)]], "m",
                                      "slosh-mass displacement from the tank centerline", yz, "body")
-        s["slosh_velocity"] = Signal(x[:, [lox + slosh.S_YDOT, lox + slosh.S_ZDOT, lh2 + slosh.S_YDOT, lh2 + slosh.S_ZDOT]],
-                                     "m/s", "slosh-mass lateral velocity",
-                                     yz, "body")
-        s["slosh_frequency"] = Signal(aux[:, slosh.A_FREQUENCY:slosh.A_FREQUENCY + 2] / (2.0 * np.pi), "Hz",
-                                      "slosh natural frequency at the current acceleration", ("lox", "lh2"))
+        s["slosh_velocity"] = Signal(x[:, [k + o for k in starts for o in (slosh.S_YDOT, slosh.S_ZDOT)]],
+                                     "m/s", "slosh-mass lateral velocity", yz, "body")
+        s["slosh_frequency"] = Signal(aux[:, slosh.A_FREQUENCY:slosh.A_FREQUENCY + len(tanks)] / (2.0 * np.pi), "Hz",
+                                      "slosh natural frequency at the current acceleration", tanks)
     if lay.n_modes:
         fo, n = lay.flex, lay.n_modes
         modes = tuple(f"mode_{i + 1}" for i in range(n))

@@ -32,7 +32,8 @@ from savant_cli.io.guidance_file import read_guidance
 from savant_cli.io.provenance import collect_provenance
 from savant_cli.io.record import FLOWN
 from savant_cli.montecarlo.batch import (
-    BatchStop, Case, Journal, RunOutcome, execute, fingerprint, fly_run, history_columns, read_outcome, shard_runs
+    BatchStop, Case, Journal, RunOutcome, batch_slosh_tanks, execute, fingerprint, fly_run, history_columns,
+    read_outcome, shard_runs
 )
 from savant_cli.montecarlo.inventory import inventory, ranges_text
 from savant_cli.montecarlo.outputs import write_outputs
@@ -115,7 +116,7 @@ def fly_batch(cfg: SavantConfig, config_yaml: str, out_dir: Path, console: Conso
     study: MonteCarloStudyConfig = cfg.study
     t0 = time.perf_counter()
     case, names = make_case(cfg)
-    journal = Journal(out_dir / "runs", cfg, case.dispersions.names)
+    journal = Journal(out_dir / "runs", cfg, case.dispersions.names, batch_slosh_tanks(case.vehicle))
     by_reason: dict[str, list[str]] = {}  # one line per reason: the navigation set alone has 21 items
     for d in case.dispersions.items:
         if d.target.kind == "inactive":

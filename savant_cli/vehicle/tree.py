@@ -34,6 +34,9 @@ CONDITION_QUANTITIES = {
 }
 #: The event every trigger counts from unless it names another.
 LIFTOFF = "liftoff"
+#: Tanks with a ``slosh`` section a vehicle may have (the plant's per-tank diagnostics
+#: are sized for them: ``models/slosh.py``).
+MAX_SLOSH_TANKS = 6
 
 
 @dataclass(frozen=True)

@@ -26,8 +26,8 @@ from savant_cli.constants import G0, P0
 from savant_cli.errors import ConfigError
 from savant_cli.vehicle.tables import MASS_TOLERANCE_KG, AeroTable, MassTable
 from savant_cli.vehicle.tree import (
-    BOOSTER, GIMBAL_AXES, ITEM, LIFTOFF, LIQUID, TRACE, EngineSpec, LiquidThrust, MovingMass, RollJets, Sensors,
-    ThrustTrace, VehicleTree
+    BOOSTER, GIMBAL_AXES, ITEM, LIFTOFF, LIQUID, MAX_SLOSH_TANKS, TRACE, EngineSpec, LiquidThrust, MovingMass, RollJets,
+    Sensors, ThrustTrace, VehicleTree
 )
 
 #: The vehicle's configurations, in the order the aero and mass tables are stacked
@@ -266,7 +266,9 @@ class Vehicle:
     events: Events
     data_dir: Path | None = None
     flex_spec: dict | None = None  # raw ``flex`` section, loaded by savant_cli.flex_slosh when flex is on
-    slosh_spec: dict | None = None  # raw ``slosh`` section, loaded when slosh is on
+    #: each sloshing tank's raw ``slosh`` section by the tank's name, in the order of
+    #: :attr:`tanks` (None: no tank sloshes), loaded when slosh is on
+    slosh_spec: dict | None = None
     #: structural load allowable on the total q·α (Pa·deg, ``loads.qalpha_limit_Pa_deg``;
     #: None: no limit declared). The run summary reports the time above it.
     qalpha_limit_Pa_deg: float | None = None
@@ -299,6 +301,15 @@ class Vehicle:
     def upper_stage_tanks(self) -> tuple[str, str]:
         """The upper stage's oxidizer and fuel tanks."""
         return self.tanks[-2], self.tanks[-1]
+
+    def tank_load_kg(self, name: str) -> float:
+        """Tank ``name``'s propellant load, kg."""
+        if self.tree is not None:
+            return self.tree.tanks[name].propellant_kg
+        fs, us = self.first_stage, self.upper_stage
+        first = (fs.propellant_kg,) if len(self.first_stage_tanks) == 1 else (fs.oxidizer_kg, fs.fuel_kg)
+        loads = dict(zip(self.first_stage_tanks + self.upper_stage_tanks, first + (us.lox_kg, us.lh2_kg)))
+        return loads[name]
 
 
 def check_consistency(v: Vehicle, mass_files: Mapping[str, str] | None = None) -> None:
@@ -545,15 +556,15 @@ def two_stage_view(tree: VehicleTree) -> Vehicle:
             "propellant_upper": f"{ox.key}.propellant_kg + {fuel.name}.propellant_kg",
             "jettison_mass": f"{first.key}.inert_mass_kg",
             "les_mass": f"{items[0].key}.mass_kg" if items else "vehicle.items",
-            "slosh.lox": f"{ox.key}.slosh", "slosh.lh2": f"{fuel.key}.slosh",
-            "slosh": f"{ox.key}.slosh and {fuel.key}.slosh",
+            **{f"slosh.{t}": f"{tree.tanks[t].key}.slosh" for t in all_tanks},
+            "slosh": "the tanks' slosh sections",
             "mixing_matrix.first_stage": f"{first.key}.mixing_matrix",
             "mixing_matrix.upper_stage": f"{upper.key}.mixing_matrix"}
     vehicle = Vehicle(
         name=tree.name, description=tree.description, length_m=tree.length_m,
         configurations={n: Configuration(n, c.aero, c.mass) for n, c in zip(slots, configs)},
         first_stage=first_stage, upper_stage=upper_stage, rcs=upper.roll_jets, sensors=tree.sensors, events=events,
-        data_dir=tree.data_dir, flex_spec=tree.flex_spec, slosh_spec=_slosh_spec(tree, ox.name, fuel.name),
+        data_dir=tree.data_dir, flex_spec=tree.flex_spec, slosh_spec=_slosh_spec(tree, all_tanks),
         qalpha_limit_Pa_deg=tree.qalpha_limit_Pa_deg, keys=keys, tree=tree, tanks=tanks,
         first_stage_configurations=n_fs, boosters=boosters)
     check_consistency(vehicle, {n: c.mass_file for n, c in zip(slots, configs)})
@@ -661,15 +672,18 @@ def check_boosters(v: Vehicle, boosted, keys: list[str]) -> None:
                           f"{stack.propellant_kg[worst]:.1f} kg of the stage's propellant) within {tol:g} kg")
 
 
-def _slosh_spec(tree: VehicleTree, ox: str, fuel: str) -> dict | None:
-    """The upper-stage tanks' slosh sections as the slosh loader reads them (``lox``: the
-    oxidizer's, ``lh2``: the fuel's, one reference acceleration); None without slosh data."""
-    sloshing = [t for t in tree.tanks.values() if t.slosh is not None]
+def _slosh_spec(tree: VehicleTree, tanks: tuple[str, ...]) -> dict | None:
+    """Every tank's slosh section, by the tank's name, in the order of the plant's
+    propellant ``tanks``; None without slosh data. A solid motor's grain does not slosh."""
+    sloshing = [tree.tanks[t] for t in tanks if tree.tanks[t].slosh is not None]
     if not sloshing:
         return None
-    if {t.name for t in sloshing} != {ox, fuel}:
-        _refuse(sloshing[0].key, [t.name for t in sloshing], f"slosh in the upper stage's two tanks, {ox} and {fuel}")
-    a_ref = {float(t.slosh["reference_accel_mps2"]) for t in sloshing}
-    if len(a_ref) != 1:
-        _refuse(f"{tree.tanks[fuel].key}.slosh.reference_accel_mps2", sorted(a_ref), "one reference acceleration")
-    return {"reference_accel_mps2": a_ref.pop(), "lox": tree.tanks[ox].slosh, "lh2": tree.tanks[fuel].slosh}
+    for tank in sloshing:
+        feeding = [e for e in tree.engines.values() if tank.name in e.tanks]
+        if any(e.source == TRACE for e in feeding):
+            _refuse(f"{tank.key}.slosh", tank.name, "slosh in a liquid engine's tank: a solid motor's grain does "
+                    "not slosh")
+    if len(sloshing) > MAX_SLOSH_TANKS:
+        _refuse(f"{sloshing[MAX_SLOSH_TANKS].key}.slosh", [t.name for t in sloshing],
+                f"at most {MAX_SLOSH_TANKS} tanks with a slosh section")
+    return {t.name: t.slosh for t in sloshing}
