@@ -98,7 +98,7 @@ def parameters(gravity_order: int = 0, aero: bool = False, thrust: bool = False,
     p[propulsion.P_FS_CONFIGS] = 1.0  # the stack, then the upper stage's configurations
     p[cluster.P_UPPER_FIRST] = 1.0  # tables(): one engine a stage
     p[slosh.P_FREQ_SCALE] = p[slosh.P_ZETA_SCALE] = 1.0
-    p[slosh.P_N_TANKS] = len(lay.slosh_tanks)
+    p[slosh.P_N_TANKS], p[slosh.P_ROWS] = len(lay.slosh_tanks), 2  # tables(): two rows a tank
     for j, tank in enumerate(lay.slosh_tanks):  # aboard in every configuration
         base = slosh.P_TANKS + j * slosh.N_TANK_FIELDS
         p[base + slosh.K_AREF], p[base + slosh.K_LIQUID], p[base + slosh.K_CONFIGS] = 9.80665, lay.tank(tank), 3.0

@@ -36,7 +36,7 @@ import numpy as np
 from numba import njit
 
 from savant_cli.models import blocks
-from savant_cli.models.interp import locate_at, tab, tab_offset
+from savant_cli.models.interp import locate_at, tab_offset
 from savant_cli.models.mass import minus_point_mass
 from savant_cli.vehicle.tree import MAX_SLOSH_TANKS
 
@@ -85,6 +85,7 @@ N_MODE = MODE.size
 _PARAMS = blocks.PARAMETERS.block("slosh")
 P_OFFSET = _PARAMS.scalar("state_offset", "1", "offset of the slosh states in x (−1: slosh off)")
 P_N_TANKS = _PARAMS.scalar("n_tanks", "1", "sloshing tanks (0 with slosh off)")
+P_ROWS = _PARAMS.scalar("rows", "1", "rows of each tank's padded table (T_LEVEL's second dimension)")
 P_FREQ_SCALE = _PARAMS.scalar("frequency_scale", "1", "multiplier of the tabulated frequencies")
 P_ZETA_SCALE = _PARAMS.scalar("damping_scale", "1", "multiplier of the tabulated damping")
 P_TANKS = _PARAMS.record("tank0", TANK, "first sloshing tank")
@@ -138,6 +139,7 @@ def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarra
     data, _ = blocks.stack_padded([np.column_stack([t.frequency_rad_s, t.damping, t.mass_kg, t.height_m])
                                    for t in sl.tanks])
     tables.update(slosh_level=level, slosh_data=data, slosh_len=n)
+    p[P_ROWS] = level.shape[1]
 
 
 class SloshTank(NamedTuple):
@@ -191,8 +193,8 @@ def slosh_tank(tb: np.ndarray, p: np.ndarray, j: int, liquid_kg: float) -> Slosh
     base = P_TANKS + j * N_TANK_FIELDS
     radius, density = p[base + K_RADIUS], p[base + K_DENSITY]
     level = max(liquid_kg, 0.0) / (density * np.pi * radius * radius)
-    o_l, n_l = tab(tb, T_LEVEL)
-    ns = n_l // int(p[P_N_TANKS])
+    o_l = tab_offset(tb, T_LEVEL)
+    ns = int(p[P_ROWS])
     i, w = locate_at(tb, o_l + j * ns, int(tb[tab_offset(tb, T_LEN) + j]), level)
     r0 = tab_offset(tb, T_DATA) + (j * ns + i) * N_COLUMNS
     r1 = r0 + N_COLUMNS
@@ -223,15 +225,16 @@ def tank_modes(x: np.ndarray, p: np.ndarray, tb: np.ndarray, config: int, aux: n
     ``aux`` (its level and :data:`MODE`): zeros for a tank whose stage is gone."""
     for j in range(tank_count(p)):
         base = P_TANKS + j * N_TANK_FIELDS
-        tank = SloshTank(0.0, 0.0, 0.0, 0.0, 0.0)
+        k = A_MODE + j * N_MODE
         if config < p[base + K_CONFIGS]:
             tank = slosh_tank(tb, p, j, x[int(p[base + K_LIQUID])])
-        k = A_MODE + j * N_MODE
-        aux[A_LEVEL + j] = tank.level_m
-        aux[k + M_FREQ] = tank.frequency_rad_s
-        aux[k + M_ZETA] = tank.damping
-        aux[k + M_MASS] = tank.mass_kg
-        aux[k + M_STATION] = tank.station_m
+            aux[A_LEVEL + j] = tank.level_m
+            aux[k + M_FREQ] = tank.frequency_rad_s
+            aux[k + M_ZETA] = tank.damping
+            aux[k + M_MASS] = tank.mass_kg
+            aux[k + M_STATION] = tank.station_m
+        else:
+            aux[A_LEVEL + j] = aux[k + M_FREQ] = aux[k + M_ZETA] = aux[k + M_MASS] = aux[k + M_STATION] = 0.0
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -273,9 +276,13 @@ def add_loads(x: np.ndarray, p: np.ndarray, aux: np.ndarray, fex: float, fey: fl
         return fx, fy, fz, msx, msy, msz
     f_mag = np.sqrt(fex * fex + fey * fey + fez * fez) / mass_total
     fx_spec = fex / mass_total  # axial specific force; the masses ride axially with the tank
+    a_ref = ratio = 0.0
     for j in range(n):
         tank = stored_tank(aux, j)
-        w = tank.frequency_rad_s * np.sqrt(f_mag / p[P_TANKS + j * N_TANK_FIELDS + K_AREF])
+        if p[P_TANKS + j * N_TANK_FIELDS + K_AREF] != a_ref:  # tanks of one reference share the ratio
+            a_ref = p[P_TANKS + j * N_TANK_FIELDS + K_AREF]
+            ratio = np.sqrt(f_mag / a_ref)
+        w = tank.frequency_rad_s * ratio
         fsx, fsy, fsz, mx, my, mz = tank_force(x, int(p[P_OFFSET]) + N_PER_TANK * j, tank, w, fx_spec, cg)
         aux[A_FREQUENCY + j] = w
         aux[A_FORCE + 3 * j] = fsx
