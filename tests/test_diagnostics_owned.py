@@ -14,7 +14,7 @@ import numpy as np
 import savant_cli.models  # noqa: F401  (declares every field)
 from conftest import compose_config
 from savant_cli.config import validate
-from savant_cli.models import blocks, layout
+from savant_cli.models import blocks, layout, slosh
 from savant_cli.paths import hydra_search_dirs
 from savant_cli.sim import plant
 from savant_cli.sim.setup import prepare
@@ -34,7 +34,9 @@ def test_every_model_with_diagnostics_writes_them_and_the_plant_writes_none():
 def test_one_evaluation_fills_every_diagnostic_and_the_state_only_path_only_the_altitude():
     """aux starts as NaN: after one full-fidelity derivative no entry is left unwritten
     (a field no model writes would stay NaN); the state-only derivative writes the
-    altitude alone and the same state derivative."""
+    altitude and, of the rest, only the sloshing tanks' entries the slosh model hands from
+    the mass properties to the loads (their mode, frequency, level and force), and the
+    same state derivative."""
     prep = prepare(validate(compose_config(["flex=on", "flex.n_modes=2", "slosh=on", "twd=on"])),
                    hydra_search_dirs())
     model = prep.model
@@ -51,8 +53,12 @@ def test_one_evaluation_fills_every_diagnostic_and_the_state_only_path_only_the_
     plant.derivative_state(0.5, x, model.u0, model.p, tb, aux_state, xd_state)
     written = np.flatnonzero(np.isfinite(aux_state))
     altitude = blocks.DIAGNOSTICS.field("earth.altitude").index
-    assert written.tolist() == [altitude]
-    assert aux_state[altitude] == aux[altitude] and np.array_equal(xd_state, xd)
+    n = len(model.layout.slosh_tanks)
+    handed = [blocks.DIAGNOSTICS.field(f"slosh.{name}").index + k for name, per in (
+        ("frequency", 1), ("level", 1), ("force", 3), ("mode", slosh.N_MODE)) for k in range(per * n)]
+    assert written.tolist() == sorted([altitude] + handed)
+    np.testing.assert_array_equal(aux_state[written], aux[written])
+    assert np.array_equal(xd_state, xd)
 
 
 def _short_flight(overrides):
@@ -66,7 +72,9 @@ def _short_flight(overrides):
 def test_a_logged_diagnostic_is_a_signal_of_every_run_where_its_model_is_on():
     """Each field declared with ``blocks.Logged`` is a time history with the field's units
     and description, the declaration's columns and frame, and the logged ``aux`` entries
-    as data; a field whose model is off (``when`` false: slosh, flex) is left out."""
+    as data (a per-tank field's first entries, one per column ``columns_of`` gives: the
+    run's sloshing tanks); a field whose model is off (``when`` false: slosh, flex) is left
+    out."""
     from savant_cli.sim.run import _split
 
     logged = [f for f in blocks.DIAGNOSTICS.fields if f.logged is not None]
@@ -76,9 +84,12 @@ def test_a_logged_diagnostic_is_a_signal_of_every_run_where_its_model_is_on():
     aux = _split(result.log, model.layout.n)[2]
     for f in logged:
         s = sig[f.logged.name]
-        declared = (f.units, f.description, f.logged.columns, f.logged.frame)
+        columns = f.logged.columns if f.logged.columns_of is None else f.logged.columns_of(model)
+        declared = (f.units, f.description, columns, f.logged.frame)
         assert (s.units, s.description, s.columns, s.frame) == declared
-        assert np.array_equal(s.data, aux[:, f.index] if f.size == 1 else aux[:, f.index:f.index + f.size])
+        size = f.size if f.logged.columns_of is None else len(columns)
+        assert np.array_equal(s.data, aux[:, f.index] if f.size == 1 else aux[:, f.index:f.index + size])
+    assert sig["liquid_level"].columns == ("lox", "lh2") and sig["slosh_force"].columns[-1] == "lh2_z"
     _, _, rigid = _short_flight([])
     conditional = {f.logged.name for f in logged if f.logged.when is not None}
     assert conditional == {"liquid_level", "slosh_force", "flex_gimbal_rotation"}

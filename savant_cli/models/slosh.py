@@ -114,6 +114,19 @@ A_MODE = _AUX.array("mode", N_MODE * MAX_TANKS, "rad/s, 1, kg, m",
                     "each tank's mode at its level (MODE): the mass-properties step hands it to the loads")
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def write_diagnostics(aux: np.ndarray, p: np.ndarray) -> None:
+    """Zero the per-tank diagnostics of the tank slots the run does not fill (every slot
+    with slosh off): each sloshing tank's own are written where the plant computes them
+    (:func:`tank_modes`, :func:`add_loads`), as the loads read them."""
+    for j in range(tank_count(p), MAX_TANKS):
+        aux[A_FREQUENCY + j] = aux[A_LEVEL + j] = 0.0
+        for c in range(3):
+            aux[A_FORCE + 3 * j + c] = 0.0
+        for c in range(N_MODE):
+            aux[A_MODE + N_MODE * j + c] = 0.0
+
+
 def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarray]) -> None:
     """The ``slosh`` group and the vehicle's slosh tables (placeholders when off): each
     sloshing tank's geometry, reference acceleration, liquid state and the configurations

@@ -53,7 +53,8 @@ def derivative_state(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: 
                      aux: np.ndarray, xd: np.ndarray) -> None:
     """:func:`derivative` without the diagnostics only a log reads (latitude, longitude,
     Earth-relative speed): ``xd`` is bit for bit the same; of ``aux`` only the altitude
-    is written (the engine's ground check)."""
+    (the engine's ground check) and the sloshing tanks' entries the slosh model hands
+    from the mass properties to the loads are written."""
     compose(t, x, u, p, tb, aux, xd, np.bool_(False))
 
 
@@ -239,4 +240,5 @@ def compose(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarra
     actuator.write_diagnostics(aux, dp, dy, ddp, ddy)
     rigid_body.write_diagnostics(aux, abx, aby, abz)
     twd.write_diagnostics(aux, mwx, mwy, mwz)
+    slosh.write_diagnostics(aux, p)
     flex.write_diagnostics(aux, tgx, tgy, tgz)
