@@ -112,6 +112,7 @@ A_FORCE = _AUX.array("force", 3 * MAX_TANKS, "N", "force of the slosh masses on 
                                    _tank_columns(("_x", "_y", "_z"))))
 A_MODE = _AUX.array("mode", N_MODE * MAX_TANKS, "rad/s, 1, kg, m",
                     "each tank's mode at its level (MODE): the mass-properties step hands it to the loads")
+assert (A_LEVEL, A_FORCE, A_MODE) == (A_FREQUENCY + MAX_TANKS, A_LEVEL + MAX_TANKS, A_FORCE + 3 * MAX_TANKS)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -119,12 +120,14 @@ def write_diagnostics(aux: np.ndarray, p: np.ndarray) -> None:
     """Zero the per-tank diagnostics of the tank slots the run does not fill (every slot
     with slosh off): each sloshing tank's own are written where the plant computes them
     (:func:`tank_modes`, :func:`add_loads`), as the loads read them."""
-    for j in range(tank_count(p), MAX_TANKS):
-        aux[A_FREQUENCY + j] = aux[A_LEVEL + j] = 0.0
-        for c in range(3):
-            aux[A_FORCE + 3 * j + c] = 0.0
-        for c in range(N_MODE):
-            aux[A_MODE + N_MODE * j + c] = 0.0
+    n = tank_count(p)
+    if n == 0:  # the four fields are declared one after another: one block
+        aux[A_FREQUENCY:A_MODE + N_MODE * MAX_TANKS] = 0.0
+        return
+    aux[A_FREQUENCY + n:A_FREQUENCY + MAX_TANKS] = 0.0
+    aux[A_LEVEL + n:A_LEVEL + MAX_TANKS] = 0.0
+    aux[A_FORCE + 3 * n:A_FORCE + 3 * MAX_TANKS] = 0.0
+    aux[A_MODE + N_MODE * n:A_MODE + N_MODE * MAX_TANKS] = 0.0
 
 
 def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarray]) -> None:
