@@ -84,7 +84,8 @@ def test_a_tanks_states_name_its_group():
 def flight():
     vehicle = _vehicle()
     cfg = validate(compose_config(["sim.progress=false", "slosh=on"]))
-    guidance = read_guidance(prepare(validate(compose_config(["sim.progress=false"])), hydra_search_dirs()).command_file)
+    shipped = validate(compose_config(["sim.progress=false"]))
+    guidance = read_guidance(prepare(shipped, hydra_search_dirs()).command_file)
     model = build_model(cfg, vehicle, guidance)
     steps = tuple(int(round(t / model.rates.dt)) for t in (60.0, 250.0))
     result = simulate(model, progress=False, snapshot_steps=steps)
