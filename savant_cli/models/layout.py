@@ -46,7 +46,7 @@ from savant_cli.models.guidance import D_QG, D_QS, D_TG, D_VG, D_VS  # noqa: F40
 from savant_cli.models.rcs import N_JET_STATES, STATE_NAMES as _RCS_NAMES  # noqa: F401
 from savant_cli.models.rigid_body import STATE_NAMES as _RIGID_NAMES, Q, R, V, W  # noqa: F401
 from savant_cli.models.sensors import D_GYRO_X, D_GYRO_Y, GYRO_MISALIGN, GYRO_POINTS  # noqa: F401
-from savant_cli.models.slosh import MAX_TANKS as MAX_SLOSH_TANKS, N_PER_TANK as N_SLOSH_PER_TANK  # noqa: F401
+from savant_cli.models.slosh import N_PER_TANK as N_SLOSH_PER_TANK  # noqa: F401
 
 N_STATE = blocks.STATE.size  # the rigid body; the vehicle's and the optional blocks follow
 N_PARAM = blocks.PARAMETERS.size

@@ -292,6 +292,7 @@ def add_loads(x: np.ndarray, p: np.ndarray, aux: np.ndarray, fex: float, fey: fl
         return fx, fy, fz, msx, msy, msz
     f_mag = np.sqrt(fex * fex + fey * fey + fez * fez) / mass_total
     fx_spec = fex / mass_total  # axial specific force; the masses ride axially with the tank
+    so = int(p[P_OFFSET])
     a_ref = ratio = 0.0
     for j in range(n):
         tank = stored_tank(aux, j)
@@ -299,7 +300,7 @@ def add_loads(x: np.ndarray, p: np.ndarray, aux: np.ndarray, fex: float, fey: fl
             a_ref = p[P_TANKS + j * N_TANK_FIELDS + K_AREF]
             ratio = np.sqrt(f_mag / a_ref)
         w = tank.frequency_rad_s * ratio
-        fsx, fsy, fsz, mx, my, mz = tank_force(x, int(p[P_OFFSET]) + N_PER_TANK * j, tank, w, fx_spec, cg)
+        fsx, fsy, fsz, mx, my, mz = tank_force(x, so + N_PER_TANK * j, tank, w, fx_spec, cg)
         aux[A_FREQUENCY + j] = w
         aux[A_FORCE + 3 * j] = fsx
         aux[A_FORCE + 3 * j + 1] = fsy

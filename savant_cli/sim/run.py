@@ -269,7 +269,8 @@ def logged_diagnostics(aux: np.ndarray, model: SimModel) -> dict[str, Signal]:
         lg = f.logged
         if lg is not None and (lg.when is None or lg.when(model)):
             columns = lg.columns if lg.columns_of is None else lg.columns_of(model)
-            data = aux[:, f.index] if f.size == 1 else aux[:, f.index:f.index + (len(columns) or f.size)]
+            size = f.size if lg.columns_of is None else len(columns)  # a per-tank field: the run's tanks
+            data = aux[:, f.index] if f.size == 1 else aux[:, f.index:f.index + size]
             out[lg.name] = Signal(data, f.units, f.description, columns, lg.frame)
     return out
 

@@ -303,13 +303,13 @@ class Vehicle:
         return self.tanks[-2], self.tanks[-1]
 
     def tank_load_kg(self, name: str) -> float:
-        """Tank ``name``'s propellant load, kg."""
-        if self.tree is not None:
-            return self.tree.tanks[name].propellant_kg
+        """Tank ``name``'s propellant load, kg, from this view's records (so a dispersed
+        load is the dispersed one, where the tree keeps the file's)."""
+        if name in self.booster_tanks:
+            return self.boosters.propellant_kg
         fs, us = self.first_stage, self.upper_stage
         first = (fs.propellant_kg,) if len(self.first_stage_tanks) == 1 else (fs.oxidizer_kg, fs.fuel_kg)
-        loads = dict(zip(self.first_stage_tanks + self.upper_stage_tanks, first + (us.lox_kg, us.lh2_kg)))
-        return loads[name]
+        return dict(zip(self.first_stage_tanks + self.upper_stage_tanks, first + (us.lox_kg, us.lh2_kg)))[name]
 
 
 def check_consistency(v: Vehicle, mass_files: Mapping[str, str] | None = None) -> None:
