@@ -51,7 +51,7 @@ def tables(mass: float = 1000.0, inertia=(100.0, 400.0, 400.0, 0.0, 0.0, 0.0),
         slosh_level=np.tile(ax, (2, 1)), slosh_data=np.zeros((2, 2, 4)), slosh_len=np.array([2, 2]),  # two tanks
         mounts=MOUNTS, booster_time=ax, booster_thrust=np.zeros(2), booster_mount=np.zeros((1, 6)),
         booster_mass_prop=np.zeros((1, 1)), booster_mass_data=np.zeros((1, 1, 10)), booster_mass_len=np.ones(1, int),
-        booster_burn_rate=np.ones(1), booster_full=np.zeros((1, 10)),
+        booster_burn_rate=np.ones(1), booster_cant=np.zeros((1, 2)), booster_full=np.zeros((1, 10)),
     )
 
 

@@ -69,7 +69,7 @@ def plant_loads(tb: np.ndarray, p: np.ndarray, x: np.ndarray, xd: np.ndarray, en
     others' read by the kernel from ``x`` and ``xd``."""
     k, lim = int(p[actuator.P_CHANNEL_OFFSET]), p[actuator.gimbal_stage(engine) + actuator.G_LIMIT]
     ky = k + actuator.N_PER_CHANNEL
-    return cluster.cluster_loads(tb, p, x, xd, engine, thrust, actuator.clip(x[k], lim), actuator.clip(x[ky], lim),
+    return cluster.cluster_loads(tb, p, x, xd, engine, 0, thrust, actuator.clip(x[k], lim), actuator.clip(x[ky], lim),
                                  xd[k + 1], xd[ky + 1], 0.0, 0.0, 0.0, 0.0, *arm)
 
 

@@ -71,7 +71,7 @@ def _loads(coefficients: np.ndarray, offsets: np.ndarray, command: tuple[float, 
     rows[:, cluster.M_SHARE] = 1.0 / n
     rows[:, cluster.M_DX:cluster.M_DZ + 1] = offsets
     rows[:, cluster.M_PAIR] = np.arange(n)
-    rows[:, cluster.M_PITCH_ROLL:] = coefficients
+    rows[:, cluster.M_PITCH_ROLL:cluster.M_YAW_YAW + 1] = coefficients
     arrays = [np.zeros(1)] * len(PlantTables._fields)
     arrays[cluster.T_MOUNTS] = rows
     tb = blocks.pack(arrays)
@@ -342,7 +342,7 @@ def _two_engine_node(**changes):
 
 
 def test_a_stages_own_mixing_matrix_reaches_the_plant_and_a_wrong_one_is_refused_naming_it():
-    own = cluster.mount_table(_two_engine_upper_stage())[-2:, cluster.M_PITCH_ROLL:]
+    own = cluster.mount_table(_two_engine_upper_stage())[-2:, cluster.M_PITCH_ROLL:cluster.M_YAW_YAW + 1]
     rows = own.reshape(4, 3).copy()
     rows[:, 0] *= -1.0  # roll the other way: refused, the roll moment has the wrong sign
     vehicle = load_vehicle(_two_engine_node(**{"stages.upper_stage.mixing_matrix": rows.tolist()}),
@@ -353,7 +353,8 @@ def test_a_stages_own_mixing_matrix_reaches_the_plant_and_a_wrong_one_is_refused
     rows[:, 2] += np.array([0.0, 1e-3, 0.0, -1e-3])  # yaw the pair apart (both at z = 0: no roll), same moments
     vehicle = load_vehicle(_two_engine_node(**{"stages.upper_stage.mixing_matrix": rows.tolist()}),
                            shipped_config_dir() / "vehicle" / "ares_i")
-    np.testing.assert_array_equal(cluster.mount_table(vehicle)[-2:, cluster.M_PITCH_ROLL:], rows.reshape(2, 6))
+    np.testing.assert_array_equal(cluster.mount_table(vehicle)[-2:, cluster.M_PITCH_ROLL:cluster.M_YAW_YAW + 1],
+                                  rows.reshape(2, 6))
     with pytest.raises(ConfigError, match=r"vehicle\.stages\.upper_stage\.mixing_matrix.*one row per gimbal "
                                           r"channel, 4"):
         load_vehicle(_two_engine_node(**{"stages.upper_stage.mixing_matrix": rows[:3].tolist()}),

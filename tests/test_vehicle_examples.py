@@ -92,11 +92,11 @@ def check_a_two_engine_cluster(vehicle):
 def check_a_given_mixing_matrix(vehicle):
     given = [[1.0, 1.0, 0.0], [0.0, 0.0, 1.0], [-1.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
     rows = cluster.mount_table(vehicle)  # checks the matrix against the allocation's moments
-    np.testing.assert_array_equal(rows[-2:, cluster.M_PITCH_ROLL:], np.reshape(given, (2, 6)))
+    np.testing.assert_array_equal(rows[-2:, cluster.M_PITCH_ROLL:cluster.M_BOOSTER], np.reshape(given, (2, 6)))
     # the mixer's own allocation, to roundoff: the page's "this one is the mixer's own"
-    np.testing.assert_allclose(cluster.mount_table(dataclasses.replace(
-        vehicle, upper_stage=dataclasses.replace(vehicle.upper_stage, mixing_matrix=None)))[-2:, cluster.M_PITCH_ROLL:],
-        np.reshape(given, (2, 6)), atol=1e-12)
+    own = cluster.mount_table(dataclasses.replace(
+        vehicle, upper_stage=dataclasses.replace(vehicle.upper_stage, mixing_matrix=None)))
+    np.testing.assert_allclose(own[-2:, cluster.M_PITCH_ROLL:cluster.M_BOOSTER], np.reshape(given, (2, 6)), atol=1e-12)
 
 
 def check_a_liquid_first_stage(vehicle):
@@ -151,10 +151,19 @@ def check_first_stage_slosh(vehicle):
 
 #: the example of the page an example is written over (its own chain first)
 BUILDS_ON = {"a-given-mixing-matrix": "a-two-engine-cluster", "a-first-stage-cutoff": "a-liquid-first-stage",
-             "first-stage-slosh": "a-liquid-first-stage"}
+             "first-stage-slosh": "a-liquid-first-stage", "booster-tvc": "strap-on-boosters"}
 #: sections of the vehicle it is written over that an example replaces whole (emptied before the merge)
 REPLACES = {"a-liquid-first-stage": ("stages.first_stage",), "a-first-stage-cutoff": ("events",),
             "strap-on-boosters": ("events",)}
+def check_booster_tvc(vehicle):
+    b = vehicle.boosters
+    assert b.tvc and b.gimbal_limit_rad == np.radians(6.0) and vehicle.gimbaled_boosters == 2
+    assert (b.engine.mass_kg, b.engine.cg_from_gimbal_m, b.engine.inertia_about_gimbal_kgm2) == (900.0, 0.9, 1500.0)
+    rows = cluster.boosted_mounts(vehicle)  # the page's allocation of one radian of pitch
+    assert rows[:, cluster.M_PITCH_PITCH] == pytest.approx([1.18, 0.064, 0.064], abs=0.005)
+    assert rows[1:, cluster.M_PITCH_ROLL].tolist() == [-1.0, 1.0]  # the pair rolls by differential pitch
+
+
 CHECKS = {"jettison-on-a-condition": check_jettison_on_a_condition,
           "a-delay-arms-a-condition": check_a_delay_arms_a_condition,
           "composed-mass-properties": check_composed_mass_properties,
@@ -164,7 +173,8 @@ CHECKS = {"jettison-on-a-condition": check_jettison_on_a_condition,
           "a-liquid-first-stage": check_a_liquid_first_stage,
           "a-first-stage-cutoff": check_a_first_stage_cutoff,
           "strap-on-boosters": check_strap_on_boosters,
-          "first-stage-slosh": check_first_stage_slosh}
+          "first-stage-slosh": check_first_stage_slosh,
+          "booster-tvc": check_booster_tvc}
 
 
 def test_every_example_on_the_page_has_a_check():

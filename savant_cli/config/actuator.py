@@ -88,25 +88,33 @@ class SimplexStage(ActuatorStageCommon):
 
 @dataclass
 class ThirdOrderActuatorConfig:
-    """``actuator=third_order``: both stages' third-order actuators (:class:`ThirdOrderStage`)."""
+    """``actuator=third_order``: both stages' third-order actuators and the strap-on
+    boosters' (:class:`ThirdOrderStage`; ``boosters`` is read only for boosters with TVC)."""
 
     name: str = "third_order"
     first_stage: ThirdOrderStage = field(default_factory=ThirdOrderStage)
     upper_stage: ThirdOrderStage = field(default_factory=ThirdOrderStage)
+    boosters: ThirdOrderStage = field(default_factory=ThirdOrderStage)
 
 
 @dataclass
 class SimplexActuatorConfig:
-    """``actuator=simplex``: both stages' simplex actuators (:class:`SimplexStage`)."""
+    """``actuator=simplex``: both stages' simplex actuators and the strap-on boosters'
+    (:class:`SimplexStage`; ``boosters`` is read only for boosters with TVC)."""
 
     name: str = "simplex"
     first_stage: SimplexStage = field(default_factory=SimplexStage)
     upper_stage: SimplexStage = field(default_factory=SimplexStage)
+    boosters: SimplexStage = field(default_factory=SimplexStage)
+
+
+#: The sections of the ``actuator`` group: each stage's actuators, then the strap-on boosters'.
+STAGES = ("first_stage", "upper_stage", "boosters")
 
 
 def check_actuator(a: ThirdOrderActuatorConfig | SimplexActuatorConfig, plant_rate_hz: float) -> None:
     """Physical checks of the ``actuator`` group (either variant)."""
-    for stage in ("first_stage", "upper_stage"):
+    for stage in STAGES:
         st = getattr(a, stage)
         names = ["loop_gain_rad_s", "rate_limit_deg_s"]
         names += ["natural_frequency_hz", "damping"] if a.name == "third_order" else [

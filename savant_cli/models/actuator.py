@@ -104,6 +104,11 @@ P_US_THIRD = _PARAMS.record("upper_stage.third_order", THIRD, "upper-stage third
 P_FS_SPX = _PARAMS.record("first_stage.simplex", SPX, "first-stage simplex actuator")
 P_US_SPX = _PARAMS.record("upper_stage.simplex", SPX, "upper-stage simplex actuator")
 P_N_CHANNELS = _PARAMS.scalar("channels", "1", "gimbal channels: two per engine of the stage with the most engines")
+P_BOOSTER_CHANNEL = _PARAMS.scalar("booster_channel", "1", "the first gimbaled booster's pitch channel (its yaw "
+                                   "channel and the other boosters' pairs follow; −1: no booster TVC)")
+P_BOOSTER_GIMBAL = _PARAMS.record("boosters", STAGE, "the strap-on boosters' gimbals")
+P_BOOSTER_THIRD = _PARAMS.record("boosters.third_order", THIRD, "the boosters' third-order actuators")
+P_BOOSTER_SPX = _PARAMS.record("boosters.simplex", SPX, "the boosters' simplex actuators")
 _AUX = blocks.DIAGNOSTICS.block("actuator")
 # the first engine's (a cluster's other engines: their channels' states); null bias not included
 A_ANGLES = _AUX.array("angles", 2, "rad", "engine gimbal angles (limited)",
@@ -124,22 +129,27 @@ def write_diagnostics(aux: np.ndarray, pitch: float, yaw: float, pitch_accel: fl
 
 def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarray]) -> None:
     """The ``actuator`` group (the record of its variant; ``kind`` selects it) and the
-    vehicle's gimbal limits."""
+    vehicle's gimbal limits; the boosters' records with booster TVC only (zero, never
+    read, otherwise)."""
     cfg, v = inputs.cfg, inputs.vehicle
     p[P_KIND] = SIMPLEX if cfg.actuator.name == "simplex" else THIRD_ORDER
     p[P_VALVE_OFFSET] = inputs.layout.valve
     p[P_CHANNEL_OFFSET] = inputs.layout.channel(0)
     p[P_N_CHANNELS] = len(inputs.layout.channels)
-    stages = (("first_stage", v.first_stage, P_FS_GIMBAL, P_FS_THIRD, P_FS_SPX),
-              ("upper_stage", v.upper_stage, P_US_GIMBAL, P_US_THIRD, P_US_SPX))
-    for name, stage, pg, p3, px in stages:
+    p[P_BOOSTER_CHANNEL] = 2 * v.first_stage_engine_count if v.gimbaled_boosters else -1
+    stages = [("first_stage", v.first_stage.gimbal_limit_rad, v.first_stage.engine, P_FS_GIMBAL, P_FS_THIRD, P_FS_SPX),
+              ("upper_stage", v.upper_stage.gimbal_limit_rad, v.upper_stage.engine, P_US_GIMBAL, P_US_THIRD, P_US_SPX)]
+    if v.gimbaled_boosters:
+        stages.append(("boosters", v.boosters.gimbal_limit_rad, v.boosters.engine, P_BOOSTER_GIMBAL, P_BOOSTER_THIRD,
+                       P_BOOSTER_SPX))
+    for name, limit, engine, pg, p3, px in stages:
         a = getattr(cfg.actuator, name)
-        p[pg + G_LIMIT] = stage.gimbal_limit_rad
+        p[pg + G_LIMIT] = limit
         p[pg + G_BIAS_PITCH], p[pg + G_BIAS_YAW] = np.radians(a.null_bias_deg)
         if cfg.actuator.name == "simplex":
             p[px:px + SPX.size] = (a.loop_gain_rad_s, 2.0 * np.pi * a.valve_frequency_hz, a.valve_damping,
                                    np.radians(a.rate_limit_deg_s), a.stiffness_Nm_per_rad, a.damping_Nms_per_rad,
-                                   stage.engine.inertia_about_gimbal_kgm2, a.leakage_rad_s_per_Nm,
+                                   engine.inertia_about_gimbal_kgm2, a.leakage_rad_s_per_Nm,
                                    1.0 if a.feedback == "nozzle" else 0.0)
         else:
             p[p3 + T3_LOOP_GAIN] = a.loop_gain_rad_s
@@ -248,21 +258,34 @@ def limits(p: np.ndarray, engine: int) -> tuple[float, float]:
     return rate, p[gimbal_stage(engine) + G_LIMIT]
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def booster_limits(p: np.ndarray) -> tuple[float, float]:
+    """The gimbaled boosters' rate limit (rad/s, as :func:`limits`) and gimbal limit (rad)."""
+    if int(p[P_KIND]) == SIMPLEX:
+        return p[P_BOOSTER_SPX + SX_RATE_LIMIT], p[P_BOOSTER_GIMBAL + G_LIMIT]
+    return p[P_BOOSTER_THIRD + T3_RATE_LIMIT], p[P_BOOSTER_GIMBAL + G_LIMIT]
+
+
 @njit(cache=True, error_model="numpy")
 def contain(x: np.ndarray, p: np.ndarray, engine: int) -> None:
     """After a plant step: the active stage's gimbal stop on every channel's δ, and the
     rate stop (the third-order δ̇, the simplex spool r), each with its outward rate of
-    change cleared."""
+    change cleared; on the first stage the gimbaled boosters' channels
+    (``P_BOOSTER_CHANNEL`` on) at the boosters' own stops."""
     rl, lim = limits(p, engine)
     k0 = int(p[P_CHANNEL_OFFSET])
     vo = int(p[P_VALVE_OFFSET])
     n = int(p[P_N_CHANNELS])
-    if int(p[P_KIND]) == SIMPLEX:
-        for c in range(n):
+    boosted = n
+    if engine == ENGINE_FIRST and p[P_BOOSTER_CHANNEL] >= 0.0:
+        boosted = int(p[P_BOOSTER_CHANNEL])
+    for c in range(n):
+        if c == boosted:
+            rl, lim = booster_limits(p)
+        if int(p[P_KIND]) == SIMPLEX:
             _stop(x, vo + N_VALVE_PER_CHANNEL * c, rl)
             _stop(x, k0 + N_PER_CHANNEL * c, lim)
-    else:
-        for c in range(n):
+        else:
             k = k0 + N_PER_CHANNEL * c
             _stop(x, k + 1, rl)
             if _stop(x, k, lim) and x[k + 2] * x[k] > 0.0:
@@ -305,6 +328,16 @@ def stage_actuator(p: np.ndarray, engine: int) -> tuple[int, int, int, int, floa
     else:
         kind, base = THIRD_ORDER, P_FS_THIRD if first else P_US_THIRD
     return kind, base, int(p[P_CHANNEL_OFFSET]), int(p[P_VALVE_OFFSET]), p[gimbal_stage(engine) + G_LIMIT]
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def booster_actuator(p: np.ndarray) -> tuple[int, int, int, int, float]:
+    """The gimbaled boosters' actuator, as :func:`stage_actuator` gives a stage's."""
+    if int(p[P_KIND]) == SIMPLEX:
+        kind, base = SIMPLEX, P_BOOSTER_SPX
+    else:
+        kind, base = THIRD_ORDER, P_BOOSTER_THIRD
+    return kind, base, int(p[P_CHANNEL_OFFSET]), int(p[P_VALVE_OFFSET]), p[P_BOOSTER_GIMBAL + G_LIMIT]
 
 
 @njit(cache=True, error_model="numpy", inline="always")

@@ -1,5 +1,5 @@
 """Strap-on boosters: identical solid motors on the first stage, lit at liftoff, with
-fixed nozzles, jettisoned together (docs/vehicles.md, "Strap-on boosters").
+fixed or gimbaled nozzles, jettisoned together (docs/vehicles.md, "Strap-on boosters").
 
 Each booster burns its own propellant state in the shape of the boosters' vacuum-thrust
 table exactly as the first-stage motor does (``propulsion.trace_flow``, the one kernel
@@ -12,6 +12,14 @@ properties are that configuration's table, which holds them at their full load, 
 each booster's full-load row exchanged for its own table's row at its own propellant
 (:func:`exchange`).
 
+With booster TVC each nozzle gimbals in pitch and yaw on its own channel pair (after the
+first stage's engines', ``actuator.P_BOOSTER_CHANNEL``), commanded by the control mixer
+together with the first stage's engines while the boosters are attached
+(``models/cluster.py``): its thrust line is its limited actuator angles plus the
+boosters' null bias plus its cant, ``propulsion.thrust_loads`` at its nozzle, and its
+moving nozzle reacts on the vehicle at its nozzle point (``twd.moving_mass_loads`` of
+the boosters' record).
+
 Its discrete fields are declared after every other model's (``models/__init__.py``):
 older staging-state files stay valid.
 """
@@ -21,7 +29,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from savant_cli.models import blocks
+from savant_cli.models import actuator, blocks, twd
 from savant_cli.models.interp import tab_offset
 from savant_cli.models.mass import N_COLUMNS, stacked_row, stacked_tables
 from savant_cli.models.propulsion import P_ON, table_impulse, thrust_loads, trace_flow
@@ -47,12 +55,16 @@ T_MASS_DATA = _TABLES.table("booster_mass_data", "kg, m, kg*m^2", "(boosters, n,
                             "mass-properties rows")
 T_MASS_LEN = _TABLES.table("booster_mass_len", "1", "(boosters,) valid rows per booster")
 T_RATE = _TABLES.table("booster_burn_rate", "1", "(boosters,) each booster's burn-rate factor k: k F_tab(k t)")
+T_CANT = _TABLES.table("booster_cant", "rad", "(boosters, 2) each booster's nozzle cant at null, pitch and yaw")
 T_FULL = _TABLES.table("booster_full", "kg, m, kg*m^2", "(boosters, mass COLUMNS) each booster's own row at its full "
                        "load (inertia as tensor elements)")
 
 _AUX = blocks.DIAGNOSTICS.block("boosters")
 A_THRUST = _AUX.scalar("thrust", "N", "the strap-on boosters' delivered thrust, summed",
                        blocks.Logged("booster_thrust"))
+A_GIMBAL = _AUX.array("gimbal_angles", 2, "rad", "the first booster's limited gimbal angles (0: fixed nozzles, or "
+                      "jettisoned)", blocks.Logged("booster_gimbal_angle", ("pitch", "yaw"), "body",
+                                                   lambda model: model.p[actuator.P_BOOSTER_CHANNEL] >= 0.0))
 _DISCRETE = blocks.DISCRETE.block("boosters")
 D_PROP_JET = _DISCRETE.scalar("propellant_at_jettison", "kg",
                               "the boosters' propellant left at their jettison, summed (0 before)")
@@ -61,9 +73,23 @@ D_PEAK = _DISCRETE.scalar("peak_thrust", "N", "largest sensed vacuum thrust so f
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def write_diagnostics(aux: np.ndarray, thrust: float) -> None:
-    """Write the boosters' delivered thrust (N, summed) into ``aux``."""
+def write_diagnostics(aux: np.ndarray, thrust: float, x: np.ndarray, p: np.ndarray, attached: bool) -> None:
+    """Write the boosters' delivered thrust (N, summed) and the first gimbaled booster's
+    limited gimbal angles (rad; 0 once jettisoned) into ``aux``."""
     aux[A_THRUST] = thrust
+    aux[A_GIMBAL] = aux[A_GIMBAL + 1] = 0.0
+    if attached and p[actuator.P_BOOSTER_CHANNEL] >= 0.0:
+        kp = booster_channel(p, 0)
+        lim = p[actuator.P_BOOSTER_GIMBAL + actuator.G_LIMIT]
+        aux[A_GIMBAL] = actuator.clip(x[kp], lim)
+        aux[A_GIMBAL + 1] = actuator.clip(x[kp + actuator.N_PER_CHANNEL], lim)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def booster_channel(p: np.ndarray, i: int) -> int:
+    """Index in ``x`` of gimbaled booster ``i``'s pitch channel's angle δ (its yaw
+    channel's follows, ``actuator.N_PER_CHANNEL`` later)."""
+    return int(p[actuator.P_CHANNEL_OFFSET]) + actuator.N_PER_CHANNEL * (int(p[actuator.P_BOOSTER_CHANNEL]) + 2 * i)
 
 
 def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarray]) -> None:
@@ -74,7 +100,7 @@ def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarra
                       booster_mount=np.zeros((1, N_MOUNT)),
                       booster_mass_prop=np.zeros((1, 1)), booster_mass_data=np.zeros((1, 1, N_COLUMNS)),
                       booster_mass_len=np.ones(1, dtype=np.int64), booster_burn_rate=np.ones(1),
-                      booster_full=np.zeros((1, N_COLUMNS)))
+                      booster_cant=np.zeros((1, 2)), booster_full=np.zeros((1, N_COLUMNS)))
         return
     p[P_N_BOOSTERS] = b.count
     p[P_TANK] = inputs.layout.tank(b.tanks[0])
@@ -88,6 +114,7 @@ def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarra
                   booster_mount=np.column_stack([b.nozzle_m, thrust_direction(b.cant_rad)]),
                   booster_mass_prop=prop, booster_mass_data=data, booster_mass_len=n,
                   booster_burn_rate=np.ones(b.count) if b.burn_rate is None else np.asarray(b.burn_rate, float),
+                  booster_cant=np.asarray(b.cant_rad, float),
                   booster_full=np.array([[m.mass_kg[-1], *m.cg_m[-1], *m.inertia_kgm2[-1, :3], *-m.inertia_kgm2[-1, 3:]]
                                          for m in b.mass]))
 
@@ -112,15 +139,19 @@ def flow(x: np.ndarray, tb: np.ndarray, p: np.ndarray, t: float, i: int) -> tupl
 def loads(x: np.ndarray, tb: np.ndarray, p: np.ndarray, t: float, pres: float, attached: bool,
           cgx: float, cgy: float, cgz: float, xd: np.ndarray):
     """The boosters' delivered thrust (N, summed), force (N) and moment about the CG
-    (N·m), body axes, with each booster's propellant rate written into ``xd`` (kg/s; 0
-    once ``attached`` is False: jettisoned, its state emptied).
+    (N·m), then their nozzles' tail-wags-dog moment about the CG (N·m), body axes, with
+    each booster's propellant rate written into ``xd`` (kg/s; 0 once ``attached`` is
+    False: jettisoned, its state emptied).
 
     Each booster's delivered thrust ``max(F_vac − p A_exit, 0)`` (``pres``: ambient
     pressure, Pa) acts at its nozzle along its fixed cant's direction
-    (:func:`thrust_direction`), its moment ``r × F`` with the arm ``r`` from the CG
-    ``cgx, cgy, cgz`` (structure frame, m) in body axes."""
+    (:func:`thrust_direction`), or with TVC along its limited gimbal angles plus the
+    null bias plus its cant (the nozzle accelerations written into ``xd`` by
+    ``cluster.gimbal_rates`` load its moving mass), its moment ``r × F`` with the arm
+    ``r`` from the CG ``cgx, cgy, cgz`` (structure frame, m) in body axes."""
     tank = int(p[P_TANK])
-    thrust = fx = fy = fz = mx = my = mz = 0.0
+    thrust = fx = fy = fz = mx = my = mz = wx = wy = wz = 0.0
+    gimbaled = p[actuator.P_BOOSTER_CHANNEL] >= 0.0
     for i in range(int(p[P_N_BOOSTERS])):
         if not attached:
             xd[tank + i] = 0.0
@@ -130,8 +161,14 @@ def loads(x: np.ndarray, tb: np.ndarray, p: np.ndarray, t: float, pres: float, a
         f = max(f_vac - pres * p[P_EXIT_AREA], 0.0) if mdot > 0.0 and p[P_ON] != 0.0 else 0.0
         m = tab_offset(tb, T_MOUNT) + i * N_MOUNT
         rx, ry, rz = -(tb[m] - cgx), tb[m + 1] - cgy, -(tb[m + 2] - cgz)
-        ax, ay, az = f * tb[m + 3], f * tb[m + 4], f * tb[m + 5]
-        bx, by, bz = ry * az - rz * ay, rz * ax - rx * az, rx * ay - ry * ax
+        if gimbaled:
+            ax, ay, az, bx, by, bz, nx, ny, nz = gimbaled_loads(x, xd, tb, p, i, f, rx, ry, rz)
+            wx += nx
+            wy += ny
+            wz += nz
+        else:
+            ax, ay, az = f * tb[m + 3], f * tb[m + 4], f * tb[m + 5]
+            bx, by, bz = ry * az - rz * ay, rz * ax - rx * az, rx * ay - ry * ax
         thrust += f
         fx += ax
         fy += ay
@@ -139,7 +176,25 @@ def loads(x: np.ndarray, tb: np.ndarray, p: np.ndarray, t: float, pres: float, a
         mx += bx
         my += by
         mz += bz
-    return thrust, fx, fy, fz, mx, my, mz
+    return thrust, fx, fy, fz, mx, my, mz, wx, wy, wz
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def gimbaled_loads(x: np.ndarray, xd: np.ndarray, tb: np.ndarray, p: np.ndarray, i: int, f: float,
+                   rx: float, ry: float, rz: float):
+    """Gimbaled booster ``i``'s thrust force (N) and moment about the CG (N·m) for its
+    delivered thrust ``f`` (N) at the arm ``r`` (CG → nozzle, body axes, m), then its
+    moving nozzle's tail-wags-dog moment about the CG (N·m), body axes."""
+    kp = booster_channel(p, i)
+    ky = kp + actuator.N_PER_CHANNEL
+    g = actuator.P_BOOSTER_GIMBAL
+    lim = p[g + actuator.G_LIMIT]
+    cant = tab_offset(tb, T_CANT) + 2 * i
+    ax, ay, az, bx, by, bz = thrust_loads(f, actuator.clip(x[kp], lim) + p[g + actuator.G_BIAS_PITCH] + tb[cant],
+                                          actuator.clip(x[ky], lim) + p[g + actuator.G_BIAS_YAW] + tb[cant + 1],
+                                          rx, ry, rz)
+    w = twd.moving_mass_loads(p, twd.P_BOOSTER_ENGINE, xd[kp + 1], xd[ky + 1], rx, ry, rz)
+    return ax, ay, az, bx, by, bz, w[5], w[6], w[7]
 
 
 @njit(cache=True, error_model="numpy")  # a call: the vehicles without boosters never enter it

@@ -63,29 +63,38 @@ MOUNT = blocks.Record(
     ("yaw_roll", "1", "mixer: yaw channel per rad of roll command δr"),
     ("yaw_pitch", "1", "mixer: yaw channel per rad of pitch command δp"),
     ("yaw_yaw", "1", "mixer: yaw channel per rad of yaw command δy"),
+    ("booster", "1", "0: an engine of the stage; i + 1: gimbaled booster i's nozzle (its thrust, actuator and "
+                     "moving mass are the booster's: models/boosters.py)"),
 )
 (M_STAGE, M_SHARE, M_DX, M_DY, M_DZ, M_CANT_PITCH, M_CANT_YAW, M_PAIR, M_PITCH_ROLL, M_PITCH_PITCH, M_PITCH_YAW,
- M_YAW_ROLL, M_YAW_PITCH, M_YAW_YAW) = MOUNT.offsets
+ M_YAW_ROLL, M_YAW_PITCH, M_YAW_YAW, M_BOOSTER) = MOUNT.offsets
 MOUNT_SIZE = MOUNT.size
 
 _PARAMS = blocks.PARAMETERS.block("cluster")
 P_UPPER_FIRST = _PARAMS.scalar("upper_stage_first_mount", "1",
                                "the upper stage's first mount record (the first stage's engines come before)")
+P_BOOSTED_END = _PARAMS.scalar("boosted_mounts", "1",
+                               "the mount records mixed while gimbaled boosters are attached: the first stage's "
+                               "engines, then the boosters' nozzles (0: no booster TVC); the first stage's own "
+                               "records follow them")
 _TABLES = blocks.TABLES.block("cluster")
 T_MOUNTS = _TABLES.table("mounts", "1", f"one {MOUNT_SIZE}-element engine-mount record per engine, stage by stage")
 
 
 def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarray]) -> None:
     """Each stage's engine mounts and mixing coefficients (a stage without ``mounts``: one
-    engine at its gimbal); roll-by-gimbal gains on a stage whose engines cannot roll the
-    vehicle are refused."""
-    mounts = mount_table(inputs.vehicle)
+    engine at its gimbal), with gimbaled boosters the first stage's engines and the
+    boosters' nozzles mixed together first; roll-by-gimbal gains on a stage whose engines
+    (with its gimbaled boosters) cannot roll the vehicle are refused."""
+    boosted = boosted_mounts(inputs.vehicle)
+    mounts = np.concatenate([boosted, mount_table(inputs.vehicle)])
+    p[P_BOOSTED_END] = boosted.shape[0]
     p[P_UPPER_FIRST] = np.count_nonzero(mounts[:, M_STAGE] == 0.0)
     tables.update(mounts=mounts)
     gimbal = inputs.cfg.controller.roll.gimbal
     for stage, (phase, name) in enumerate((("stack", "first stage"), ("upper", "upper stage"))):
         gains = getattr(gimbal, phase)
-        rows = mounts[mounts[:, M_STAGE] == stage]
+        rows = mounts[mounts[:, M_STAGE] == stage]  # the first stage's with and without the boosters
         if (gains.kp, gains.ki, gains.kd) != (0.0, 0.0, 0.0) and not np.any(rows[:, [M_PITCH_ROLL, M_YAW_ROLL]]):
             raise ConfigError(f"controller.roll.gimbal.{phase}", {"kp": gains.kp, "ki": gains.ki, "kd": gains.kd},
                               f"the {name}'s engines cannot roll the vehicle (one engine, or all on the roll axis): "
@@ -123,8 +132,45 @@ def mount_table(vehicle) -> np.ndarray:
             coefficients = np.asarray(given, float).reshape(-1, 6)
         n = offsets.shape[0]
         for i in range(n):
-            rows.append([float(stage), 1.0 / n, *offsets[i], *cants[i], float(i), *coefficients[i]])
+            rows.append([float(stage), 1.0 / n, *offsets[i], *cants[i], float(i), *coefficients[i], 0.0])
     return np.array(rows, dtype=float)
+
+
+def boosted_mounts(vehicle) -> np.ndarray:
+    """The :data:`MOUNT` records mixed while gimbaled boosters are attached: the first
+    stage's engines (pairs 0 … n − 1), then each booster's nozzle (pair n + i, its
+    offset from the first stage's gimbal point, ``booster`` i + 1), with the mixer's
+    allocation over all of their channels (:func:`boosted_mixer`); none (``(0,
+    MOUNT.size)``) without booster TVC."""
+    if not vehicle.gimbaled_boosters:
+        return np.zeros((0, MOUNT_SIZE))
+    gimbal, offsets, cants, _, _ = _stage_geometry(vehicle, 0)
+    b = vehicle.boosters
+    coefficients = boosted_mixer(vehicle)
+    n = offsets.shape[0]
+    rows = [[0.0, 1.0 / n, *offsets[i], *cants[i], float(i), *coefficients[i], 0.0] for i in range(n)]
+    rows += [[0.0, 0.0, *(b.nozzle_m[i] - gimbal), *b.cant_rad[i], float(n + i), *coefficients[n + i], float(i + 1)]
+             for i in range(b.count)]
+    return np.array(rows, dtype=float)
+
+
+def boosted_mixer(vehicle) -> np.ndarray:
+    """The mixing coefficients ``(n + n_boosters, 6)`` (as :func:`stage_mixer`'s) of the
+    first stage's engines and the gimbaled boosters' nozzles together: the allocation
+    over all of their channels with each engine at its rated vacuum thrust (the peak of
+    its trace; a booster at its own, a stage's engine at an equal share of the stage's),
+    the arms from the liftoff configuration's CG at full load, each channel weighted by
+    its own gimbal limit."""
+    gimbal, offsets, cants, _, limit = _stage_geometry(vehicle, 0)
+    b = vehicle.boosters
+    n = offsets.shape[0]
+    mass = vehicle.configurations["boosted"].mass
+    cg = np.asarray(mass.cg_m, float)[int(np.argmax(mass.propellant_kg))]
+    points = np.concatenate([gimbal + offsets, b.nozzle_m])
+    thrust = np.concatenate([np.full(n, float(np.max(vehicle.first_stage.thrust_vac_N)) / n),
+                             np.full(b.count, float(np.max(b.thrust_vac_N)))])
+    limits = np.repeat(np.concatenate([np.full(n, limit), np.full(b.count, b.gimbal_limit_rad)]), 2)
+    return allocation(points, np.concatenate([cants, b.cant_rad]), thrust, cg, limits)
 
 
 def _effectiveness(gimbal_m: np.ndarray, offsets_m: np.ndarray, cants_rad: np.ndarray,
@@ -132,11 +178,38 @@ def _effectiveness(gimbal_m: np.ndarray, offsets_m: np.ndarray, cants_rad: np.nd
     """``B`` (3 × 2n, N·m/rad per N of the stage's thrust, body axes; each engine's pitch
     then yaw channel) of a stage's engines sharing its thrust, and the channels' axes."""
     n = offsets_m.shape[0]
-    structure = gimbal_m + offsets_m - cg_m
+    return effectiveness(gimbal_m + offsets_m, cants_rad, np.full(n, 1.0 / n), cg_m)
+
+
+def effectiveness(points_m: np.ndarray, cants_rad: np.ndarray, thrust_N: np.ndarray,
+                  cg_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``B`` (3 × 2n, N·m/rad, body axes; each engine's pitch then yaw channel) of n
+    engines at their gimbal points ``points_m`` (structure frame, m) with their cants
+    (rad) and thrusts (N), about the CG ``cg_m`` (structure frame, m), and the channels'
+    axes."""
+    n = points_m.shape[0]
+    structure = points_m - cg_m
     arms = np.ascontiguousarray(np.column_stack([-structure[:, 0], structure[:, 1], -structure[:, 2]]))  # body axes
     engine = np.repeat(np.arange(n, dtype=np.int64), 2)
     axis = np.tile(np.array([mixer.AXIS_PITCH, mixer.AXIS_YAW], np.int64), n)
-    return mixer.moment_effectiveness(arms, np.ascontiguousarray(cants_rad), np.full(n, 1.0 / n), engine, axis), axis
+    return mixer.moment_effectiveness(arms, np.ascontiguousarray(cants_rad), np.ascontiguousarray(thrust_N, float),
+                                      engine, axis), axis
+
+
+def allocation(points_m: np.ndarray, cants_rad: np.ndarray, thrust_N: np.ndarray, cg_m: np.ndarray,
+               limits_rad: np.ndarray) -> np.ndarray:
+    """The mixing coefficients ``(n, 6)`` of n engines (:func:`effectiveness`'s
+    arguments; ``limits_rad`` each channel's gimbal limit, ``(2 n,)``): the mixer's
+    allocation with its roll column scaled so that the most-deflected channel moves by
+    ``δr``, or zero where the engines cannot roll the vehicle (``B`` of rank below 3)."""
+    b, axis = effectiveness(points_m, cants_rad, thrust_N, cg_m)
+    k = mixer.mixing_matrix(b, np.ascontiguousarray(limits_rad, float), axis)
+    roll = k[:, mixer.ROLL]
+    if np.linalg.matrix_rank(b) < 3:  # the engines cannot roll the vehicle
+        k[:, mixer.ROLL] = 0.0
+    else:
+        k[:, mixer.ROLL] = roll / np.max(np.abs(roll))
+    return k.reshape(points_m.shape[0], 6)
 
 
 def stage_mixer(gimbal_m: np.ndarray, offsets_m: np.ndarray, cants_rad: np.ndarray, cg_m: np.ndarray,
@@ -165,14 +238,7 @@ def stage_mixer(gimbal_m: np.ndarray, offsets_m: np.ndarray, cants_rad: np.ndarr
     n = offsets_m.shape[0]
     if n == 1:
         return np.array([[0.0, 1.0, 0.0, 0.0, 0.0, 1.0]])
-    b, axis = _effectiveness(gimbal_m, offsets_m, cants_rad, cg_m)
-    k = mixer.mixing_matrix(b, np.full(2 * n, float(limit_rad)), axis)
-    roll = k[:, mixer.ROLL]
-    if np.linalg.matrix_rank(b) < 3:  # the engines cannot roll the vehicle
-        k[:, mixer.ROLL] = 0.0
-    else:
-        k[:, mixer.ROLL] = roll / np.max(np.abs(roll))
-    return k.reshape(n, 6)
+    return allocation(gimbal_m + offsets_m, cants_rad, np.full(n, 1.0 / n), cg_m, np.full(2 * n, float(limit_rad)))
 
 
 def check_given_mixer(given: np.ndarray, gimbal_m: np.ndarray, offsets_m: np.ndarray, cants_rad: np.ndarray,
@@ -212,23 +278,32 @@ def roll_effectiveness(vehicle, stage: int) -> float:
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def stage_mounts(tb: np.ndarray, p: np.ndarray, engine: int) -> tuple[int, int]:
-    """The active stage's mount records: the offsets in ``tb`` of the first and past the
-    last (the upper stage's from separation on)."""
+def stage_mounts(tb: np.ndarray, p: np.ndarray, engine: int, config: int) -> tuple[int, int]:
+    """The active mount records: the offsets in ``tb`` of the first and past the last
+    (the upper stage's from separation on; on the first stage with gimbaled boosters,
+    the boosted records while they are attached, configuration 0, then the stage's own)."""
     o, n = tab(tb, T_MOUNTS)
     split = o + int(p[P_UPPER_FIRST]) * MOUNT_SIZE
-    return (o, split) if engine == ENGINE_FIRST else (split, o + n)
+    if engine != ENGINE_FIRST:
+        return split, o + n
+    boosted = int(p[P_BOOSTED_END])
+    if boosted == 0:
+        return o, split
+    end = o + boosted * MOUNT_SIZE
+    return (o, end) if config == 0 else (end, split)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def gimbal_rates(x: np.ndarray, p: np.ndarray, tb: np.ndarray, engine: int, roll: float, pitch: float, yaw: float,
-                 xd: np.ndarray) -> tuple[float, float]:
-    """Mix the flight control's commands to the active stage's channels and write every
-    gimbal channel's derivatives into ``xd`` (the channels no engine of the stage drives
-    stay at rest).
+def gimbal_rates(x: np.ndarray, p: np.ndarray, tb: np.ndarray, engine: int, config: int, roll: float, pitch: float,
+                 yaw: float, xd: np.ndarray) -> tuple[float, float]:
+    """Mix the flight control's commands to the active stage's channels (and the
+    gimbaled boosters' while they are attached) and write every gimbal channel's
+    derivatives into ``xd`` (the channels no active engine drives stay at rest).
 
     Parameters
     ----------
+    engine, config : int
+        The engine phase and the configuration (:func:`stage_mounts`).
     roll, pitch, yaw : float
         The equivalent roll angle δr and the equivalent engine's pitch and yaw angles
         δp, δy commanded (rad).
@@ -238,7 +313,7 @@ def gimbal_rates(x: np.ndarray, p: np.ndarray, tb: np.ndarray, engine: int, roll
     tuple of float
         The first engine's nozzle angular accelerations, pitch and yaw (rad/s²).
     """
-    first, stop = stage_mounts(tb, p, engine)
+    first, stop = stage_mounts(tb, p, engine, config)
     stage = actuator.stage_actuator(p, engine)
     cmd_p = tb[first + M_PITCH_ROLL] * roll + tb[first + M_PITCH_PITCH] * pitch + tb[first + M_PITCH_YAW] * yaw
     cmd_y = tb[first + M_YAW_ROLL] * roll + tb[first + M_YAW_PITCH] * pitch + tb[first + M_YAW_YAW] * yaw
@@ -248,12 +323,14 @@ def gimbal_rates(x: np.ndarray, p: np.ndarray, tb: np.ndarray, engine: int, roll
     if n_ch == 2:  # every stage of one engine: the compiled code keeps this path free of the loops
         return acc_p, acc_y
     used = 2
-    for b in range(first + MOUNT_SIZE, stop, MOUNT_SIZE):  # a cluster's other engines
+    boosters = actuator.booster_actuator(p)
+    for b in range(first + MOUNT_SIZE, stop, MOUNT_SIZE):  # a cluster's other engines, the gimbaled boosters
         c = 2 * int(tb[b + M_PAIR])
         cmd_p = tb[b + M_PITCH_ROLL] * roll + tb[b + M_PITCH_PITCH] * pitch + tb[b + M_PITCH_YAW] * yaw
         cmd_y = tb[b + M_YAW_ROLL] * roll + tb[b + M_YAW_PITCH] * pitch + tb[b + M_YAW_YAW] * yaw
-        actuator.channel_rates(x, p, stage, c, cmd_p, xd)
-        actuator.channel_rates(x, p, stage, c + 1, cmd_y, xd)
+        act = stage if tb[b + M_BOOSTER] == 0.0 else boosters
+        actuator.channel_rates(x, p, act, c, cmd_p, xd)
+        actuator.channel_rates(x, p, act, c + 1, cmd_y, xd)
         used += 2
     for c in range(used, n_ch):
         actuator.idle_channel(p, c, xd)
@@ -261,10 +338,11 @@ def gimbal_rates(x: np.ndarray, p: np.ndarray, tb: np.ndarray, engine: int, roll
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def cluster_loads(tb: np.ndarray, p: np.ndarray, x: np.ndarray, xd: np.ndarray, engine: int, thrust: float,
-                  pitch: float, yaw: float, ddp: float, ddy: float, bias_p: float, bias_y: float, flex_p: float,
-                  flex_y: float, rgx: float, rgy: float, rgz: float):
-    """Thrust and tail-wags-dog loads of the active stage's engines.
+def cluster_loads(tb: np.ndarray, p: np.ndarray, x: np.ndarray, xd: np.ndarray, engine: int, config: int,
+                  thrust: float, pitch: float, yaw: float, ddp: float, ddy: float, bias_p: float, bias_y: float,
+                  flex_p: float, flex_y: float, rgx: float, rgy: float, rgz: float):
+    """Thrust and tail-wags-dog loads of the active stage's engines (a gimbaled booster's
+    are its own: ``boosters.loads``).
 
     Parameters
     ----------
@@ -272,8 +350,9 @@ def cluster_loads(tb: np.ndarray, p: np.ndarray, x: np.ndarray, xd: np.ndarray, 
         The state and its derivative, the gimbal channels' written by
         :func:`gimbal_rates` (a cluster's other engines' angles and nozzle accelerations
         are read there).
-    engine : int
-        The engine phase (the upper stage's engines from separation on).
+    engine, config : int
+        The engine phase (the upper stage's engines from separation on) and the
+        configuration.
     thrust : float
         The stage's delivered thrust, N.
     pitch, yaw : float
@@ -296,7 +375,7 @@ def cluster_loads(tb: np.ndarray, p: np.ndarray, x: np.ndarray, xd: np.ndarray, 
         (N·m), then ``(Fx, Fy, Fz, Ty, Tz, Mx, My, Mz)`` the engines' tail-wags-dog force
         and torque at the gimbal and moment about the CG (as ``twd.twd_loads``), body axes.
     """
-    first, stop = stage_mounts(tb, p, engine)
+    first, stop = stage_mounts(tb, p, engine, config)
     thrust_part, twd_part = engine_loads(tb, p, first, engine, thrust, pitch, yaw, ddp, ddy, rgx, rgy, rgz)
     if stop - first == MOUNT_SIZE:  # one engine: the compiled code keeps this path free of the loop
         return thrust_part, twd_part
@@ -305,6 +384,8 @@ def cluster_loads(tb: np.ndarray, p: np.ndarray, x: np.ndarray, xd: np.ndarray, 
     lim = p[actuator.gimbal_stage(engine) + actuator.G_LIMIT]
     k0 = int(p[actuator.P_CHANNEL_OFFSET])
     for b in range(first + MOUNT_SIZE, stop, MOUNT_SIZE):  # a cluster's other engines
+        if tb[b + M_BOOSTER] != 0.0:
+            continue  # a gimbaled booster's loads are its own (boosters.loads)
         kp = k0 + 2 * actuator.N_PER_CHANNEL * int(tb[b + M_PAIR])
         ky = kp + actuator.N_PER_CHANNEL
         (fx, fy, fz, mx, my, mz), (wx, wy, wz, ty, tz, nx, ny, nz) = engine_loads(

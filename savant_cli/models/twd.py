@@ -29,6 +29,7 @@ _PARAMS = blocks.PARAMETERS.block("twd")
 P_ON = _PARAMS.scalar("on", "1", "1: the engine-inertia reaction is applied (twd=on)")
 P_FS_ENGINE = _PARAMS.record("first_stage", ENGINE, "first-stage moving engine")
 P_US_ENGINE = _PARAMS.record("upper_stage", ENGINE, "upper-stage moving engine")
+P_BOOSTER_ENGINE = _PARAMS.record("boosters", ENGINE, "each gimbaled booster's moving nozzle (zero: fixed nozzles)")
 _AUX = blocks.DIAGNOSTICS.block("twd")
 A_MOMENT = _AUX.array("moment", 3, "N*m", "engine-inertia (tail-wags-dog) moment about the CG (zero with twd=off)",
                       blocks.Logged("twd_moment", ("x", "y", "z"), "body"))
@@ -45,8 +46,11 @@ def write_diagnostics(aux: np.ndarray, mx: float, my: float, mz: float) -> None:
 def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarray]) -> None:
     """The ``twd`` switch and the vehicle's moving-engine data."""
     p[P_ON] = 1.0 if inputs.cfg.twd.enabled else 0.0
-    for base, stage in ((P_FS_ENGINE, inputs.vehicle.first_stage), (P_US_ENGINE, inputs.vehicle.upper_stage)):
-        eng = stage.engine
+    v = inputs.vehicle
+    engines = [(P_FS_ENGINE, v.first_stage.engine), (P_US_ENGINE, v.upper_stage.engine)]
+    if v.gimbaled_boosters:
+        engines.append((P_BOOSTER_ENGINE, v.boosters.engine))
+    for base, eng in engines:
         p[base + E_MASS] = eng.mass_kg
         p[base + E_ARM] = eng.cg_from_gimbal_m
         p[base + E_INERTIA] = eng.inertia_about_gimbal_kgm2
@@ -54,8 +58,16 @@ def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarra
 
 @njit(cache=True, error_model="numpy", inline="always")
 def twd_loads(p: np.ndarray, engine: int, ddp: float, ddy: float, rgx: float, rgy: float, rgz: float):
-    """Engine-inertia reaction for nozzle accelerations ``ddp``, ``ddy`` (rad/s²) at the
-    arm ``r_cg→gimbal`` (m, body axes).
+    """Engine-inertia reaction of the active stage's engine (:func:`moving_mass_loads`
+    of its record)."""
+    return moving_mass_loads(p, P_FS_ENGINE if engine == ENGINE_FIRST else P_US_ENGINE, ddp, ddy, rgx, rgy, rgz)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def moving_mass_loads(p: np.ndarray, e: int, ddp: float, ddy: float, rgx: float, rgy: float, rgz: float):
+    """Engine-inertia reaction of the moving mass whose :data:`ENGINE` record is at
+    ``p[e]``, for nozzle accelerations ``ddp``, ``ddy`` (rad/s²) at the arm
+    ``r_cg→gimbal`` (m, body axes).
 
     Returns
     -------
@@ -66,7 +78,6 @@ def twd_loads(p: np.ndarray, engine: int, ddp: float, ddy: float, rgx: float, rg
     """
     if p[P_ON] == 0.0:
         return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-    e = P_FS_ENGINE if engine == ENGINE_FIRST else P_US_ENGINE
     m_l = p[e + E_MASS] * p[e + E_ARM]
     fwx = 0.0
     fwy = -m_l * ddy

@@ -93,7 +93,7 @@ def _contiguous(a) -> np.ndarray:
 
 def state_layout(cfg: SavantConfig, vehicle: Vehicle) -> layout.StateLayout:
     """The continuous-state layout of ``vehicle`` with the models switched on in ``cfg``."""
-    engines = max(len(vehicle.first_stage.mounts), len(vehicle.upper_stage.mounts), 1)
+    engines = max(vehicle.first_stage_engine_count + vehicle.gimbaled_boosters, len(vehicle.upper_stage.mounts), 1)
     return layout.StateLayout(tanks=vehicle.tanks + vehicle.booster_tanks, channels=layout.channel_names(engines),
                               simplex=cfg.actuator.name == "simplex",
                               slosh_tanks=tuple(vehicle.slosh_spec or ()) if cfg.slosh.enabled else (),

@@ -100,9 +100,17 @@ class LossOfControl:
     reason: str
 
 
-def _limits(model: SimModel, stage: int) -> tuple[float, float]:
-    """(rate limit rad/s, gimbal limit rad) of a stage (0 first, 1 upper)."""
-    return actuator.limits(model.p, ENGINE_FIRST if stage == 0 else layout.ENGINE_UPPER)
+def _limits(model: SimModel, stage: int) -> tuple[np.ndarray, np.ndarray]:
+    """Each gimbal channel's (rate limit rad/s, gimbal limit rad) while a stage flies (0
+    first, 1 upper): the stage's, and on the first stage the gimbaled boosters' own on
+    their channels."""
+    n = len(model.layout.channels)
+    rate, gimbal = (np.full(n, v) for v in actuator.limits(model.p, ENGINE_FIRST if stage == 0 else
+                                                             layout.ENGINE_UPPER))
+    first_booster = int(model.p[actuator.P_BOOSTER_CHANNEL])
+    if stage == 0 and first_booster >= 0:
+        rate[first_booster:], gimbal[first_booster:] = actuator.booster_limits(model.p)
+    return rate, gimbal
 
 
 def _stage_masks(t: np.ndarray, result: SimResult) -> list[np.ndarray]:
@@ -203,8 +211,8 @@ def assess(result: SimResult, sig: dict[str, Signal], model: SimModel, cfg) -> d
     longest_hold = ("", 0.0)
     for s, (name, mask) in enumerate(zip(STAGES, _stage_masks(t, result))):
         rate_limit, gimbal_limit = _limits(model, s)
-        at_rate = mask & np.any(np.abs(rate_state) >= _ON_STOP * rate_limit, axis=1)
-        at_stop = mask & np.any(np.abs(angles) >= _ON_STOP * gimbal_limit, axis=1)
+        at_rate = mask & np.any(np.abs(rate_state) >= _ON_STOP * rate_limit[:rate_state.shape[1]], axis=1)
+        at_stop = mask & np.any(np.abs(angles) >= _ON_STOP * gimbal_limit[:angles.shape[1]], axis=1)
         out[f"time_at_rate_limit_{name}_s"] = float(dt[at_rate].sum())
         out[f"time_at_gimbal_stop_{name}_s"] = float(dt[at_stop].sum())
         out[f"max_gimbal_rate_{name}_deg_s"] = float(np.degrees(np.abs(rates[mask]).max())) if mask.any() else 0.0

@@ -156,7 +156,7 @@ def compose(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarra
 
     # ------------------------------------------------- forces and moments
     fax, fay, faz, max_, may, maz = aero.aero_loads(tb, p, config, t, mach, alpha, beta, qbar, cgx, cgy, cgz)
-    ddp, ddy = cluster.gimbal_rates(x, p, tb, engine, u[U_ROLL], u[U_DPC], u[U_DYC], xd)
+    ddp, ddy = cluster.gimbal_rates(x, p, tb, engine, config, u[U_ROLL], u[U_DPC], u[U_DYC], xd)
     rcs_pos_rate, rcs_neg_rate = rcs.jet_rates(x, p, u[U_RCS])
     jets = int(p[rcs.P_STATE_OFFSET])
     xd[jets] = rcs_pos_rate
@@ -170,18 +170,19 @@ def compose(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarra
     rgx, rgy, rgz = propulsion.gimbal_arm(p, engine, cgx, cgy, cgz)
     dgx, dgy, dgz = flex.displacement_at(x, config, p, tb, gimbal_pt)  # the structure moves the gimbal
     rgx, rgy, rgz = rgx + dgx, rgy + dgy, rgz + dgz
-    thrust_part, twd_part = cluster.cluster_loads(tb, p, x, xd, engine, thrust, dp + bias_p - tgy, dy + bias_y - tgz,
-                                                  ddp, ddy, bias_p, bias_y, tgy, tgz, rgx, rgy, rgz)
+    thrust_part, twd_part = cluster.cluster_loads(tb, p, x, xd, engine, config, thrust, dp + bias_p - tgy,
+                                                  dy + bias_y - tgz, ddp, ddy, bias_p, bias_y, tgy, tgz, rgx, rgy, rgz)
     ftx, fty, ftz, mtx, mty, mtz = thrust_part
     fwx, fwy, fwz, twy, twz, mwx, mwy, mwz = twd_part
     rcs_torque = rcs.roll_torque(x, tb, p, alt, pres)
     fex, fey, fez = fax + ftx, fay + fty, faz + ftz  # external, non-gravitational
     booster_thrust = 0.0
-    if p[boosters.P_N_BOOSTERS] > 0.0:  # strap-on boosters: their thrust and moment join the stage's
-        booster_thrust, fbx, fby, fbz, mbx, mby, mbz = boosters.loads(x, tb, p, t, pres, config == 0, cgx, cgy, cgz,
-                                                                      xd)
+    if p[boosters.P_N_BOOSTERS] > 0.0:  # strap-on boosters: their thrust, moment and nozzles' reaction join in
+        booster_thrust, fbx, fby, fbz, mbx, mby, mbz, wbx, wby, wbz = boosters.loads(x, tb, p, t, pres, config == 0,
+                                                                                   cgx, cgy, cgz, xd)
         fex, fey, fez = fex + fbx, fey + fby, fez + fbz
         mtx, mty, mtz = mtx + mbx, mty + mby, mtz + mbz
+        mwx, mwy, mwz = mwx + wbx, mwy + wby, mwz + wbz
     # the rigid part carries the slosh masses' forces too
     frx, fry, frz, msx, msy, msz = slosh.add_loads(x, p, aux, fex, fey, fez, mass_total, (cgx, cgy, cgz))
 
@@ -233,7 +234,7 @@ def compose(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarra
     winds.write_diagnostics(aux, wind_n, wind_e, wind_d)
     gravity.write_diagnostics(aux, gx, gy, gz)
     propulsion.write_diagnostics(aux, thrust, thrust_vac, mtx, mty, mtz)
-    boosters.write_diagnostics(aux, booster_thrust)
+    boosters.write_diagnostics(aux, booster_thrust, x, p, config == 0)
     mass_model.write_diagnostics(aux, mass_total, prop, cgx_t, cgy_t, cgz_t)
     rcs.write_diagnostics(aux, rcs_torque)
     throttle.write_diagnostics(aux, setting)

@@ -158,14 +158,18 @@ class UpperStage:
 @dataclass(frozen=True)
 class Boosters:
     """Strap-on boosters on the first stage: identical solid motors (each one ``trace``
-    engine on its own tank), lit at liftoff, with fixed nozzles (no TVC), jettisoned
-    together by one event. Each burns its ``propellant_kg`` in the shape of the thrust
-    table (vacuum thrust N vs mission time s) at ``isp_vac_s``, as a solid first stage
-    does (docs/models.md, "Propulsion"), its delivered thrust ``F_vac − p A_exit`` along
+    engine on its own tank), lit at liftoff, with fixed nozzles or with TVC (each nozzle
+    gimbaled in pitch and yaw), jettisoned together by one event. Each burns its
+    ``propellant_kg`` in the shape of the thrust table (vacuum thrust N vs mission time
+    s) at ``isp_vac_s``, as a solid first stage does (docs/models.md, "Propulsion"), its delivered thrust ``F_vac − p A_exit`` along
     its nozzle's cant (pitch, yaw, rad) at its nozzle (structure frame, m). ``mass``: each
     booster's own mass properties against its own propellant, exchanged in flight for its
     full-load row of the liftoff configuration's table (``models/boosters.py``);
-    ``burn_rate``: each booster's burn-rate factor (None: 1 each).
+    ``burn_rate``: each booster's burn-rate factor (None: 1 each). With TVC
+    (``gimbal_limit_rad`` > 0) each nozzle pivots at its ``nozzle_m`` on its own pitch
+    and yaw actuator within ``gimbal_limit_rad`` (rad), its moving mass ``engine``
+    (tail-wags-dog); the control mixer allocates over the first stage's engines and the
+    boosters' nozzles together while they are attached (``models/cluster.py``).
 
     Attributes
     ----------
@@ -189,11 +193,20 @@ class Boosters:
     #: each booster's burn-rate factor k (None: 1 each): it burns ``k F_tab(k t)``, its
     #: load and impulse the same in a burn ``1/k`` as long (a Monte Carlo dispersion)
     burn_rate: np.ndarray | None = None
+    #: each nozzle's gimbal limit per axis (rad; 0: fixed nozzles, no TVC)
+    gimbal_limit_rad: float = 0.0
+    #: each gimbaled nozzle's moving mass (None: fixed nozzles)
+    engine: Engine | None = None
 
     @property
     def count(self) -> int:
         """The number of boosters."""
         return len(self.names)
+
+    @property
+    def tvc(self) -> bool:
+        """Whether the boosters' nozzles gimbal (in pitch and yaw)."""
+        return self.gimbal_limit_rad > 0.0
 
 
 #: Roll-control jets (the upper stage's).
@@ -286,6 +299,17 @@ class Vehicle:
     first_stage_configurations: int = 1
     #: the strap-on boosters (None: none); their tanks' states follow :attr:`tanks`
     boosters: Boosters | None = None
+
+    @property
+    def first_stage_engine_count(self) -> int:
+        """The first stage's engines (1 without a cluster)."""
+        return max(len(self.first_stage.mounts), 1)
+
+    @property
+    def gimbaled_boosters(self) -> int:
+        """The boosters whose nozzles gimbal (0: none, or fixed nozzles); their channel
+        pairs follow the first stage's engines'."""
+        return self.boosters.count if self.boosters is not None and self.boosters.tvc else 0
 
     @property
     def booster_tanks(self) -> tuple[str, ...]:
@@ -576,8 +600,8 @@ def two_stage_view(tree: VehicleTree) -> Vehicle:
 def _boosters(tree: VehicleTree, first, parts: list) -> Boosters | None:
     """The strap-on boosters' record (:class:`Boosters`), or a refusal naming the first
     key outside what the plant flies: identical boosters on the first stage, each one
-    trace engine on its own tank with a fixed nozzle, lit at liftoff, with its own
-    inert mass and mass table."""
+    trace engine on its own tank with a fixed nozzle or one gimbaled in pitch and yaw,
+    lit at liftoff, with its own inert mass and mass table."""
     if not parts:
         return None
     engines = []
@@ -592,8 +616,9 @@ def _boosters(tree: VehicleTree, first, parts: list) -> Boosters | None:
         eng = tree.engines[part.engines[0]]
         if eng.source != TRACE:
             _refuse(f"{eng.key}.source", eng.source, "a booster is a solid motor: source trace")
-        if eng.gimbal_axes:
-            _refuse(f"{eng.key}.gimbal_axes", list(eng.gimbal_axes), "a booster's nozzle is fixed: [] (no TVC)")
+        if eng.gimbal_axes and eng.gimbal_axes != GIMBAL_AXES:
+            _refuse(f"{eng.key}.gimbal_axes", list(eng.gimbal_axes), "a booster's nozzle is fixed, [], or gimbals "
+                                                                     "in pitch and yaw, [pitch, yaw]")
         if eng.name in tree.ignited_later():
             _refuse(f"{eng.key}", eng.name, "a booster lights at liftoff (no event ignites it)")
         for what, value in (("mass_table", part.mass), ("inert_mass_kg", part.inert_mass_kg)):
@@ -608,7 +633,10 @@ def _boosters(tree: VehicleTree, first, parts: list) -> Boosters | None:
                 (f"{eng.key}.nozzle_exit_area_m2", eng.nozzle_exit_area_m2, first_engine.nozzle_exit_area_m2),
                 (f"{tree.tanks[eng.tanks[0]].key}.propellant_kg", tree.tanks[eng.tanks[0]].propellant_kg,
                  tree.tanks[first_engine.tanks[0]].propellant_kg),
-                (f"{part.key}.inert_mass_kg", part.inert_mass_kg, first_part.inert_mass_kg)):
+                (f"{part.key}.inert_mass_kg", part.inert_mass_kg, first_part.inert_mass_kg),
+                (f"{eng.key}.gimbal_axes", eng.gimbal_axes, first_engine.gimbal_axes),
+                (f"{eng.key}.gimbal_limit_deg", eng.gimbal_limit_rad, first_engine.gimbal_limit_rad),
+                (f"{eng.key}.moving_mass", eng.moving_mass, first_engine.moving_mass)):
             if not _same(value, other):
                 _refuse(key, part.name, f"the boosters are identical but for their place, cant and mass table "
                                         f"(as {first_part.name})")
@@ -620,7 +648,9 @@ def _boosters(tree: VehicleTree, first, parts: list) -> Boosters | None:
         isp_vac_s=trace.isp_vac_s, isp_sl_s=trace.isp_sl_s, nozzle_exit_area_m2=first_engine.nozzle_exit_area_m2,
         propellant_kg=tree.tanks[first_engine.tanks[0]].propellant_kg, inert_mass_kg=float(first_part.inert_mass_kg),
         nozzle_m=np.array([e.gimbal_m for e in engines], dtype=float),
-        cant_rad=np.array([e.cant_rad for e in engines], dtype=float), mass=tuple(p.mass for p in parts))
+        cant_rad=np.array([e.cant_rad for e in engines], dtype=float), mass=tuple(p.mass for p in parts),
+        gimbal_limit_rad=float(first_engine.gimbal_limit_rad) if first_engine.gimbal_axes else 0.0,
+        engine=first_engine.moving_mass if first_engine.gimbal_axes else None)
 
 
 def _booster_jettison(tree: VehicleTree, name: str, boosters: Boosters):
