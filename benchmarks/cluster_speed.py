@@ -1,9 +1,10 @@
 """Cost per plant step of an engine cluster and of strap-on boosters: the shipped ares_i
 against the same vehicle with its first-stage motor split into a ring of six engines
 (each a sixth of the thrust and of the moving mass, twelve gimbal channels through the
-mixer), and against docs/vehicles.md's strap-on booster example (two boosters, their
-thrust and in-flight mass composition until their jettison), flown in turn in one
-process so the machine's drift falls on all alike.
+mixer), against docs/vehicles.md's strap-on booster example (two boosters, their
+thrust and in-flight mass composition until their jettison) and against its booster-TVC
+example (the same boosters' nozzles on four more gimbal channels, mixed with the
+motor's), flown in turn in one process so the machine's drift falls on all alike.
 
     python benchmarks/cluster_speed.py [--rounds 7] [--engines 6] [overrides ...]
 
@@ -49,15 +50,17 @@ def ring_first_stage(vehicle, n: int):
     return dataclasses.replace(vehicle, first_stage=dataclasses.replace(fs, engine=moving, mounts=mounts))
 
 
-def strap_on_boosters():
+def strap_on_boosters(*more: str):
     """docs/vehicles.md's ``strap-on-boosters`` example over the shipped ares_i (its events
-    replaced, as the page says)."""
-    block = re.search(r"```yaml\n# example: strap-on-boosters\n(.*?)```", PAGE.read_text(encoding="utf-8"), re.S)
+    replaced, as the page says), then the examples ``more`` written over it."""
+    page = PAGE.read_text(encoding="utf-8")
     folder = shipped_config_dir() / "vehicle"
-    base = OmegaConf.load(folder / "ares_i.yaml").vehicle
-    OmegaConf.update(base, "events", {}, merge=False)
-    node = OmegaConf.to_container(OmegaConf.merge(base, OmegaConf.create(block.group(1))), resolve=True)
-    return load_vehicle(node, folder / "ares_i")
+    node = OmegaConf.load(folder / "ares_i.yaml").vehicle
+    OmegaConf.update(node, "events", {}, merge=False)
+    for name in ("strap-on-boosters", *more):
+        block = re.search(rf"```yaml\n# example: {name}\n(.*?)```", page, re.S)
+        node = OmegaConf.merge(node, OmegaConf.create(block.group(1)))
+    return load_vehicle(OmegaConf.to_container(node, resolve=True), folder / "ares_i")
 
 
 def main() -> None:
@@ -73,7 +76,8 @@ def main() -> None:
     models = {"ares_i": prep.model,
               f"{args.engines}-engine first stage": build_model(cfg, ring_first_stage(prep.vehicle, args.engines),
                                                                guidance),
-              "two strap-on boosters": build_model(cfg, strap_on_boosters(), guidance)}
+              "two strap-on boosters": build_model(cfg, strap_on_boosters(), guidance),
+              "two boosters with TVC": build_model(cfg, strap_on_boosters("booster-tvc"), guidance)}
     per_step = {name: [] for name in models}
     rtf = {name: [] for name in models}
     for model in models.values():

@@ -286,11 +286,8 @@ def stage_mounts(tb: np.ndarray, p: np.ndarray, engine: int, config: int) -> tup
     split = o + int(p[P_UPPER_FIRST]) * MOUNT_SIZE
     if engine != ENGINE_FIRST:
         return split, o + n
-    boosted = int(p[P_BOOSTED_END])
-    if boosted == 0:
-        return o, split
-    end = o + boosted * MOUNT_SIZE
-    return (o, end) if config == 0 else (end, split)
+    end = o + int(p[P_BOOSTED_END]) * MOUNT_SIZE  # o without booster TVC
+    return (o, end) if config == 0 and end > o else (end, split)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
