@@ -73,8 +73,8 @@ def test_a_logged_diagnostic_is_a_signal_of_every_run_where_its_model_is_on():
     """Each field declared with ``blocks.Logged`` is a time history with the field's units
     and description, the declaration's columns and frame, and the logged ``aux`` entries
     as data (a per-tank field's first entries, one per column ``columns_of`` gives: the
-    run's sloshing tanks); a field whose model is off (``when`` false: slosh, flex) is left
-    out."""
+    run's sloshing tanks); a field whose model is off (``when`` false: slosh, flex, boosters
+    with fixed nozzles or none, an unthrottled upper stage) is left out."""
     from savant_cli.sim.run import _split
 
     logged = [f for f in blocks.DIAGNOSTICS.fields if f.logged is not None]
@@ -83,6 +83,9 @@ def test_a_logged_diagnostic_is_a_signal_of_every_run_where_its_model_is_on():
     model, result, sig = _short_flight(["flex=on", "flex.n_modes=2", "slosh=on", "twd=on"])
     aux = _split(result.log, model.layout.n)[2]
     for f in logged:
+        if f.logged.when is not None and not f.logged.when(model):
+            assert f.logged.name not in sig
+            continue
         s = sig[f.logged.name]
         columns = f.logged.columns if f.logged.columns_of is None else f.logged.columns_of(model)
         declared = (f.units, f.description, columns, f.logged.frame)
@@ -92,7 +95,8 @@ def test_a_logged_diagnostic_is_a_signal_of_every_run_where_its_model_is_on():
     assert sig["liquid_level"].columns == ("lox", "lh2") and sig["slosh_force"].columns[-1] == "lh2_z"
     _, _, rigid = _short_flight([])
     conditional = {f.logged.name for f in logged if f.logged.when is not None}
-    assert conditional == {"liquid_level", "slosh_force", "flex_gimbal_rotation"}
+    assert conditional == {"liquid_level", "slosh_force", "flex_gimbal_rotation", "booster_gimbal_angle",
+                           "upper_stage_throttle"}
     assert not conditional & set(rigid) and {f.logged.name for f in logged} - conditional <= set(rigid)
 
 

@@ -136,25 +136,28 @@ def _vacuum_params(terminal_s: float = 10.0) -> tuple[np.ndarray, np.ndarray, fl
     return p, h, rd, vd
 
 
-def _fly_vacuum(thrust_scale: float = 1.0):
+def _fly_vacuum(thrust_scale: float = 1.0, accel_limit: float = 0.0, peg_limit: float | None = None):
     """A vacuum upper-stage burn under PEG at 1 Hz, integrated by RK4 at 0.02 s with the
     thrust along PEG's steering law, the last step shortened to end at PEG's predicted
-    cutoff time (the engine's cutoff lands on a plant step instead)."""
+    cutoff time (the engine's cutoff lands on a plant step instead). ``accel_limit``
+    (m/s², 0: none): an ideal throttle holds the thrust acceleration there; PEG models
+    ``peg_limit`` (default: the same)."""
     p, h, _, _ = _vacuum_params()
+    p[peg.P_ACCEL_LIMIT] = accel_limit if peg_limit is None else peg_limit
     node = 0.3
     up = np.array([np.cos(node), np.sin(node), 0.0])
     down_range = np.cross(h, up)
     r = (constants.WGS84_A + 110e3) * up
     v = 3000.0 * (np.cos(np.radians(5.0)) * down_range + np.sin(np.radians(5.0)) * up)
     thrust, m = 1.3e6 * thrust_scale, 150e3
-    mdot = thrust / VE
     d = np.zeros(layout.N_DISC)
     dt, t = 0.02, 100.0
     log = []
 
     def deriv(y, u):
         rn = np.linalg.norm(y[0:3])
-        return np.concatenate([y[3:6], -constants.MU_EARTH * y[0:3] / rn ** 3 + thrust / y[6] * u, [-mdot]])
+        accel = thrust / y[6] if accel_limit <= 0.0 else min(thrust / y[6], accel_limit)
+        return np.concatenate([y[3:6], -constants.MU_EARTH * y[0:3] / rn ** 3 + accel * u, [-accel * y[6] / VE]])
 
     y = np.concatenate([r, v, [m]])
     next_cycle = t
@@ -209,6 +212,62 @@ def test_vacuum_burn_inserts_on_target(vacuum_burn):
     assert orbit["inclination_deg"] == pytest.approx(51.6, abs=1e-3)
     assert np.linalg.norm(y[0:3]) == pytest.approx(rd, abs=10.0)
     assert np.linalg.norm(y[3:6]) == pytest.approx(vd, abs=0.05)
+
+
+def test_burn_integrals_of_a_throttled_burn_match_quadrature():
+    """UPFG's constant-acceleration mode: ``burn_integrals`` of a burn at constant thrust
+    until ``a(t) = v_e/(τ − t)`` reaches the limit, then at the limit, against quadrature
+    of that ``a(t)`` (breakpoint at the switch); its ``L`` is the velocity to go. A limit
+    reached already is constant acceleration throughout; one not reached within the burn,
+    or none, is the constant-thrust burn, bit for bit."""
+    tau = 600.0
+    for a_lim, vgo, switch in ((20.0, 5000.0, tau - VE / 20.0), (5.0, 3000.0, 0.0), (30.0, 2000.0, None),
+                               (0.0, 4000.0, None)):
+        tgo, L, J, S, Q, P, H = peg.burn_integrals(VE, tau, vgo, a_lim)
+        if switch is None:  # constant thrust: the standard integrals of the rocket equation's t_go
+            t_ct = tau * (1.0 - np.exp(-vgo / VE))
+            assert (tgo, L, J, S, Q, P, H) == (t_ct, *peg.thrust_integrals(VE, tau, t_ct))
+            continue
+
+        def a(t):
+            return VE / (tau - t) if t < switch else a_lim
+
+        def integral(weight):
+            pts = [switch] if 0.0 < switch < tgo else None
+            return quad(lambda t: a(t) * weight(t), 0.0, tgo, points=pts, limit=200)[0]
+
+        assert L == pytest.approx(vgo, rel=1e-12) and L == pytest.approx(integral(lambda t: 1.0), rel=1e-10)
+        assert J == pytest.approx(integral(lambda t: t), rel=1e-10)
+        assert S == pytest.approx(integral(lambda t: tgo - t), rel=1e-10)
+        assert Q == pytest.approx(integral(lambda t: (tgo - t) * t), rel=1e-9)
+        assert P == pytest.approx(integral(lambda t: (tgo - t) * t * t), rel=1e-9)
+        assert H == pytest.approx(integral(lambda t: t * t), rel=1e-9)
+
+
+def test_a_throttled_burn_inserts_and_its_time_to_go_is_the_burns():
+    """An ideal throttle holding 20 m/s² over the burn's last 150 s: PEG in its
+    constant-acceleration mode inserts on target and predicts the cutoff as well as the
+    rated burn's constant-thrust mode does (within 3 s at engagement, the steering
+    losses its t_go leaves out; within 0.05 s over the last 100 s). Modelling constant
+    thrust it still reaches orbit (closed loop), further from the target (0.22 km of
+    apogee), having predicted the cutoff more than 5 s early, over the last 100 s too."""
+    t_cut, y, log = _fly_vacuum(accel_limit=20.0)
+    orbit = orbit_elements(y[0:3], y[3:6])
+    assert orbit["perigee_altitude_km"] == pytest.approx(56.0, abs=0.1)
+    assert orbit["apogee_altitude_km"] == pytest.approx(185.0, abs=0.1)
+    assert t_cut > _fly_vacuum()[0] + 10.0  # the limit lengthens the burn
+
+    def errors(log, t_end):
+        t, tgo = log[1:, 0], log[1:, 1]
+        last = t >= t_end - 100.0
+        return abs(t[0] + tgo[0] - t_end), np.abs(t + tgo - t_end)[last].max()
+
+    at_engagement, late = errors(log, t_cut)
+    assert at_engagement < 3.0 and late < 0.05
+    t_ct, y_ct, log_ct = _fly_vacuum(accel_limit=20.0, peg_limit=0.0)
+    apogee_ct = orbit_elements(y_ct[0:3], y_ct[3:6])["apogee_altitude_km"]
+    assert abs(apogee_ct - 185.0) < 1.0 and abs(apogee_ct - 185.0) > abs(orbit["apogee_altitude_km"] - 185.0)
+    assert min(errors(log_ct, t_ct)) > 5.0
 
 
 def test_degraded_thrust_still_inserts():

@@ -164,6 +164,12 @@ def check_booster_tvc(vehicle):
     assert rows[1:, cluster.M_PITCH_ROLL].tolist() == [-1.0, 1.0]  # the pair rolls by differential pitch
 
 
+def check_a_throttled_upper_stage(vehicle):
+    th = vehicle.upper_stage.throttle
+    assert (th.minimum, th.maximum, th.rate_per_s, th.axial_acceleration_limit_mps2) == (0.6, 1.0, 0.2, 25.0)
+    assert th.time_s is None and vehicle.first_stage.liquid is None
+
+
 CHECKS = {"jettison-on-a-condition": check_jettison_on_a_condition,
           "a-delay-arms-a-condition": check_a_delay_arms_a_condition,
           "composed-mass-properties": check_composed_mass_properties,
@@ -174,7 +180,8 @@ CHECKS = {"jettison-on-a-condition": check_jettison_on_a_condition,
           "a-first-stage-cutoff": check_a_first_stage_cutoff,
           "strap-on-boosters": check_strap_on_boosters,
           "first-stage-slosh": check_first_stage_slosh,
-          "booster-tvc": check_booster_tvc}
+          "booster-tvc": check_booster_tvc,
+          "a-throttled-upper-stage": check_a_throttled_upper_stage}
 
 
 def test_every_example_on_the_page_has_a_check():

@@ -142,6 +142,8 @@ U_THROTTLE = _INPUTS.scalar("first_stage_throttle", "1", "the first stage's thro
                            "thrust (read only when it is throttled: models/throttle.py)")
 U_FS_T_CUT = _INPUTS.scalar("first_stage_cutoff_command_time", "s",
                             "a liquid first stage's cutoff command time, mission time (0: none yet; never at liftoff)")
+U_US_THROTTLE = _INPUTS.scalar("upper_stage_throttle", "1", "the upper stage's throttle setting, fraction of rated "
+                              "thrust (read only when it is throttled: models/throttle.py)")
 N_INPUT = blocks.INPUTS.size
 
 

@@ -2,7 +2,9 @@
 steering to an insertion state, with time-to-go prediction and thrust integrals.
 
 The formulation is the Space Shuttle's Unified Powered Flight Guidance in its standard
-(constant-thrust, single-phase) mode: Space Shuttle GN&C Equation Document No. 24,
+(constant-thrust) mode, and in its constant-acceleration mode for a throttled upper
+stage (the burn at constant thrust until the throttle's acceleration limit, then at that
+acceleration: :func:`burn_integrals`): Space Shuttle GN&C Equation Document No. 24,
 "Unified Powered Flight Guidance" (NASA JSC, 1974) and its public derivation by
 McHenry, Brand, Long, Cockrell and Thibodeau, "Space Shuttle Ascent Guidance,
 Navigation, and Control", J. Astronaut. Sci. 27(1), 1979; the equations are in
@@ -12,8 +14,10 @@ Navigation, and Control", J. Astronaut. Sci. 27(1), 1979; the equations are in
    ``Δv_s = Δv − ½ (g₀ + g₁) Δt``; the thrust acceleration ``a_T = |Δv_s| / Δt`` (the
    mean over the cycle, moved to its end by ``τ = v_e / a_T − Δt/2``);
 2. ``v_go ← v_go − Δv_s``; burn time to go from the rocket equation,
-   ``t_go = τ (1 − exp(−|v_go| / v_e))``;
-3. thrust integrals ``L, J, S, Q, P, H`` of a constant-thrust burn of duration ``t_go``;
+   ``t_go = τ (1 − exp(−|v_go| / v_e))`` (with an acceleration limit ``a_L``, the
+   constant-thrust part ends at ``t₁ = τ − v_e/a_L`` and the rest of ``|v_go|`` takes
+   ``(|v_go| − L₁)/a_L``);
+3. thrust integrals ``L, J, S, Q, P, H`` of that burn over ``t_go``;
 4. steering: ``λ = v_go/|v_go|``; ``r_grav ← (t_go/t_go,prev)² r_grav``; the position to
    go ``r_go`` (its downrange part free, set so that ``λ · r_go = S``); turning rate ``λ̇ = (r_go − S λ)/(Q − S J/L)``; the
    thrust direction ``i_F(t) = unit(λ + λ̇ (t − t_λ))`` with ``t_λ = t + J/L``;
@@ -64,6 +68,8 @@ P_STEER_TOL = _PARAMS.scalar("steering_tolerance", "rad", "largest change of the
 P_SHUTDOWN_LEAD = _PARAMS.scalar("shutdown_impulse_time", "s", "nominal shutdown impulse in seconds of rated "
                                   "thrust (an I-load): the cutoff is commanded this much before t_go ends")
 P_BLEND = _PARAMS.scalar("blend_time", "s", "the command turns from the stored profile to PEG's over this time")
+P_ACCEL_LIMIT = _PARAMS.scalar("acceleration_limit", "m/s^2", "the thrust acceleration the upper stage's throttle "
+                               "holds (0: constant thrust to cutoff)")
 
 _DISCRETE = blocks.DISCRETE.block("peg")
 D_ACTIVE = _DISCRETE.scalar("active", "1", "1 once PEG steers the vehicle")
@@ -129,6 +135,8 @@ def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarra
     p[P_STEER_TOL] = np.radians(g.peg.steering_tolerance_deg)
     p[P_BLEND] = g.peg.blend_s
     p[P_SHUTDOWN_LEAD] = g.peg.shutdown_impulse_time_s
+    upper = inputs.vehicle.upper_stage.throttle  # the flight software's own limit
+    p[P_ACCEL_LIMIT] = upper.axial_acceleration_limit_mps2 if upper is not None else 0.0
 
 
 class InsertionTarget:
@@ -233,6 +241,50 @@ def thrust_integrals(ve: float, tau: float, tgo: float) -> tuple[float, float, f
 
 
 @njit(cache=True, error_model="numpy")
+def constant_acceleration_integrals(a: float, tb: float) -> tuple[float, float, float, float, float, float]:
+    """:func:`thrust_integrals` of a burn at the constant acceleration ``a`` (m/s²) for
+    ``tb`` s: ``L = a t``, ``J = S = a t²/2``, ``Q = a t³/6``, ``P = a t⁴/12``,
+    ``H = a t³/3``."""
+    L = a * tb
+    J = 0.5 * L * tb
+    Q = J * tb / 3.0
+    return L, J, J, Q, 0.5 * Q * tb, 2.0 * Q
+
+
+@njit(cache=True, error_model="numpy")
+def burn_integrals(ve: float, tau: float, vgo: float, a_limit: float) -> tuple[float, float, float, float, float,
+                                                                             float, float]:
+    """Burn time to go (s) for the velocity to go ``vgo`` (m/s) and the thrust integrals
+    ``L, J, S, Q, P, H`` of that burn (:func:`thrust_integrals`' units).
+
+    Without an acceleration limit (``a_limit`` ≤ 0) the burn is at constant thrust:
+    ``t_go = τ (1 − exp(−v_go/v_e))``. With one, as UPFG's constant-acceleration mode, the
+    thrust acceleration ``v_e/(τ − t)`` reaches ``a_L`` at ``t₁ = τ − v_e/a_L`` (0 if it is
+    there already); if the constant-thrust part delivers ``L₁ < v_go`` the rest is flown
+    at ``a_L`` for ``t₂ = (v_go − L₁)/a_L``, and the two parts combine as integrals of
+    ``a(t)`` over ``[0, t₁]`` and ``[t₁, t₁ + t₂]``::
+
+        L = L₁ + L₂            J = J₁ + J₂ + t₁ L₂         S = S₁ + S₂ + t₂ L₁
+        Q = Q₁ + Q₂ + t₂ J₁ + t₁ S₂
+        P = P₁ + P₂ + t₂ H₁ + 2 t₁ Q₂ + t₁² S₂                H = J t_go − Q
+    """
+    t1 = tau - ve / a_limit if a_limit > 0.0 else tau
+    if a_limit <= 0.0 or t1 > 0.0 and ve * np.log(tau / (tau - t1)) >= vgo:
+        tgo = tau * (1.0 - np.exp(-vgo / ve))
+        L, J, S, Q, P, H = thrust_integrals(ve, tau, tgo)
+        return tgo, L, J, S, Q, P, H
+    t1 = max(t1, 0.0)
+    L1, J1, S1, Q1, P1, H1 = thrust_integrals(ve, tau, t1)
+    t2 = (vgo - L1) / a_limit
+    L2, J2, S2, Q2, P2, _ = constant_acceleration_integrals(a_limit, t2)
+    tgo = t1 + t2
+    J = J1 + J2 + t1 * L2
+    Q = Q1 + Q2 + t2 * J1 + t1 * S2
+    return (tgo, L1 + L2, J, S1 + S2 + t2 * L1, Q, P1 + P2 + t2 * H1 + 2.0 * t1 * Q2 + t1 * t1 * S2,
+            J * tgo - Q)
+
+
+@njit(cache=True, error_model="numpy")
 def coast(r: np.ndarray, v: np.ndarray, duration: float, grav: np.ndarray,
           n_steps: int) -> tuple[np.ndarray, np.ndarray]:
     """Position and velocity after a coast of ``duration`` s under gravity alone.
@@ -310,7 +362,7 @@ def _target_velocity(rd: np.ndarray, target: np.ndarray, grav: np.ndarray) -> np
 @njit(cache=True, error_model="numpy")
 def upfg_pass(r: np.ndarray, v: np.ndarray, vgo: np.ndarray, rd: np.ndarray, rbias: np.ndarray,
               rgrav: np.ndarray, tgo_prev: float, first: bool, ve: float, tau: float, target: np.ndarray,
-              grav: np.ndarray, n_grav: int):
+              grav: np.ndarray, n_grav: int, a_limit: float = 0.0):
     """One UPFG pass (steps 2–6 of the module notes) at state ``r, v`` (ECI, m, m/s).
 
     Parameters
@@ -327,6 +379,8 @@ def upfg_pass(r: np.ndarray, v: np.ndarray, vgo: np.ndarray, rd: np.ndarray, rbi
         ``[R_d (m), V_d (m/s), γ_d (rad), i_y (3)]``.
     grav : ndarray (8,)
         Gravity model (:func:`coast`); ``n_grav`` its RK4 steps.
+    a_limit : float
+        The thrust acceleration a throttle holds (m/s²; 0: none), :func:`burn_integrals`.
 
     Returns
     -------
@@ -341,8 +395,7 @@ def upfg_pass(r: np.ndarray, v: np.ndarray, vgo: np.ndarray, rd: np.ndarray, rbi
     """
     iy = target[3:6]
     vgo_mag = np.sqrt(np.dot(vgo, vgo))
-    tgo = tau * (1.0 - np.exp(-vgo_mag / ve))
-    L, J, S, Q, P, H = thrust_integrals(ve, tau, tgo)
+    tgo, L, J, S, Q, P, H = burn_integrals(ve, tau, vgo_mag, a_limit)
     j_over_l = J / L
     if first:
         g0 = grav[5:8] if grav[0] == 0.0 else gravity_zonal(r, grav[0], grav[1], grav[2], grav[3], grav[4])
@@ -455,6 +508,7 @@ def guidance_cycle(d: np.ndarray, t: float, r: np.ndarray, v: np.ndarray, t_igni
         return PEG_OK
     ve = p[P_VE]
     tau = ve / d[D_ACCEL] - 0.5 * dt
+    a_limit = p[P_ACCEL_LIMIT]
     target = _target(p)
     n_grav = int(p[P_GRAV_STEPS])
     tol = p[P_TOL]
@@ -470,7 +524,7 @@ def guidance_cycle(d: np.ndarray, t: float, r: np.ndarray, v: np.ndarray, t_igni
         for it in range(int(p[P_MAX_ITER])):
             n_iter = it + 1
             tgo, vgo, rd, rbias, rgrav, vd, lam, lam_dot, jl = upfg_pass(
-                r, v, vgo, rd, rbias, rgrav, tgo_prev, it == 0, ve, tau, target, grav, n_grav)
+                r, v, vgo, rd, rbias, rgrav, tgo_prev, it == 0, ve, tau, target, grav, n_grav, a_limit)
             i_f = _unit(lam - lam_dot * jl)
             turn = np.arccos(min(max(np.dot(i_f, i_f_prev), -1.0), 1.0))
             if abs(tgo - tgo_prev) <= tol * tgo and turn <= p[P_STEER_TOL]:
@@ -493,15 +547,14 @@ def guidance_cycle(d: np.ndarray, t: float, r: np.ndarray, v: np.ndarray, t_igni
             rgrav = d[D_RGRAV:D_RGRAV + 3].copy()
             tgo_expected = d[D_TGO] - dt
             tgo, vgo, rd, rbias, rgrav, vd, lam, lam_dot, jl = upfg_pass(
-                r, v, vgo, rd, rbias, rgrav, d[D_TGO], False, ve, tau, target, grav, n_grav)
+                r, v, vgo, rd, rbias, rgrav, d[D_TGO], False, ve, tau, target, grav, n_grav, a_limit)
             converged = abs(tgo - tgo_expected) <= tol * max(tgo, terminal)
             d[D_UNCONVERGED] = 0.0 if converged else d[D_UNCONVERGED] + 1.0
             if d[D_UNCONVERGED] >= p[P_MAX_UNCONVERGED]:
                 return PEG_LOST_CONVERGENCE
         else:  # steering frozen: only the time to go
             converged = True
-            vgo_mag = np.sqrt(np.dot(vgo, vgo))
-            tgo = tau * (1.0 - np.exp(-vgo_mag / ve))
+            tgo = burn_integrals(ve, tau, np.sqrt(np.dot(vgo, vgo)), a_limit)[0]
     if not (np.isfinite(tgo) and np.all(np.isfinite(vgo))):
         return PEG_NONFINITE
     d[D_CONVERGED] = 1.0 if converged else 0.0

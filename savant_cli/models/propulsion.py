@@ -237,16 +237,19 @@ def liquid_first_stage_flow(x: np.ndarray, tb: np.ndarray, p: np.ndarray, t: flo
 
 @njit(cache=True, error_model="numpy", inline="always")
 def upper_stage_thrust_vac(x: np.ndarray, tb: np.ndarray, p: np.ndarray, t: float, t_ign: float,
-                           t_cut: float) -> float:
+                           t_cut: float, setting: float) -> float:
     """Vacuum thrust of the upper-stage engine (N) at mission time ``t`` (s): the start-up
-    fraction at ``t − t_ign`` × the rated thrust, × the shutdown decay
+    fraction at ``t − t_ign`` × the rated thrust (× the throttle ``setting`` of a
+    throttled stage, ``throttle.held_upper``), × the shutdown decay
     ``max(0, 1 − (t − t_cut)/T_sd)`` once the cutoff command at ``t_cut`` (s; 0 or less:
-    none yet) is given; zero once either tank is empty."""
+    none yet) is given (the setting held); zero once either tank is empty."""
     lox, lh2 = upper_stage_propellant(x, p)
     if not (lox > 0.0 and lh2 > 0.0):
         return 0.0
     o_st, n_st = tab(tb, T_US_START_TIME)
     f_vac = interp1_at(tb, o_st, tab_offset(tb, T_US_START_FRAC), n_st, t - t_ign) * p[P_US_THRUST]
+    if setting != 1.0:
+        f_vac *= setting
     if t_cut > 0.0 and t > t_cut:
         f_vac *= shutdown_decay(t - t_cut, p[P_US_SHUTDOWN_TIME])
     return f_vac
@@ -271,7 +274,8 @@ def propellant_remaining(x: np.ndarray, p: np.ndarray, config: int) -> float:
 
 @njit(cache=True, error_model="numpy", inline="always")
 def thrust_and_flow(x: np.ndarray, tb: np.ndarray, p: np.ndarray, engine: int, t: float, t_ign: float,
-                    t_cut: float, throttle: float, fs_t_cut: float, pres: float) -> tuple[float, float, float, float]:
+                    t_cut: float, throttle: float, fs_t_cut: float, pres: float,
+                    us_throttle: float) -> tuple[float, float, float, float]:
     """Delivered thrust (N), the first- and upper-stage mass flows (kg/s) and the vacuum
     thrust of the burning engine (N).
 
@@ -279,7 +283,7 @@ def thrust_and_flow(x: np.ndarray, tb: np.ndarray, p: np.ndarray, engine: int, t
     ignition time (s), ``t_cut`` its cutoff command time (s; 0 or less: none yet),
     ``throttle`` the first stage's setting (1 unthrottled), ``fs_t_cut`` a liquid first
     stage's cutoff command time (s; 0 or less: none yet), ``pres`` the ambient pressure
-    (Pa).
+    (Pa), ``us_throttle`` the upper stage's setting (1 unthrottled).
     """
     thrust = 0.0
     f_vac = 0.0
@@ -290,7 +294,7 @@ def thrust_and_flow(x: np.ndarray, tb: np.ndarray, p: np.ndarray, engine: int, t
         if mdot_fs > 0.0:
             thrust = max(f_vac - pres * p[P_FS_EXIT_AREA], 0.0)
     elif engine == ENGINE_UPPER:
-        f_vac = upper_stage_thrust_vac(x, tb, p, t, t_ign, t_cut)
+        f_vac = upper_stage_thrust_vac(x, tb, p, t, t_ign, t_cut, us_throttle)
         mdot_us = f_vac / (G0 * p[P_US_ISP])
         thrust = max(f_vac - pres * p[P_US_EXIT_AREA], 0.0)
     if p[P_ON] == 0.0:

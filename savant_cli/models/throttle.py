@@ -1,4 +1,5 @@
-"""The first stage's throttle: the engine controller's setting and its law.
+"""The throttles: the engine controller's setting and its law, for the first stage and
+for the upper stage.
 
 A liquid first stage with a ``throttle`` section (``vehicle/tree.py::Throttle``) burns
 at ``k`` × its rated vacuum thrust (``models/propulsion.py``), ``k`` a fraction held in
@@ -18,6 +19,11 @@ setting that holds ``a = a_lim`` exactly, and the error shrinks by ``−L/(m a_l
 acceleration grows between cycles as propellant burns: by ``a ṁ Δt / m`` at most. The
 mass flow follows the thrust at the rated Isp (a constant Isp over the throttle range).
 An unthrottled vehicle reads 1 whatever ``u`` holds (:func:`held`).
+
+A throttled upper stage (``u[U_US_THROTTLE]``, :func:`held_upper`) runs the same law with
+its own bounds, rate and acceleration limit and no schedule (its command is its
+maximum), from its ignition to its cutoff command: its guidance, PEG, models the burn as
+constant thrust until the limit and constant acceleration after it (``models/peg.py``).
 """
 
 from __future__ import annotations
@@ -36,23 +42,37 @@ P_RATE = _PARAMS.scalar("rate", "1/s", "largest change of the setting per second
 P_ACCEL_LIMIT = _PARAMS.scalar("axial_acceleration_limit", "m/s^2",
                                "sensed axial acceleration the throttle holds (0: no limit)")
 P_SCHEDULED = _PARAMS.scalar("scheduled", "1", "1: the command follows the schedule table, 0: the maximum")
+P_US_ON = _PARAMS.scalar("upper_stage.on", "1", "1: the upper stage is throttled (u holds its setting)")
+P_US_MIN = _PARAMS.scalar("upper_stage.minimum", "1", "the upper stage's lowest setting, fraction of rated thrust")
+P_US_MAX = _PARAMS.scalar("upper_stage.maximum", "1", "the upper stage's highest setting (its command)")
+P_US_RATE = _PARAMS.scalar("upper_stage.rate", "1/s", "largest change of the upper stage's setting per second")
+P_US_ACCEL_LIMIT = _PARAMS.scalar("upper_stage.axial_acceleration_limit", "m/s^2",
+                                  "sensed axial acceleration the upper stage's throttle holds (0: unthrottled)")
 _TABLES = blocks.TABLES.block("throttle")
 T_TIME = _TABLES.table("fs_throttle_time", "s", "first-stage throttle schedule, mission time")
 T_SETTING = _TABLES.table("fs_throttle", "1", "throttle setting at T_TIME, fraction of rated thrust")
 
 _AUX = blocks.DIAGNOSTICS.block("throttle")
 A_SETTING = _AUX.scalar("setting", "1", "the first stage's throttle setting (1: rated or unthrottled)")
+A_US_SETTING = _AUX.scalar("upper_stage_setting", "1", "the upper stage's throttle setting (1: rated or unthrottled)",
+                           blocks.Logged("upper_stage_throttle", (), "", lambda model: model.p[P_US_ON] != 0.0))
 
 #: The tables of a stage without a schedule (never read: ``P_SCHEDULED`` is 0).
 UNSCHEDULED = {"fs_throttle_time": np.array([0.0, 1.0]), "fs_throttle": np.array([1.0, 1.0])}
 
 
 def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarray]) -> None:
-    """The first stage's throttle (none: ``P_ON`` 0, a setting of 1)."""
+    """The first stage's throttle (none: ``P_ON`` 0, a setting of 1) and the upper
+    stage's (none: ``P_US_ON`` 0)."""
     liquid = inputs.vehicle.first_stage.liquid
     th = liquid.throttle if liquid is not None else None
     tables.update(UNSCHEDULED)
-    p[P_MIN] = p[P_MAX] = 1.0
+    p[P_MIN] = p[P_MAX] = p[P_US_MIN] = p[P_US_MAX] = 1.0
+    upper = inputs.vehicle.upper_stage.throttle
+    if upper is not None:
+        p[P_US_ON] = 1.0
+        p[P_US_MIN], p[P_US_MAX], p[P_US_RATE] = upper.minimum, upper.maximum, upper.rate_per_s
+        p[P_US_ACCEL_LIMIT] = upper.axial_acceleration_limit_mps2
     if th is None:
         return
     p[P_ON] = 1.0
@@ -71,9 +91,24 @@ def start(p: np.ndarray, tb: np.ndarray) -> float:
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def write_diagnostics(aux: np.ndarray, setting: float) -> None:
-    """Write the throttle setting the first stage burns at (1) into ``aux``."""
+def write_diagnostics(aux: np.ndarray, setting: float, upper_setting: float) -> None:
+    """Write the throttle settings the first and the upper stage burn at (1) into ``aux``."""
     aux[A_SETTING] = setting
+    aux[A_US_SETTING] = upper_setting
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def held_upper(setting: float, p: np.ndarray) -> float:
+    """The throttle the upper stage burns at: the held ``setting`` if it is throttled, else 1."""
+    return setting if p[P_US_ON] != 0.0 else 1.0
+
+
+@njit(cache=True, error_model="numpy")
+def cycle_upper(setting: float, accel: float, dt: float, p: np.ndarray) -> float:
+    """The upper stage's setting after a flight-control cycle of ``dt`` (s) with the
+    sensed axial acceleration ``accel`` (m/s²): the law with its maximum as the command."""
+    return throttle_step(setting, p[P_US_MAX], accel, p[P_US_ACCEL_LIMIT], p[P_US_MIN], p[P_US_MAX],
+                         p[P_US_RATE] * dt)
 
 
 @njit(cache=True, error_model="numpy", inline="always")

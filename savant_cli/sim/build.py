@@ -382,6 +382,7 @@ def build_model(cfg: SavantConfig, vehicle: Vehicle, guidance: GuidanceTable) ->
     u0[layout.U_ENGINE] = layout.ENGINE_FIRST
     packed = pack_tables(tb)
     u0[layout.U_THROTTLE] = throttle.start(p, packed)
+    u0[layout.U_US_THROTTLE] = p[throttle.P_US_MAX]  # set again at the upper stage's ignition
 
     sched = event_schedule(cfg, vehicle, rt)
     t_sep_predicted = predicted_separation_time(vehicle, p, packed)

@@ -7,8 +7,9 @@ on step boundaries, runs the discrete parts at their own rates with zero-order h
 * command smoother, flight control and roll-jet logic every ``n_fcs`` steps (50 Hz);
   their commands reach the actuators and jets ``controller.delay_s`` later (the loop's
   transport delay, a whole number of plant steps within the control period); a
-  throttled first stage's engine controller sets its new throttle at the same cycle, at
-  once (``models/throttle.py``, from the sensed axial acceleration with a limit);
+  throttled stage's engine controller (the first stage's, or the upper stage's from its
+  ignition to its cutoff command) sets its new throttle at the same cycle, at once
+  (``models/throttle.py``, from the sensed axial acceleration with a limit);
 * a new guidance command every ``n_guid`` steps (1 Hz): from the stored profile
   (``models/guidance.py``, read at mission time or, in the first stage, by relative
   speed: ``models/command_schedule.py``) or, once engaged in the upper stage, from
@@ -53,7 +54,7 @@ from savant_cli.models.gravity import P_MU
 from savant_cli.models.guidance import D_TG, D_VG, SmootherGains, guidance_sample, smoother_step
 from savant_cli.models.layout import (
     D_CMD_P, D_CMD_RCS, D_CMD_Y, D_FLEX_NAV, D_GYRO_X, D_GYRO_Y, ENGINE_FIRST, ENGINE_OFF, ENGINE_UPPER, N_AUX,
-    U_CONFIG, U_DPC, U_DYC, U_ENGINE, U_FS_T_CUT, U_RCS, U_ROLL, U_T_CUT, U_T_IGN, U_THROTTLE, Q, R, V, W
+    U_CONFIG, U_DPC, U_DYC, U_ENGINE, U_FS_T_CUT, U_RCS, U_ROLL, U_T_CUT, U_T_IGN, U_THROTTLE, U_US_THROTTLE, Q, R, V, W
 )
 from savant_cli.models.sensors import (
     GYRO_MISALIGN, GYRO_POINTS, IMU_GYRO, N_GYROS, P_IMU_MISALIGN, GyroModel, gyro_step, misalignment
@@ -330,11 +331,13 @@ def handle_events(t: float, dt: float, x: np.ndarray, u: np.ndarray, d: np.ndarr
         elif k == EV_IGNITION:
             u[U_ENGINE] = ENGINE_UPPER
             u[U_T_IGN] = t  # the flight control fades its gains in from here (models/fcs.py)
+            u[U_US_THROTTLE] = p[throttle.P_US_MAX]  # a throttled upper stage starts at its command
         else:
             next_configuration(x, u, p, tb)
     if int(u[U_ENGINE]) == ENGINE_UPPER:
         if u[U_T_CUT] > 0.0:  # shutdown transient: the impulse after the command (trapezoid)
-            f_us = propulsion.upper_stage_thrust_vac(x, tb, p, t, u[U_T_IGN], u[U_T_CUT])
+            f_us = propulsion.upper_stage_thrust_vac(x, tb, p, t, u[U_T_IGN], u[U_T_CUT],
+                                                     throttle.held_upper(u[U_US_THROTTLE], p))
             if t > u[U_T_CUT]:
                 d[propulsion.D_US_SD_IMPULSE] += 0.5 * (d[propulsion.D_US_SD_LAST] + f_us) * dt
             d[propulsion.D_US_SD_LAST] = f_us
@@ -413,7 +416,8 @@ def cutoff_step(t: float, dt: float, x: np.ndarray, r_nav: np.ndarray, v_nav: np
             return RUNNING
         events[EV_CUTOFF] = t
         u[U_T_CUT] = t
-        d[propulsion.D_US_SD_LAST] = propulsion.upper_stage_thrust_vac(x, tb, p, t, u[U_T_IGN], t)
+        d[propulsion.D_US_SD_LAST] = propulsion.upper_stage_thrust_vac(x, tb, p, t, u[U_T_IGN], t,
+                                                                       throttle.held_upper(u[U_US_THROTTLE], p))
     if t + 0.5 * dt >= u[U_T_CUT] + p[propulsion.P_US_SHUTDOWN_TIME]:
         return STOP_GUIDANCE_CUTOFF if peg_on else STOP_CUTOFF
     return RUNNING
@@ -495,6 +499,7 @@ def _advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0
     peg_on = p[peg.P_ON] != 0.0
     perturbed = pert[loop_perturbation.AXIS] >= 0.0
     throttled = p[throttle.P_ON] != 0.0
+    us_throttled = p[throttle.P_US_ON] != 0.0
     for j in range(n_steps):
         k = k0 + j
         t = k * dt
@@ -569,6 +574,9 @@ def _advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0
                     derivative(t, x, u, p, tb, work[5], work[4])
                     accel = work[5][rigid_body.A_ACCEL]
                 u[U_THROTTLE] = throttle.cycle(u[U_THROTTLE], t, accel, dt_fcs, p, tb)
+            elif us_throttled and int(u[U_ENGINE]) == ENGINE_UPPER and not u[U_T_CUT] > 0.0:
+                derivative(t, x, u, p, tb, work[5], work[4])  # the accelerometer, as the first stage's
+                u[U_US_THROTTLE] = throttle.cycle_upper(u[U_US_THROTTLE], work[5][rigid_body.A_ACCEL], dt_fcs, p)
         command_update = (k - sched.command_delay_steps) % rates.n_fcs == 0
         if command_update:  # the commands, after the loop delay
             u[U_DPC] = d[D_CMD_P]

@@ -26,7 +26,8 @@ from savant_cli.models import (
 )
 from savant_cli.models.configurations import ENGINE_FIRST
 from savant_cli.models.layout import (
-    U_CONFIG, U_DPC, U_DYC, U_ENGINE, U_FS_T_CUT, U_GUST, U_RCS, U_ROLL, U_T_CUT, U_T_IGN, U_THROTTLE, Q, R, V, W
+    U_CONFIG, U_DPC, U_DYC, U_ENGINE, U_FS_T_CUT, U_GUST, U_RCS, U_ROLL, U_T_CUT, U_T_IGN, U_THROTTLE, U_US_THROTTLE, Q,
+    R, V, W
 )
 
 #: Tabular data of the plant by name (SI, contiguous arrays); the fields are the tables
@@ -164,8 +165,9 @@ def compose(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarra
     gimbal_pt = flex.PT_GIMBAL_FS if engine == ENGINE_FIRST else flex.PT_GIMBAL_US
     tgx, tgy, tgz = flex.rotation_at(x, config, p, tb, gimbal_pt, False)  # follower thrust
     setting = throttle.held(u[U_THROTTLE], p)
+    us_setting = throttle.held_upper(u[U_US_THROTTLE], p)
     thrust, mdot_fs, mdot_us, thrust_vac = propulsion.thrust_and_flow(x, tb, p, engine, t, u[U_T_IGN], u[U_T_CUT],
-                                                                      setting, u[U_FS_T_CUT], pres)
+                                                                      setting, u[U_FS_T_CUT], pres, us_setting)
     dp, dy, bias_p, bias_y = actuator.gimbal_angles(x, p, engine)
     rgx, rgy, rgz = propulsion.gimbal_arm(p, engine, cgx, cgy, cgz)
     dgx, dgy, dgz = flex.displacement_at(x, config, p, tb, gimbal_pt)  # the structure moves the gimbal
@@ -237,7 +239,7 @@ def compose(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarra
     boosters.write_diagnostics(aux, booster_thrust, x, p, config == 0)
     mass_model.write_diagnostics(aux, mass_total, prop, cgx_t, cgy_t, cgz_t)
     rcs.write_diagnostics(aux, rcs_torque)
-    throttle.write_diagnostics(aux, setting)
+    throttle.write_diagnostics(aux, setting, us_setting)
     actuator.write_diagnostics(aux, dp, dy, ddp, ddy)
     rigid_body.write_diagnostics(aux, abx, aby, abz)
     twd.write_diagnostics(aux, mwx, mwy, mwz)

@@ -27,7 +27,7 @@ from savant_cli.errors import ConfigError
 from savant_cli.vehicle.tables import MASS_TOLERANCE_KG, AeroTable, MassTable
 from savant_cli.vehicle.tree import (
     BOOSTER, GIMBAL_AXES, ITEM, LIFTOFF, LIQUID, MAX_SLOSH_TANKS, TRACE, EngineSpec, LiquidThrust, MovingMass, RollJets,
-    Sensors, ThrustTrace, VehicleTree
+    Sensors, Throttle, ThrustTrace, VehicleTree
 )
 
 #: The vehicle's configurations, in the order the aero and mass tables are stacked
@@ -136,7 +136,9 @@ class UpperStage:
     shutdown impulse (N·s: the vacuum impulse delivered after the cutoff command), gimbal
     (structure frame, m; limit rad) and the launch abort system mass (kg). A cluster of
     identical engines is one record, as :class:`FirstStage`'s: the rated thrust, the
-    exit area and the shutdown impulse are the engines' sums."""
+    exit area and the shutdown impulse are the engines' sums. ``throttle``: a throttle
+    that holds an axial-acceleration limit (no schedule; None: rated thrust), flown by
+    PEG's constant-acceleration mode (``models/peg.py``)."""
 
     thrust_vac_N: float
     isp_vac_s: float
@@ -153,6 +155,7 @@ class UpperStage:
     engine: Engine
     mounts: tuple[Mount, ...] = ()
     mixing_matrix: np.ndarray | None = None
+    throttle: Throttle | None = None
 
 
 @dataclass(frozen=True)
@@ -513,9 +516,12 @@ def two_stage_view(tree: VehicleTree) -> Vehicle:
     fs_source = tree.engines_of(first.name)[0].source if first.engines else TRACE
     fs_engines, us_engines = _stage_engines(tree, first.name, fs_source), _stage_engines(tree, upper.name, LIQUID)
     fs, us = fs_engines[0], us_engines[0]
-    if isinstance(us.thrust, LiquidThrust) and us.thrust.throttle is not None:
-        _refuse(f"{us.key}.throttle", "throttle", "the upper stage burns at rated thrust (its guidance, PEG, steers a "
-                                                  "constant-thrust burn); a throttle is the first stage's")
+    us_throttle = us.thrust.throttle if isinstance(us.thrust, LiquidThrust) else None
+    tabled = us_throttle is not None and us_throttle.time_s is not None
+    if us_throttle is not None and (tabled or us_throttle.axial_acceleration_limit_mps2 is None):
+        _refuse(f"{us.key}.throttle", "table" if tabled else None,
+                "the upper stage's throttle holds an axial_acceleration_limit_mps2 and has no table: its guidance, "
+                "PEG, flies a constant-thrust burn, then a constant-acceleration one at that limit")
     if first.roll_jets is not None or upper.roll_jets is None:
         _refuse(f"{upper.key}.roll_jets", None, "roll jets on the upper stage only")
     if first.inert_mass_kg is None:
@@ -560,7 +566,7 @@ def two_stage_view(tree: VehicleTree) -> Vehicle:
         lox_kg=ox.propellant_kg, lh2_kg=fuel.propellant_kg, startup_time_s=us_thrust.startup_time_s,
         startup_fraction=us_thrust.startup_fraction, shutdown_impulse_Ns=n_us * us_thrust.shutdown_impulse_Ns,
         gimbal_m=us_gimbal, gimbal_limit_rad=us.gimbal_limit_rad, les_mass_kg=items[0].inert_mass_kg if items else 0.0,
-        engine=us.moving_mass, mounts=us_mounts, mixing_matrix=upper.mixing_matrix)
+        engine=us.moving_mass, mounts=us_mounts, mixing_matrix=upper.mixing_matrix, throttle=us_throttle)
     fs_tanks = tuple(tree.tanks[t] for t in fs.tanks)
     tanks = (*(t.name for t in fs_tanks), ox.name, fuel.name)
     all_tanks = tanks + (boosters.tanks if boosters is not None else ())
