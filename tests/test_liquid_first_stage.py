@@ -173,12 +173,9 @@ def test_a_setting_of_the_schedule_outside_the_bounds_is_refused_naming_the_colu
         load_vehicle(*_scheduled(tmp_path, "0,1.0\n50,0.4", minimum=0.5, rate=0.1))
 
 
-def test_a_throttle_on_the_upper_stage_and_a_mixed_first_stage_are_refused():
-    def upper(node):
-        node["stages"]["upper_stage"]["engines"]["j2x"]["throttle"] = {
-            "minimum": 0.8, "rate_per_s": 0.1, "axial_acceleration_limit_mps2": 40.0}
-    _refusal(upper, r"upper_stage\.engines\.j2x\.throttle.*constant-thrust")
-
+def test_a_mixed_first_stage_is_refused():
+    """Trace and liquid engines on one stage (an upper stage's throttle is
+    tests/test_throttled_upper_stage.py's)."""
     def mixed(node):
         shipped = OmegaConf.to_container(OmegaConf.load(SHIPPED / "ares_i.yaml").vehicle.stages.first_stage)
         node["stages"]["first_stage"]["tanks"]["grain"] = {"propellant_kg": 1000.0}
