@@ -3,9 +3,10 @@ boundary at which its condition holds, never a step early or late.
 
 The shipped ares_i's LES jettison is given a condition instead of its 30 s delay (armed at
 the J-2X ignition): altitude above 80 km, dynamic pressure below 20 Pa, sensed axial
-acceleration above 12 m/s², LOX below 90 t. The state at the start of the event's step
-and of the step before it (before their events: the run's snapshots) is evaluated by the
-plant: the condition must hold at the event's step and not at the one before. The
+acceleration above 12 m/s², LOX below 90 t, the CG's radial speed below 600 m/s. The
+state at the start of the event's step and of the step before it (before their events:
+the run's snapshots) is evaluated by the plant: the condition must hold at the event's
+step and not at the one before. The
 flight's log at the plant rate shows the jettison itself at that step.
 """
 
@@ -41,6 +42,9 @@ def _quantity(model, snap, when: dict) -> float:
              "axial_acceleration_mps2": "rigid_body.sensed_acceleration"}
     if when["quantity"] == "propellant_kg":
         return float(snap.x[model.layout.tank("lox")])
+    if when["quantity"] == "radial_speed_mps":  # r·v/|r| of the CG
+        r, v = snap.x[layout.R:layout.R + 3], snap.x[layout.V:layout.V + 3]
+        return float(np.dot(r, v) / np.linalg.norm(r))
     return float(aux[blocks.DIAGNOSTICS.field(field[when["quantity"]]).index])
 
 
@@ -49,6 +53,7 @@ def _quantity(model, snap, when: dict) -> float:
     {"quantity": "dynamic_pressure_Pa", "below": 20.0},
     {"quantity": "axial_acceleration_mps2", "above": 12.0},
     {"quantity": "propellant_kg", "of": "lox", "below": 90000.0},
+    {"quantity": "radial_speed_mps", "below": 600.0},
 ])
 def test_a_condition_fires_within_one_step(when):
     model = _prepared(when).model

@@ -144,26 +144,36 @@ def _fly_vacuum(thrust_scale: float = 1.0, accel_limit: float = 0.0, peg_limit: 
     ``peg_limit`` (default: the same)."""
     p, h, _, _ = _vacuum_params()
     p[peg.P_ACCEL_LIMIT] = accel_limit if peg_limit is None else peg_limit
+    y = np.concatenate([_in_plane_state(h, 110e3, 3000.0, 5.0), [150e3]])
+    return _burn(p, np.zeros(layout.N_DISC), y, 100.0, 1.3e6 * thrust_scale, VE, accel_limit)
+
+
+def _in_plane_state(h: np.ndarray, altitude_m: float, speed_mps: float, gamma_deg: float) -> np.ndarray:
+    """Position and velocity (ECI, m, m/s) in the plane of normal ``h``, at node 0.3 rad."""
     node = 0.3
     up = np.array([np.cos(node), np.sin(node), 0.0])
     down_range = np.cross(h, up)
-    r = (constants.WGS84_A + 110e3) * up
-    v = 3000.0 * (np.cos(np.radians(5.0)) * down_range + np.sin(np.radians(5.0)) * up)
-    thrust, m = 1.3e6 * thrust_scale, 150e3
-    d = np.zeros(layout.N_DISC)
-    dt, t = 0.02, 100.0
+    g = np.radians(gamma_deg)
+    return np.concatenate([(constants.WGS84_A + altitude_m) * up,
+                           speed_mps * (np.cos(g) * down_range + np.sin(g) * up)])
+
+
+def _burn(p, d, y, t, thrust, ve, accel_limit=0.0, burn=peg.BURN_UPPER_STAGE, t_ignition=50.0):
+    """A vacuum burn of ``burn`` under PEG from mission time ``t`` (s): state ``y`` =
+    position, velocity (ECI) and mass (kg), ``thrust`` (N) at exhaust velocity ``ve``
+    (m/s). Returns the cutoff time, the state then and PEG's log per cycle."""
+    dt = 0.02
     log = []
 
     def deriv(y, u):
         rn = np.linalg.norm(y[0:3])
         accel = thrust / y[6] if accel_limit <= 0.0 else min(thrust / y[6], accel_limit)
-        return np.concatenate([y[3:6], -constants.MU_EARTH * y[0:3] / rn ** 3 + accel * u, [-accel * y[6] / VE]])
+        return np.concatenate([y[3:6], -constants.MU_EARTH * y[0:3] / rn ** 3 + accel * u, [-accel * y[6] / ve]])
 
-    y = np.concatenate([r, v, [m]])
     next_cycle = t
     while True:
         if t >= next_cycle - 1e-9:
-            assert peg.guidance_cycle(d, t, y[0:3], y[3:6], 50.0, 1.0, p, constants.WGS84_A) == peg.PEG_OK
+            assert peg.guidance_cycle(d, t, y[0:3], y[3:6], t_ignition, 1.0, p, constants.WGS84_A, burn) == peg.PEG_OK
             log.append((t, d[peg.D_TGO], d[peg.D_T_CUTOFF], d[peg.D_CONVERGED], d[peg.D_ITERATIONS]))
             next_cycle += 1.0
         if d[peg.D_ACTIVE] and t >= d[peg.D_T_CUTOFF] - 1e-9:
@@ -268,6 +278,55 @@ def test_a_throttled_burn_inserts_and_its_time_to_go_is_the_burns():
     apogee_ct = orbit_elements(y_ct[0:3], y_ct[3:6])["apogee_altitude_km"]
     assert abs(apogee_ct - 185.0) < 1.0 and abs(apogee_ct - 185.0) > abs(orbit["apogee_altitude_km"] - 185.0)
     assert min(errors(log_ct, t_ct)) > 5.0
+
+
+def test_two_burns_with_a_coast_each_reach_their_own_orbit():
+    """The SLS Block 1 mission shape in vacuum (AAS 18-136): PEG flies a core-stage burn
+    (four RS-25-class engines, T/W < 1 at engagement) to a 40.7 x 1805.7 km orbit cut off
+    at 160 km, the vehicle coasts to apogee (scipy's integrator, the apogee by its event),
+    and PEG, restarted, flies the upper stage's burn there to the 1805.7 km circular
+    orbit. Each burn's osculating orbit is its target's within 1 km in each apsis and
+    0.001 deg of inclination. The second burn's Δv exceeds the impulsive vis-viva
+    difference at apogee by less than 3 %: it starts at apogee rather than centred on
+    it, and the vehicle falls from there (gravity exceeds v²/r by 0.7 m/s²) while its
+    110 kN builds speed over 230 s."""
+    from scipy.integrate import solve_ivp
+
+    p, h, _, _ = _vacuum_params()
+    core = peg.insertion_state(40.7, 1805.7, 160.0)
+    p[peg.P_FS_ON], p[peg.P_FS_START] = 1.0, 0.0
+    p[peg.P_FS_TARGET:peg.P_FS_TARGET + 3] = core
+    ve_core, ve_upper = 452.0 * constants.G0, 465.5 * constants.G0
+    p[peg.P_FS_VE], p[peg.P_VE] = ve_core, ve_upper
+    p[peg.P_R_TARGET], p[peg.P_V_TARGET], p[peg.P_GAMMA_TARGET] = peg.insertion_state(1805.7, 1805.7, 1805.7)
+    d = np.zeros(layout.N_DISC)
+    y = np.concatenate([_in_plane_state(h, 60e3, 2000.0, 20.0), [800e3]])
+    t_meco, y, _ = _burn(p, d, y, 130.0, 9.1e6, ve_core, burn=peg.BURN_FIRST_STAGE, t_ignition=0.0)
+    first = orbit_elements(y[0:3], y[3:6])
+    assert first["perigee_altitude_km"] == pytest.approx(40.7, abs=1.0)
+    assert first["apogee_altitude_km"] == pytest.approx(1805.7, abs=1.0)
+    assert first["inclination_deg"] == pytest.approx(51.6, abs=1e-3)
+
+    def two_body(t, s):
+        return np.concatenate([s[3:6], -constants.MU_EARTH * s[0:3] / np.linalg.norm(s[0:3]) ** 3])
+
+    def apogee(t, s):
+        return np.dot(s[0:3], s[3:6])
+    apogee.terminal, apogee.direction = True, -1.0
+    coast = solve_ivp(two_body, (t_meco, t_meco + 2e4), y[0:6], events=apogee, rtol=1e-11, atol=1e-6)
+    t_apo, s_apo = coast.t_events[0][0], coast.y_events[0][0]
+    peg.restart(d)
+    t_cut, y2, log = _burn(p, d, np.concatenate([s_apo, [58e3]]), t_apo, 110e3, ve_upper, t_ignition=t_apo - 1.0)
+    final = orbit_elements(y2[0:3], y2[3:6])
+    assert final["perigee_altitude_km"] == pytest.approx(1805.7, abs=1.0)
+    assert final["apogee_altitude_km"] == pytest.approx(1805.7, abs=1.0)
+    assert final["inclination_deg"] == pytest.approx(51.6, abs=1e-3)
+    r_apo = constants.WGS84_A + 1805.7e3
+    a_transfer = constants.WGS84_A + 0.5 * (40.7e3 + 1805.7e3)
+    dv_hohmann = np.sqrt(constants.MU_EARTH / r_apo) - np.sqrt(constants.MU_EARTH * (2 / r_apo - 1 / a_transfer))
+    dv_flown = ve_upper * np.log(58e3 / y2[6])
+    assert dv_hohmann < dv_flown < 1.03 * dv_hohmann
+    assert log[1, 3] == 1.0 and t_apo - t_meco > 2000.0  # engaged afresh; a real coast
 
 
 def test_degraded_thrust_still_inserts():

@@ -8,6 +8,7 @@ from typing import Any, Optional
 
 from omegaconf import MISSING
 
+from savant_cli import constants
 from savant_cli.config.checks import non_negative, positive
 from savant_cli.config.run import SimConfig
 from savant_cli.errors import ConfigError
@@ -70,6 +71,33 @@ class OrbitTarget:
 
 
 @dataclass
+class FirstStageBurn:
+    """``guidance.peg.first_stage_burn``: PEG flies a liquid first stage's burn as well, to
+    its own cutoff orbit, and commands that stage's cutoff (the SLS core stage's MECO).
+
+    The orbit is given by its apsis altitudes above the WGS84 equatorial radius, km (the
+    perigee may lie below the surface: a suborbital cutoff) and the cutoff altitude on it,
+    in the plane of ``guidance.target`` (``plane: target``) or in the vehicle's osculating
+    plane at PEG's engagement (``plane: engagement``: in-plane steering only, the upper
+    stage steers into the target's plane); PEG engages at ``start_s`` after liftoff, with
+    the stage's own I-loads: ``isp_vac_s`` (s) and ``shutdown_impulse_time_s`` (its
+    engines' shutdown impulse over their rated thrust, s). Every key but ``plane`` is
+    required."""
+
+    start_s: float = MISSING
+    isp_vac_s: float = MISSING
+    shutdown_impulse_time_s: float = MISSING
+    perigee_altitude_km: float = MISSING
+    apogee_altitude_km: float = MISSING
+    cutoff_altitude_km: float = MISSING
+    plane: str = "target"
+
+
+#: ``guidance.peg.first_stage_burn.plane``'s choices.
+FIRST_STAGE_PLANES = ("target", "engagement")
+
+
+@dataclass
 class PegConfig:
     """``guidance.peg``: closed-loop upper-stage guidance (``models/peg.py``)."""
 
@@ -86,6 +114,7 @@ class PegConfig:
     # the nominal engine shutdown impulse in seconds of rated thrust, I_sd / F_vac (an I-load):
     # the cutoff is commanded this much before t_go runs out, so the tail-off completes the burn
     shutdown_impulse_time_s: float = MISSING
+    first_stage_burn: Optional[FirstStageBurn] = None  # None: PEG flies the upper stage's burn alone
 
 
 @dataclass
@@ -170,6 +199,28 @@ def check_target(g: GuidanceConfig) -> None:
         positive(f"guidance.target.tolerance.{name}", getattr(t.tolerance, name))
 
 
+def check_first_stage_burn(b: FirstStageBurn) -> None:
+    """``guidance.peg.first_stage_burn``: positive I-loads, an engagement after liftoff and a
+    cutoff orbit whose perigee radius is positive and whose cutoff altitude lies on it."""
+    key = "guidance.peg.first_stage_burn"
+    if b.plane not in FIRST_STAGE_PLANES:
+        raise ConfigError(f"{key}.plane", b.plane, f"must be one of {', '.join(FIRST_STAGE_PLANES)}")
+    positive(f"{key}.start_s", b.start_s)
+    positive(f"{key}.isp_vac_s", b.isp_vac_s)
+    non_negative(f"{key}.shutdown_impulse_time_s", b.shutdown_impulse_time_s)
+    floor = -constants.WGS84_A / 1e3
+    if not b.perigee_altitude_km > floor:
+        raise ConfigError(f"{key}.perigee_altitude_km", b.perigee_altitude_km,
+                          f"must be above {floor:g} km (a perigee radius > 0; below 0 km the cutoff is suborbital)")
+    if b.apogee_altitude_km < b.perigee_altitude_km:
+        raise ConfigError(f"{key}.apogee_altitude_km", b.apogee_altitude_km,
+                          f"must be at least the perigee altitude ({b.perigee_altitude_km} km)")
+    if not max(b.perigee_altitude_km, 0.0) < b.cutoff_altitude_km <= b.apogee_altitude_km:
+        raise ConfigError(f"{key}.cutoff_altitude_km", b.cutoff_altitude_km,
+                          f"must lie on the cutoff orbit above the surface: within ({max(b.perigee_altitude_km, 0.0)}, "
+                          f"{b.apogee_altitude_km}] km")
+
+
 def check_peg(peg: PegConfig | None, sim: SimConfig) -> None:
     """``guidance.peg``: its I-loads and tunings (checked only when given and enabled)."""
     if peg is None or not peg.enabled:
@@ -189,6 +240,8 @@ def check_peg(peg: PegConfig | None, sim: SimConfig) -> None:
     for name, low in (("max_iterations", 1), ("max_unconverged_cycles", 1), ("gravity_steps", 1)):
         if getattr(peg, name) < low:
             raise ConfigError(f"guidance.peg.{name}", getattr(peg, name), f"must be at least {low}")
+    if peg.first_stage_burn is not None:
+        check_first_stage_burn(peg.first_stage_burn)
     if peg.terminal_time_to_go_s < 1.0 / sim.guidance_rate_hz:
         raise ConfigError("guidance.peg.terminal_time_to_go_s", peg.terminal_time_to_go_s,
                           f"must be at least one guidance cycle (1 / sim.guidance_rate_hz = {1.0 / sim.guidance_rate_hz:g} s)")

@@ -38,6 +38,11 @@ command then turns from the stored profile's to PEG's along a cosine ramp of
 ``terminal_time_to_go_s`` the steering law is frozen (its ``λ̇`` would grow without
 bound as ``t_go → 0``) and only ``v_go``, ``t_go`` and the predicted cutoff time are
 updated. The engine cuts off at the plant step nearest that time.
+
+PEG may fly a liquid first stage's burn first, to its own target (``BURN_FIRST_STAGE``:
+:func:`burn_loads`, :func:`_target`); the upper stage's burn is then a new one
+(:func:`restart`), blended from the attitude held since the first stage's cutoff
+(:func:`hold_command`, :func:`blend_with_hold`).
 """
 
 from __future__ import annotations
@@ -46,6 +51,7 @@ import numpy as np
 from numba import njit
 
 from savant_cli import constants
+from savant_cli.errors import ConfigError
 from savant_cli.models import blocks, quaternion as qt
 from savant_cli.models.gravity import P_J2, P_J3, P_J4, P_MU, P_ORDER, gravity_at, gravity_zonal, gravity_zonal_xyz
 from savant_cli.models.guidance import D_QG, D_TG, D_VG, command_at
@@ -70,6 +76,22 @@ P_SHUTDOWN_LEAD = _PARAMS.scalar("shutdown_impulse_time", "s", "nominal shutdown
 P_BLEND = _PARAMS.scalar("blend_time", "s", "the command turns from the stored profile to PEG's over this time")
 P_ACCEL_LIMIT = _PARAMS.scalar("acceleration_limit", "m/s^2", "the thrust acceleration the upper stage's throttle "
                                "holds (0: constant thrust to cutoff)")
+_FIRST = blocks.PARAMETERS.block("peg_first_stage")
+P_FS_ON = _FIRST.scalar("on", "1", "1: PEG flies the first stage's burn too (guidance.peg.first_stage_burn)")
+P_FS_START = _FIRST.scalar("start", "s", "mission time PEG engages in the first stage")
+P_FS_TARGET = _FIRST.array("target", 3, "m, m/s, rad", "the first stage's cutoff radius, inertial speed and "
+                           "flight-path angle")
+P_FS_VE = _FIRST.scalar("exhaust_velocity", "m/s", "guidance's first-stage g0 Isp (an I-load)")
+P_FS_LEAD = _FIRST.scalar("shutdown_impulse_time", "s", "the first stage's nominal shutdown impulse in seconds of "
+                          "rated thrust: its cutoff is commanded this much before t_go ends")
+P_FS_ACCEL_LIMIT = _FIRST.scalar("acceleration_limit", "m/s^2", "the thrust acceleration the first stage's throttle "
+                                 "holds (0: none)")
+P_FS_OWN_PLANE = _FIRST.scalar("own_plane", "1", "1: the first stage's burn stays in the osculating plane at its "
+                               "engagement; 0: it steers into the target's plane")
+
+#: The burns PEG flies (``guidance_cycle``'s ``burn``).
+BURN_FIRST_STAGE = 0
+BURN_UPPER_STAGE = 1
 
 _DISCRETE = blocks.DISCRETE.block("peg")
 D_ACTIVE = _DISCRETE.scalar("active", "1", "1 once PEG steers the vehicle")
@@ -92,7 +114,12 @@ D_ITERATIONS = _DISCRETE.scalar("iterations", "1", "passes made in the latest cy
 D_T_NAV = _DISCRETE.scalar("navigation_time", "s", "time of the latest navigation sample (0: none yet)")
 D_V_NAV = _DISCRETE.array("navigation_velocity", 3, "m/s", "inertial velocity at the latest navigation sample, ECI")
 D_G_NAV = _DISCRETE.array("navigation_gravity", 3, "m/s^2", "gravity at the latest navigation sample, ECI")
-D_T_ENGAGED = _DISCRETE.scalar("engage_time", "s", "time PEG engaged (0 before)")
+D_T_ENGAGED = _DISCRETE.scalar("engage_time", "s", "time PEG engaged in this burn (0 before)")
+D_FS_COMMANDED = _DISCRETE.scalar("first_stage_cutoff", "1", "1 once PEG commanded the first stage's cutoff")
+D_FS_IY = _DISCRETE.array("first_stage_plane", 3, "1", "i_y of the first stage's burn: the target's, or the "
+                          "osculating plane's at its engagement (−unit(r × v)), ECI")
+D_HOLD_Q = _DISCRETE.array("hold_quaternion", 4, "1", "the attitude held from a guided first-stage cutoff until "
+                           "PEG steers the upper stage (q_c2i)")
 
 #: guidance_cycle results
 PEG_OK = 0
@@ -137,6 +164,24 @@ def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarra
     p[P_SHUTDOWN_LEAD] = g.peg.shutdown_impulse_time_s
     upper = inputs.vehicle.upper_stage.throttle  # the flight software's own limit
     p[P_ACCEL_LIMIT] = upper.axial_acceleration_limit_mps2 if upper is not None else 0.0
+    burn = g.peg.first_stage_burn
+    if burn is None:
+        p[P_FS_ON] = 0.0
+        return
+    liquid = inputs.vehicle.first_stage.liquid
+    if liquid is None:
+        raise ConfigError("guidance.peg.first_stage_burn", "set",
+                          "a liquid first stage, whose cutoff guidance commands (this vehicle's first stage is a solid "
+                          "motor, which burns to its end): leave first_stage_burn out")
+    r, v, gamma = insertion_state(burn.perigee_altitude_km, burn.apogee_altitude_km, burn.cutoff_altitude_km)
+    p[P_FS_ON] = 1.0
+    p[P_FS_START] = burn.start_s
+    p[P_FS_TARGET:P_FS_TARGET + 3] = (r, v, gamma)
+    p[P_FS_VE] = constants.G0 * burn.isp_vac_s
+    p[P_FS_LEAD] = burn.shutdown_impulse_time_s
+    limit = liquid.throttle.axial_acceleration_limit_mps2 if liquid.throttle is not None else None
+    p[P_FS_ACCEL_LIMIT] = limit if limit is not None else 0.0
+    p[P_FS_OWN_PLANE] = 1.0 if burn.plane == "engagement" else 0.0
 
 
 class InsertionTarget:
@@ -469,8 +514,14 @@ def gravity_model(p: np.ndarray, re: float) -> np.ndarray:
 
 
 @njit(cache=True, error_model="numpy")
-def _target(p: np.ndarray) -> np.ndarray:
+def _target(p: np.ndarray, d: np.ndarray, burn: int) -> np.ndarray:
+    """``[R_d, V_d, γ_d, i_y (3)]`` of ``burn``: the upper stage's insertion state in the
+    target plane, or the first stage's cutoff state in its burn's plane (``D_FS_IY``)."""
     out = np.empty(6)
+    if burn == BURN_FIRST_STAGE:
+        out[0:3] = p[P_FS_TARGET:P_FS_TARGET + 3]
+        out[3:6] = d[D_FS_IY:D_FS_IY + 3]
+        return out
     out[0] = p[P_R_TARGET]
     out[1] = p[P_V_TARGET]
     out[2] = p[P_GAMMA_TARGET]
@@ -479,9 +530,44 @@ def _target(p: np.ndarray) -> np.ndarray:
 
 
 @njit(cache=True, error_model="numpy")
+def burn_loads(p: np.ndarray, burn: int) -> tuple[float, float, float]:
+    """Guidance's I-loads of ``burn``: exhaust velocity (m/s), the acceleration its throttle
+    holds (m/s², 0: none) and its shutdown lead (s)."""
+    if burn == BURN_FIRST_STAGE:
+        return p[P_FS_VE], p[P_FS_ACCEL_LIMIT], p[P_FS_LEAD]
+    return p[P_VE], p[P_ACCEL_LIMIT], p[P_SHUTDOWN_LEAD]
+
+
+@njit(cache=True, error_model="numpy")
+def restart(d: np.ndarray) -> None:
+    """A new burn: PEG disengaged, its convergence and steering state cleared, until it
+    engages again (its first cycle of the burn takes a fresh navigation sample)."""
+    for k in (D_ACTIVE, D_CONVERGED, D_TERMINAL, D_TGO, D_T_CUTOFF, D_UNCONVERGED, D_ITERATIONS, D_T_NAV, D_T_ENGAGED):
+        d[k] = 0.0
+
+
+@njit(cache=True, error_model="numpy")
+def hold_command(d: np.ndarray, t: float) -> None:
+    """From a guided first-stage cutoff: hold the guidance command's attitude at ``t`` (s),
+    at zero rate, and keep it (``D_HOLD_Q``) for the upper stage's engagement blend; once
+    held, nothing more."""
+    if np.dot(d[D_HOLD_Q:D_HOLD_Q + 4], d[D_HOLD_Q:D_HOLD_Q + 4]) > 0.0:
+        return
+    h = t - d[D_TG]
+    q = qt.qmul(d[D_QG:D_QG + 4], qt.from_rotation_vector(d[D_VG:D_VG + 3] * h))
+    d[D_QG:D_QG + 4] = q
+    d[D_HOLD_Q:D_HOLD_Q + 4] = q
+    d[D_VG:D_VG + 3] = 0.0
+    d[D_TG] = t
+
+
+@njit(cache=True, error_model="numpy")
 def guidance_cycle(d: np.ndarray, t: float, r: np.ndarray, v: np.ndarray, t_ignition: float, period: float,
-                   p: np.ndarray, re: float) -> int:
-    """One guidance cycle at time ``t`` (s) after upper-stage ignition at ``t_ignition``.
+                   p: np.ndarray, re: float, burn: int = BURN_UPPER_STAGE) -> int:
+    """One guidance cycle of ``burn`` at time ``t`` (s): the upper stage's after its
+    ignition at ``t_ignition`` (engaging ``P_START`` later), or the first stage's
+    (``t_ignition`` 0, liftoff; engaging at ``P_FS_START``), each with its own target and
+    I-loads (:func:`_target`, :func:`burn_loads`).
 
     Takes a navigation sample (``r, v``: ECI, m, m/s); once engaged, runs PEG and writes
     the guidance command (``guidance.command_quaternion``, ``command_rate``,
@@ -504,12 +590,15 @@ def guidance_cycle(d: np.ndarray, t: float, r: np.ndarray, v: np.ndarray, t_igni
     d[D_G_NAV] = g[0]
     d[D_G_NAV + 1] = g[1]
     d[D_G_NAV + 2] = g[2]
-    if not have_nav or t < t_ignition + p[P_START] or d[D_ACCEL] <= 0.0:
+    start = t_ignition + p[P_START] if burn == BURN_UPPER_STAGE else p[P_FS_START]
+    if not have_nav or t < start or d[D_ACCEL] <= 0.0:
         return PEG_OK
-    ve = p[P_VE]
+    ve, a_limit, lead = burn_loads(p, burn)
     tau = ve / d[D_ACCEL] - 0.5 * dt
-    a_limit = p[P_ACCEL_LIMIT]
-    target = _target(p)
+    if burn == BURN_FIRST_STAGE and d[D_ACTIVE] == 0.0:  # the burn's plane, fixed at engagement
+        h = np.cross(r, v) if p[P_FS_OWN_PLANE] != 0.0 else -p[P_IY:P_IY + 3]
+        d[D_FS_IY:D_FS_IY + 3] = -_unit(h)
+    target = _target(p, d, burn)
     n_grav = int(p[P_GRAV_STEPS])
     tol = p[P_TOL]
     terminal = p[P_TERMINAL]
@@ -560,7 +649,7 @@ def guidance_cycle(d: np.ndarray, t: float, r: np.ndarray, v: np.ndarray, t_igni
     d[D_CONVERGED] = 1.0 if converged else 0.0
     d[D_TGO] = tgo
     d[D_VGO:D_VGO + 3] = vgo
-    d[D_T_CUTOFF] = t + tgo - p[P_SHUTDOWN_LEAD]  # the tail-off delivers the rest
+    d[D_T_CUTOFF] = t + tgo - lead  # the tail-off delivers the rest
     if d[D_TERMINAL] == 0.0:
         d[D_RD:D_RD + 3] = rd
         d[D_VD:D_VD + 3] = vd
@@ -610,14 +699,32 @@ def blend_with_profile(d: np.ndarray, t: float, tau: float, period: float, p: np
     attitude a cosine-ramp fraction of the way from the stored profile's (read at profile
     time ``tau`` for mission time ``t``) to PEG's, with the eigenaxis rate to the next
     cycle's blended attitude."""
-    start = d[D_T_ENGAGED]
-    if d[D_ACTIVE] == 0.0 or t >= start + p[P_BLEND]:
+    if d[D_ACTIVE] == 0.0 or t >= d[D_T_ENGAGED] + p[P_BLEND]:
         return
+    qp0, _ = command_at(tau, times, quats, rates)
+    qp1, _ = command_at(tau + period, times, quats, rates)
+    _blend(d, t, period, p, qp0, qp1)
+
+
+@njit(cache=True, error_model="numpy")
+def blend_with_hold(d: np.ndarray, t: float, period: float, p: np.ndarray) -> None:
+    """:func:`blend_with_profile` from the attitude held since a guided first-stage cutoff
+    (``D_HOLD_Q``) instead of the stored profile's."""
+    if d[D_ACTIVE] == 0.0 or t >= d[D_T_ENGAGED] + p[P_BLEND]:
+        return
+    held = d[D_HOLD_Q:D_HOLD_Q + 4].copy()
+    _blend(d, t, period, p, held, held)
+
+
+@njit(cache=True, error_model="numpy")
+def _blend(d: np.ndarray, t: float, period: float, p: np.ndarray, qp0: np.ndarray, qp1: np.ndarray) -> None:
+    """PEG's command in ``d`` replaced by the attitude a cosine-ramp fraction of the way
+    from ``qp0`` (at ``t``; ``qp1`` a cycle later) to PEG's, with the eigenaxis rate to
+    the next cycle's blended attitude."""
+    start = d[D_T_ENGAGED]
     qg0 = d[D_QG:D_QG + 4].copy()
     w = d[D_VG:D_VG + 3]
     qg1 = qt.qmul(qg0, qt.from_rotation_vector(w * period))
-    qp0, _ = command_at(tau, times, quats, rates)
-    qp1, _ = command_at(tau + period, times, quats, rates)
     qa = _slerp(qp0, qg0, _ramp(t, start, p[P_BLEND]))
     qb = _slerp(qp1, qg1, _ramp(t + period, start, p[P_BLEND]))
     if np.dot(qa, qb) < 0.0:

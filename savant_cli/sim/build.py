@@ -317,7 +317,8 @@ def first_stage_profile(table: GuidanceTable, cfg: SavantConfig, t_sep: float) -
 #: A condition's quantity (vehicle/tree.py) → the engine's code of it.
 WHEN_CODES = {None: engine.WHEN_NONE, "thrust_fraction": engine.WHEN_THRUST_FRACTION,
               "axial_acceleration_mps2": engine.WHEN_AXIAL_ACCELERATION, "altitude_m": engine.WHEN_ALTITUDE,
-              "dynamic_pressure_Pa": engine.WHEN_DYNAMIC_PRESSURE, "propellant_kg": engine.WHEN_PROPELLANT}
+              "dynamic_pressure_Pa": engine.WHEN_DYNAMIC_PRESSURE, "propellant_kg": engine.WHEN_PROPELLANT,
+              "radial_speed_mps": engine.WHEN_RADIAL_SPEED}
 
 
 def event_schedule(cfg: SavantConfig, vehicle: Vehicle, rt: Rates) -> EventSchedule:

@@ -14,7 +14,10 @@ on step boundaries, runs the discrete parts at their own rates with zero-order h
   (``models/guidance.py``, read at mission time or, in the first stage, by relative
   speed: ``models/command_schedule.py``) or, once engaged in the upper stage, from
   Powered Explicit Guidance (``models/peg.py``), whose time to go (less the nominal
-  shutdown impulse's lead) also commands the cutoff at the plant step nearest it;
+  shutdown impulse's lead) also commands the cutoff at the plant step nearest it; PEG
+  may fly a liquid first stage's burn too (``guidance.peg.first_stage_burn``), command
+  its cutoff the same way, hold that moment's attitude until it engages in the upper
+  stage, and blend from it;
 * the vehicle's events at the first step boundary at which their trigger holds
   (:class:`EventSchedule`, from the vehicle file's ``events``): the strap-on boosters'
   jettison (a delay after liftoff and, with a condition, once it holds: a booster's
@@ -97,6 +100,7 @@ WHEN_ALTITUDE = 3  # geodetic altitude of the CG, m
 WHEN_DYNAMIC_PRESSURE = 4  # Pa
 WHEN_PROPELLANT = 5  # propellant remaining in a tank (a state of x), kg
 WHEN_BOOSTER_THRUST_FRACTION = 6  # a booster's sensed vacuum thrust over its own flown peak
+WHEN_RADIAL_SPEED = 7  # the CG's inertial radial speed r·v/|r|, m/s (crosses 0 at apogee)
 
 
 class EventRule(NamedTuple):
@@ -243,7 +247,8 @@ def condition_holds(k: int, t: float, x: np.ndarray, u: np.ndarray, f_sensed: fl
 
     A thrust fraction compares the first stage's sensed vacuum thrust ``f_sensed`` (N),
     or the watched booster's ``f_booster`` (N), with the fraction of its own flown peak;
-    the propellant reads its state in ``x``; the
+    the propellant reads its state in ``x``, the radial speed the CG's position and velocity
+    in ``x``; the
     axial acceleration, altitude and dynamic pressure come from one evaluation of the
     plant at ``t`` (its diagnostics, into the scratch rows of ``work``)."""
     rule = sched.rules[k]
@@ -257,6 +262,9 @@ def condition_holds(k: int, t: float, x: np.ndarray, u: np.ndarray, f_sensed: fl
         value, limit = f_booster, limit * d[boosters.D_PEAK]
     elif when == WHEN_PROPELLANT:
         value = x[rule.of]
+    elif when == WHEN_RADIAL_SPEED:  # the same in the Earth-fixed frame: ω × r is horizontal
+        value = (x[R] * x[V] + x[R + 1] * x[V + 1] + x[R + 2] * x[V + 2]) / np.sqrt(
+            x[R] * x[R] + x[R + 1] * x[R + 1] + x[R + 2] * x[R + 2])
     else:
         aux = work[5]
         derivative(t, x, u, p, tb, aux, work[4])
@@ -304,6 +312,11 @@ def handle_events(t: float, dt: float, x: np.ndarray, u: np.ndarray, d: np.ndarr
             d[propulsion.D_FS_PEAK] = f_sensed
         if np.isnan(events[EV_FS_CUTOFF]) and p[propulsion.P_FS_LIQUID] != 0.0 and propulsion.liquid_tank_dry(x, p):
             events[EV_FS_CUTOFF] = t  # a tank ran dry before any command: the engines' shutdown is now
+        if np.isnan(events[EV_FS_CUTOFF]) and p[peg.P_FS_ON] != 0.0 and d[peg.D_ACTIVE] != 0.0 \
+                and t + 0.5 * dt >= d[peg.D_T_CUTOFF]:  # PEG's cutoff of the first stage: the nearest step
+            events[EV_FS_CUTOFF] = t
+            u[U_FS_T_CUT] = t
+            d[peg.D_FS_COMMANDED] = 1.0
     f_booster = 0.0
     boosted = p[boosters.P_N_BOOSTERS] > 0.0 and np.isnan(events[EV_BOOSTER_JETTISON])
     if boosted and sched.rules[EV_BOOSTER_JETTISON].when == WHEN_BOOSTER_THRUST_FRACTION:
@@ -332,6 +345,8 @@ def handle_events(t: float, dt: float, x: np.ndarray, u: np.ndarray, d: np.ndarr
             u[U_ENGINE] = ENGINE_UPPER
             u[U_T_IGN] = t  # the flight control fades its gains in from here (models/fcs.py)
             u[U_US_THROTTLE] = p[throttle.P_US_MAX]  # a throttled upper stage starts at its command
+            if p[peg.P_FS_ON] != 0.0:  # PEG flew the first stage: the upper stage's burn is a new one
+                peg.restart(d)
         else:
             next_configuration(x, u, p, tb)
     if int(u[U_ENGINE]) == ENGINE_UPPER:
@@ -497,6 +512,7 @@ def _advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0
     nav_on = p[navigation.P_ON] != 0.0
     has_flex = int(p[flex.P_OFFSET]) >= 0
     peg_on = p[peg.P_ON] != 0.0
+    fs_guided = peg_on and p[peg.P_FS_ON] != 0.0  # PEG flies the first stage's burn too
     perturbed = pert[loop_perturbation.AXIS] >= 0.0
     throttled = p[throttle.P_ON] != 0.0
     us_throttled = p[throttle.P_US_ON] != 0.0
@@ -524,12 +540,27 @@ def _advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0
 
         if k % rates.n_guid == 0 and u[U_T_CUT] <= 0.0:  # guidance frozen after the cutoff command
             steered = False
+            period = rates.n_guid * dt
             if peg_on and not np.isnan(events[EV_IGNITION]):
-                code = peg.guidance_cycle(d, t, r_nav, v_nav, events[EV_IGNITION], rates.n_guid * dt, p, p[P_RE])
+                if fs_guided:  # the attitude held from the first stage's cutoff (here if no cycle fell between)
+                    peg.hold_command(d, t)
+                code = peg.guidance_cycle(d, t, r_nav, v_nav, events[EV_IGNITION], period, p, p[P_RE])
+                if code != peg.PEG_OK:
+                    return GUIDANCE_FAILED, j, log_row, peg.failure_message(code)
+                steered = d[peg.D_ACTIVE] != 0.0 or fs_guided  # (the held attitude until PEG engages)
+                if fs_guided:  # blended from the attitude held since the first stage's cutoff
+                    peg.blend_with_hold(d, t, period, p)
+                else:
+                    peg.blend_with_profile(d, t, t + d[D_PROFILE_OFFSET], period, p, gt.time, gt.quat, gt.rate)
+            elif fs_guided and np.isnan(events[EV_FS_CUTOFF]):  # PEG's first-stage burn
+                code = peg.guidance_cycle(d, t, r_nav, v_nav, 0.0, period, p, p[P_RE], peg.BURN_FIRST_STAGE)
                 if code != peg.PEG_OK:
                     return GUIDANCE_FAILED, j, log_row, peg.failure_message(code)
                 steered = d[peg.D_ACTIVE] != 0.0
-                peg.blend_with_profile(d, t, t + d[D_PROFILE_OFFSET], rates.n_guid * dt, p, gt.time, gt.quat, gt.rate)
+                peg.blend_with_profile(d, t, t + d[D_PROFILE_OFFSET], period, p, gt.time, gt.quat, gt.rate)
+            elif fs_guided:  # from the first stage's cutoff to the upper stage's guidance: the attitude held
+                steered = True
+                peg.hold_command(d, t)
             if not steered:
                 if sched.profile_schedule == BY_TIME:
                     guidance_sample(d, t, gt.time, gt.quat, gt.rate, k == 0)

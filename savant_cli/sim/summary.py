@@ -7,7 +7,7 @@ import numpy as np
 
 from savant_cli import constants
 from savant_cli.io.record import Signal
-from savant_cli.models import boosters, propulsion
+from savant_cli.models import boosters, peg, propulsion
 from savant_cli.models.layout import U_FS_T_CUT, U_T_CUT
 from savant_cli.sim import engine
 from savant_cli.sim.run import SimResult
@@ -192,12 +192,37 @@ def propulsion_keys(result: SimResult, p: np.ndarray) -> dict[str, float | str |
 
 def first_stage_cutoff_keys(result: SimResult) -> dict[str, float | str | None]:
     """A liquid first stage's shutdown: ``time_first_stage_cutoff_s`` (None: its engines
-    still burned at the end of the run) and ``first_stage_shutdown``, ``"commanded"`` (by
-    its cutoff event) or ``"depletion"`` (a tank ran dry first: no propellant reserve at
-    the cutoff)."""
+    still burned at the end of the run) and ``first_stage_shutdown``, ``"guidance"`` (PEG
+    commanded it: ``guidance.peg.first_stage_burn``), ``"commanded"`` (by its cutoff
+    event) or ``"depletion"`` (a tank ran dry first: no propellant reserve at the
+    cutoff)."""
     t_cut = _event(result, engine.EV_FS_CUTOFF)
-    how = None if t_cut is None else "commanded" if result.u[U_FS_T_CUT] > 0.0 else "depletion"
+    how = None if t_cut is None else "guidance" if result.d[peg.D_FS_COMMANDED] != 0.0 \
+        else "commanded" if result.u[U_FS_T_CUT] > 0.0 else "depletion"
     return {"time_first_stage_cutoff_s": t_cut, "first_stage_shutdown": how}
+
+
+#: The guided first-stage burn's keys (:func:`first_stage_burn_errors`).
+FIRST_STAGE_BURN_KEYS = ("first_stage_burn_radius_error_m", "first_stage_burn_speed_error_mps",
+                         "first_stage_burn_flight_path_angle_error_deg")
+
+
+def first_stage_burn_errors(result: SimResult, sig: dict[str, Signal], p: np.ndarray) -> dict[str, float | None]:
+    """A guided first-stage burn (``guidance.peg.first_stage_burn``) against its target: the
+    radius, inertial speed and flight-path angle at the end of the stage's thrust (the
+    first logged sample at or after its cutoff plus its shutdown transient) less the
+    target's; None when the stage was not cut off, or the run ended before the transient
+    did."""
+    t_cut = _event(result, engine.EV_FS_CUTOFF)
+    t = sig["time"].data
+    if t_cut is None or t[-1] < t_cut + p[propulsion.P_FS_SHUTDOWN_TIME]:
+        return dict.fromkeys(FIRST_STAGE_BURN_KEYS)
+    i = int(np.searchsorted(t, t_cut + p[propulsion.P_FS_SHUTDOWN_TIME] - 1e-9))
+    r_eci, v_eci = sig["position_eci"].data[i], sig["velocity_eci"].data[i]
+    r, v = float(np.linalg.norm(r_eci)), float(np.linalg.norm(v_eci))
+    gamma = float(np.arcsin(np.clip(np.dot(r_eci, v_eci) / (r * v), -1.0, 1.0)))
+    r_d, v_d, gamma_d = p[peg.P_FS_TARGET:peg.P_FS_TARGET + 3]
+    return dict(zip(FIRST_STAGE_BURN_KEYS, (r - r_d, v - v_d, float(np.degrees(gamma - gamma_d)))))
 
 
 def booster_keys(result: SimResult) -> dict[str, float | None]:
@@ -291,6 +316,8 @@ def summarize(result: SimResult, sig: dict[str, Signal], study_wall_s: float | N
         out.update(propulsion_keys(result, p))
         if p[propulsion.P_FS_LIQUID] != 0.0:
             out.update(first_stage_cutoff_keys(result))
+        if p[peg.P_ON] != 0.0 and p[peg.P_FS_ON] != 0.0:
+            out.update(first_stage_burn_errors(result, sig, p))
         if p[boosters.P_N_BOOSTERS] > 0.0:
             out.update(booster_keys(result))
     if target is not None:
@@ -299,7 +326,8 @@ def summarize(result: SimResult, sig: dict[str, Signal], study_wall_s: float | N
     if "navigation_position_error" in sig:
         out.update(navigation_keys(r_f, v_f, sig))
     if "peg_time_to_go" in sig:
-        active = sig["peg_active"].data > 0.0
+        t_ign = _event(result, engine.EV_IGNITION)  # the upper stage's burn (PEG may fly the first stage's too)
+        active = (sig["peg_active"].data > 0.0) & (t >= (np.inf if t_ign is None else t_ign))
         out["peg_engage_time_s"] = float(t[np.argmax(active)]) if active.any() else None
         out["peg_converged_at_cutoff"] = int(sig["peg_converged"].data[-1]) if active.any() else None
     if study_wall_s is not None:

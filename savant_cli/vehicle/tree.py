@@ -31,6 +31,7 @@ CONDITION_QUANTITIES = {
     "altitude_m": None,  # geodetic height, m
     "dynamic_pressure_Pa": None,  # Pa
     "propellant_kg": "tank",  # propellant remaining in a tank, kg
+    "radial_speed_mps": None,  # the CG's radial (vertical) inertial speed r·v/|r|, m/s: 0 at apogee
 }
 #: The event every trigger counts from unless it names another.
 LIFTOFF = "liftoff"
