@@ -136,3 +136,20 @@ def test_a_bad_first_stage_burn_is_refused_naming_its_key(changes, key):
     with pytest.raises(ConfigError) as info:
         validate(compose_config([_override(**changes)]))
     assert info.value.key == f"guidance.peg.first_stage_burn.{key}"
+
+
+@pytest.mark.slow
+def test_a_target_beyond_the_stage_fails_the_run_as_guidance_failed():
+    """A cutoff orbit far beyond the stage (apogee 300 km; its unguided burnout coasts to under 90 km):
+    PEG's time to go stops converging, and the run says so in its status and message,
+    with the time, and keeps what it flew (its history up to then, its summary)."""
+    cfg = _cfg(_override(apogee_altitude_km=300.0))
+    command_file = prepare(_cfg(), hydra_search_dirs()).command_file
+    model = build_model(cfg, load_vehicle(_node(), FOLDER), read_guidance(command_file))
+    result = simulate(model, progress=False)
+    sig = signals(result, model)
+    summary = summarize(result, sig, p=model.p)
+    assert result.status == "guidance_failed" and "PEG" in result.message
+    assert BURN["start_s"] <= result.t_final < 190.6  # engaged, failed before the stage's own burnout
+    assert summary["status"] == "guidance_failed" and sig["time"].data[-1] == pytest.approx(result.t_final, abs=0.1)
+    assert summary["first_stage_shutdown"] is None and summary["first_stage_burn_speed_error_mps"] is None
