@@ -222,7 +222,7 @@ def first_stage_burn_errors(result: SimResult, sig: dict[str, Signal], p: np.nda
     r, v = float(np.linalg.norm(r_eci)), float(np.linalg.norm(v_eci))
     gamma = float(np.arcsin(np.clip(np.dot(r_eci, v_eci) / (r * v), -1.0, 1.0)))
     r_d, v_d, gamma_d = p[peg.P_FS_TARGET:peg.P_FS_TARGET + 3]
-    return dict(zip(FIRST_STAGE_BURN_KEYS, (r - r_d, v - v_d, float(np.degrees(gamma - gamma_d)))))
+    return dict(zip(FIRST_STAGE_BURN_KEYS, (float(r - r_d), float(v - v_d), float(np.degrees(gamma - gamma_d)))))
 
 
 def booster_keys(result: SimResult) -> dict[str, float | None]:
