@@ -116,6 +116,22 @@ def test_a_low_thrust_stage_burns_longer_and_still_cuts_off_on_target(flights):
     assert abs(summary["first_stage_burn_flight_path_angle_error_deg"]) < 0.1
 
 
+def test_in_the_target_plane_the_short_stage_fails_at_engagement():
+    """``plane: target``: the example's stage is 111 m/s and 5.6 km out of the target plane
+    at 120 s, which 60 s of burn cannot take out; PEG does not converge at engagement and
+    the run says so (the reason for ``plane: engagement``)."""
+    cfg = _cfg(_override(plane="target"))
+    command_file = prepare(_cfg(), hydra_search_dirs()).command_file
+    model = build_model(cfg, load_vehicle(_node(), FOLDER), read_guidance(command_file))
+    result = simulate(model, progress=False, t_stop=130.0)
+    assert result.status == "guidance_failed" and "did not converge at engagement" in result.message
+    assert result.t_final == pytest.approx(BURN["start_s"], abs=1e-6)
+    sig = signals(result, model)
+    i = _at(sig, BURN["start_s"])
+    normal = -model.p[peg.P_IY:peg.P_IY + 3]
+    assert abs(sig["velocity_eci"].data[i] @ normal) > 100.0 and abs(sig["position_eci"].data[i] @ normal) > 5e3
+
+
 def test_a_solid_first_stage_refuses_a_guided_burn():
     """The shipped ares_i's solid motor burns to its end: the key is named."""
     cfg = _cfg(_override())
