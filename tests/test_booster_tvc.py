@@ -300,7 +300,8 @@ def test_the_boosters_differential_gimbal_holds_the_roll_inside_the_jets_deadban
     one radian of δr from numpy's effectiveness at the rated thrusts and I_xx the liftoff
     configuration's at full load) hold the roll attitude inside the roll jets' 1°
     deadband while the boosters are attached; without them the jets alone let it reach
-    several degrees."""
+    several degrees. The logged booster angles show how: without the gains the two
+    nozzles move as one, with them they differ in pitch."""
     vehicle = _vehicle(example_node(EXAMPLE))
     fs, b = vehicle.first_stage, vehicle.boosters
     mass = vehicle.configurations["boosted"].mass
@@ -310,7 +311,7 @@ def test_the_boosters_differential_gimbal_holds_the_roll_inside_the_jets_deadban
     k_roll = cluster.boosted_mounts(vehicle)[:, [cluster.M_PITCH_ROLL, cluster.M_YAW_ROLL]].ravel()
     b_r = float((big @ k_roll)[0])
     omega, zeta, i_xx = 2.0, 0.7, mass.inertia_kgm2[full, 0]
-    errors = []
+    errors, differential = [], []
     for kp, kd in ((0.0, 0.0), (i_xx * omega ** 2 / b_r, 2.0 * zeta * omega * i_xx / b_r)):
         model = _model(f"controller.roll.gimbal.stack.kp={kp}", f"controller.roll.gimbal.stack.kd={kd}")
         result = simulate(model, progress=False, t_stop=96.0)
@@ -318,7 +319,11 @@ def test_the_boosters_differential_gimbal_holds_the_roll_inside_the_jets_deadban
         t = sig["time"].data
         attached = (t > 5.0) & (t < result.events[engine.EV_BOOSTER_JETTISON])
         errors.append(np.degrees(np.max(np.abs(sig["attitude_error"].data[attached, 0]))))
+        angles = sig["booster_gimbal_angle"]
+        assert angles.columns == ("booster_1_pitch", "booster_1_yaw", "booster_2_pitch", "booster_2_yaw")
+        differential.append(np.max(np.abs(angles.data[attached, 0] - angles.data[attached, 2])))
     assert errors[1] < 1.0 < 3.0 < errors[0]
+    assert differential[0] < 1e-12 and differential[1] > np.radians(0.01)
 
 
 @pytest.fixture(scope="module")
@@ -329,9 +334,10 @@ def flight():
 
 @pytest.mark.slow
 def test_the_example_flies_to_orbit_with_the_booster_nozzles_steering_until_their_jettison(flight):
-    """The run completes at PEG's cutoff; the first booster's logged gimbal angles move
-    within ±6° while it is attached and are exactly 0 after the jettison; its channel is
-    held to the bit until separation, when every channel comes to rest at null."""
+    """The run completes at PEG's cutoff; both boosters' logged gimbal angles move within
+    ±6° while they are attached and are exactly 0 after the jettison; the first one's
+    channel is held to the bit until separation, when every channel comes to rest at
+    null."""
     model, result = flight
     assert result.status == "complete", result.message
     sig = signals(result, model)
@@ -340,7 +346,7 @@ def test_the_example_flies_to_orbit_with_the_booster_nozzles_steering_until_thei
     assert 90.0 < t_drop < 100.0
     on, off = t < t_drop - 0.1, t > t_drop + 0.1
     assert np.max(np.abs(angles[on])) <= LIMIT
-    assert np.max(np.abs(angles[on][:, 0])) > 1e-4  # it steers
+    assert angles.shape[1] == 4 and np.min(np.max(np.abs(angles[on]), axis=0)) > 1e-4  # each nozzle steers
     assert np.all(angles[off] == 0.0)
     states = result.log[:, 1 + boosters.booster_channel(model.p, 0)]  # the log's rows: t, then x
     held = off & (t < result.events[engine.EV_SEPARATION])

@@ -62,9 +62,22 @@ T_FULL = _TABLES.table("booster_full", "kg, m, kg*m^2", "(boosters, mass COLUMNS
 _AUX = blocks.DIAGNOSTICS.block("boosters")
 A_THRUST = _AUX.scalar("thrust", "N", "the strap-on boosters' delivered thrust, summed",
                        blocks.Logged("booster_thrust"))
-A_GIMBAL = _AUX.array("gimbal_angles", 2, "rad", "the first booster's limited gimbal angles (0: fixed nozzles, or "
-                      "jettisoned)", blocks.Logged("booster_gimbal_angle", ("pitch", "yaw"), "body",
-                                                   lambda model: model.p[actuator.P_BOOSTER_CHANNEL] >= 0.0))
+#: Gimbaled boosters whose angles are logged (the first ones of a vehicle with more).
+MAX_LOGGED_GIMBALS = 8
+
+
+def _gimbal_columns(model) -> tuple[str, ...]:
+    """``booster_<n>_pitch``, ``booster_<n>_yaw`` of each logged booster (1-based, the
+    vehicle file's order)."""
+    n = min(int(model.p[P_N_BOOSTERS]), MAX_LOGGED_GIMBALS)
+    return tuple(f"booster_{i + 1}_{axis}" for i in range(n) for axis in ("pitch", "yaw"))
+
+
+A_GIMBAL = _AUX.array("gimbal_angles", 2 * MAX_LOGGED_GIMBALS, "rad",
+                      f"each booster's limited gimbal angles, pitch then yaw, the first {MAX_LOGGED_GIMBALS} boosters "
+                      f"(0: fixed nozzles, or jettisoned)",
+                      blocks.Logged("booster_gimbal_angle", (), "body",
+                                    lambda model: model.p[actuator.P_BOOSTER_CHANNEL] >= 0.0, _gimbal_columns))
 _DISCRETE = blocks.DISCRETE.block("boosters")
 D_PROP_JET = _DISCRETE.scalar("propellant_at_jettison", "kg",
                               "the boosters' propellant left at their jettison, summed (0 before)")
@@ -74,15 +87,18 @@ D_PEAK = _DISCRETE.scalar("peak_thrust", "N", "largest sensed vacuum thrust so f
 
 @njit(cache=True, error_model="numpy", inline="always")
 def write_diagnostics(aux: np.ndarray, thrust: float, x: np.ndarray, p: np.ndarray, attached: bool) -> None:
-    """Write the boosters' delivered thrust (N, summed) and the first gimbaled booster's
-    limited gimbal angles (rad; 0 once jettisoned) into ``aux``."""
+    """Write the boosters' delivered thrust (N, summed) and each gimbaled booster's limited
+    gimbal angles (rad, pitch then yaw; the first :data:`MAX_LOGGED_GIMBALS`; 0 once
+    jettisoned) into ``aux``."""
     aux[A_THRUST] = thrust
-    aux[A_GIMBAL] = aux[A_GIMBAL + 1] = 0.0
-    if attached and p[actuator.P_BOOSTER_CHANNEL] >= 0.0:
-        kp = booster_channel(p, 0)
-        lim = p[actuator.P_BOOSTER_GIMBAL + actuator.G_LIMIT]
-        aux[A_GIMBAL] = actuator.clip(x[kp], lim)
-        aux[A_GIMBAL + 1] = actuator.clip(x[kp + actuator.N_PER_CHANNEL], lim)
+    aux[A_GIMBAL:A_GIMBAL + 2 * MAX_LOGGED_GIMBALS] = 0.0
+    if not attached or p[actuator.P_BOOSTER_CHANNEL] < 0.0:
+        return
+    lim = p[actuator.P_BOOSTER_GIMBAL + actuator.G_LIMIT]
+    for i in range(min(int(p[P_N_BOOSTERS]), MAX_LOGGED_GIMBALS)):
+        kp = booster_channel(p, i)
+        aux[A_GIMBAL + 2 * i] = actuator.clip(x[kp], lim)
+        aux[A_GIMBAL + 2 * i + 1] = actuator.clip(x[kp + actuator.N_PER_CHANNEL], lim)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
