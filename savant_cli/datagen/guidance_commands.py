@@ -244,8 +244,10 @@ class Reference:
         elif t >= self.t_ign and y[7] > 0.0 and y[8] > 0.0:
             f_vac = np.interp(t - self.t_ign, tb.us_start_time, tb.us_start_frac) * us.thrust_vac_N
             th = us.throttle
-            if th is not None:  # a throttle at its acceleration limit (in vacuum, no rate limit), within its bounds
-                f_vac = min(f_vac, max(th.axial_acceleration_limit_mps2 * mass, th.minimum * us.thrust_vac_N))
+            if th is not None:  # at its command, the maximum, down to its acceleration limit (in vacuum, no rate
+                # limit), not below its minimum: the flight's law (models/throttle.py) without its lag
+                held = max(th.axial_acceleration_limit_mps2 * mass, th.minimum * us.thrust_vac_N)
+                f_vac = min(th.maximum * f_vac, held)
             f += max(f_vac - pres * us.nozzle_exit_area_m2, 0.0) * x_b
             md = f_vac / (G0 * us.isp_vac_s)
             mdot[1] = md * us.mixture_ratio / (1.0 + us.mixture_ratio)

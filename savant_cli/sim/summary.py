@@ -55,6 +55,14 @@ INSERTION_KEYS = ("insertion_radius_error_m", "insertion_speed_error_mps", "inse
                   "insertion_inclination_error_deg", "insertion_node_error_deg")
 
 
+def radius_speed_gamma(r_eci: np.ndarray, v_eci: np.ndarray) -> tuple[float, float, float]:
+    """Radius (m), inertial speed (m/s) and flight-path angle (rad, above the local
+    horizontal) of an ECI state."""
+    r = float(np.linalg.norm(r_eci))
+    v = float(np.linalg.norm(v_eci))
+    return r, v, float(np.arcsin(np.clip(np.dot(r_eci, v_eci) / (r * v), -1.0, 1.0)))
+
+
 def insertion_errors(r_eci: np.ndarray, v_eci: np.ndarray, target) -> dict[str, float]:
     """The cutoff state against the insertion target (:class:`savant_cli.models.peg.InsertionTarget`).
 
@@ -64,9 +72,7 @@ def insertion_errors(r_eci: np.ndarray, v_eci: np.ndarray, target) -> dict[str, 
     inclination and node (right ascension of the ascending node, ECI at liftoff) of the
     osculating two-body orbit against the target orbit's.
     """
-    r = float(np.linalg.norm(r_eci))
-    v = float(np.linalg.norm(v_eci))
-    gamma = float(np.arcsin(np.clip(np.dot(r_eci, v_eci) / (r * v), -1.0, 1.0)))
+    r, v, gamma = radius_speed_gamma(r_eci, v_eci)
     n = target.plane_normal
     ix = r_eci / r
     iz = np.cross(n, ix)  # downrange in the target plane, normal to r
@@ -218,9 +224,7 @@ def first_stage_burn_errors(result: SimResult, sig: dict[str, Signal], p: np.nda
     if t_cut is None or t[-1] < t_cut + p[propulsion.P_FS_SHUTDOWN_TIME]:
         return dict.fromkeys(FIRST_STAGE_BURN_KEYS)
     i = int(np.searchsorted(t, t_cut + p[propulsion.P_FS_SHUTDOWN_TIME] - 1e-9))
-    r_eci, v_eci = sig["position_eci"].data[i], sig["velocity_eci"].data[i]
-    r, v = float(np.linalg.norm(r_eci)), float(np.linalg.norm(v_eci))
-    gamma = float(np.arcsin(np.clip(np.dot(r_eci, v_eci) / (r * v), -1.0, 1.0)))
+    r, v, gamma = radius_speed_gamma(sig["position_eci"].data[i], sig["velocity_eci"].data[i])
     r_d, v_d, gamma_d = p[peg.P_FS_TARGET:peg.P_FS_TARGET + 3]
     return dict(zip(FIRST_STAGE_BURN_KEYS, (float(r - r_d), float(v - v_d), float(np.degrees(gamma - gamma_d)))))
 
