@@ -70,6 +70,18 @@ def check_composed_mass_properties(vehicle):
                                    atol=1.0)
 
 
+def check_items_in_any_phase(vehicle):
+    assert list(vehicle.configurations) == ["stack", "upper_les", "upper_les_2", "upper"]
+    assert [j.kind for j in vehicle.jettisons] == ["stage", "items", "items"]
+    assert [j.mass_kg for j in vehicle.jettisons[1:]] == [1200.0, 7060.0]
+    fairings, les = (_rule(vehicle, slot) for slot in engine.EV_ITEMS[:2])
+    assert (fairings.after, fairings.delay_s, fairings.waits_for) == (engine.EV_SEPARATION, 1.0, engine.EV_SEPARATION)
+    assert (les.after, les.delay_s, les.waits_for) == (engine.EV_IGNITION, 30.0, engine.EV_ITEMS[0])
+    mass = {n: c.mass for n, c in vehicle.configurations.items()}  # each drop is the items' mass at every level
+    np.testing.assert_allclose(mass["upper_les"].mass_kg - mass["upper_les_2"].mass_kg, 1200.0, atol=1e-6)
+    np.testing.assert_allclose(mass["upper_les_2"].mass_kg - mass["upper"].mass_kg, 7060.0, atol=1e-6)
+
+
 def check_ignition_on_a_tank(vehicle):
     rule = _rule(vehicle, engine.EV_IGNITION)
     # the tanks' states follow the rigid body's in the vehicle's order
@@ -120,7 +132,7 @@ def check_a_first_stage_cutoff(vehicle):
         -1, 60.0, engine.WHEN_PROPELLANT, oxidizer_state, False, 5000.0)
     assert (sep.after, sep.delay_s, sep.when, sep.threshold) == (engine.EV_FS_CUTOFF, 1.0, engine.WHEN_THRUST_FRACTION,
                                                                  0.02)
-    assert vehicle.events.names == ("separation", "upper_stage_ignition", "les_jettison", "", "meco", "")
+    assert vehicle.events.names == ("separation", "upper_stage_ignition", "les_jettison", "", "meco", "", "", "", "")
 
 
 def check_strap_on_boosters(vehicle):
@@ -154,6 +166,7 @@ BUILDS_ON = {"a-given-mixing-matrix": "a-two-engine-cluster", "a-first-stage-cut
              "first-stage-slosh": "a-liquid-first-stage", "booster-tvc": "strap-on-boosters"}
 #: sections of the vehicle it is written over that an example replaces whole (emptied before the merge)
 REPLACES = {"a-liquid-first-stage": ("stages.first_stage",), "a-first-stage-cutoff": ("events",),
+            "items-in-any-phase": ("events",),
             "strap-on-boosters": ("events",)}
 def check_booster_tvc(vehicle):
     b = vehicle.boosters
@@ -173,6 +186,7 @@ def check_a_throttled_upper_stage(vehicle):
 CHECKS = {"jettison-on-a-condition": check_jettison_on_a_condition,
           "a-delay-arms-a-condition": check_a_delay_arms_a_condition,
           "composed-mass-properties": check_composed_mass_properties,
+          "items-in-any-phase": check_items_in_any_phase,
           "ignition-on-a-tank": check_ignition_on_a_tank,
           "a-two-engine-cluster": check_a_two_engine_cluster,
           "a-given-mixing-matrix": check_a_given_mixing_matrix,

@@ -59,7 +59,6 @@ from savant_cli import constants
 from savant_cli.datagen import flex_filters
 from savant_cli.datagen.guidance_commands import _compose, solve
 from savant_cli.models import aero, atmosphere as atm, earth, mass as mass_model
-from savant_cli.models.configurations import CONFIG_STACK, CONFIG_UPPER
 
 #: The first estimate of the MSFC-like design (the rigid-body pole placement and the
 #: filters of :data:`.flex_filters.DESIGN`): where ``study=fcs_design`` began.
@@ -116,7 +115,8 @@ def pitch_coefficients(ref, t: float, y: np.ndarray, config: int) -> tuple[float
     """μα and μc (1/s²) of the rigid pitch plane at reference time ``t``."""
     tb, packed = ref.tb, ref.packed
     v = ref.vehicle
-    prop = y[6] if config == CONFIG_STACK else y[7] + y[8]
+    first_stage = config < v.first_stage_configurations
+    prop = y[6] if first_stage else y[7] + y[8]
     _, cg, inertia = mass_model.inertia_tensor(packed, config, max(prop, 0.0))
     iyy = inertia[1, 1]
     r, vel = y[0:3], y[3:6]
@@ -135,7 +135,7 @@ def pitch_coefficients(ref, t: float, y: np.ndarray, config: int) -> tuple[float
 
     da = np.radians(1.0)
     mu_alpha = (m_cg(da) - m_cg(-da)) / (2 * da) / iyy
-    if config == CONFIG_STACK:
+    if first_stage:
         f_vac = np.interp(t, tb.fs_time, tb.fs_thrust)
         thrust = f_vac - pres * v.first_stage.nozzle_exit_area_m2
         gimbal_x = v.first_stage.gimbal_m[0]
@@ -189,14 +189,15 @@ def design_points(cfg, vehicle, spec: dict = DESIGN) -> dict[str, list[tuple[flo
     points = {}
     for name, axis_vals, sel, var, config in (
         ("stack", spec["stack_altitudes_m"], t < ref.t_sep - spec["stack_design_end_before_separation_s"], alt,
-         CONFIG_STACK),
+         None),
         ("upper", spec["upper_speeds_mps"], t > ref.t_ign + spec["upper_design_start_after_ignition_s"], vrel,
-         CONFIG_UPPER),
+         len(vehicle.configurations) - 1),
     ):
         points[name] = []
         for val in axis_vals:
             i = int(np.argmin(np.abs(np.where(sel, var, np.inf) - val)))
-            points[name].append((float(t[i]), *pitch_coefficients(ref, t[i], y[i], config)))
+            flown = ref.config_at(t[i]) if config is None else config  # the upper stage's last configuration
+            points[name].append((float(t[i]), *pitch_coefficients(ref, t[i], y[i], flown)))
     t_tail = np.linspace(ref.t_sep - spec["stack_design_end_before_separation_s"],
                          ref.t_sep - spec["stack_tailoff_end_before_separation_s"],
                          int(spec["stack_tailoff_breakpoints"]) + 1)[1:]
@@ -206,7 +207,7 @@ def design_points(cfg, vehicle, spec: dict = DESIGN) -> dict[str, list[tuple[flo
         a = round(float(alt[i]), -2)  # a breakpoint to 100 m
         if a <= (points["stack_tailoff"][-1][0] if points["stack_tailoff"] else spec["stack_altitudes_m"][-1]):
             raise ValueError(f"tail-off breakpoint at {tt:.1f} s ({a:.0f} m) is not above the previous one")
-        points["stack_tailoff"].append((a, float(t[i]), *pitch_coefficients(ref, t[i], y[i], CONFIG_STACK)))
+        points["stack_tailoff"].append((a, float(t[i]), *pitch_coefficients(ref, t[i], y[i], ref.config_at(t[i]))))
     points["ignition_fade"] = ignition_fade(vehicle.upper_stage.startup_time_s, vehicle.upper_stage.startup_fraction)
     return points
 

@@ -48,7 +48,6 @@ from savant_cli.config import SavantConfig
 from savant_cli.errors import ConfigError
 from savant_cli.io.guidance_file import SPEED_COLUMN
 from savant_cli.models import aero, atmosphere as atm, earth, mass as mass_model, quaternion as qt
-from savant_cli.models.configurations import CONFIG_STACK, CONFIG_UPPER, CONFIG_UPPER_LES
 from savant_cli.models.gravity import gravity_zonal
 from savant_cli.models.peg import insertion_state
 from savant_cli.sim import build
@@ -90,17 +89,38 @@ def _cosine_ramp(t: float, start: float, duration: float) -> float:
     return 0.5 * (1.0 - np.cos(np.pi * (t - start) / duration))
 
 
+#: The events this reference places at their delays: the ignition and the items' jettisons.
+TIMED_SLOTS = (1, 2, 6, 7, 8)
+
+
 def timed_events(vehicle: Vehicle) -> None:
-    """Refuse a vehicle whose ignition or jettison waits for a condition: this reference
-    places the events at their delays (after the predicted separation)."""
+    """Refuse a vehicle whose ignition or an item's jettison waits for a condition: this
+    reference places those events at their delays (:func:`event_times`)."""
     names = vehicle.events.names
-    for slot in (1, 2):
+    for slot in TIMED_SLOTS:
         if vehicle.events.trigger(slot).quantity is not None:
             key = f"vehicle.events.{names[slot]}.when" if len(names) > slot else "vehicle.events"
             raise ConfigError(key, vehicle.events.trigger(slot).quantity,
-                              f"the reference ascent of this generator places the ignition and the jettison at "
+                              f"the reference ascent of this generator places the ignition and the jettisons at "
                               f"their delays: generate the command file without the condition, with a delay that "
                               f"stands for it ('~{key}' and {key[:-5]}.delay_s=...; docs/vehicles.md)")
+
+
+def event_times(vehicle: Vehicle, t_sep: float, t_fs_cut: float | None) -> dict[int, float]:
+    """The reference's time of each event slot (s from liftoff; ``inf``: none): the
+    predicted separation ``t_sep`` and a liquid first stage's cutoff ``t_fs_cut``, and the
+    timed events (:data:`TIMED_SLOTS`) at their delays after the event each counts from,
+    a jettison not before the one written before it (``Trigger.waits_for``)."""
+    times = {-1: 0.0, 0: t_sep, 4: np.inf if t_fs_cut is None else t_fs_cut}
+
+    def time_of(slot: int) -> float:
+        if slot not in times:
+            trigger = vehicle.events.trigger(slot)
+            t = time_of(trigger.after) + trigger.delay_s
+            times[slot] = t if trigger.waits_for < 0 else max(t, time_of(trigger.waits_for))
+        return times[slot]
+
+    return {slot: time_of(slot) for slot in (0, *TIMED_SLOTS)}
 
 
 class Reference:
@@ -127,8 +147,12 @@ class Reference:
         # a prediction: no flight exists here (the flight separates on board)
         self.t_sep = build.separation_on_trace(vehicle, self.fs_time, self.fs_thrust, t_fs_cut)
         timed_events(vehicle)
-        self.t_ign = self.t_sep + vehicle.events.ignition_delay_s
-        self.t_les = self.t_ign + vehicle.events.les_jettison_delay_s
+        times = event_times(vehicle, self.t_sep, t_fs_cut)
+        self.t_ign = times[1]
+        #: each jettison's time (the separation's and the items'), ascending: the k-th
+        #: moves to configuration k (s)
+        self.jettison_times = np.sort([times[k] for k in (0, 2, 6, 7, 8)])
+        self.n_first_stage_configs = vehicle.first_stage_configurations
         self.energy_target = build.target_energy(cfg)
         tgt = cfg.guidance.target
         self.r_cut, _, self.fpa_cut = insertion_state(tgt.perigee_altitude_km, tgt.apogee_altitude_km,
@@ -201,19 +225,16 @@ class Reference:
         return self._frame_from_x(x_b, r)
 
     # ----------------------------------------------------------------- dynamics
-    def _config(self, t: float) -> int:
-        if t < self.t_sep:
-            return CONFIG_STACK
-        if t < self.t_les:
-            return CONFIG_UPPER_LES
-        return CONFIG_UPPER
+    def config_at(self, t: float) -> int:
+        """The configuration flown at ``t`` (s): its number, one more for each jettison."""
+        return int(np.searchsorted(self.jettison_times, t, side="right"))
 
     def rhs(self, t: float, y: np.ndarray, azimuth: float, steer, turn) -> np.ndarray:
         """3-DOF derivative of [r, v, m_fs, m_lox, m_lh2] (ECI, SI)."""
         r, v = y[0:3], y[3:6]
         tb = self.tb
-        cfg_i = self._config(t)
-        prop = y[6] if cfg_i == CONFIG_STACK else y[7] + y[8]
+        cfg_i = self.config_at(t)
+        prop = y[6] if cfg_i < self.n_first_stage_configs else y[7] + y[8]
         mass = mass_model.mass_properties(self.packed, cfg_i, max(prop, 0.0))[0]
         c_b2i = self.attitude(t, y, azimuth, steer, turn)
         x_b = c_b2i[:, 0]
@@ -237,7 +258,7 @@ class Reference:
             if nn > 1e-9:
                 f += -qbar * s_ref * cn * n_dir / nn
         fs, us = self.vehicle.first_stage, self.vehicle.upper_stage
-        if cfg_i == CONFIG_STACK and y[6] > 0.0:
+        if cfg_i < self.n_first_stage_configs and y[6] > 0.0:
             f_vac = np.interp(t, self.fs_time, self.fs_thrust)
             f += max(f_vac - pres * fs.nozzle_exit_area_m2, 0.0) * x_b
             mdot[0] = f_vac / (G0 * fs.isp_vac_s)

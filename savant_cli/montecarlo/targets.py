@@ -43,7 +43,6 @@ from savant_cli.sim.build import SimModel, build_model
 from savant_cli.vehicle import AERO_COEFFICIENTS, MassTable, Vehicle
 
 KINDS = ("config", "vehicle", "tables", "group")
-UPPER_CONFIGS = ("upper_les", "upper")
 
 #: Vehicle-table targets: name → (units of the sample, allowed ``apply``, what it does).
 TABLE_TARGETS: dict[str, tuple[str, tuple[str, ...], str]] = {
@@ -279,6 +278,12 @@ def first_stage_configurations(vehicle: Vehicle) -> tuple[str, ...]:
     return tuple(vehicle.configurations)[:vehicle.first_stage_configurations]
 
 
+def upper_configurations(vehicle: Vehicle) -> tuple[str, ...]:
+    """The configurations flown after the separation (``upper_les``, any further one
+    before the last item's jettison, ``upper``): an ``upper`` target applies to each."""
+    return tuple(vehicle.configurations)[vehicle.first_stage_configurations:]
+
+
 def _mass(vehicle: Vehicle, configs: tuple[str, ...], change) -> Vehicle:
     confs = dict(vehicle.configurations)
     for c in configs:
@@ -327,7 +332,7 @@ def _upper_load(vehicle: Vehicle, name: str, k_tank: float) -> Vehicle:
         cg = (m.mass_kg[:, None] * m.cg_m + delta_kg * cg_prop[None, :]) / mass[:, None]
         return dataclasses.replace(m, mass_kg=mass, cg_m=np.ascontiguousarray(cg))
 
-    vehicle = _mass(vehicle, UPPER_CONFIGS, lambda m: load_scaled(m, k))
+    vehicle = _mass(vehicle, upper_configurations(vehicle), lambda m: load_scaled(m, k))
     vehicle = _mass(vehicle, first_stage_configurations(vehicle), stack)
     return dataclasses.replace(vehicle, upper_stage=dataclasses.replace(us, lox_kg=lox, lh2_kg=lh2))
 
@@ -367,10 +372,11 @@ def _apply_table(vehicle: Vehicle, name: str, v: float) -> Vehicle:
     if name in ("tables.upper_stage.lox_load", "tables.upper_stage.lh2_load"):
         return _upper_load(vehicle, name, v)
     if name.endswith("dry_mass"):
-        configs = first_stage_configurations(vehicle) + (() if ".first_stage." in name else UPPER_CONFIGS)
+        upper = () if ".first_stage." in name else upper_configurations(vehicle)
+        configs = first_stage_configurations(vehicle) + upper
         return _mass(vehicle, configs, lambda m: dataclasses.replace(m, mass_kg=m.mass_kg + v))
     config = name.split(".")[1]
-    configs = first_stage_configurations(vehicle) if config == "stack" else UPPER_CONFIGS
+    configs = first_stage_configurations(vehicle) if config == "stack" else upper_configurations(vehicle)
     if name.endswith("inertia"):
         if not v > 0.0:
             raise ConfigError(name, v, "inertia factor must be positive")

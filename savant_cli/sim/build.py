@@ -330,7 +330,8 @@ def event_schedule(cfg: SavantConfig, vehicle: Vehicle, rt: Rates) -> EventSched
                               when=engine.WHEN_BOOSTER_THRUST_FRACTION if tr.booster is not None
                               else WHEN_CODES[tr.quantity],
                               of=x_layout.tank(tr.tank) if tr.tank else tr.booster if tr.booster is not None else -1,
-                              above=bool(tr.above), threshold=float(tr.threshold)) for tr in triggers),
+                              above=bool(tr.above), threshold=float(tr.threshold), waits_for=int(tr.waits_for))
+                    for tr in triggers),
         cutoff_energy_j_kg=float(target_energy(cfg)),
         max_time_s=float(cfg.sim.max_time_s),
         stop_at_separation=cfg.phase.stop_at == "separation",

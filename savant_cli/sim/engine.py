@@ -27,9 +27,11 @@ on step boundaries, runs the discrete parts at their own rates with zero-order h
   once it holds; separation when the sensed (vacuum) thrust of the flown first stage (its
   motor, or its liquid engines as throttled and shut down) falls below a fraction of its
   own flown peak (the peak is kept in the discrete state), from liftoff or a delay after
-  the first stage's cutoff; the upper-stage ignition and the item's (LES or fairing)
+  the first stage's cutoff; the upper-stage ignition and each item's (LES, fairing)
   jettison a delay after the event they count from and, with a condition, once it holds
-  (axial acceleration, altitude, dynamic pressure, a tank's propellant); then the cutoff
+  (axial acceleration, altitude, dynamic pressure, a tank's propellant), a jettison not
+  before the one written before it (the items' may come in the first stage's flight, the
+  separation then waits for them); then the cutoff
   command; after the command the upper-stage thrust decays over its shutdown transient
   (``models/propulsion.py``) with guidance frozen (the last attitude command held), and
   the run stops when the decay ends: the insertion state includes the shutdown impulse.
@@ -85,12 +87,17 @@ EV_LES = 2
 EV_CUTOFF = 3
 EV_FS_CUTOFF = 4
 EV_BOOSTER_JETTISON = 5
+#: The jettisoned items' events, in the order written: the first (``les_jettison``) and
+#: the further ones (``item_jettison_2`` …).
+EV_ITEMS = (EV_LES, 6, 7, 8)
 EVENT_NAMES = ("separation", "upper_stage_ignition", "les_jettison", "cutoff", "first_stage_cutoff",
-               "booster_jettison")
+               "booster_jettison", "item_jettison_2", "item_jettison_3", "item_jettison_4")
 #: The vehicle's event slots, in the order a step boundary checks them (the cutoff is
 #: guidance's; the boosters' jettison and a liquid first stage's cutoff precede the
-#: separation).
-SEQUENCE = (EV_BOOSTER_JETTISON, EV_FS_CUTOFF, EV_SEPARATION, EV_IGNITION, EV_LES)
+#: separation; an item's jettison, which may come before the separation, waits for the
+#: jettison written before it: ``EventRule.waits_for``).
+SEQUENCE = (EV_BOOSTER_JETTISON, EV_FS_CUTOFF, EV_ITEMS[0], EV_ITEMS[1], EV_ITEMS[2], EV_ITEMS[3], EV_SEPARATION,
+            EV_IGNITION)
 
 # what an event's condition watches (EventSchedule.when)
 WHEN_NONE = 0  # fires once armed
@@ -123,6 +130,9 @@ class EventRule(NamedTuple):
     threshold : float
         In the quantity's units (a thrust fraction: of the first-stage motor's own flown
         peak).
+    waits_for : int
+        The jettison slot that must have fired first (−1: none): the vehicle's jettisons
+        happen in the order written, so each configuration follows the one before it.
     """
 
     after: int
@@ -131,6 +141,7 @@ class EventRule(NamedTuple):
     of: int
     above: bool
     threshold: float
+    waits_for: int = -1
 
 
 class EventSchedule(NamedTuple):
@@ -161,7 +172,7 @@ class EventSchedule(NamedTuple):
         ``models.command_schedule.SCHEDULES``.
     """
 
-    rules: tuple[EventRule, EventRule, EventRule, EventRule, EventRule, EventRule]
+    rules: tuple[EventRule, ...]
     cutoff_energy_j_kg: float
     max_time_s: float
     stop_at_separation: bool
@@ -231,11 +242,13 @@ def move_reference(x: np.ndarray, old: tuple[float, float, float], new: tuple[fl
 
 @njit(cache=True, error_model="numpy", inline="always")  # every slot, every step: no call
 def armed(k: int, t: float, events: np.ndarray, sched: EventSchedule) -> bool:
-    """Whether event slot ``k`` waits for its condition at ``t`` (s): not fired, and
-    ``delay_s`` past the event it counts from."""
+    """Whether event slot ``k`` waits for its condition at ``t`` (s): not fired, the
+    jettison it waits for fired, and ``delay_s`` past the event it counts from."""
     if not np.isnan(events[k]):
         return False
     rule = sched.rules[k]
+    if rule.waits_for >= 0 and np.isnan(events[rule.waits_for]):
+        return False
     t0 = 0.0 if rule.after < 0 else events[rule.after]
     return not np.isnan(t0) and t >= t0 + rule.delay_s
 
@@ -291,8 +304,8 @@ def handle_events(t: float, dt: float, x: np.ndarray, u: np.ndarray, d: np.ndarr
     stage (with its boosters, if still attached; the upper-stage nozzle and its command
     start at null, a new modal set starts at rest, the reference point moves to the new
     configuration's CG), ignition lights
-    the upper stage (the flight control fades its gains in from here), the item's
-    jettison drops the LES or fairing (the reference point moves again). Until separation
+    the upper stage (the flight control fades its gains in from here), an item's
+    jettison drops it (:func:`next_configuration`: the reference point moves again). Until separation
     the first stage's sensed vacuum thrust at ``t`` (``propulsion.first_stage_flow``, the
     stage flown so far, at its held throttle) is tracked: its largest value so far
     (``d[D_FS_PEAK]``, the thrust fraction's reference) and its trapezoidal integral

@@ -122,9 +122,9 @@ def _stage_masks(t: np.ndarray, result: SimResult) -> list[np.ndarray]:
 def _quiet_pieces(t: np.ndarray, result: SimResult, quiet_s: float) -> list[tuple[str, np.ndarray]]:
     """(stage, sample indices) of each contiguous stretch of a stage that lies outside
     the ``quiet_s`` after liftoff, the boosters' jettison, a liquid first stage's cutoff,
-    separation, upper-stage ignition and LES jettison."""
+    separation, upper-stage ignition and each item's jettison."""
     starts = [float(t[0]), *(result.events[k] for k in (engine.EV_BOOSTER_JETTISON, engine.EV_FS_CUTOFF,
-                                                         engine.EV_SEPARATION, engine.EV_IGNITION, engine.EV_LES))]
+                                                         engine.EV_SEPARATION, engine.EV_IGNITION, *engine.EV_ITEMS))]
     quiet = np.ones(t.size, bool)
     for te in starts:
         if np.isfinite(te):

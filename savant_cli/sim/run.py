@@ -289,12 +289,10 @@ def signals(result: SimResult, model: SimModel) -> dict[str, Signal]:
     qc = d[:, layout.D_QS:layout.D_QS + 4]
     euler = qt.euler_321(np.einsum("ij,njk->nik", c_launch, qt.dcm_array(q))) if len(t) else np.zeros((0, 3))
     euler_c = qt.euler_321(np.einsum("ij,njk->nik", c_launch, qt.dcm_array(qc))) if len(t) else np.zeros((0, 3))
-    config = np.full(len(t), 0.0)
-    ev = result.events
-    if not np.isnan(ev[engine.EV_SEPARATION]):
-        config[t >= ev[engine.EV_SEPARATION]] = 1.0
-    if not np.isnan(ev[engine.EV_LES]):
-        config[t >= ev[engine.EV_LES]] = 2.0
+    config = np.full(len(t), 0.0)  # each jettison moves to the next configuration
+    for k in (engine.EV_BOOSTER_JETTISON, engine.EV_SEPARATION, *engine.EV_ITEMS):
+        if not np.isnan(result.events[k]):
+            config[t >= result.events[k]] += 1.0
     s = {
         "time": Signal(t, "s", "mission time from liftoff"),
         "position_eci": Signal(x[:, layout.R:layout.R + 3], "m", "CG position", xyz, "ECI"),
@@ -320,7 +318,8 @@ def signals(result: SimResult, model: SimModel) -> dict[str, Signal]:
                                            "flex rotation at the navigation unit, added to the attitude errors", rpy, "body"),
         "fcs_gains": Signal(d[:, layout.D_GAINS:layout.D_GAINS + 8], "1", "applied gains: scheduled, faded in over the J-2X start (Kp rad/rad, Ki 1/s, Kd s, Kir rad/rad)",
                             ("pitch_kp", "pitch_ki", "pitch_kd", "pitch_kir", "yaw_kp", "yaw_ki", "yaw_kd", "yaw_kir")),
-        "configuration": Signal(config, "1", "0 integrated stack, 1 upper stage with LES, 2 upper stage"),
+        "configuration": Signal(config, "1", "the configuration flown: its number in the vehicle's sequence (0 at "
+                                                 "liftoff, one more at each jettison)"),
     }
     s.update(logged_diagnostics(aux, model))
     if model.p[peg.P_ON] != 0.0:

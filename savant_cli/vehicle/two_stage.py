@@ -5,10 +5,12 @@ of engines flown by their thrust trace (a solid motor) or of liquid engines (eac
 from the stage's oxidizer and fuel tank, optionally throttled), an upper stage of liquid
 engines drawing from an oxidizer and a fuel tank and carrying the roll jets (each stage
 one engine or a cluster of identical ones, ``models/cluster.py``), optionally identical
-strap-on solid boosters on the first stage (fixed nozzles, lit at liftoff, jettisoned
-together first), at most one jettisoned item (LES or fairing), and the configurations
-the sequence reaches (``boosted`` with boosters, then ``stack``, ``upper_les``,
-``upper``). :func:`two_stage_view` derives these records from a loaded
+strap-on solid boosters on the first stage (fixed or gimbaled nozzles, lit at liftoff,
+jettisoned together first), up to four item jettisons (LES, fairing, interstage) in any
+phase after the boosters' jettison, and the configurations the sequence reaches
+(``boosted`` with boosters, then ``stack`` and ``stack_2`` … while items leave the first
+stage's flight, ``upper_les``, ``upper_les_2`` … while items leave the upper stage's, and
+``upper``: the slots' names, whatever the file calls them). :func:`two_stage_view` derives these records from a loaded
 :class:`~savant_cli.vehicle.tree.VehicleTree` and refuses, naming the key, a tree the
 plant cannot fly yet (more stages, other boosters, other event sequences).
 """
@@ -234,13 +236,35 @@ class Trigger:
     #: a thrust fraction's booster (its position in :attr:`Boosters.names`; None: the
     #: first stage's)
     booster: int | None = None
+    #: the jettison slot that must have fired before this jettison (−1: none): the
+    #: jettisons happen in the order written
+    waits_for: int = -1
 
 
 #: The plant's events, in slot order (sim/engine.py: EVENT_NAMES): the ``cutoff`` is
 #: guidance's (no trigger of the vehicle's arms it), the ``first_stage_cutoff`` a liquid
 #: first stage's shutdown before its separation, the ``booster_jettison`` the strap-on
 #: boosters' before it.
-EVENT_ORDER = ("separation", "upper_stage_ignition", "les_jettison", "cutoff", "first_stage_cutoff", "booster_jettison")
+EVENT_ORDER = ("separation", "upper_stage_ignition", "les_jettison", "cutoff", "first_stage_cutoff", "booster_jettison",
+               "item_jettison_2", "item_jettison_3", "item_jettison_4")
+#: The item jettisons' slots, in the order written (``sim/engine.py::EV_ITEMS``).
+ITEM_SLOTS = (2, 6, 7, 8)
+
+
+@dataclass(frozen=True)
+class Jettison:
+    """One jettison of the sequence, from a configuration to the next (the order of
+    :attr:`Vehicle.configurations`): the event (its name in the vehicle file and its slot
+    in :data:`EVENT_ORDER`), what leaves (``boosters``, ``stage``: the first stage with
+    anything still mounted on it, ``items``), the mass that leaves besides the first
+    stage's and the boosters' propellant (kg; the boosters' own: ``check_boosters``) and
+    the YAML key of that mass."""
+
+    name: str
+    slot: int
+    kind: str
+    mass_kg: float
+    key: str
 
 
 @dataclass(frozen=True)
@@ -248,11 +272,11 @@ class Events:
     """Staging events: separation when the first stage's vacuum thrust falls below
     ``separation_thrust_fraction`` of its peak (from liftoff, or a delay after a liquid
     first stage's cutoff); the upper-stage ignition command ``ignition_delay_s`` later;
-    the LES (or fairing) jettison ``les_jettison_delay_s`` after that (infinite: none).
-    ``triggers``: each event's whole trigger, in :data:`EVENT_ORDER`, where the ignition,
-    the jettison, the first-stage cutoff and the boosters' jettison may also wait for a
-    condition (the guidance cutoff's, and those of events a vehicle does not have,
-    never arm).
+    the first item's jettison ``les_jettison_delay_s`` after the ignition (infinite: none,
+    or it counts from another event). ``triggers``: each event's whole trigger, in
+    :data:`EVENT_ORDER`, where the ignition, the items' jettisons, the first-stage cutoff
+    and the boosters' jettison may also wait for a condition (the guidance cutoff's, and
+    those of events a vehicle does not have, never arm).
     ``names``: each slot's event name in the vehicle file ("" for none; empty: built
     without a file)."""
 
@@ -302,6 +326,9 @@ class Vehicle:
     first_stage_configurations: int = 1
     #: the strap-on boosters (None: none); their tanks' states follow :attr:`tanks`
     boosters: Boosters | None = None
+    #: each jettison, in the order of :attr:`configurations` (empty: built without a
+    #: tree: the separation, then the LES's)
+    jettisons: tuple[Jettison, ...] = ()
 
     @property
     def first_stage_engine_count(self) -> int:
@@ -342,41 +369,80 @@ class Vehicle:
 def check_consistency(v: Vehicle, mass_files: Mapping[str, str] | None = None) -> None:
     """Refuse mass tables that disagree with the loads and the jettisoned masses.
 
-    * every table starts at 0 propellant; the stack's ends at ``first_stage.propellant_kg``,
-      the upper configurations' at ``upper_stage.lox_kg + lh2_kg``;
-    * stack mass at 0 propellant minus ``first_stage.jettison_mass_kg`` equals the
-      upper_les mass at full propellant;
-    * upper_les minus upper mass equals ``upper_stage.les_mass_kg`` at every propellant
-      level (upper_les interpolated at upper's breakpoints; mass is linear in propellant).
+    * every table starts at 0 propellant; those of the configurations flown with the
+      first stage end at its load, the others' at the upper stage's;
+    * at the separation, the last first-stage configuration's mass at 0 propellant minus
+      the first stage's jettisoned mass (its inert mass and any item still on it) equals
+      the next configuration's at full propellant;
+    * at an item's jettison, the mass before minus the mass after equals the items'
+      masses at every propellant level of the configuration after (the one before
+      interpolated there; mass is linear in propellant);
+    * the boosters' jettison is :func:`check_boosters`'.
 
-    All within :data:`MASS_TOLERANCE_KG`.
+    All within :data:`MASS_TOLERANCE_KG`. A view built without a tree (``jettisons``
+    empty) has the separation (``first_stage.jettison_mass_kg``) and the LES's jettison
+    (``upper_stage.les_mass_kg``; 0: none).
     """
-    files = dict(mass_files or {n: f"mass_{n}.csv" for n in CONFIG_NAMES})
+    names = list(v.configurations)
+    files = dict(mass_files or {n: f"mass_{n}.csv" for n in names})
     keys = {**LEGACY_KEYS, **v.keys}
     tol = MASS_TOLERANCE_KG
-    stack, les, up = (v.configurations[n].mass for n in CONFIG_NAMES)
+    n_fs = v.first_stage_configurations
     us_prop = v.upper_stage.lox_kg + v.upper_stage.lh2_kg
-    for name, table, full, key in (("stack", stack, v.first_stage.propellant_kg, keys["propellant_first"]),
-                                   ("upper_les", les, us_prop, keys["propellant_upper"]),
-                                   ("upper", up, us_prop, keys["propellant_upper"])):
+    for i, name in enumerate(names):
+        table = v.configurations[name].mass
+        full, key = (v.first_stage.propellant_kg, keys["propellant_first"]) if i < n_fs \
+            else (us_prop, keys["propellant_upper"])
         if table.propellant_kg[0] > tol:
             raise ConfigError(f"{files[name]}:propellant_remaining", float(table.propellant_kg[0]),
                               "the table must start at 0 propellant remaining")
         if abs(table.propellant_kg[-1] - full) > tol:
             raise ConfigError(key, full, f"must equal the largest propellant_remaining of {files[name]} "
                                          f"({table.propellant_kg[-1]:.1f} kg)")
-    after_sep = stack.mass_kg[0] - v.first_stage.jettison_mass_kg
-    if abs(after_sep - les.mass_kg[-1]) > tol:
-        raise ConfigError(keys["jettison_mass"], v.first_stage.jettison_mass_kg,
-                          f"stack mass at burnout ({stack.mass_kg[0]:.1f} kg, {files['stack']}) minus the jettison "
-                          f"mass must equal the upper_les mass at full propellant ({les.mass_kg[-1]:.1f} kg, "
-                          f"{files['upper_les']}) within {tol:g} kg")
-    diff = np.interp(up.propellant_kg, les.propellant_kg, les.mass_kg) - up.mass_kg
-    worst = int(np.argmax(np.abs(diff - v.upper_stage.les_mass_kg)))
-    if abs(diff[worst] - v.upper_stage.les_mass_kg) > tol:
-        raise ConfigError(keys["les_mass"], v.upper_stage.les_mass_kg,
-                          f"must equal upper_les mass minus upper mass at every propellant level within {tol:g} kg; "
-                          f"at {up.propellant_kg[worst]:.1f} kg propellant the difference is {diff[worst]:.1f} kg")
+    jettisons = list(v.jettisons) or [
+        Jettison("separation", 0, "stage", v.first_stage.jettison_mass_kg, keys["jettison_mass"]),
+        Jettison("les_jettison", 2, "items", v.upper_stage.les_mass_kg, keys["les_mass"])]
+    jettisons += [Jettison("", -1, "items", 0.0, "vehicle.items")] * (len(names) - 1 - len(jettisons))
+    for k, jet in enumerate(jettisons):
+        before, after = (v.configurations[n].mass for n in names[k:k + 2])
+        if jet.kind == "stage":
+            left = before.mass_kg[0] - jet.mass_kg
+            if abs(left - after.mass_kg[-1]) > tol:
+                raise ConfigError(jet.key, jet.mass_kg,
+                                  f"{names[k]} mass at burnout ({before.mass_kg[0]:.1f} kg, {files[names[k]]}) minus "
+                                  f"the jettison mass must equal the {names[k + 1]} mass at full propellant "
+                                  f"({after.mass_kg[-1]:.1f} kg, {files[names[k + 1]]}) within {tol:g} kg")
+        elif jet.kind == "items":
+            diff = np.interp(after.propellant_kg, before.propellant_kg, before.mass_kg) - after.mass_kg
+            worst = int(np.argmax(np.abs(diff - jet.mass_kg)))
+            if abs(diff[worst] - jet.mass_kg) > tol:
+                raise ConfigError(jet.key, jet.mass_kg,
+                                  f"must equal {names[k]} mass minus {names[k + 1]} mass at every propellant level "
+                                  f"within {tol:g} kg; at {after.propellant_kg[worst]:.1f} kg propellant the "
+                                  f"difference is {diff[worst]:.1f} kg")
+
+
+def _jettisoned(tree: VehicleTree, order: list[str], slot_of: dict[str, int], first: str) -> tuple[Jettison, ...]:
+    """Each jettison of ``order`` (the events in the order written): what leaves and its
+    mass besides the propellant (the first stage takes along the items still on it)."""
+    gone: set[str] = set()
+    out = []
+    for name in order:
+        ev = tree.events[name]
+        parts = [tree.parts[j] for j in ev.jettison]
+        if parts[0].kind == BOOSTER:
+            out.append(Jettison(name, slot_of[name], "boosters", 0.0, f"{ev.key}.jettison"))
+        elif parts[0].name == first:
+            riders = [p for p in tree.parts.values() if p.kind == ITEM and p.attached_to == first
+                      and p.name not in gone]
+            leaving = (parts[0], *riders)
+            key = " + ".join(f"{p.key}.{'inert_mass_kg' if p.name == first else 'mass_kg'}" for p in leaving)
+            out.append(Jettison(name, slot_of[name], "stage", sum(p.inert_mass_kg for p in leaving), key))
+        else:
+            out.append(Jettison(name, slot_of[name], "items", sum(p.inert_mass_kg for p in parts),
+                                " + ".join(f"{p.key}.mass_kg" for p in parts)))
+        gone.update(ev.jettison)
+    return tuple(out)
 
 
 def _refuse(key: str, value, what: str) -> None:
@@ -490,9 +556,11 @@ def _first_stage_cutoff(tree: VehicleTree, name: str, first, engines: tuple[Engi
     return ev
 
 
-def _trigger(ev, slot_after: int, tanks: tuple[str, ...]) -> Trigger:
-    """The plant's trigger of a non-separation event: a delay, and optionally a condition
-    on the vehicle or a tank (a thrust fraction is the first-stage motor's alone)."""
+def _trigger(ev, slot_of: Mapping[str, int], tanks: tuple[str, ...]) -> Trigger:
+    """The plant's trigger of a non-separation event: a delay after liftoff or an event
+    (its slot in ``slot_of``), and optionally a condition on the vehicle or a tank (a
+    thrust fraction is the first-stage motor's alone)."""
+    slot_after = -1 if ev.after == LIFTOFF else slot_of[ev.after]
     if ev.when is None:
         return Trigger(slot_after, ev.delay_s)
     if ev.when.quantity == "thrust_fraction":
@@ -510,9 +578,6 @@ def two_stage_view(tree: VehicleTree) -> Vehicle:
         _refuse("vehicle.stages", [s.name for s in stages], "two stages")
     first, upper = stages
     boosters = _boosters(tree, first, [p for p in tree.parts.values() if p.kind == BOOSTER])
-    items = [p for p in tree.parts.values() if p.kind == ITEM]
-    if len(items) > 1 or any(i.attached_to != upper.name for i in items):
-        _refuse("vehicle.items", [i.name for i in items], f"at most one jettisoned item, on {upper.name}")
     fs_source = tree.engines_of(first.name)[0].source if first.engines else TRACE
     fs_engines, us_engines = _stage_engines(tree, first.name, fs_source), _stage_engines(tree, upper.name, LIQUID)
     fs, us = fs_engines[0], us_engines[0]
@@ -531,30 +596,58 @@ def two_stage_view(tree: VehicleTree) -> Vehicle:
     cut = _first_stage_cutoff(tree, names[0], first, fs_engines) if names else None
     if cut is not None:
         names.pop(0)
-    if len(names) != 2 + len(items):
+    sep_name = next((n for n in names if first.name in tree.events[n].jettison), None)
+    ign_name = next((n for n in names if tree.events[n].ignite), None)
+    item_names = [n for n in names if n not in (sep_name, ign_name)]
+    if sep_name is None or ign_name is None or len(item_names) > len(ITEM_SLOTS) \
+            or names.index(ign_name) < names.index(sep_name):
         _refuse("vehicle.events", list(tree.events),
                 ("the boosters' jettison, " if boosters is not None else "")
-                + "a liquid first stage's cutoff (optional), separation, the upper-stage ignition"
-                + (", the item's jettison" if items else ""))
-    sep = _event(tree, names[0], (LIFTOFF,) if cut is None else (LIFTOFF, cut.name), jettison=(first.name,))
+                + "a liquid first stage's cutoff (optional), separation, the upper-stage ignition, and up to "
+                + f"{len(ITEM_SLOTS)} item jettisons (anywhere after the boosters' jettison and the cutoff)")
+    sep = _event(tree, sep_name, (LIFTOFF,) if cut is None else (LIFTOFF, cut.name), jettison=(first.name,))
     if sep.when is None or sep.when.quantity != "thrust_fraction" \
             or sep.when.of not in (first.name, *(e.name for e in fs_engines)) \
             or sep.when.below is None or (sep.delay_s != 0.0 and sep.after == LIFTOFF):
         _refuse(f"{sep.key}.when", sep.when.quantity if sep.when else None,
                 f"separation when the thrust fraction of {first.name} (or one of its identical engines) falls below "
                 f"a value, from liftoff (or a delay after the first stage's cutoff)")
-    ign = _event(tree, names[1], (sep.name,), ignite=tuple(e.name for e in us_engines))
-    jet = _event(tree, names[2], (ign.name,), jettison=(items[0].name,)) if items else None
+    ign = _event(tree, ign_name, (sep.name,), ignite=tuple(e.name for e in us_engines))
+    jets = []
+    for name in item_names:
+        ev = tree.events[name]
+        if ev.ignite or ev.shutdown or not ev.jettison or any(tree.parts[j].kind != ITEM for j in ev.jettison):
+            _refuse(ev.key, name, "an event after the first stage's cutoff is the separation, the upper-stage "
+                                  "ignition or an item's jettison (items only, no engine)")
+        jets.append(ev)
     configs = [tree.configurations[c] for _, c in tree.sequence]
-    n_fs = 1 if boosters is None else 2  # the configurations flown with the first stage
+    order = [e for e, _ in tree.sequence[1:]]  # the jettisons, in the order written
+    n_fs = 1 + order.index(sep.name)  # the configurations flown with the first stage
     for i, c in enumerate(configs):
         tanks = fs.tanks if i < n_fs else us.tanks
         if set(c.mass_tanks) != set(tanks):
             _refuse(f"{c.key}.mass_tanks", list(c.mass_tanks),
                     f"this configuration's mass table is against {list(tanks)}")
-    if not items:  # the upper stage alone from separation on
+    n_items = n_fs - 1 - (boosters is not None)  # the items' jettisons before the separation
+    slots = (("boosted",) if boosters is not None else ()) + ("stack",) + tuple(
+        f"stack_{k}" for k in range(2, n_items + 2))
+    n_upper = len(configs) - n_fs
+    slots += ("upper_les",) + tuple(f"upper_les_{k}" for k in range(2, n_upper)) + ("upper",)
+    if n_upper == 1:  # the upper stage alone from separation on
         configs.append(configs[-1])
-    slots = (("boosted",) if boosters is not None else ()) + CONFIG_NAMES
+    slot_of = {ev.name: ITEM_SLOTS[k] for k, ev in enumerate(jets)}
+    slot_of.update({sep.name: EVENT_ORDER.index("separation"), ign.name: EVENT_ORDER.index("upper_stage_ignition")})
+    if cut is not None:
+        slot_of[cut.name] = EVENT_ORDER.index("first_stage_cutoff")
+    if drop is not None:
+        slot_of[drop.name] = EVENT_ORDER.index("booster_jettison")
+    waits = {}  # each jettison waits for the one written before it (the separation takes the boosters along)
+    for before, ev in zip(order, order[1:]):
+        if not (ev == sep.name and before == (drop.name if drop is not None else None)):
+            waits[ev] = slot_of[before]
+    jettisons = _jettisoned(tree, order, slot_of, first.name)
+    sep_jet = jettisons[order.index(sep.name)]
+    upper_items = jettisons[n_fs:]
     us_thrust = us.thrust
     assert isinstance(us_thrust, LiquidThrust)
     ox, fuel = (tree.tanks[t] for t in us.tanks)
@@ -565,7 +658,8 @@ def two_stage_view(tree: VehicleTree) -> Vehicle:
         mixture_ratio=us_thrust.mixture_ratio, nozzle_exit_area_m2=n_us * us.nozzle_exit_area_m2,
         lox_kg=ox.propellant_kg, lh2_kg=fuel.propellant_kg, startup_time_s=us_thrust.startup_time_s,
         startup_fraction=us_thrust.startup_fraction, shutdown_impulse_Ns=n_us * us_thrust.shutdown_impulse_Ns,
-        gimbal_m=us_gimbal, gimbal_limit_rad=us.gimbal_limit_rad, les_mass_kg=items[0].inert_mass_kg if items else 0.0,
+        gimbal_m=us_gimbal, gimbal_limit_rad=us.gimbal_limit_rad,
+        les_mass_kg=upper_items[0].mass_kg if upper_items else 0.0,
         engine=us.moving_mass, mounts=us_mounts, mixing_matrix=upper.mixing_matrix, throttle=us_throttle)
     fs_tanks = tuple(tree.tanks[t] for t in fs.tanks)
     tanks = (*(t.name for t in fs_tanks), ox.name, fuel.name)
@@ -574,18 +668,26 @@ def two_stage_view(tree: VehicleTree) -> Vehicle:
     separation = Trigger(-1 if sep.after == LIFTOFF else fs_cut_slot, sep.delay_s, "thrust_fraction", None, False,
                          sep.when.below)
     never = Trigger(-1, float("inf"))  # an event this vehicle does not have, or guidance's cutoff
+    triggers = [never] * len(EVENT_ORDER)
+    triggers[slot_of[sep.name]] = dataclasses.replace(separation, waits_for=waits.get(sep.name, -1))
+    triggers[slot_of[ign.name]] = _trigger(ign, slot_of, all_tanks)
+    for ev in jets:
+        triggers[slot_of[ev.name]] = dataclasses.replace(_trigger(ev, slot_of, all_tanks),
+                                                         waits_for=waits.get(ev.name, -1))
+    if cut is not None:
+        triggers[slot_of[cut.name]] = _trigger(cut, slot_of, all_tanks)
+    if drop is not None:
+        triggers[slot_of[drop.name]] = _booster_trigger(drop, boosters, all_tanks)
+    first_item = jets[0] if jets else None
+    les_delay = first_item.delay_s if first_item is not None and first_item.after == ign.name else float("inf")
     events = Events(separation_thrust_fraction=sep.when.below, ignition_delay_s=ign.delay_s,
-                    les_jettison_delay_s=jet.delay_s if jet is not None else float("inf"),
-                    triggers=(separation, _trigger(ign, 0, all_tanks),
-                              _trigger(jet, 1, all_tanks) if jet is not None else never, never,
-                              _trigger(cut, -1, all_tanks) if cut is not None else never,
-                              _booster_trigger(drop, boosters, all_tanks) if drop is not None else never),
-                    names=(sep.name, ign.name, jet.name if jet is not None else "", "", cut.name if cut else "",
-                           drop.name if drop is not None else ""))
+                    les_jettison_delay_s=les_delay, triggers=tuple(triggers),
+                    names=tuple(next((n for n, k in slot_of.items() if k == slot), "")
+                                for slot in range(len(EVENT_ORDER))))
     keys = {"propellant_first": " + ".join(f"{t.key}.propellant_kg" for t in fs_tanks),
             "propellant_upper": f"{ox.key}.propellant_kg + {fuel.name}.propellant_kg",
-            "jettison_mass": f"{first.key}.inert_mass_kg",
-            "les_mass": f"{items[0].key}.mass_kg" if items else "vehicle.items",
+            "jettison_mass": sep_jet.key,
+            "les_mass": upper_items[0].key if upper_items else "vehicle.items",
             **{f"slosh.{t}": f"{tree.tanks[t].key}.slosh" for t in all_tanks},
             "slosh": "the tanks' slosh sections",
             "mixing_matrix.first_stage": f"{first.key}.mixing_matrix",
@@ -596,7 +698,7 @@ def two_stage_view(tree: VehicleTree) -> Vehicle:
         first_stage=first_stage, upper_stage=upper_stage, rcs=upper.roll_jets, sensors=tree.sensors, events=events,
         data_dir=tree.data_dir, flex_spec=tree.flex_spec, slosh_spec=_slosh_spec(tree, all_tanks),
         qalpha_limit_Pa_deg=tree.qalpha_limit_Pa_deg, keys=keys, tree=tree, tanks=tanks,
-        first_stage_configurations=n_fs, boosters=boosters)
+        first_stage_configurations=n_fs, boosters=boosters, jettisons=jettisons)
     check_consistency(vehicle, {n: c.mass_file for n, c in zip(slots, configs)})
     if boosters is not None:
         check_boosters(vehicle, configs[0], [tree.parts[b].key for b in boosters.names])
@@ -674,7 +776,7 @@ def _booster_trigger(ev, boosters: Boosters, tanks: tuple[str, ...]) -> Trigger:
     """The boosters' jettison's trigger: a thrust fraction is one booster's (named, or by
     its engine), below a value; any other condition as :func:`_trigger`'s."""
     if ev.when is None or ev.when.quantity != "thrust_fraction":
-        return _trigger(ev, -1, tanks)
+        return _trigger(ev, {}, tanks)
     which = boosters.names if ev.when.of in boosters.names else boosters.engines
     if ev.when.of not in which or ev.when.below is None:
         _refuse(f"{ev.key}.when", ev.when.of, f"the thrust fraction of a booster ({', '.join(boosters.names)}, or its "
