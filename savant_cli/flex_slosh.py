@@ -32,22 +32,32 @@ POINT_KEYS = ("imu", "rate_gyro_upper_stage", "rate_gyro_first_stage", "rcs", "g
 FIRST_STAGE_KEYS = ("rate_gyro_first_stage", "gimbal_first_stage")
 #: The modal data sets (file names in the flex folder), in the order of the tables.
 FLEX_SETS = ("first_stage_liftoff", "first_stage_burnout", "second_stage_ignition", "second_stage_burnout")
+#: The sets of the configuration with strap-on boosters (after :data:`FLEX_SETS`): at
+#: liftoff and at the boosters' burnout.
+BOOSTED_SETS = ("boosted_liftoff", "boosted_burnout")
 
 
 @dataclass(frozen=True)
 class FlexTables:
-    """Modal data at the plant's points, all four sets (:data:`FLEX_SETS` order)."""
+    """Modal data at the plant's points, every set (:data:`FLEX_SETS`, then
+    :data:`BOOSTED_SETS` with boosters)."""
 
-    frequency_rad_s: np.ndarray  # (4, n_modes)
+    frequency_rad_s: np.ndarray  # (sets, n_modes)
     damping: np.ndarray  # (n_modes,)
-    shapes: np.ndarray  # (4, n_modes, N_POINTS, 6), body axes, SI
+    shapes: np.ndarray  # (sets, n_modes, points, 6), body axes, SI
     sets: tuple[ModalSet, ...]
 
 
 def point_keys(vehicle: Vehicle) -> tuple[str, ...]:
     """The keys of every flex point of ``vehicle``: :data:`POINT_KEYS`, then
-    ``slosh_<tank>`` for each tank with a slosh section, in the order of its slosh tanks."""
-    return POINT_KEYS + tuple(f"slosh_{t}" for t in (vehicle.slosh_spec or {}))
+    ``slosh_<tank>`` for each tank with a slosh section, in the order of its slosh tanks,
+    then ``nozzle_<booster>`` for each strap-on booster (:func:`booster_keys`)."""
+    return POINT_KEYS + tuple(f"slosh_{t}" for t in (vehicle.slosh_spec or {})) + booster_keys(vehicle)
+
+
+def booster_keys(vehicle: Vehicle) -> tuple[str, ...]:
+    """The boosters' nozzle points, ``nozzle_<booster>`` (only in the boosted sets)."""
+    return tuple(f"nozzle_{b}" for b in (vehicle.boosters.names if vehicle.boosters is not None else ()))
 
 
 def first_stage_keys(vehicle: Vehicle) -> tuple[str, ...]:
@@ -103,7 +113,8 @@ def _modal_set(folder: Path, name: str, units: tuple[str, str], key: str) -> Mod
 
 
 def load_flex(vehicle: Vehicle, fcfg: FlexOnConfig, plant_rate_hz: float) -> FlexTables:
-    """Read the four modal sets, keep ``fcfg.n_modes`` and evaluate them at the points."""
+    """Read the modal sets (the four of :data:`FLEX_SETS`, and :data:`BOOSTED_SETS` with
+    strap-on boosters), keep ``fcfg.n_modes`` and evaluate them at the points."""
     spec = _spec(vehicle, "flex")
     key = "vehicle.flex"
     for k in spec:
@@ -120,25 +131,27 @@ def load_flex(vehicle: Vehicle, fcfg: FlexOnConfig, plant_rate_hz: float) -> Fle
         if not isinstance(ids, (list, tuple)) or not ids or not all(isinstance(i, int) for i in ids):
             raise ConfigError(f"{key}.nodes.{pk}", ids, "must be a non-empty list of integer node ids")
     unit_pair = (str(units.get("length", "")), str(units.get("force", "")))
-    sets = tuple(_modal_set(folder, name, unit_pair, f"{key} set {name}") for name in FLEX_SETS)
+    names = FLEX_SETS + (BOOSTED_SETS if vehicle.boosters is not None else ())
+    sets = tuple(_modal_set(folder, name, unit_pair, f"{key} set {name}") for name in names)
     n = fcfg.n_modes
     for ms in sets:
         if ms.frequency_rad_s.size < n:
             raise ConfigError("flex.n_modes", n, f"modal set {ms.name!r} has only {ms.frequency_rad_s.size} modes")
     freq = np.array([ms.frequency_rad_s[:n] for ms in sets]) * fcfg.frequency_scale
     # RK4 resolves a mode well (numerical damping < 0.2 % of critical) below 1/8 of the step rate
-    in_use = freq if fcfg.switching == "propellant" else freq[[0, 2]]  # burnout sets unused otherwise
+    in_use = freq if fcfg.switching == "propellant" else freq[0::2]  # burnout sets unused otherwise
     limit = 2.0 * np.pi * plant_rate_hz / 8.0
     if in_use.max() >= limit:
         raise ConfigError("flex.n_modes", n, f"the highest retained mode ({in_use.max() / 2 / np.pi:.1f} Hz) must stay "
                           f"below sim.plant_rate_hz / 8 = {plant_rate_hz / 8:g} Hz for the RK4 step; keep fewer "
                           "modes or raise sim.plant_rate_hz")
     shapes = np.zeros((len(sets), n, len(keys), 6))
+    nozzles = booster_keys(vehicle)
     for s, ms in enumerate(sets):
-        upper = s >= 2
+        upper, boosted = s in (2, 3), s >= len(FLEX_SETS)
         for pt, pk in enumerate(keys):
-            if upper and pk in first_keys:
-                continue  # the first stage is gone in the upper-stage sets
+            if upper and pk in first_keys or pk in nozzles and not boosted:
+                continue  # the first stage is gone in the upper-stage sets, the boosters in all but theirs
             shapes[s, :, pt, :] = ms.at_nodes(nodes[pk], f"{key}.nodes.{pk}")[:n]
     shapes *= fcfg.shape_scale
     zeta = np.asarray(fcfg.damping_per_mode[:n] if fcfg.damping_per_mode else [fcfg.damping] * n, float)

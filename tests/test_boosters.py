@@ -152,7 +152,7 @@ def test_a_canted_booster_pushes_along_its_cant_at_its_arm():
     x = model.x0.copy()
     t, pres, cg = 40.0, 30000.0, np.array([60.0, 0.1, -0.05])
     xd = np.zeros_like(x)
-    thrust, fx, fy, fz, mx, my, mz, *reaction = boosters.loads(x, tb, p, t, pres, True, *cg, xd)
+    thrust, fx, fy, fz, mx, my, mz, *reaction = boosters.loads(x, tb, p, t, pres, True, *cg, xd, np.zeros(layout.N_AUX))
     assert reaction == [0.0, 0.0, 0.0]  # fixed nozzles: no tail-wags-dog
     s_to_b = np.array([-1.0, 1.0, -1.0])
     f_total, m_total, each = np.zeros(3), np.zeros(3), []
@@ -172,7 +172,7 @@ def test_a_canted_booster_pushes_along_its_cant_at_its_arm():
     np.testing.assert_allclose([mx, my, mz], m_total, rtol=1e-12, atol=1e-6 * abs(m_total).max())
     # jettisoned: no thrust and the states still
     xd[:] = 1.0
-    assert boosters.loads(x, tb, p, t, pres, False, *cg, xd) == (0.0,) * 10
+    assert boosters.loads(x, tb, p, t, pres, False, *cg, xd, np.zeros(layout.N_AUX)) == (0.0,) * 10
     assert np.all(xd[_booster_states(model)] == 0.0)
 
 
@@ -203,7 +203,7 @@ def test_a_booster_burn_rate_compresses_its_trace_and_keeps_its_impulse():
         assert np.trapezoid(thrust, times) == pytest.approx(constants.G0 * 279.0 * LOAD, rel=1e-6)
     t, pres, cg = 50.0, 20000.0, np.array([60.0, 0.0, 0.0])
     xd = np.zeros_like(x)
-    _, fx, fy, fz, mx, my, mz, *_ = boosters.loads(x, tb, p, t, pres, True, *cg, xd)
+    _, fx, fy, fz, mx, my, mz, *_ = boosters.loads(x, tb, p, t, pres, True, *cg, xd, np.zeros(layout.N_AUX))
     moment = np.zeros(3)
     for y, k in zip((-2.755, 2.755), rates):
         f = k * scale * np.interp(k * t, rows[:, 0], rows[:, 1]) - pres * 2.0
@@ -537,11 +537,11 @@ def test_a_liftoff_table_that_disagrees_with_the_boosters_is_refused():
     assert info.value.key == "mass_stack.csv"
 
 
-def test_flex_and_the_command_generator_refuse_boosters_naming_the_key():
+def test_flex_without_the_nozzle_nodes_and_the_command_generator_refuse_boosters_naming_the_key():
     v = _vehicle()
     with pytest.raises(ConfigError) as info:
         plant_data(_cfg("flex=on"), v)
-    assert info.value.key == "flex"
+    assert info.value.key == "vehicle.flex.nodes.nozzle_booster_left"
     with pytest.raises(ConfigError) as info:
         Reference(_cfg(), v, Program())
     assert info.value.key == "vehicle.boosters"

@@ -29,7 +29,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from savant_cli.models import actuator, blocks, twd
+from savant_cli.models import actuator, blocks, flex, twd
 from savant_cli.models.interp import tab_offset
 from savant_cli.models.mass import N_COLUMNS, stacked_row, stacked_tables
 from savant_cli.models.propulsion import P_ON, table_impulse, thrust_loads, trace_flow
@@ -78,6 +78,10 @@ A_GIMBAL = _AUX.array("gimbal_angles", 2 * MAX_LOGGED_GIMBALS, "rad",
                       f"(0: fixed nozzles, or jettisoned)",
                       blocks.Logged("booster_gimbal_angle", (), "body",
                                     lambda model: model.p[actuator.P_BOOSTER_CHANNEL] >= 0.0, _gimbal_columns))
+A_NOZZLE_LOADS = _AUX.array("nozzle_loads", 5 * flex.MAX_BOOSTERS, "N, N*m",
+                            "each booster's loads on the structure at its nozzle for the flexible body's boosted "
+                            "modal sets (0 otherwise): the thrust and the moving nozzle's reaction force (body x, y, "
+                            "z), its reaction torque (body y, z)")
 _DISCRETE = blocks.DISCRETE.block("boosters")
 D_PROP_JET = _DISCRETE.scalar("propellant_at_jettison", "kg",
                               "the boosters' propellant left at their jettison, summed (0 before)")
@@ -89,8 +93,11 @@ D_PEAK = _DISCRETE.scalar("peak_thrust", "N", "largest sensed vacuum thrust so f
 def write_diagnostics(aux: np.ndarray, thrust: float, x: np.ndarray, p: np.ndarray, attached: bool) -> None:
     """Write the boosters' delivered thrust (N, summed) and each gimbaled booster's limited
     gimbal angles (rad, pitch then yaw; the first :data:`MAX_LOGGED_GIMBALS`; 0 once
-    jettisoned) into ``aux``."""
+    jettisoned) into ``aux``; their nozzle loads are :func:`loads`' (zero without the
+    boosted modal sets, or once jettisoned)."""
     aux[A_THRUST] = thrust
+    if not (attached and p[flex.P_N_BOOSTERS] > 0.0):
+        aux[A_NOZZLE_LOADS:A_NOZZLE_LOADS + 5 * flex.MAX_BOOSTERS] = 0.0
     aux[A_GIMBAL:A_GIMBAL + 2 * MAX_LOGGED_GIMBALS] = 0.0
     if not attached or p[actuator.P_BOOSTER_CHANNEL] < 0.0:
         return
@@ -153,7 +160,7 @@ def flow(x: np.ndarray, tb: np.ndarray, p: np.ndarray, t: float, i: int) -> tupl
 
 @njit(cache=True, error_model="numpy")  # a call: the vehicles without boosters never enter it
 def loads(x: np.ndarray, tb: np.ndarray, p: np.ndarray, t: float, pres: float, attached: bool,
-          cgx: float, cgy: float, cgz: float, xd: np.ndarray):
+          cgx: float, cgy: float, cgz: float, xd: np.ndarray, aux: np.ndarray):
     """The boosters' delivered thrust (N, summed), force (N) and moment about the CG
     (N·m), then their nozzles' tail-wags-dog moment about the CG (N·m), body axes, with
     each booster's propellant rate written into ``xd`` (kg/s; 0 once ``attached`` is
@@ -164,10 +171,15 @@ def loads(x: np.ndarray, tb: np.ndarray, p: np.ndarray, t: float, pres: float, a
     (:func:`thrust_direction`), or with TVC along its limited gimbal angles plus the
     null bias plus its cant (the nozzle accelerations written into ``xd`` by
     ``cluster.gimbal_rates`` load its moving mass), its moment ``r × F`` with the arm
-    ``r`` from the CG ``cgx, cgy, cgz`` (structure frame, m) in body axes."""
+    ``r`` from the CG ``cgx, cgy, cgz`` (structure frame, m) in body axes. With the
+    flexible body's boosted sets (flex on) the structure at the nozzle's point turns the
+    thrust line (its rotation subtracted from the pitch and yaw angles, as at the stage's
+    gimbal) and moves the point (the arm plus its displacement), and the loads there go
+    into ``aux[A_NOZZLE_LOADS]`` for the modes."""
     tank = int(p[P_TANK])
     thrust = fx = fy = fz = mx = my = mz = wx = wy = wz = 0.0
     gimbaled = p[actuator.P_BOOSTER_CHANNEL] >= 0.0
+    flexible = attached and p[flex.P_N_BOOSTERS] > 0.0
     for i in range(int(p[P_N_BOOSTERS])):
         if not attached:
             xd[tank + i] = 0.0
@@ -177,14 +189,29 @@ def loads(x: np.ndarray, tb: np.ndarray, p: np.ndarray, t: float, pres: float, a
         f = max(f_vac - pres * p[P_EXIT_AREA], 0.0) if mdot > 0.0 and p[P_ON] != 0.0 else 0.0
         m = tab_offset(tb, T_MOUNT) + i * N_MOUNT
         rx, ry, rz = -(tb[m] - cgx), tb[m + 1] - cgy, -(tb[m + 2] - cgz)
+        ty = tz = 0.0
+        if flexible:
+            pt = flex.booster_point(p, tb, i)
+            _, ty, tz = flex.rotation_at(x, 0, p, tb, pt, False)
+            dx, dy, dz = flex.displacement_at(x, 0, p, tb, pt)
+            rx, ry, rz = rx + dx, ry + dy, rz + dz
+        nfx = nfy = nfz = nty = ntz = 0.0
         if gimbaled:
-            ax, ay, az, bx, by, bz, nx, ny, nz = gimbaled_loads(x, xd, tb, p, i, f, rx, ry, rz)
+            ax, ay, az, bx, by, bz, nfx, nfy, nfz, nty, ntz, nx, ny, nz = gimbaled_loads(x, xd, tb, p, i, f, rx, ry,
+                                                                                           rz, ty, tz)
             wx += nx
             wy += ny
             wz += nz
+        elif flexible:
+            cant = tab_offset(tb, T_CANT) + 2 * i
+            ax, ay, az, bx, by, bz = thrust_loads(f, tb[cant] - ty, tb[cant + 1] - tz, rx, ry, rz)
         else:
             ax, ay, az = f * tb[m + 3], f * tb[m + 4], f * tb[m + 5]
             bx, by, bz = ry * az - rz * ay, rz * ax - rx * az, rx * ay - ry * ax
+        if flexible:
+            k = A_NOZZLE_LOADS + 5 * i
+            aux[k], aux[k + 1], aux[k + 2] = ax + nfx, ay + nfy, az + nfz
+            aux[k + 3], aux[k + 4] = nty, ntz
         thrust += f
         fx += ax
         fy += ay
@@ -197,20 +224,22 @@ def loads(x: np.ndarray, tb: np.ndarray, p: np.ndarray, t: float, pres: float, a
 
 @njit(cache=True, error_model="numpy", inline="always")
 def gimbaled_loads(x: np.ndarray, xd: np.ndarray, tb: np.ndarray, p: np.ndarray, i: int, f: float,
-                   rx: float, ry: float, rz: float):
+                   rx: float, ry: float, rz: float, ty: float, tz: float):
     """Gimbaled booster ``i``'s thrust force (N) and moment about the CG (N·m) for its
-    delivered thrust ``f`` (N) at the arm ``r`` (CG → nozzle, body axes, m), then its
-    moving nozzle's tail-wags-dog moment about the CG (N·m), body axes."""
+    delivered thrust ``f`` (N) at the arm ``r`` (CG → nozzle, body axes, m), its thrust
+    line turned back by the structure's rotation ``ty``, ``tz`` at the nozzle (rad; 0
+    rigid), then its moving nozzle's tail-wags-dog force and torque at the nozzle (N,
+    N·m) and moment about the CG (N·m), body axes."""
     kp = booster_channel(p, i)
     ky = kp + actuator.N_PER_CHANNEL
     g = actuator.P_BOOSTER_GIMBAL
     lim = p[g + actuator.G_LIMIT]
     cant = tab_offset(tb, T_CANT) + 2 * i
-    ax, ay, az, bx, by, bz = thrust_loads(f, actuator.clip(x[kp], lim) + p[g + actuator.G_BIAS_PITCH] + tb[cant],
-                                          actuator.clip(x[ky], lim) + p[g + actuator.G_BIAS_YAW] + tb[cant + 1],
+    ax, ay, az, bx, by, bz = thrust_loads(f, actuator.clip(x[kp], lim) + p[g + actuator.G_BIAS_PITCH] + tb[cant] - ty,
+                                          actuator.clip(x[ky], lim) + p[g + actuator.G_BIAS_YAW] + tb[cant + 1] - tz,
                                           rx, ry, rz)
     w = twd.moving_mass_loads(p, twd.P_BOOSTER_ENGINE, xd[kp + 1], xd[ky + 1], rx, ry, rz)
-    return ax, ay, az, bx, by, bz, w[5], w[6], w[7]
+    return ax, ay, az, bx, by, bz, w[0], w[1], w[2], w[3], w[4], w[5], w[6], w[7]
 
 
 @njit(cache=True, error_model="numpy")  # a call: the vehicles without boosters never enter it

@@ -15,9 +15,15 @@ moment arm about the CG is ``r_g + Σ φ_i(g) q_i``); at the navigation unit and
 gyros the rotation is what the sensors see on top of the rigid motion.
 
 Four modal sets, two per stage (first-stage liftoff and burnout, second-stage ignition
-and burnout). With ``flex.switching: event`` (the paper's assumption) the liftoff set is
-used until separation and the ignition set after it; with ``propellant`` the frequencies
-and shapes are blended linearly with the stage's burned-propellant fraction. Source:
+and burnout), and with strap-on boosters two more for the configuration that carries
+them (``boosted_liftoff`` and ``boosted_burnout``, the latter at the boosters' burnout).
+With ``flex.switching: event`` (the paper's assumption) the liftoff set is used until
+separation (the boosted one while the boosters are attached, the first stage's after
+their jettison) and the ignition set after it; with ``propellant`` the frequencies and
+shapes are blended linearly with the stage's burned-propellant fraction (the boosters'
+own while they are attached). Each booster's nozzle is a point of its own (after the
+sloshing tanks'): its thrust and its moving nozzle's reaction load the modes there, and
+its thrust line turns with the structure's rotation there (``models/boosters.py``). Source:
 SAVANT §III, "Flexible body"; the default modal data come from a beam model
 (``datagen/ares_i_flex.py``).
 """
@@ -67,11 +73,20 @@ _PARAMS = blocks.PARAMETERS.block("flex")
 P_OFFSET = _PARAMS.scalar("state_offset", "1", "offset of q₁…q_N, q̇₁…q̇_N in x (−1: flex off)")
 P_N_MODES = _PARAMS.scalar("n_modes", "1", "retained modes")
 P_SWITCH = _PARAMS.scalar("switching", "1", "0: liftoff set then ignition set; 1: blend by propellant")
+P_BOOSTER_TANK = _PARAMS.scalar("booster_tank_state", "1", "index in x of the first booster's propellant (the "
+                                "others follow it; read only with boosters)")
+P_N_BOOSTERS = _PARAMS.scalar("boosters", "1", "boosters whose nozzles are flex points, whose boosted sets fly while "
+                              "they are attached (0: none, or flex off)")
+P_BOOSTER_FULL = _PARAMS.scalar("booster_propellant_full", "kg", "the boosters' propellant at liftoff, summed")
+#: The modal sets of the configuration with the strap-on boosters (after FLEX_SETS).
+BOOSTED_SET = 4
+#: Boosters whose nozzles load the flexible body (flex on with more is refused).
+MAX_BOOSTERS = 8
 _TABLES = blocks.TABLES.block("flex")
-T_FREQ = _TABLES.table("flex_freq", "rad/s", "(4 FLEX_SETS, n_modes) modal frequencies")
+T_FREQ = _TABLES.table("flex_freq", "rad/s", "(sets: FLEX_SETS, then the boosted pair, n_modes) modal frequencies")
 T_ZETA = _TABLES.table("flex_zeta", "1", "(n_modes,) modal damping ratios")
-T_SHAPE = _TABLES.table("flex_shape", "SI", "(4, n_modes, n_points, SHAPE) mode shapes at the points (N_POINTS, "
-                         "then one per sloshing tank), body axes")
+T_SHAPE = _TABLES.table("flex_shape", "SI", "(sets, n_modes, n_points, SHAPE) mode shapes at the points (N_POINTS, "
+                         "then one per sloshing tank, then one per booster nozzle), body axes")
 _AUX = blocks.DIAGNOSTICS.block("flex")
 A_GIMBAL_ROTATION = _AUX.array("gimbal_rotation", 3, "rad", "flex rotation at the active gimbal (turns the thrust)",
                                blocks.Logged("flex_gimbal_rotation", ("roll", "pitch", "yaw"), "body",
@@ -93,6 +108,11 @@ def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarra
     p[P_OFFSET] = inputs.layout.flex
     p[P_N_MODES] = inputs.layout.n_modes
     p[P_SWITCH] = 1.0 if f.enabled and f.switching == "propellant" else 0.0
+    b = inputs.vehicle.boosters
+    if f.enabled and b is not None:
+        p[P_BOOSTER_TANK] = inputs.layout.tank(b.tanks[0])
+        p[P_N_BOOSTERS] = b.count
+        p[P_BOOSTER_FULL] = b.count * b.propellant_kg
     if f.enabled:
         fx = inputs.flex
         tables.update(flex_freq=fx.frequency_rad_s, flex_zeta=fx.damping, flex_shape=fx.shapes)
@@ -104,12 +124,19 @@ def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarra
 def flex_sets(x: np.ndarray, config: int, p: np.ndarray) -> tuple[int, int, float]:
     """The two modal sets of the current stage and the blend weight toward the second.
 
-    Stack: first-stage liftoff → burnout; upper stage: ignition → burnout. With
-    ``switching: event`` (the source paper's assumption) the weight is 0: the liftoff
-    set until separation, the ignition set after. With ``propellant`` the weight is the
-    fraction of the stage's propellant burned.
+    Stack: first-stage liftoff → burnout (with boosters attached, the configuration 0:
+    boosted liftoff → burnout); upper stage: ignition → burnout. With ``switching:
+    event`` (the source paper's assumption) the weight is 0: the liftoff set until
+    separation, the ignition set after. With ``propellant`` the weight is the fraction of
+    the stage's propellant burned (the boosters' own while they are attached).
     """
-    if config < p[P_FS_CONFIGS]:
+    if config == 0 and p[P_N_BOOSTERS] > 0.0:
+        tank = int(p[P_BOOSTER_TANK])
+        left = 0.0
+        for i in range(tank, tank + int(p[P_N_BOOSTERS])):
+            left += x[i]
+        a, frac = BOOSTED_SET, left / p[P_BOOSTER_FULL]
+    elif config < p[P_FS_CONFIGS]:
         a, frac = 0, first_stage_propellant(x, p) / p[P_FS_PROP_FULL]
     else:
         lox, lh2 = upper_stage_propellant(x, p)
@@ -121,8 +148,15 @@ def flex_sets(x: np.ndarray, config: int, p: np.ndarray) -> tuple[int, int, floa
 
 @njit(cache=True, error_model="numpy", inline="always")
 def point_count(tb: np.ndarray) -> int:
-    """The points of the shape table: :data:`N_POINTS` and one per sloshing tank."""
-    return tab(tb, T_SHAPE)[1] // (4 * tab(tb, T_ZETA)[1] * N_SHAPE)
+    """The points of the shape table: :data:`N_POINTS`, one per sloshing tank, one per
+    booster nozzle (with the boosted sets)."""
+    return tab(tb, T_SHAPE)[1] // (tab(tb, T_FREQ)[1] * N_SHAPE)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def booster_point(p: np.ndarray, tb: np.ndarray, i: int) -> int:
+    """Booster ``i``'s nozzle point (after the sloshing tanks')."""
+    return point_count(tb) - int(p[P_N_BOOSTERS]) + i
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -201,7 +235,8 @@ class StructuralLoads(NamedTuple):
         Roll-jet torque about body x at the jets, N·m.
 
     The slosh masses' forces on the structure are the slosh model's diagnostics
-    (``slosh.A_FORCE``, one per sloshing tank).
+    (``slosh.A_FORCE``, one per sloshing tank), the boosters' nozzle loads the boosters'
+    (``boosters.A_NOZZLE_LOADS``, written by ``boosters.loads``).
     """
 
     gimbal_force_n: tuple[float, float, float]
@@ -211,10 +246,11 @@ class StructuralLoads(NamedTuple):
 
 @njit(cache=True, error_model="numpy", inline="always")
 def modal_rates(x: np.ndarray, config: int, p: np.ndarray, tb: np.ndarray, gimbal_pt: int,
-                loads: StructuralLoads, aux: np.ndarray, xd: np.ndarray) -> None:
+                loads: StructuralLoads, aux: np.ndarray, nozzle_loads: int, xd: np.ndarray) -> None:
     """Modal equations into ``xd`` under the ``loads`` at the flex points (the active
-    gimbal point ``gimbal_pt``, the jets) and the slosh masses' forces (``aux``). Nothing
-    when flex is off."""
+    gimbal point ``gimbal_pt``, the jets), the slosh masses' forces and, in the boosted
+    sets, the boosters' nozzle loads (both in ``aux``; the latter five per booster from
+    ``aux[nozzle_loads]``: force x, y, z, torque y, z). Nothing when flex is off."""
     fo = int(p[P_OFFSET])
     if fo < 0:
         return
@@ -240,6 +276,11 @@ def modal_rates(x: np.ndarray, config: int, p: np.ndarray, tb: np.ndarray, gimba
         for j in range(n_slosh):
             k = slosh.A_FORCE + 3 * j
             gen += point_work(tb, base_a, base_b, w, PT_SLOSH + j, aux[k], aux[k + 1], aux[k + 2], 0.0, 0.0, 0.0)
+        if sa == BOOSTED_SET:  # the boosters' nozzles
+            for j in range(int(p[P_N_BOOSTERS])):
+                k = nozzle_loads + 5 * j
+                gen += point_work(tb, base_a, base_b, w, npt - int(p[P_N_BOOSTERS]) + j, aux[k], aux[k + 1],
+                                  aux[k + 2], 0.0, aux[k + 3], aux[k + 4])
         qi = x[fo + i]
         qdi = x[fo + nmod + i]
         xd[fo + i] = qdi

@@ -16,7 +16,9 @@ from savant_cli.errors import ConfigError
 from savant_cli.flex_slosh import FlexTables, SloshData, load_flex, load_slosh
 from savant_cli.io.guidance_file import SPEED_COLUMN, GuidanceTable
 from savant_cli.io.table_order import table_key
-from savant_cli.models import PLANT_MODELS, blocks, earth, layout, propulsion, quaternion as qt, rigid_body, throttle
+from savant_cli.models import (
+    PLANT_MODELS, blocks, earth, flex as flex_model, layout, propulsion, quaternion as qt, rigid_body, throttle
+)
 from savant_cli.models.command_schedule import SCHEDULES
 from savant_cli.models.fcs import FcsTables, fcs_tables
 from savant_cli.models.guidance import SmootherGains, smoother_gains
@@ -61,10 +63,10 @@ def model_inputs(cfg: SavantConfig, vehicle: Vehicle, slosh: SloshData | None = 
     their model is on and they are not handed in (``savant_cli.flex_slosh``)."""
     if cfg.slosh.enabled and slosh is None:
         slosh = load_slosh(vehicle, cfg.slosh)
-    if cfg.flex.enabled and vehicle.boosters is not None:
-        names = ", ".join(vehicle.boosters.names)
-        raise ConfigError("flex", "on", f"off for a vehicle with strap-on boosters ({names}): the flexible body does "
-                                        f"not carry the boosters' loads yet (docs/vehicles.md, \"What flies today\")")
+    if cfg.flex.enabled and vehicle.boosters is not None and vehicle.boosters.count > flex_model.MAX_BOOSTERS:
+        raise ConfigError("flex", "on", f"off for a vehicle with more than {flex_model.MAX_BOOSTERS} strap-on boosters "
+                                        f"({vehicle.boosters.count}): their nozzles are flex points, at most "
+                                        f"{flex_model.MAX_BOOSTERS}")
     if cfg.flex.enabled and flex is None:
         flex = load_flex(vehicle, cfg.flex, cfg.sim.plant_rate_hz)
     return blocks.ModelInputs(cfg=cfg, vehicle=vehicle, layout=state_layout(cfg, vehicle),

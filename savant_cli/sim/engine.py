@@ -393,8 +393,12 @@ def next_configuration(x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarr
 def drop_boosters(x: np.ndarray, u: np.ndarray, d: np.ndarray, p: np.ndarray, tb: np.ndarray) -> None:
     """The boosters' jettison: the next configuration (:func:`next_configuration`), their
     propellant left (summed, kg) kept in ``d[boosters.D_PROP_JET]`` and their states
-    emptied (it leaves with them)."""
+    emptied (it leaves with them); the first stage's modal set starts at rest, as at
+    separation (flex on)."""
     next_configuration(x, u, p, tb)
+    fo = int(p[flex.P_OFFSET])
+    if fo >= 0:
+        x[fo:fo + 2 * int(p[flex.P_N_MODES])] = 0.0
     tank = int(p[boosters.P_TANK])
     left = 0.0
     for i in range(tank, tank + int(p[boosters.P_N_BOOSTERS])):

@@ -181,7 +181,7 @@ def compose(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarra
     booster_thrust = 0.0
     if p[boosters.P_N_BOOSTERS] > 0.0:  # strap-on boosters: their thrust, moment and nozzles' reaction join in
         booster_thrust, fbx, fby, fbz, mbx, mby, mbz, wbx, wby, wbz = boosters.loads(x, tb, p, t, pres, config == 0,
-                                                                                   cgx, cgy, cgz, xd)
+                                                                                   cgx, cgy, cgz, xd, aux)
         fex, fey, fez = fex + fbx, fey + fby, fez + fbz
         mtx, mty, mtz = mtx + mbx, mty + mby, mtz + mbz
         mwx, mwy, mwz = mwx + wbx, mwy + wby, mwz + wbz
@@ -224,7 +224,7 @@ def compose(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarra
         motion = slosh.RigidMotion((cgx, cgy, cgz), (aby, abz), (wx, wy, wz), (alx, aly, alz))
         slosh.rates(x, p, aux, config, motion, xd)
     loads = flex.StructuralLoads((ftx + fwx, fty + fwy, ftz + fwz), (twy, twz), rcs_torque)
-    flex.modal_rates(x, config, p, tb, gimbal_pt, loads, aux, xd)
+    flex.modal_rates(x, config, p, tb, gimbal_pt, loads, aux, boosters.A_NOZZLE_LOADS, xd)
 
     # ------------------------------------------------------------ diagnostics
     earth.write_altitude(aux, alt)
