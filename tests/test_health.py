@@ -322,3 +322,38 @@ def test_the_shipped_nominal_flights_are_healthy(overrides):
     s = flight.summary
     assert flight.result.status == "complete", flight.result.message
     assert s["health_flags"] == "" and not s["limit_cycle"] and not s["slow_divergence"] and not s["loss_of_control"]
+
+
+@pytest.fixture(scope="module")
+def cluster_model():
+    """The page's two-engine cluster (docs/vehicles.md): four gimbal channels."""
+    from savant_cli.io.guidance_file import read_guidance
+    from savant_cli.paths import shipped_config_dir
+    from savant_cli.sim.build import build_model
+    from savant_cli.vehicle import load_vehicle
+    from test_vehicle_examples import example_node
+    cfg = validate(compose_config(["sim.progress=false"]))
+    vehicle = load_vehicle(example_node("a-two-engine-cluster"), shipped_config_dir() / "vehicle" / "ares_i")
+    return build_model(cfg, vehicle, read_guidance(prepare(cfg, hydra_search_dirs()).command_file))
+
+
+@pytest.mark.parametrize("scale, found", [(1.1, True), (0.9, False)])
+def test_a_limit_cycle_on_the_second_engine_s_channel_alone_is_found(cluster_model, scale, found):
+    """A roll limit cycle by differential gimbal moves the two engines' nozzles against
+    each other, here only the second's: the first engine's channels and the attitude
+    errors stay quiet, and the second engine's pitch channel (``pitch2``) carries a 1.3 Hz
+    oscillation just above (found) or just below (not) the amplitude floor."""
+    assert len(cluster_model.layout.channels) == 4
+    result, sig = _history(int(300 * FS), 130.0)
+    n = sig["time"].data.size
+    sig["gimbal_angle"] = Signal(np.zeros((n, 4)), "rad", "")
+    sig["gimbal_rate"] = Signal(np.zeros((n, 4)), "rad/s", "")
+    t = sig["time"].data
+    on = (t > 20.0) & (t < 120.0)
+    sig["gimbal_angle"].data[on, 2] = np.radians(scale * CFG.min_amplitude_deg) * np.sin(2 * np.pi * 1.3 * t[on])
+    h = assess(result, sig, cluster_model, CFG)
+    assert h["limit_cycle"] is found
+    if found:
+        assert h["limit_cycle_signal"] == "gimbal_angle_pitch2"
+        assert h["limit_cycle_frequency_hz"] == pytest.approx(1.3, abs=0.02)
+        assert result.status == "limit_cycle"

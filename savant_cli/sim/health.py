@@ -18,7 +18,9 @@ sample spacing as ``rcs_on_time_s``:
 * *peak gimbal rate*: the largest nozzle rate |δ̇| of either axis (deg/s), and the
   largest body-rate magnitude |ω| over the flight.
 
-Limit cycle: a sustained oscillation of a gimbal angle or an attitude error (pitch, yaw)
+Limit cycle: a sustained oscillation of a gimbal angle (every channel of the history's
+``gimbal_angle``: each engine's pitch and yaw, and each gimbaled booster's, so that a
+cluster's differential-gimbal roll loop is watched too) or an attitude error (pitch, yaw)
 by :func:`savant_cli.sim.oscillation.find_limit_cycle` (its definition and method are in
 that module's notes), in each stage's history less ``event_quiet_s`` after each event
 (liftoff, separation, upper-stage ignition, LES jettison), from 0.05 Hz to
@@ -51,16 +53,13 @@ from savant_cli.models.configurations import ENGINE_FIRST
 from savant_cli.sim import engine
 from savant_cli.sim.build import SimModel
 from savant_cli.sim.oscillation import band_top_hz, find_limit_cycles, find_slow_divergence
-from savant_cli.sim.run import SimResult
+from savant_cli.sim.run import SimResult, channel_columns
 from savant_cli.sim.summary import total_alpha_deg
 
 STAGES = ("first_stage", "upper_stage")
 _ON_STOP = 1.0 - 1e-9  # a state within this fraction of its limit is on the stop
-#: the signals searched for a limit cycle: name → (signal, column)
-CYCLE_SIGNALS = {"gimbal_angle_pitch": ("gimbal_angle", 0), "gimbal_angle_yaw": ("gimbal_angle", 1),
-                 "attitude_error_pitch": ("attitude_error", 1), "attitude_error_yaw": ("attitude_error", 2)}
-#: the signals searched for a slow divergence
-DIVERGENCE_SIGNALS = ("attitude_error_pitch", "attitude_error_yaw")
+#: the attitude errors searched for a limit cycle and a slow divergence: name → (signal, column)
+ATTITUDE_SIGNALS = {"attitude_error_pitch": ("attitude_error", 1), "attitude_error_yaw": ("attitude_error", 2)}
 
 
 @dataclass
@@ -137,21 +136,33 @@ def _quiet_pieces(t: np.ndarray, result: SimResult, quiet_s: float) -> list[tupl
     return out
 
 
-def _signal_deg(sig: dict[str, Signal], name: str) -> np.ndarray:
-    signal, column = CYCLE_SIGNALS[name]
+def cycle_signals(sig: dict[str, Signal]) -> dict[str, tuple[str, int]]:
+    """The signals searched for a limit cycle, name → (signal, column): each column of
+    ``gimbal_angle`` (``gimbal_angle_pitch``, ``gimbal_angle_yaw``, then
+    ``gimbal_angle_pitch2`` … of a cluster's further engines and the gimbaled boosters),
+    then the pitch and yaw attitude errors."""
+    columns = channel_columns(sig["gimbal_angle"].data.shape[1])
+    gimbal = {f"gimbal_angle_{c}": ("gimbal_angle", k) for k, c in enumerate(columns)}
+    return {**gimbal, **ATTITUDE_SIGNALS}
+
+
+def _signal_deg(sig: dict[str, Signal], where: tuple[str, int]) -> np.ndarray:
+    signal, column = where
     return np.degrees(sig[signal].data[:, column])
 
 
 def limit_cycle(t: np.ndarray, sig: dict[str, Signal], result: SimResult, model: SimModel, cfg) -> LimitCycle | None:
-    """The limit cycle of most periods over the gimbal angles and attitude errors (pitch,
-    yaw) of both stages (module notes), or None. ``cfg`` is ``sim.health``."""
+    """The limit cycle of most periods over every gimbal channel's angle and the attitude
+    errors (pitch, yaw) of both stages (module notes), or None. ``cfg`` is
+    ``sim.health``."""
     fs_fcs = 1.0 / (model.rates.n_fcs * model.rates.dt)
     fs_log = 1.0 / float(np.median(np.diff(t)))
     top = band_top_hz(fs_fcs, fs_log, cfg.min_periods)
     best = None
-    names = list(CYCLE_SIGNALS)
+    signals = cycle_signals(sig)
+    names = list(signals)
     for stage, piece in _quiet_pieces(t, result, cfg.event_quiet_s):
-        rows = np.stack([_signal_deg(sig, name)[piece] for name in names])
+        rows = np.stack([_signal_deg(sig, signals[name])[piece] for name in names])
         for name, found in zip(names, find_limit_cycles(t[piece], rows, top, cfg.min_amplitude_deg,
                                                          cfg.tonal_fraction, cfg.min_periods, cfg.max_damping_ratio)):
             if found and (best is None or found.periods > best.periods):
@@ -164,8 +175,8 @@ def slow_divergence(t: np.ndarray, sig: dict[str, Signal], result: SimResult, cf
     (module notes), or None."""
     best = None
     for stage, piece in _quiet_pieces(t, result, cfg.event_quiet_s):
-        for name in DIVERGENCE_SIGNALS:
-            found = find_slow_divergence(t[piece], _signal_deg(sig, name)[piece], cfg.divergence_growth,
+        for name, where in ATTITUDE_SIGNALS.items():
+            found = find_slow_divergence(t[piece], _signal_deg(sig, where)[piece], cfg.divergence_growth,
                                          cfg.divergence_min_amplitude_deg)
             if found and (best is None or found.growth > best.growth):
                 best = SlowDivergence(name, stage, found.growth, found.start_s, found.end_s, found.start_deg,

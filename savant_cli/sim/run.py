@@ -178,6 +178,12 @@ def simulate(model: SimModel, progress: bool = True, chunk_s: float = 10.0,
 
 
 # ----------------------------------------------------------------- signals from log
+def channel_columns(n_channels: int) -> tuple[str, ...]:
+    """The gimbal channels' column names in the histories: ``pitch``, ``yaw`` (the first
+    engine's), then ``pitch2``, ``yaw2`` … (each further engine's, then each gimbaled
+    booster's)."""
+    pq = ("pitch", "yaw")
+    return pq + tuple(f"{axis}{i}" for i in range(2, n_channels // 2 + 1) for axis in pq)
 
 
 def _split(log: np.ndarray, nx: int):
@@ -281,9 +287,8 @@ def signals(result: SimResult, model: SimModel) -> dict[str, Signal]:
     t, x, aux, d = _split(result.log, lay.n)
     xyz = ("x", "y", "z")
     rpy = ("roll", "pitch", "yaw")
-    pq = ("pitch", "yaw")
     n_ch = len(lay.channels)  # every engine's pitch and yaw channels
-    channels = pq + tuple(f"{axis}{i}" for i in range(2, n_ch // 2 + 1) for axis in pq)
+    channels = channel_columns(n_ch)
     c_launch = launch_frame(model)
     q = x[:, layout.Q:layout.Q + 4]
     qc = d[:, layout.D_QS:layout.D_QS + 4]
@@ -306,7 +311,8 @@ def signals(result: SimResult, model: SimModel) -> dict[str, Signal]:
         "rate_error": Signal(d[:, layout.D_RATE_ERR:layout.D_RATE_ERR + 3], "rad/s", "blended rate error", ("p", "q", "r"), "body"),
         "attitude_euler": Signal(euler, "rad", "body attitude, 3-2-1 Euler angles relative to the launch frame (pad NED frozen at liftoff)", rpy, "launch"),
         "attitude_euler_command": Signal(euler_c, "rad", "smoothed command attitude, 3-2-1 Euler angles relative to the launch frame", rpy, "launch"),
-        "gimbal_command": Signal(d[:, [layout.D_CMD_P, layout.D_CMD_Y]], "rad", "flight-control gimbal commands", pq, "body"),
+        "gimbal_command": Signal(d[:, [layout.D_CMD_P, layout.D_CMD_Y]], "rad", "flight-control gimbal commands",
+                                 channels[:2], "body"),
         "gimbal_rate": Signal(x[:, [lay.channel(k) + 1 for k in range(n_ch)]], "rad/s", "nozzle angular rates", channels,
                               "body"),
         "rcs_command": Signal(d[:, layout.D_CMD_RCS], "1", "roll jet command (+1 positive roll torque, 0, -1)"),
