@@ -58,6 +58,7 @@ import numpy as np
 from savant_cli import constants
 from savant_cli.datagen import flex_filters
 from savant_cli.datagen.guidance_commands import _compose, solve
+from savant_cli.errors import ConfigError
 from savant_cli.models import aero, atmosphere as atm, earth, mass as mass_model
 
 #: The first estimate of the MSFC-like design (the rigid-body pole placement and the
@@ -174,6 +175,12 @@ def design_points(cfg, vehicle, spec: dict = DESIGN) -> dict[str, list[tuple[flo
     ``stack_tailoff``: (altitude m, t s, μα, μc) at the tail-off breakpoints; and key
     ``ignition_fade``: the engine's thrust build-up (:func:`ignition_fade`; module
     notes)."""
+    if vehicle.boosters is not None:
+        raise ConfigError("vehicle.boosters", list(vehicle.boosters.names),
+                          "none: this generator's design points take the first stage's thrust and the liftoff "
+                          "configuration's table at its boosters' full load, leaving their thrust and burn out; "
+                          "fly a vehicle with boosters with a controller file made for it (docs/vehicles.md, "
+                          "\"Strap-on boosters\")")
     ref, sols, turn, azimuth, steer, sol = solve(cfg, vehicle, verbose=False)
     # dense reference history
     ts, ys = [], []

@@ -1,7 +1,9 @@
 """Reproducible generator of the default guidance command file.
 
 A three-degree-of-freedom ascent (point mass with the vehicle's own thrust, mass, and
-aerodynamic tables; J2–J4 gravity; US76 atmosphere; rotating Earth, no wind) is flown
+aerodynamic tables of the configuration flown, each jettison at its predicted time;
+strap-on boosters' thrust and mass on their own nominal trace while they are attached;
+J2–J4 gravity; US76 atmosphere; rotating Earth, no wind) is flown
 with an attitude program, and the attitude is written at 1 Hz as inertial quaternions and
 eigenaxis rates — the form the source paper's guidance commands take (§III.E).
 
@@ -48,9 +50,11 @@ from savant_cli.config import SavantConfig
 from savant_cli.errors import ConfigError
 from savant_cli.io.guidance_file import SPEED_COLUMN
 from savant_cli.models import aero, atmosphere as atm, earth, mass as mass_model, quaternion as qt
+from savant_cli.models.boosters import thrust_direction
 from savant_cli.models.gravity import gravity_zonal
 from savant_cli.models.peg import insertion_state
 from savant_cli.sim import build
+from savant_cli.sim.booster_trace import booster_trace
 from savant_cli.sim.plant import PlantTables, pack_tables
 from savant_cli.vehicle import Vehicle
 
@@ -106,12 +110,14 @@ def timed_events(vehicle: Vehicle) -> None:
                               f"stands for it ('~{key}' and {key[:-5]}.delay_s=...; docs/vehicles.md)")
 
 
-def event_times(vehicle: Vehicle, t_sep: float, t_fs_cut: float | None) -> dict[int, float]:
+def event_times(vehicle: Vehicle, t_sep: float, t_fs_cut: float | None,
+                t_boosters: float = np.inf) -> dict[int, float]:
     """The reference's time of each event slot (s from liftoff; ``inf``: none): the
-    predicted separation ``t_sep`` and a liquid first stage's cutoff ``t_fs_cut``, and the
-    timed events (:data:`TIMED_SLOTS`) at their delays after the event each counts from,
-    a jettison not before the one written before it (``Trigger.waits_for``)."""
-    times = {-1: 0.0, 0: t_sep, 4: np.inf if t_fs_cut is None else t_fs_cut}
+    predicted separation ``t_sep``, a liquid first stage's cutoff ``t_fs_cut`` and the
+    boosters' jettison ``t_boosters``, and the timed events (:data:`TIMED_SLOTS`) at
+    their delays after the event each counts from, a jettison not before the one written
+    before it (``Trigger.waits_for``)."""
+    times = {-1: 0.0, 0: t_sep, 4: np.inf if t_fs_cut is None else t_fs_cut, 5: t_boosters}
 
     def time_of(slot: int) -> float:
         if slot not in times:
@@ -120,7 +126,7 @@ def event_times(vehicle: Vehicle, t_sep: float, t_fs_cut: float | None) -> dict[
             times[slot] = t if trigger.waits_for < 0 else max(t, time_of(trigger.waits_for))
         return times[slot]
 
-    return {slot: time_of(slot) for slot in (0, *TIMED_SLOTS)}
+    return {slot: time_of(slot) for slot in (0, 5, *TIMED_SLOTS)}
 
 
 class Reference:
@@ -130,11 +136,11 @@ class Reference:
         self.cfg = cfg
         self.vehicle = vehicle
         self.prog = prog
-        if vehicle.boosters is not None:
-            raise ConfigError("vehicle.boosters", list(vehicle.boosters.names),
-                              "none: this generator's reference ascent flies the stages alone (its mass and thrust "
-                              "leave the boosters out); give the vehicle a command file made without them "
-                              "(docs/vehicles.md, \"Strap-on boosters\")")
+        #: the strap-on boosters' nominal thrust, mass and jettison (None: none)
+        self.boosters = booster_trace(vehicle)
+        b = vehicle.boosters
+        #: the boosters' delivered thrust along body x per N of it (their cants' mean cosine)
+        self.booster_axial = float(thrust_direction(b.cant_rad)[:, 0].mean()) if b is not None else 0.0
         params, self.tb = build.plant_data(cfg, vehicle)
         self.packed = pack_tables(self.tb)  # the plant's own kernels read these
         # the first stage's nominal trace (a throttled liquid stage's under the flight's own law)
@@ -147,11 +153,12 @@ class Reference:
         # a prediction: no flight exists here (the flight separates on board)
         self.t_sep = build.separation_on_trace(vehicle, self.fs_time, self.fs_thrust, t_fs_cut)
         timed_events(vehicle)
-        times = event_times(vehicle, self.t_sep, t_fs_cut)
+        t_boosters = self.boosters.jettison_s if self.boosters is not None else np.inf
+        times = event_times(vehicle, self.t_sep, t_fs_cut, t_boosters)
         self.t_ign = times[1]
-        #: each jettison's time (the separation's and the items'), ascending: the k-th
-        #: moves to configuration k (s)
-        self.jettison_times = np.sort([times[k] for k in (0, 2, 6, 7, 8)])
+        #: each jettison's time (the boosters', the separation's and the items'), ascending:
+        #: the k-th moves to configuration k (s)
+        self.jettison_times = np.sort([times[k] for k in (5, 0, 2, 6, 7, 8)])
         self.n_first_stage_configs = vehicle.first_stage_configurations
         self.energy_target = build.target_energy(cfg)
         tgt = cfg.guidance.target
@@ -235,7 +242,14 @@ class Reference:
         tb = self.tb
         cfg_i = self.config_at(t)
         prop = y[6] if cfg_i < self.n_first_stage_configs else y[7] + y[8]
-        mass = mass_model.mass_properties(self.packed, cfg_i, max(prop, 0.0))[0]
+        boosted = self.boosters is not None and cfg_i == 0
+        # with the boosters attached: the stack's mass without them (the next configuration's)
+        # and theirs on their own trace, as the flight exchanges their rows (models/boosters.py)
+        mass = mass_model.mass_properties(self.packed, 1 if boosted else cfg_i, max(prop, 0.0))[0]
+        f_boosters = 0.0
+        if boosted:
+            f_boosters, m_boosters = self.boosters.at(t)
+            mass += m_boosters
         c_b2i = self.attitude(t, y, azimuth, steer, turn)
         x_b = c_b2i[:, 0]
         c_i2e = earth.dcm_eci_to_ecef(t, constants.OMEGA_EARTH)
@@ -258,6 +272,9 @@ class Reference:
             if nn > 1e-9:
                 f += -qbar * s_ref * cn * n_dir / nn
         fs, us = self.vehicle.first_stage, self.vehicle.upper_stage
+        if boosted:  # delivered: each booster's vacuum thrust less its exit area's back pressure
+            b = self.vehicle.boosters
+            f += max(f_boosters - pres * b.count * b.nozzle_exit_area_m2, 0.0) * self.booster_axial * x_b
         if cfg_i < self.n_first_stage_configs and y[6] > 0.0:
             f_vac = np.interp(t, self.fs_time, self.fs_thrust)
             f += max(f_vac - pres * fs.nozzle_exit_area_m2, 0.0) * x_b
