@@ -183,7 +183,7 @@ def test_a_gimbaled_booster_nozzle_s_reaction_loads_the_modes_at_its_point(tmp_p
 @pytest.mark.slow
 def test_a_boosted_vehicle_flies_with_flex_and_its_modes_restart_at_the_jettison(boosted):
     _, _, model = boosted
-    result = simulate(model, progress=False, t_stop=170.0)
+    result = simulate(model, progress=False, t_stop=120.0)
     assert result.status == "complete", result.message
     t_jet = result.events[engine.EV_BOOSTER_JETTISON]
     assert 80.0 < t_jet < 120.0  # the boosters' tail-off (their trace burns out near 95 s)

@@ -64,7 +64,7 @@ def flight():
     cfg = _cfg()
     vehicle = _vehicle(_first_stage_les())
     model = build_model(cfg, vehicle, read_guidance(prepare(cfg, hydra_search_dirs()).command_file))
-    result = simulate(model, progress=False, t_stop=200.0)
+    result = simulate(model, progress=False, t_stop=140.0)
     return model, result
 
 
