@@ -11,6 +11,7 @@ from __future__ import annotations
 import io
 import json
 import os
+import re
 import shutil
 import socket
 import subprocess
@@ -209,6 +210,30 @@ def clipped_labels(boxes: list[dict], frame: dict) -> list[str]:
             if b["x"] < frame["x"] - 0.5 or b["y"] < frame["y"] - 0.5
             or b["x"] + b["width"] > frame["x"] + frame["width"] + 0.5
             or b["y"] + b["height"] > frame["y"] + frame["height"] + 0.5]
+
+
+def require_chromium() -> None:
+    """Skip the calling test when no Chromium is on PATH, or fail it when
+    ``SAVANT_REQUIRE_CHROMIUM=1`` (CI) says there must be one."""
+    import pytest
+
+    if find_chromium() is None:
+        if os.environ.get("SAVANT_REQUIRE_CHROMIUM") == "1":
+            pytest.fail("SAVANT_REQUIRE_CHROMIUM=1 but no Chromium on PATH")
+        pytest.skip("no Chromium on PATH (apt-get install chromium)")
+
+
+def assert_page_reads(run_dir: Path) -> None:
+    """The Chromium checks of a study's ``report.html`` as a reviewer reads it: no console
+    error or broken image, no dict text, no float noise (such as 7.47999999999997),
+    timeline labels apart and inside the drawing."""
+    seen = check_page(Path(run_dir) / "report.html")
+    assert seen.console_errors == [] and seen.broken_images == []
+    assert "{" not in seen.text and "}" not in seen.text, seen.text[max(seen.text.find("{") - 80, 0):][:200]
+    assert not re.search(r"\d\.\d*(9999|0000)\d", seen.text)
+    assert overlapping_labels(seen.label_boxes, gap=2.0) == []
+    if seen.timeline_box is not None:
+        assert clipped_labels(seen.label_boxes, seen.timeline_box) == []
 
 
 if __name__ == "__main__":  # python tests/browser.py REPORT.html SHOT.png [ANCHOR [SCALE]]: the docs' screenshots

@@ -11,13 +11,13 @@ import types
 import numpy as np
 import pytest
 
+from browser import assert_page_reads, require_chromium
 from conftest import assert_report_redraws, compose_config
-from savant_cli.config import DesignParameter, DesignParameters, shipped_option, validate
+from savant_cli.config import shipped_option, validate
 from savant_cli.datagen import fcs_gains
 from savant_cli.design import parameters as dp, points as dpts, search as ds
 from savant_cli.errors import ConfigError
 from savant_cli.linear.requirements import Check, PointVerdict
-from savant_cli.models.fcs import fcs_tables
 from test_end_to_end import run
 
 
@@ -39,10 +39,14 @@ def test_rule_values_are_the_design_rules():
     assert spec["upper"]["omega"] == 1.0 and spec["filters"] is None  # the rules themselves untouched
 
 
+#: The reference ascent (``fcs_gains.solve``) of each vehicle, solved once for its controllers.
+_REFERENCES: dict = {}
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("vehicle, controller", [("ares_i", "msfc_pid"), ("ares_i", "larc_pd"),
                                                  ("small_launcher", "small_pid"), ("small_launcher", "small_pd")])
-def test_shipped_controller_is_its_rules_with_its_design_values(vehicle, controller):
+def test_shipped_controller_is_its_rules_with_its_design_values(vehicle, controller, monkeypatch):
     """Each shipped controller is exactly (text, bitwise) the YAML its design rules write
     with the values of its own ``design`` block (what study=fcs_design tuned), at the
     reference ascent's design points: the file is reproducible from its provenance."""
@@ -58,8 +62,17 @@ def test_shipped_controller_is_its_rules_with_its_design_values(vehicle, control
     spec = fcs_gains.CONTROLLERS[design.rules]
     blend = flex_filters.vehicle_stack_blend(cfg.vehicle, prep.vehicle_dir)
     values = {(sched, name): v for sched, vals in design.parameters.items() for name, v in vals.items()}
-    text = dp.controller_text(dp.apply(spec, values), fcs_gains.design_points(cfg, prep.vehicle, spec), blend,
-                              vehicle, {"rules": design.rules, "parameters": values})
+    solve = fcs_gains.solve
+
+    def solved_once(*args, **kwargs):  # one reference ascent per vehicle: its controllers share it
+        if vehicle not in _REFERENCES:
+            _REFERENCES[vehicle] = solve(*args, **kwargs)
+        return _REFERENCES[vehicle]
+
+    monkeypatch.setattr(fcs_gains, "solve", solved_once)
+    points = fcs_gains.design_points(cfg, prep.vehicle, spec)
+    text = dp.controller_text(dp.apply(spec, values), points, blend, vehicle,
+                              {"rules": design.rules, "parameters": values})
     assert text == (shipped_config_dir() / "controller" / f"{controller}.yaml").read_text()
 
 
@@ -184,6 +197,8 @@ def test_fcs_design_end_to_end(tmp_path):
     yaml = out / "controller" / "tuned_test.yaml"
     assert yaml.is_file() and "tuned by study=fcs_design" in yaml.read_text()
     assert "fcs_design/margin_envelope_after.png" in assert_report_redraws(out)
+    require_chromium()
+    assert_page_reads(out)  # the study's page as a reviewer reads it (tests/test_html_report.py reads the others)
     fly = run(["run", f"--config-dir={out}", "controller=tuned_test", "phase=first_stage", "sim.progress=false",
                f"hydra.run.dir={tmp_path}/fly"], cwd=tmp_path)
     assert fly.returncode == 0, fly.stdout + fly.stderr

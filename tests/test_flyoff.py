@@ -11,6 +11,7 @@ import h5py
 import numpy as np
 import pytest
 
+from browser import assert_page_reads, require_chromium
 from conftest import assert_report_redraws, compose_config
 from savant_cli.config import validate
 from savant_cli.errors import ConfigError
@@ -81,6 +82,8 @@ def test_flyoff_end_to_end(tmp_path):
     assert (out / "plots" / "flyoff_histograms.png").is_file()
     assert (out / "plots" / "flyoff_attitude_error_pitch.png").is_file()
     assert "flyoff_histograms.png" in assert_report_redraws(out)
+    require_chromium()
+    assert_page_reads(out)  # the study's page as a reviewer reads it (tests/test_html_report.py reads the others)
     assert "histograms_01.png" in assert_report_redraws(out / "larc_pd")  # one controller's batch
     bad = run(["run", "study=flyoff", "study.controllers=[msfc_pid,nope]", f"hydra.run.dir={tmp_path}/bad"],
               cwd=tmp_path)

@@ -6,14 +6,13 @@ to fail it."""
 
 from __future__ import annotations
 
-import os
 import re
 from pathlib import Path
 
 import pytest
 
 import savant_cli
-from browser import check_page, clipped_labels, find_chromium, is_blank, overlapping_labels
+from browser import assert_page_reads, check_page, clipped_labels, is_blank, overlapping_labels, require_chromium
 from conftest import assert_report_page, assert_report_redraws
 from savant_cli.html_report import (
     LABEL_CHAR_W, TIMELINE_LEFT, TIMELINE_WIDTH, WORST_PREFIX, config_diff, timeline_layout, verdicts
@@ -22,16 +21,6 @@ from savant_cli.html_tables import summary_tables, worst_offender
 
 ROOT = Path(__file__).resolve().parents[1]
 #: .ci/run sets it: there a missing Chromium is a failure, not a skip
-REQUIRE = os.environ.get("SAVANT_REQUIRE_CHROMIUM") == "1"
-
-
-def _chromium():
-    if find_chromium() is None:
-        if REQUIRE:
-            pytest.fail("SAVANT_REQUIRE_CHROMIUM=1 but no Chromium on PATH")
-        pytest.skip("no Chromium on PATH (apt-get install chromium)")
-
-
 @pytest.fixture(scope="module")
 def short_run(tmp_path_factory):
     return savant_cli.run(["sim.max_time_s=140", "sim.progress=false", "winds=design_gust"],
@@ -78,7 +67,7 @@ def test_events_and_provenance_are_on_the_page(short_run):
 
 def test_the_browser_check_fails_a_broken_page(tmp_path):
     """A broken image, a console error and a blank page are each seen."""
-    _chromium()
+    require_chromium()
     bad = tmp_path / "bad.html"
     bad.write_text('<!DOCTYPE html><html><head><title>bad</title></head><body><p>text</p>'
                    '<img alt="broken" src="data:image/png;base64,AAAA"><script>console.error("boom")</script>'
@@ -103,7 +92,7 @@ def _assert_renders(run_dir: Path) -> bytes:
 def test_reports_render_in_headless_chromium(tmp_path, short_run):
     """A flight, a linear study and a Monte Carlo: each page loads in Chromium with no
     console error and no broken image, and its screenshot is not blank."""
-    _chromium()
+    require_chromium()
     lin = savant_cli.run(["study=linear", "study.times=[55,130]", "sim.progress=false"], out_dir=tmp_path / "lin")
     mc = savant_cli.run(["study=montecarlo", "study.n_runs=4", "study.workers=1", "sim.progress=false",
                          "study.linear_times=[55]"], out_dir=tmp_path / "mc")
@@ -197,7 +186,7 @@ def test_timeline_labels_keep_apart_and_inside():
 
 def test_the_reviewer_checks_fail_a_bad_page(tmp_path):
     """Dict text and overlapping or clipped labels are each seen by the browser checks."""
-    _chromium()
+    require_chromium()
     bad = tmp_path / "bad.html"
     bad.write_text('<!DOCTYPE html><html><body><p>{\'max\': 168769.8129200502}</p>'
                    '<svg viewBox="0 0 300 60" width="300" aria-label="events timeline">'
@@ -211,21 +200,9 @@ def test_the_reviewer_checks_fail_a_bad_page(tmp_path):
     assert clipped_labels(seen.label_boxes, seen.timeline_box) == ["cutoff 561.45 s"]
 
 
-def _assert_reads(run_dir: Path) -> None:
-    """The Chromium checks of a page a reviewer reads: no dict text, timeline labels
-    apart and inside the drawing, no float noise."""
-    seen = check_page(run_dir / "report.html")
-    assert seen.console_errors == [] and seen.broken_images == []
-    assert "{" not in seen.text and "}" not in seen.text, seen.text[max(seen.text.find("{") - 80, 0):][:200]
-    assert not re.search(r"\d\.\d*(9999|0000)\d", seen.text)  # no float noise such as 7.47999999999997
-    assert overlapping_labels(seen.label_boxes, gap=2.0) == []
-    if seen.timeline_box is not None:
-        assert clipped_labels(seen.label_boxes, seen.timeline_box) == []
-
-
 def test_flight_page_reads_in_chromium(short_run):
-    _chromium()
-    _assert_reads(short_run.run_dir)
+    require_chromium()
+    assert_page_reads(short_run.run_dir)
     assert len(check_page(short_run.run_dir / "report.html").label_boxes) == len(short_run.events)
 
 
@@ -237,11 +214,10 @@ STUDY_RUNS = {
     "time_margins": ["study=time_margins", "study.times=[180]", "study.axes=[yaw]", "study.workers=1"],
     "flex_sweep": ["study=flex_sweep", "flex.n_modes=2", "study.times=[55,180]"],
     "mode_retention": ["study=mode_retention", "study.max_modes=2", "study.times=[55]"],
-    "flyoff": ["study=flyoff", "phase=first_stage", "study.n_runs=4", "study.linear_times=[55]", "study.workers=1"],
-    "fcs_design": ["study=fcs_design", "study.optimizer.max_evaluations=6", "study.every_s.stack=40",
-                   "study.every_s.upper=150", "study.verify_every_s=60", "study.controller_name=tuned_test",
-                   "study.workers=1"],
 }
+# The pages of study=flyoff and study=fcs_design are read in their own end-to-end runs
+# (tests/test_flyoff.py, tests/test_fcs_design.py): a second study only for its page cost
+# five minutes of the suite
 
 
 @pytest.mark.slow
@@ -249,6 +225,6 @@ STUDY_RUNS = {
 def test_every_study_page_reads_in_chromium(tmp_path, study):
     """Each study's report.html: no dict text, no float noise, timeline labels apart and
     inside the drawing (bounding boxes from the DOM)."""
-    _chromium()
+    require_chromium()
     r = savant_cli.run(STUDY_RUNS[study] + ["sim.progress=false"], out_dir=tmp_path / study, quiet=True)
-    _assert_reads(r.run_dir)
+    assert_page_reads(r.run_dir)

@@ -55,7 +55,7 @@ from savant_cli.models.gravity import gravity_zonal
 from savant_cli.models.peg import insertion_state
 from savant_cli.sim import build
 from savant_cli.sim.booster_trace import booster_trace
-from savant_cli.sim.plant import PlantTables, pack_tables
+from savant_cli.sim.plant import pack_tables
 from savant_cli.vehicle import Vehicle
 
 G0 = constants.G0
@@ -82,6 +82,13 @@ class Program:
             raise ConfigError(f"guidance.generator.{sorted(unknown)[0]}", gen[sorted(unknown)[0]],
                               f"unknown key; known: {', '.join(sorted(known))}")
         return cls(**{k: float(v) for k, v in gen.items()})
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``a × b`` of two 3-vectors: numpy's own products and differences, term for term
+    (so bit for bit ``np.cross``), without its general-shape overhead, which was a third
+    of the reference ascent's integration time."""
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
 
 
 def _cosine_ramp(t: float, start: float, duration: float) -> float:
@@ -185,7 +192,7 @@ class Reference:
         pitch-over may overlap and the gravity turn continues the same residual roll."""
         x0 = -self.c_e2n[2]  # up
         z0 = np.cos(self.pad_heading) * self.c_e2n[0] + np.sin(self.pad_heading) * self.c_e2n[1]
-        c0 = np.column_stack([x0, np.cross(z0, x0), z0])
+        c0 = np.column_stack([x0, _cross(z0, x0), z0])
         _, final = self._roll_angles(t, azimuth)
         pr = self.prog
         tilt = np.radians(pr.pitchover_angle_deg) * _cosine_ramp(t, pr.pitchover_start_s, pr.pitchover_duration_s)
@@ -198,7 +205,7 @@ class Reference:
         down = -r / np.linalg.norm(r)
         z = down - np.dot(down, x_b) * x_b
         z /= np.linalg.norm(z)
-        return np.column_stack([x_b, np.cross(z, x_b), z])
+        return np.column_stack([x_b, _cross(z, x_b), z])
 
     def attitude(self, t: float, y: np.ndarray, azimuth: float, steer: tuple[float, float],
                  turn: dict) -> np.ndarray:
@@ -216,7 +223,7 @@ class Reference:
             return self._frame_from_x(x_b, r) @ self._residual_roll(t, azimuth)
         r_hat = r / np.linalg.norm(r)
         h_hat = turn["plane_normal"]
-        downrange = np.cross(h_hat, r_hat)
+        downrange = _cross(h_hat, r_hat)
         theta = np.arctan(steer[0] + steer[1] * (t - self.t_ign))
         x_b = np.cos(theta) * downrange + np.sin(theta) * r_hat
         # continuous command at ignition: rotate from the (inertially held) coast
@@ -224,7 +231,7 @@ class Reference:
         s = _cosine_ramp(t, self.t_ign, pr.steering_blend_s)
         if s < 1.0:
             x0 = turn["x_ignition"]
-            axis = np.cross(x0, x_b)
+            axis = _cross(x0, x_b)
             sin_a = np.linalg.norm(axis)
             if sin_a > 1e-12:
                 ang = np.arctan2(sin_a, np.dot(x0, x_b))
@@ -315,7 +322,7 @@ class Reference:
         x_b = self.launch_attitude(t_turn, azimuth)[:, 0]
         v_rel = earth.velocity_relative_eci(y[0:3], y[3:6], constants.OMEGA_EARTH)
         v_hat = v_rel / np.linalg.norm(v_rel)
-        axis = np.cross(v_hat, x_b)
+        axis = _cross(v_hat, x_b)
         sin_a = np.linalg.norm(axis)
         turn["axis"] = axis / sin_a if sin_a > 1e-12 else np.array([1.0, 0.0, 0.0])
         turn["alpha0"] = float(np.arctan2(sin_a, np.dot(v_hat, x_b)))
@@ -323,7 +330,7 @@ class Reference:
         s3 = solve_ivp(self.rhs, (self.t_sep, self.t_ign), s2.y[:, -1], args=(azimuth, (0.0, 0.0), turn), **kw)
         y_ign = s3.y[:, -1]
         turn["x_ignition"] = self.attitude(self.t_ign, y_ign, azimuth, (0.0, 0.0), turn)[:, 0]
-        hvec = np.cross(y_ign[0:3], y_ign[3:6])
+        hvec = _cross(y_ign[0:3], y_ign[3:6])
         turn["plane_normal"] = hvec / np.linalg.norm(hvec)
         return (s1, s2, s3), turn
 
@@ -350,7 +357,7 @@ class Reference:
         return np.array([(r - self.r_cut) / 1e3, np.degrees(fpa - self.fpa_cut)])
 
     def inclination_of(self, y: np.ndarray) -> float:
-        h = np.cross(y[0:3], y[3:6])
+        h = _cross(y[0:3], y[3:6])
         return float(np.arccos(h[2] / np.linalg.norm(h)))
 
 
