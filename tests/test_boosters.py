@@ -572,12 +572,16 @@ def test_the_reference_ascent_carries_the_boosters_as_the_flight_does():
 
 
 @pytest.mark.slow
-def test_a_profile_made_for_the_boosted_vehicle_predicts_its_flight_and_eases_its_loads(tmp_path):
+def test_a_profile_made_for_the_boosted_vehicle_predicts_its_flight_and_eases_its_loads(tmp_path, monkeypatch):
     """The generator's attitude profile for the example (its reference ascent carrying the
     boosters): the reference's altitude and speed match the flight's through the boosted
     ascent to 1 % (without the boosters' thrust and mass it would lag by tens of
     percent), and its peak q·α (in the first stage, where the air is) is below the one the
-    shipped profile (made for the stack without boosters) gives the same vehicle."""
+    shipped profile (made for the stack without boosters) gives the same vehicle. The gain
+    generator designs on the same reference: every stack breakpoint, the boosted ones
+    included, has a finite μα and a positive μc (its values against the plant's own:
+    ``tests/test_booster_tvc.py``)."""
+    from savant_cli.datagen import fcs_gains
     from savant_cli.datagen.guidance_commands import commands, solve
     from savant_cli.io.guidance_file import write_guidance_csv
     from savant_cli.sim.summary import total_alpha_deg
@@ -607,3 +611,7 @@ def test_a_profile_made_for_the_boosted_vehicle_predicts_its_flight_and_eases_it
     peak = {name: float(np.max(s["dynamic_pressure"].data * total_alpha_deg(s["alpha"].data, s["beta"].data)))
             for name, s in flights.items()}
     assert peak["own"] < peak["shipped"]
+    monkeypatch.setattr(fcs_gains, "solve", lambda *args, **kwargs: (ref, sols, turn, azimuth, steer, sol))
+    stack = fcs_gains.design_points(cfg, v)["stack"]
+    assert any(t < ref.boosters.jettison_s for t, _, _ in stack)
+    assert all(np.isfinite(mu_alpha) and mu_c > 0.0 for _, mu_alpha, mu_c in stack)

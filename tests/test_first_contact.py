@@ -122,6 +122,42 @@ def test_cold_load_says_the_line_once_and_times_it(tmp_path, monkeypatch, capsys
     assert LINE not in capsys.readouterr().err
 
 
+def test_a_second_cold_process_waits_for_the_first_compile_and_loads_it(tmp_path, monkeypatch):
+    """Two processes on one cold cache compile once: a subprocess that finds the kernel
+    cold says the line, then waits on the cache directory's lock, held here; this
+    process compiles the kernel into the cache meanwhile and releases the lock; the
+    subprocess then loads it (numba counts a cache hit, no miss). Without the lock it
+    would have compiled it itself in the second it was given."""
+    import time
+
+    import numba
+
+    cache = tmp_path / "cache"
+    cache.mkdir()
+    src = tmp_path / "fc_kernel3.py"
+    src.write_text(KERNEL)
+    code = textwrap.dedent("""
+        import fc_kernel3 as kernel
+        from savant_cli.sim import compile_notice
+        compile_notice.load_kernels([(kernel.twice, (2.0,))])
+        print(sum(kernel.twice.stats.cache_hits.values()), sum(kernel.twice.stats.cache_misses.values()))
+    """)
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache), PYTHONPATH=str(tmp_path))
+    with compile_notice.compile_lock(str(cache)):
+        proc = subprocess.Popen([sys.executable, "-c", code], env=env, stdout=subprocess.PIPE,
+                                stderr=subprocess.PIPE, text=True)
+        said = proc.stderr.readline()
+        assert LINE in said, said
+        time.sleep(1.0)
+        assert proc.poll() is None  # waiting on the lock
+        monkeypatch.setattr(numba.config, "CACHE_DIR", str(cache))
+        monkeypatch.syspath_prepend(str(tmp_path))
+        assert importlib.import_module("fc_kernel3").twice(2.0) == 4.0  # compiled here, into the cache
+    out, err = proc.communicate(timeout=120)
+    assert proc.returncode == 0, err
+    assert out.split() == ["1", "0"]  # loaded, not compiled
+
+
 def test_silenced_says_nothing(capsys):
     with compile_notice.silenced():
         with compile_notice.compiling("/somewhere"):

@@ -4,7 +4,10 @@
 Along the reference ascent of :mod:`savant_cli.datagen.guidance_commands`, the rigid
 pitch-plane model θ̈ = μα·α + μc·δ gives, at each schedule breakpoint,
 
-* μc = T·l_c / I  (thrust, gimbal-to-CG arm, pitch inertia), 1/s²;
+* μc = T·l_c / I  (thrust, gimbal-to-CG arm, pitch inertia), 1/s²; while strap-on
+  boosters are attached the mass properties hold each at its propellant on the
+  reference's trace, and gimbaled boosters add their nozzles' moments through the control
+  mixer (:func:`pitch_coefficients`);
 * μα = ∂M_cg/∂α / I from the vehicle's aerodynamic tables (positive: unstable), 1/s².
 
 A PD pole placement at natural frequency ω and damping ζ gives Kp = (ω² + μα)/μc and
@@ -58,8 +61,7 @@ import numpy as np
 from savant_cli import constants
 from savant_cli.datagen import flex_filters
 from savant_cli.datagen.guidance_commands import _compose, solve
-from savant_cli.errors import ConfigError
-from savant_cli.models import aero, atmosphere as atm, earth, mass as mass_model
+from savant_cli.models import aero, atmosphere as atm, boosters, cluster, earth, mass as mass_model, mixer
 
 #: The first estimate of the MSFC-like design (the rigid-body pole placement and the
 #: filters of :data:`.flex_filters.DESIGN`): where ``study=fcs_design`` began.
@@ -112,14 +114,59 @@ CONTROLLERS = {"msfc_pid": DESIGN, "larc_pd": LARC_PD,
                "small_pid": {**FIRST_ESTIMATE, "name": "small_pid"}, "small_pd": {**PD_FIRST_ESTIMATE, "name": "small_pd"}}
 
 
+def _boosted_mass(ref, t: float, prop: float) -> tuple[np.ndarray, float]:
+    """The CG (structure frame, m) and pitch inertia (kg·m², about the CG) of the liftoff
+    configuration at ``t`` (s) with ``prop`` kg of the first stage's propellant and each
+    strap-on booster at its own propellant on the reference's trace: the table's
+    full-load booster rows exchanged as the flight exchanges them
+    (``models/boosters.py::exchange``)."""
+    packed, p = ref.packed, ref.params
+    _, each_prop = ref.boosters.each_at(t)
+    first_tank = int(p[boosters.P_TANK])
+    x = np.zeros(first_tank + each_prop.size)
+    x[first_tank:] = each_prop
+    whole = boosters.exchange(x, p, packed, *mass_model.mass_properties(packed, 0, max(prop, 0.0)))
+    return np.array(whole[1:4]), float(whole[5])
+
+
+def _boosted_control_moment(ref, t: float, pres: float, cg: np.ndarray) -> float:
+    """The pitch moment (N·m, about ``cg``) of one radian of the flight control's pitch
+    command while gimbaled boosters are attached: the mixer's pitch column over the first
+    stage's engines and the boosters' nozzles (``cluster.boosted_mixer``, at their rated
+    thrusts) times each channel's moment effectiveness at the thrusts delivered at ``t``
+    (s; the stage's share per engine and each booster's on the reference's trace, less
+    its exit area's back pressure ``pres`` Pa)."""
+    v = ref.vehicle
+    fs, b = v.first_stage, v.boosters
+    gimbal, offsets, cants, _, _ = cluster.stage_geometry(v, 0)
+    n = offsets.shape[0]
+    f_stage = max(float(np.interp(t, ref.tb.fs_time, ref.tb.fs_thrust)) - pres * fs.nozzle_exit_area_m2, 0.0)
+    each_vac, _ = ref.boosters.each_at(t)
+    thrust = np.concatenate([np.full(n, f_stage / n), np.maximum(each_vac - pres * b.nozzle_exit_area_m2, 0.0)])
+    effect, _ = cluster.effectiveness(np.concatenate([gimbal + offsets, b.nozzle_m]),
+                                      np.concatenate([cants, b.cant_rad]), thrust, cg)
+    k_pitch = cluster.boosted_mixer(v).reshape(-1, 3)[:, mixer.PITCH]  # each channel, pitch then yaw per engine
+    return float(effect[1] @ k_pitch)
+
+
 def pitch_coefficients(ref, t: float, y: np.ndarray, config: int) -> tuple[float, float]:
-    """μα and μc (1/s²) of the rigid pitch plane at reference time ``t``."""
+    """μα and μc (1/s²) of the rigid pitch plane at reference time ``t`` (s) and 3-DOF
+    state ``y``, in configuration ``config``. While strap-on boosters are attached (the
+    liftoff configuration) the mass properties hold each at its propellant on the
+    reference's trace, and with gimbaled boosters μc is the pitch moment of one radian
+    of the flight control's pitch command through the mixer over the stage's engines and
+    the boosters' nozzles (:func:`_boosted_control_moment`); a booster without TVC adds
+    no control moment."""
     tb, packed = ref.tb, ref.packed
     v = ref.vehicle
     first_stage = config < v.first_stage_configurations
+    boosted = ref.boosters is not None and config == 0
     prop = y[6] if first_stage else y[7] + y[8]
-    _, cg, inertia = mass_model.inertia_tensor(packed, config, max(prop, 0.0))
-    iyy = inertia[1, 1]
+    if boosted:
+        cg, iyy = _boosted_mass(ref, t, prop)
+    else:
+        _, cg, inertia = mass_model.inertia_tensor(packed, config, max(prop, 0.0))
+        iyy = inertia[1, 1]
     r, vel = y[0:3], y[3:6]
     c_i2e = earth.dcm_eci_to_ecef(t, constants.OMEGA_EARTH)
     _, _, alt = earth.ecef_to_geodetic(c_i2e @ r, constants.WGS84_A, constants.WGS84_E2)
@@ -136,6 +183,8 @@ def pitch_coefficients(ref, t: float, y: np.ndarray, config: int) -> tuple[float
 
     da = np.radians(1.0)
     mu_alpha = (m_cg(da) - m_cg(-da)) / (2 * da) / iyy
+    if boosted and v.boosters.tvc:
+        return float(mu_alpha), _boosted_control_moment(ref, t, pres, cg) / iyy
     if first_stage:
         f_vac = np.interp(t, tb.fs_time, tb.fs_thrust)
         thrust = f_vac - pres * v.first_stage.nozzle_exit_area_m2
@@ -175,12 +224,6 @@ def design_points(cfg, vehicle, spec: dict = DESIGN) -> dict[str, list[tuple[flo
     ``stack_tailoff``: (altitude m, t s, μα, μc) at the tail-off breakpoints; and key
     ``ignition_fade``: the engine's thrust build-up (:func:`ignition_fade`; module
     notes)."""
-    if vehicle.boosters is not None:
-        raise ConfigError("vehicle.boosters", list(vehicle.boosters.names),
-                          "none: this generator's design points take the first stage's thrust and the liftoff "
-                          "configuration's table at its boosters' full load, leaving their thrust and burn out; "
-                          "fly a vehicle with boosters with a controller file made for it (docs/vehicles.md, "
-                          "\"Strap-on boosters\")")
     ref, sols, turn, azimuth, steer, sol = solve(cfg, vehicle, verbose=False)
     # dense reference history
     ts, ys = [], []

@@ -148,10 +148,10 @@ class Reference:
         b = vehicle.boosters
         #: the boosters' delivered thrust along body x per N of it (their cants' mean cosine)
         self.booster_axial = float(thrust_direction(b.cant_rad)[:, 0].mean()) if b is not None else 0.0
-        params, self.tb = build.plant_data(cfg, vehicle)
+        self.params, self.tb = build.plant_data(cfg, vehicle)
         self.packed = pack_tables(self.tb)  # the plant's own kernels read these
         # the first stage's nominal trace (a throttled liquid stage's under the flight's own law)
-        self.fs_time, self.fs_thrust, t_fs_cut = build.first_stage_march(vehicle, params, self.packed)
+        self.fs_time, self.fs_thrust, t_fs_cut = build.first_stage_march(vehicle, self.params, self.packed)
         self.r0, self.v0, self.q0 = build.pad_state(cfg, vehicle)
         ls = cfg.guidance.launch_site
         lat, lon = np.radians(ls.latitude_deg), np.radians(ls.longitude_deg)

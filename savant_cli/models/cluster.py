@@ -101,7 +101,7 @@ def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarra
                               "its gains must be 0")
 
 
-def _stage_geometry(vehicle, stage: int) -> tuple:
+def stage_geometry(vehicle, stage: int) -> tuple:
     """A stage's engines for the mixer: the stage's gimbal point, each engine's offset and
     cant, the reference CG (the stage's configuration at full load; structure frame, m,
     rad) and the gimbal limit (rad)."""
@@ -120,7 +120,7 @@ def mount_table(vehicle) -> np.ndarray:
     :func:`check_given_mixer` finds it gives the same moments."""
     rows = []
     for stage, name in enumerate(("first_stage", "upper_stage")):
-        gimbal, offsets, cants, cg, limit = _stage_geometry(vehicle, stage)
+        gimbal, offsets, cants, cg, limit = stage_geometry(vehicle, stage)
         coefficients = stage_mixer(gimbal, offsets, cants, cg, limit)
         given = getattr(vehicle, name).mixing_matrix
         if given is not None:
@@ -144,7 +144,7 @@ def boosted_mounts(vehicle) -> np.ndarray:
     MOUNT.size)``) without booster TVC."""
     if not vehicle.gimbaled_boosters:
         return np.zeros((0, MOUNT_SIZE))
-    gimbal, offsets, cants, _, _ = _stage_geometry(vehicle, 0)
+    gimbal, offsets, cants, _, _ = stage_geometry(vehicle, 0)
     b = vehicle.boosters
     coefficients = boosted_mixer(vehicle)
     n = offsets.shape[0]
@@ -161,7 +161,7 @@ def boosted_mixer(vehicle) -> np.ndarray:
     its trace; a booster at its own, a stage's engine at an equal share of the stage's),
     the arms from the liftoff configuration's CG at full load, each channel weighted by
     its own gimbal limit."""
-    gimbal, offsets, cants, _, limit = _stage_geometry(vehicle, 0)
+    gimbal, offsets, cants, _, limit = stage_geometry(vehicle, 0)
     b = vehicle.boosters
     n = offsets.shape[0]
     mass = vehicle.configurations["boosted"].mass
@@ -269,7 +269,7 @@ def roll_effectiveness(vehicle, stage: int) -> float:
     """The roll moment of one radian of the roll command ``δr`` per newton of the stage's
     thrust (N·m/rad/N = m/rad, about body x, at the mixer's reference CG); 0 for a stage
     whose engines cannot roll the vehicle. ``stage``: 0 first, 1 upper."""
-    gimbal, offsets, cants, cg, limit = _stage_geometry(vehicle, stage)
+    gimbal, offsets, cants, cg, limit = stage_geometry(vehicle, stage)
     if offsets.shape[0] == 1:
         return 0.0
     b, _ = _effectiveness(gimbal, offsets, cants, cg)

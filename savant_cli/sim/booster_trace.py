@@ -19,18 +19,27 @@ N_SAMPLES = 20001
 
 class BoosterTrace(NamedTuple):
     """The boosters' nominal trace: summed vacuum thrust (N) and mass (kg) at
-    ``time_s`` (s), and their predicted jettison time (s)."""
+    ``time_s`` (s), their predicted jettison time (s), and each booster's vacuum thrust
+    (N) and propellant left (kg), ``(n_boosters, n_samples)``."""
 
     time_s: np.ndarray
     thrust_vac_N: np.ndarray
     mass_kg: np.ndarray
     jettison_s: float
+    each_thrust_vac_N: np.ndarray
+    each_propellant_kg: np.ndarray
 
     def at(self, t: float) -> tuple[float, float]:
         """Their summed vacuum thrust (N) and mass (kg) at ``t`` (s): zero once jettisoned."""
         if t >= self.jettison_s:
             return 0.0, 0.0
         return float(np.interp(t, self.time_s, self.thrust_vac_N)), float(np.interp(t, self.time_s, self.mass_kg))
+
+    def each_at(self, t: float) -> tuple[np.ndarray, np.ndarray]:
+        """Each booster's vacuum thrust (N) and propellant left (kg) at ``t`` (s), while
+        they are attached (before :attr:`jettison_s`)."""
+        thrust = np.array([np.interp(t, self.time_s, f) for f in self.each_thrust_vac_N])
+        return thrust, np.array([np.interp(t, self.time_s, m) for m in self.each_propellant_kg])
 
 
 def booster_trace(vehicle: Vehicle) -> BoosterTrace | None:
@@ -46,11 +55,12 @@ def booster_trace(vehicle: Vehicle) -> BoosterTrace | None:
     rates = np.ones(b.count) if b.burn_rate is None else np.asarray(b.burn_rate, float)
     t = np.linspace(0.0, float(b.thrust_time_s[-1]) / float(rates.min()), N_SAMPLES)
     flow_per_thrust = b.propellant_kg / table_impulse(b.thrust_time_s, b.thrust_vac_N)
-    thrusts, mass = [], np.zeros(t.size)
+    thrusts, left, mass = [], [], np.zeros(t.size)
     for k, table in zip(rates, b.mass):
         flow = k * flow_per_thrust * np.interp(k * t, b.thrust_time_s, b.thrust_vac_N, left=0.0, right=0.0)
         burned = np.concatenate([[0.0], np.cumsum(0.5 * (flow[1:] + flow[:-1]) * np.diff(t))])
-        mass += np.interp(np.maximum(b.propellant_kg - burned, 0.0), table.propellant_kg, table.mass_kg)
+        left.append(np.maximum(b.propellant_kg - burned, 0.0))
+        mass += np.interp(left[-1], table.propellant_kg, table.mass_kg)
         thrusts.append(constants.G0 * b.isp_vac_s * flow)
     trig = vehicle.events.trigger(engine.EV_BOOSTER_JETTISON)
     jettison = float(t[-1])
@@ -61,4 +71,4 @@ def booster_trace(vehicle: Vehicle) -> BoosterTrace | None:
         jettison = float(t[start + below[0]]) if below.size else jettison
     elif trig.quantity is None:
         jettison = float(trig.delay_s)
-    return BoosterTrace(t, np.sum(thrusts, axis=0), mass, jettison)
+    return BoosterTrace(t, np.sum(thrusts, axis=0), mass, jettison, np.array(thrusts), np.array(left))

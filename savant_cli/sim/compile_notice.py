@@ -15,6 +15,11 @@ nothing to do (no step flown), before the flight loop starts, so that
   ``compile_time_s``, left out of ``realtime_factor``.
 
 ``output.console=quiet`` silences the line (:func:`silenced`).
+
+A cold compile holds an exclusive lock on the cache directory (:func:`compile_lock`):
+processes that find the cache cold at the same moment (a test suite's workers, shards
+starting together, cluster nodes sharing ``SAVANT_CACHE_DIR``) compile once; the others
+wait for it and load what it compiled.
 """
 
 from __future__ import annotations
@@ -145,19 +150,46 @@ def compiled_apart(dispatcher: Any, args: Sequence[Any]) -> Iterator[None]:
         helper.join()
 
 
+#: The lock file a cold compile holds in the cache directory.
+LOCK_NAME = ".savant-compile.lock"
+
+
+@contextmanager
+def compile_lock(where: str) -> Iterator[None]:
+    """Within the block, an exclusive ``flock`` on :data:`LOCK_NAME` in the directory
+    ``where`` (waiting for the process that holds it); no lock when the directory or
+    ``fcntl`` is not there or the file cannot be opened (a compile then goes ahead
+    unserialised, as numba's cache allows)."""
+    try:
+        import fcntl
+        fd = os.open(os.path.join(where, LOCK_NAME), os.O_RDWR | os.O_CREAT, 0o666)
+    except (ImportError, OSError):
+        yield
+        return
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX)
+        yield
+    finally:
+        fcntl.flock(fd, fcntl.LOCK_UN)  # (a helper forked meanwhile shares the descriptor: release it explicitly)
+        os.close(fd)
+
+
 def load_kernels(calls: Sequence[tuple[Callable[..., Any], Sequence[Any]]],
                  apart: tuple[Any, Sequence[Any]] | None = None) -> float:
     """Call each compiled ``(dispatcher, args)`` of ``calls`` once (they must do nothing
     the flight would see), announcing the compile on a cold cache (:func:`compiling`);
     ``apart``, a ``(dispatcher, args)`` the calls compile on the way, is compiled by a
-    helper process meanwhile (:func:`compiled_apart`). Returns the wall time, s."""
+    helper process meanwhile (:func:`compiled_apart`). A cold compile holds
+    :func:`compile_lock` on the cache directory; a process that waited for another's finds
+    the kernels cached and loads them. Returns the wall time, s."""
     t0 = time.perf_counter()
     if kernels_cached(calls):
         for f, args in calls:
             f(*args)
         return time.perf_counter() - t0
-    with compiling(cache_dir(calls[0][0] if calls else None)), \
-            (compiled_apart(*apart) if apart is not None else nullcontext()):
-        for f, args in calls:
-            f(*args)
+    where = cache_dir(calls[0][0] if calls else None)
+    with compiling(where), compile_lock(where):
+        with nullcontext() if kernels_cached(calls) or apart is None else compiled_apart(*apart):
+            for f, args in calls:
+                f(*args)
     return time.perf_counter() - t0
