@@ -132,7 +132,8 @@ def check_a_first_stage_cutoff(vehicle):
         -1, 60.0, engine.WHEN_PROPELLANT, oxidizer_state, False, 5000.0)
     assert (sep.after, sep.delay_s, sep.when, sep.threshold) == (engine.EV_FS_CUTOFF, 1.0, engine.WHEN_THRUST_FRACTION,
                                                                  0.02)
-    assert vehicle.events.names == ("separation", "upper_stage_ignition", "les_jettison", "", "meco", "", "", "", "")
+    assert vehicle.events.names == ("separation", "upper_stage_ignition", "les_jettison", "", "meco", "", "", "", "",
+                                    "", "")
 
 
 def check_strap_on_boosters(vehicle):
@@ -183,6 +184,15 @@ def check_a_throttled_upper_stage(vehicle):
     assert th.time_s is None and vehicle.first_stage.liquid is None
 
 
+def check_an_upper_stage_restart(vehicle):
+    cut, again = _rule(vehicle, engine.EV_US_CUTOFF), _rule(vehicle, engine.EV_RESTART)
+    assert (cut.after, cut.delay_s, cut.when) == (engine.EV_IGNITION, 500.0, engine.WHEN_NONE)
+    assert (again.after, again.delay_s, again.when, again.above, again.threshold) == (
+        engine.EV_US_CUTOFF, 10.0, engine.WHEN_RADIAL_SPEED, False, 0.0)
+    assert vehicle.events.names[-2:] == ("j2x_cutoff", "j2x_restart") and vehicle.events.has("upper_stage_restart")
+    assert len(vehicle.configurations) == len(_loaded("a-throttled-upper-stage").configurations)  # no new part
+
+
 CHECKS = {"jettison-on-a-condition": check_jettison_on_a_condition,
           "a-delay-arms-a-condition": check_a_delay_arms_a_condition,
           "composed-mass-properties": check_composed_mass_properties,
@@ -195,7 +205,8 @@ CHECKS = {"jettison-on-a-condition": check_jettison_on_a_condition,
           "strap-on-boosters": check_strap_on_boosters,
           "first-stage-slosh": check_first_stage_slosh,
           "booster-tvc": check_booster_tvc,
-          "a-throttled-upper-stage": check_a_throttled_upper_stage}
+          "a-throttled-upper-stage": check_a_throttled_upper_stage,
+          "an-upper-stage-restart": check_an_upper_stage_restart}
 
 
 def test_every_example_on_the_page_has_a_check():

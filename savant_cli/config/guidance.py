@@ -93,6 +93,27 @@ class FirstStageBurn:
     plane: str = "target"
 
 
+@dataclass
+class UpperStageFirstBurn:
+    """``guidance.peg.upper_stage_first_burn``: PEG flies the upper stage's first burn to
+    its own cutoff orbit, commands that burn's cutoff, holds the attitude through the
+    coast and flies the restarted burn to ``guidance.target`` (a parking-orbit or
+    perigee-raise burn, then the final one: Centaur's MECO-1 and MES-2, the ICPS's
+    perigee raise). The vehicle's events hold the upper stage's cutoff (a backup) and its
+    restart. The orbit, as ``first_stage_burn``'s: apsis altitudes above the WGS84
+    equatorial radius (km; the perigee may lie below the surface) and the cutoff altitude
+    on it, in the target's plane; the I-loads are the upper stage's
+    (``guidance.peg.isp_vac_s``, ``shutdown_impulse_time_s``). PEG engages in the first
+    burn ``guidance.peg.start_after_ignition_s`` after the ignition, and in the second
+    ``start_after_restart_s`` after the restart (s; a short circularization burn needs an
+    early engagement). Every key is required."""
+
+    perigee_altitude_km: float = MISSING
+    apogee_altitude_km: float = MISSING
+    cutoff_altitude_km: float = MISSING
+    start_after_restart_s: float = MISSING
+
+
 #: ``guidance.peg.first_stage_burn.plane``'s choices.
 FIRST_STAGE_PLANES = ("target", "engagement")
 
@@ -115,6 +136,7 @@ class PegConfig:
     # the cutoff is commanded this much before t_go runs out, so the tail-off completes the burn
     shutdown_impulse_time_s: float = MISSING
     first_stage_burn: Optional[FirstStageBurn] = None  # None: PEG flies the upper stage's burn alone
+    upper_stage_first_burn: Optional[UpperStageFirstBurn] = None  # None: the upper stage burns once
 
 
 @dataclass
@@ -208,6 +230,12 @@ def check_first_stage_burn(b: FirstStageBurn) -> None:
     positive(f"{key}.start_s", b.start_s)
     positive(f"{key}.isp_vac_s", b.isp_vac_s)
     non_negative(f"{key}.shutdown_impulse_time_s", b.shutdown_impulse_time_s)
+    check_cutoff_orbit(key, b)
+
+
+def check_cutoff_orbit(key: str, b: FirstStageBurn | UpperStageFirstBurn) -> None:
+    """A burn's cutoff orbit (``key``: its section): a perigee radius > 0, an apogee at
+    least the perigee and a cutoff altitude on the orbit above the surface."""
     floor = -constants.WGS84_A / 1e3
     if not b.perigee_altitude_km > floor:
         raise ConfigError(f"{key}.perigee_altitude_km", b.perigee_altitude_km,
@@ -242,6 +270,10 @@ def check_peg(peg: PegConfig | None, sim: SimConfig) -> None:
             raise ConfigError(f"guidance.peg.{name}", getattr(peg, name), f"must be at least {low}")
     if peg.first_stage_burn is not None:
         check_first_stage_burn(peg.first_stage_burn)
+    if peg.upper_stage_first_burn is not None:
+        check_cutoff_orbit("guidance.peg.upper_stage_first_burn", peg.upper_stage_first_burn)
+        non_negative("guidance.peg.upper_stage_first_burn.start_after_restart_s",
+                     peg.upper_stage_first_burn.start_after_restart_s)
     if peg.terminal_time_to_go_s < 1.0 / sim.guidance_rate_hz:
         raise ConfigError("guidance.peg.terminal_time_to_go_s", peg.terminal_time_to_go_s,
                           f"must be at least one guidance cycle (1 / sim.guidance_rate_hz = {1.0 / sim.guidance_rate_hz:g} s)")

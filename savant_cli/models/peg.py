@@ -42,7 +42,9 @@ updated. The engine cuts off at the plant step nearest that time.
 PEG may fly a liquid first stage's burn first, to its own target (``BURN_FIRST_STAGE``:
 :func:`burn_loads`, :func:`_target`); the upper stage's burn is then a new one
 (:func:`restart`), blended from the attitude held since the first stage's cutoff
-(:func:`hold_command`, :func:`blend_with_hold`).
+(:func:`hold_command`, :func:`blend_with_hold`). An upper stage that restarts flies its
+first burn to its own target (``BURN_UPPER_FIRST``) the same way, and its restarted
+burn to the insertion target.
 """
 
 from __future__ import annotations
@@ -89,9 +91,18 @@ P_FS_ACCEL_LIMIT = _FIRST.scalar("acceleration_limit", "m/s^2", "the thrust acce
 P_FS_OWN_PLANE = _FIRST.scalar("own_plane", "1", "1: the first stage's burn stays in the osculating plane at its "
                                "engagement; 0: it steers into the target's plane")
 
+_UPPER_FIRST = blocks.PARAMETERS.block("peg_upper_first_burn")
+P_US1_ON = _UPPER_FIRST.scalar("on", "1", "1: the upper stage burns twice, PEG flying its first burn to its own "
+                                          "target (guidance.peg.upper_stage_first_burn)")
+P_US1_TARGET = _UPPER_FIRST.array("target", 3, "m, m/s, rad", "the upper stage's first cutoff radius, inertial "
+                                  "speed and flight-path angle (in the target's plane)")
+P_US1_RESTART_START = _UPPER_FIRST.scalar("start_after_restart", "s", "PEG engages this long after the upper "
+                                                                      "stage's restart")
+
 #: The burns PEG flies (``guidance_cycle``'s ``burn``).
 BURN_FIRST_STAGE = 0
-BURN_UPPER_STAGE = 1
+BURN_UPPER_STAGE = 1  # the upper stage's (last) burn, to guidance.target
+BURN_UPPER_FIRST = 2  # the upper stage's first burn of two (guidance.peg.upper_stage_first_burn)
 
 _DISCRETE = blocks.DISCRETE.block("peg")
 D_ACTIVE = _DISCRETE.scalar("active", "1", "1 once PEG steers the vehicle")
@@ -118,8 +129,10 @@ D_T_ENGAGED = _DISCRETE.scalar("engage_time", "s", "time PEG engaged in this bur
 D_FS_COMMANDED = _DISCRETE.scalar("first_stage_cutoff", "1", "1 once PEG commanded the first stage's cutoff")
 D_FS_IY = _DISCRETE.array("first_stage_plane", 3, "1", "i_y of the first stage's burn: the target's, or the "
                           "osculating plane's at its engagement (−unit(r × v)), ECI")
-D_HOLD_Q = _DISCRETE.array("hold_quaternion", 4, "1", "the attitude held from a guided first-stage cutoff until "
-                           "PEG steers the upper stage (q_c2i)")
+D_HOLD_Q = _DISCRETE.array("hold_quaternion", 4, "1", "the attitude held from a cutoff before a coast until "
+                           "PEG steers the next burn (q_c2i)")
+D_US1_COMMANDED = _DISCRETE.scalar("upper_stage_first_cutoff", "1", "1 once PEG commanded the cutoff of the upper "
+                                                                     "stage's first burn")
 
 #: guidance_cycle results
 PEG_OK = 0
@@ -164,6 +177,7 @@ def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarra
     p[P_SHUTDOWN_LEAD] = g.peg.shutdown_impulse_time_s
     upper = inputs.vehicle.upper_stage.throttle  # the flight software's own limit
     p[P_ACCEL_LIMIT] = upper.axial_acceleration_limit_mps2 if upper is not None else 0.0
+    _build_upper_first_burn(g.peg.upper_stage_first_burn, inputs.vehicle, p)
     burn = g.peg.first_stage_burn
     if burn is None:
         p[P_FS_ON] = 0.0
@@ -182,6 +196,24 @@ def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarra
     limit = liquid.throttle.axial_acceleration_limit_mps2 if liquid.throttle is not None else None
     p[P_FS_ACCEL_LIMIT] = limit if limit is not None else 0.0
     p[P_FS_OWN_PLANE] = 1.0 if burn.plane == "engagement" else 0.0
+
+
+def _build_upper_first_burn(burn, vehicle, p: np.ndarray) -> None:
+    """The upper stage's first burn (``guidance.peg.upper_stage_first_burn``), which a
+    vehicle with an upper-stage restart needs, and only such a vehicle takes."""
+    restarts = vehicle.events.has("upper_stage_restart")
+    if restarts != (burn is not None):
+        raise ConfigError("guidance.peg.upper_stage_first_burn", "set" if burn is not None else None,
+                          "set exactly when the vehicle restarts its upper stage (an event igniting its engines "
+                          "again after one shutting them down)" + (": this vehicle does not" if burn is not None else
+                                                                   ": this vehicle does, and PEG needs the first "
+                                                                   "burn's cutoff orbit"))
+    p[P_US1_ON] = 0.0
+    if burn is not None:
+        p[P_US1_ON] = 1.0
+        p[P_US1_TARGET:P_US1_TARGET + 3] = insertion_state(burn.perigee_altitude_km, burn.apogee_altitude_km,
+                                                           burn.cutoff_altitude_km)
+        p[P_US1_RESTART_START] = burn.start_after_restart_s
 
 
 class InsertionTarget:
@@ -515,16 +547,20 @@ def gravity_model(p: np.ndarray, re: float) -> np.ndarray:
 
 @njit(cache=True, error_model="numpy")
 def _target(p: np.ndarray, d: np.ndarray, burn: int) -> np.ndarray:
-    """``[R_d, V_d, γ_d, i_y (3)]`` of ``burn``: the upper stage's insertion state in the
-    target plane, or the first stage's cutoff state in its burn's plane (``D_FS_IY``)."""
+    """``[R_d, V_d, γ_d, i_y (3)]`` of ``burn``: the upper stage's insertion state (or its
+    first burn's cutoff state) in the target plane, or the first stage's cutoff state in
+    its burn's plane (``D_FS_IY``)."""
     out = np.empty(6)
     if burn == BURN_FIRST_STAGE:
         out[0:3] = p[P_FS_TARGET:P_FS_TARGET + 3]
         out[3:6] = d[D_FS_IY:D_FS_IY + 3]
         return out
-    out[0] = p[P_R_TARGET]
-    out[1] = p[P_V_TARGET]
-    out[2] = p[P_GAMMA_TARGET]
+    if burn == BURN_UPPER_FIRST:
+        out[0:3] = p[P_US1_TARGET:P_US1_TARGET + 3]
+    else:
+        out[0] = p[P_R_TARGET]
+        out[1] = p[P_V_TARGET]
+        out[2] = p[P_GAMMA_TARGET]
     out[3:6] = p[P_IY:P_IY + 3]
     return out
 
@@ -532,7 +568,8 @@ def _target(p: np.ndarray, d: np.ndarray, burn: int) -> np.ndarray:
 @njit(cache=True, error_model="numpy")
 def burn_loads(p: np.ndarray, burn: int) -> tuple[float, float, float]:
     """Guidance's I-loads of ``burn``: exhaust velocity (m/s), the acceleration its throttle
-    holds (m/s², 0: none) and its shutdown lead (s)."""
+    holds (m/s², 0: none) and its shutdown lead (s); both of the upper stage's burns take
+    its own."""
     if burn == BURN_FIRST_STAGE:
         return p[P_FS_VE], p[P_FS_ACCEL_LIMIT], p[P_FS_LEAD]
     return p[P_VE], p[P_ACCEL_LIMIT], p[P_SHUTDOWN_LEAD]
@@ -548,9 +585,10 @@ def restart(d: np.ndarray) -> None:
 
 @njit(cache=True, error_model="numpy")
 def hold_command(d: np.ndarray, t: float) -> None:
-    """From a guided first-stage cutoff: hold the guidance command's attitude at ``t`` (s),
-    at zero rate, and keep it (``D_HOLD_Q``) for the upper stage's engagement blend; once
-    held, nothing more."""
+    """From a cutoff before a coast (a guided first stage's, or the upper stage's first):
+    hold the guidance command's attitude at ``t`` (s), at zero rate, and keep it
+    (``D_HOLD_Q``) for the next burn's engagement blend; once held, nothing more until
+    :func:`release_hold`."""
     if np.dot(d[D_HOLD_Q:D_HOLD_Q + 4], d[D_HOLD_Q:D_HOLD_Q + 4]) > 0.0:
         return
     h = t - d[D_TG]
@@ -562,10 +600,17 @@ def hold_command(d: np.ndarray, t: float) -> None:
 
 
 @njit(cache=True, error_model="numpy")
+def release_hold(d: np.ndarray) -> None:
+    """A new coast's cutoff: the next :func:`hold_command` holds the attitude of its own moment."""
+    d[D_HOLD_Q:D_HOLD_Q + 4] = 0.0
+
+
+@njit(cache=True, error_model="numpy")
 def guidance_cycle(d: np.ndarray, t: float, r: np.ndarray, v: np.ndarray, t_ignition: float, period: float,
                    p: np.ndarray, re: float, burn: int = BURN_UPPER_STAGE) -> int:
-    """One guidance cycle of ``burn`` at time ``t`` (s): the upper stage's after its
-    ignition at ``t_ignition`` (engaging ``P_START`` later), or the first stage's
+    """One guidance cycle of ``burn`` at time ``t`` (s): the upper stage's (either of its
+    burns) after its ignition at ``t_ignition`` (engaging ``P_START`` later; a restarted burn
+    ``P_US1_RESTART_START`` after its restart), or the first stage's
     (``t_ignition`` 0, liftoff; engaging at ``P_FS_START``), each with its own target and
     I-loads (:func:`_target`, :func:`burn_loads`).
 
@@ -590,7 +635,8 @@ def guidance_cycle(d: np.ndarray, t: float, r: np.ndarray, v: np.ndarray, t_igni
     d[D_G_NAV] = g[0]
     d[D_G_NAV + 1] = g[1]
     d[D_G_NAV + 2] = g[2]
-    start = t_ignition + p[P_START] if burn == BURN_UPPER_STAGE else p[P_FS_START]
+    start = p[P_FS_START] if burn == BURN_FIRST_STAGE else t_ignition + (
+        p[P_US1_RESTART_START] if burn == BURN_UPPER_STAGE and p[P_US1_ON] != 0.0 else p[P_START])
     if not have_nav or t < start or d[D_ACCEL] <= 0.0:
         return PEG_OK
     ve, a_limit, lead = burn_loads(p, burn)

@@ -86,6 +86,8 @@ P_US_OX_TANK = _PARAMS.scalar("upper_stage.oxidizer_state", "1", "index in x of 
 P_US_FUEL_TANK = _PARAMS.scalar("upper_stage.fuel_state", "1", "index in x of the upper stage's LH2 (kg)")
 P_FS_CONFIGS = _PARAMS.scalar("first_stage.configurations", "1",
                               "configurations flown with the first stage attached: the sequence's first n")
+P_US_RESTARTS = _PARAMS.scalar("upper_stage.restarts", "1", "1: the upper stage burns twice (its cutoff, a coast and "
+                                                            "its restart: the vehicle's events), 0: once")
 P_FS_GIMBAL = _PARAMS.record("first_stage.gimbal", GIMBAL, "first-stage gimbal point")
 P_US_GIMBAL = _PARAMS.record("upper_stage.gimbal", GIMBAL, "upper-stage gimbal point")
 
@@ -141,6 +143,7 @@ def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarra
     p[P_US_EXIT_AREA] = us.nozzle_exit_area_m2
     p[P_US_PROP_FULL] = us.lox_kg + us.lh2_kg
     p[P_US_SHUTDOWN_TIME] = 2.0 * us.shutdown_impulse_Ns / us.thrust_vac_N
+    p[P_US_RESTARTS] = 1.0 if inputs.vehicle.events.has("upper_stage_restart") else 0.0
     fs_tanks, (ox, fuel) = inputs.vehicle.first_stage_tanks, inputs.vehicle.upper_stage_tanks
     p[P_FS_TANK] = inputs.layout.tank(fs_tanks[0])
     p[P_US_OX_TANK] = inputs.layout.tank(ox)

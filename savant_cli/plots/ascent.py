@@ -51,6 +51,8 @@ EVENT_LABELS = {
     "ignition": "ignition",
     "les_jettison": "LES jettison",
     "cutoff": "cutoff",
+    "upper_stage_cutoff": "first cutoff",
+    "upper_stage_restart": "restart",
 }
 
 #: (unit of a signal, unit to plot in) → scale factor.

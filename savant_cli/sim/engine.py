@@ -17,7 +17,9 @@ on step boundaries, runs the discrete parts at their own rates with zero-order h
   shutdown impulse's lead) also commands the cutoff at the plant step nearest it; PEG
   may fly a liquid first stage's burn too (``guidance.peg.first_stage_burn``), command
   its cutoff the same way, hold that moment's attitude until it engages in the upper
-  stage, and blend from it;
+  stage, and blend from it; an upper stage that restarts has its first burn guided to
+  that burn's own target (``guidance.peg.upper_stage_first_burn``), cut off the same way,
+  the attitude held through the coast, and its restarted burn guided to the insertion;
 * the vehicle's events at the first step boundary at which their trigger holds
   (:class:`EventSchedule`, from the vehicle file's ``events``): the strap-on boosters'
   jettison (a delay after liftoff and, with a condition, once it holds: a booster's
@@ -31,8 +33,10 @@ on step boundaries, runs the discrete parts at their own rates with zero-order h
   jettison a delay after the event they count from and, with a condition, once it holds
   (axial acceleration, altitude, dynamic pressure, a tank's propellant), a jettison not
   before the one written before it (the items' may come in the first stage's flight, the
-  separation then waits for them); then the cutoff
-  command; after the command the upper-stage thrust decays over its shutdown transient
+  separation then waits for them); a restarting upper stage's first cutoff (a backup of
+  guidance's) and its restart, each a delay after the event before it and, with a
+  condition, once it holds (the coast between them is the flight control's coast phase);
+  then the (last) cutoff command; after the command the upper-stage thrust decays over its shutdown transient
   (``models/propulsion.py``) with guidance frozen (the last attitude command held), and
   the run stops when the decay ends: the insertion state includes the shutdown impulse.
 
@@ -90,14 +94,17 @@ EV_BOOSTER_JETTISON = 5
 #: The jettisoned items' events, in the order written: the first (``les_jettison``) and
 #: the further ones (``item_jettison_2`` …).
 EV_ITEMS = (EV_LES, 6, 7, 8)
+EV_US_CUTOFF = 9  # a restarting upper stage's first cutoff (guidance's, or the vehicle's backup)
+EV_RESTART = 10  # its second ignition
 EVENT_NAMES = ("separation", "upper_stage_ignition", "les_jettison", "cutoff", "first_stage_cutoff",
-               "booster_jettison", "item_jettison_2", "item_jettison_3", "item_jettison_4")
+               "booster_jettison", "item_jettison_2", "item_jettison_3", "item_jettison_4", "upper_stage_cutoff",
+               "upper_stage_restart")
 #: The vehicle's event slots, in the order a step boundary checks them (the cutoff is
 #: guidance's; the boosters' jettison and a liquid first stage's cutoff precede the
 #: separation; an item's jettison, which may come before the separation, waits for the
 #: jettison written before it: ``EventRule.waits_for``).
 SEQUENCE = (EV_BOOSTER_JETTISON, EV_FS_CUTOFF, EV_ITEMS[0], EV_ITEMS[1], EV_ITEMS[2], EV_ITEMS[3], EV_SEPARATION,
-            EV_IGNITION)
+            EV_IGNITION, EV_US_CUTOFF, EV_RESTART)
 
 # what an event's condition watches (EventSchedule.when)
 WHEN_NONE = 0  # fires once armed
@@ -193,9 +200,12 @@ class Rates(NamedTuple):
 
 @njit(cache=True, error_model="numpy")
 def fcs_phase(events: np.ndarray) -> int:
+    """The flight control's phase: the stack until separation, the coast until the
+    upper-stage ignition and between a restarting stage's cutoff and its restart, the
+    upper stage's while it burns."""
     if np.isnan(events[EV_SEPARATION]):
         return FCS_STACK
-    if np.isnan(events[EV_IGNITION]):
+    if np.isnan(events[EV_IGNITION]) or (not np.isnan(events[EV_US_CUTOFF]) and np.isnan(events[EV_RESTART])):
         return FCS_COAST
     return FCS_UPPER
 
@@ -330,6 +340,11 @@ def handle_events(t: float, dt: float, x: np.ndarray, u: np.ndarray, d: np.ndarr
             events[EV_FS_CUTOFF] = t
             u[U_FS_T_CUT] = t
             d[peg.D_FS_COMMANDED] = 1.0
+    if p[peg.P_US1_ON] != 0.0 and int(u[U_ENGINE]) == ENGINE_UPPER and np.isnan(events[EV_US_CUTOFF]) \
+            and d[peg.D_ACTIVE] != 0.0 and t + 0.5 * dt >= d[peg.D_T_CUTOFF]:  # PEG's first cutoff: the nearest step
+        events[EV_US_CUTOFF] = t
+        upper_stage_cutoff(t, x, u, d, p, tb)
+        d[peg.D_US1_COMMANDED] = 1.0
     f_booster = 0.0
     boosted = p[boosters.P_N_BOOSTERS] > 0.0 and np.isnan(events[EV_BOOSTER_JETTISON])
     if boosted and sched.rules[EV_BOOSTER_JETTISON].when == WHEN_BOOSTER_THRUST_FRACTION:
@@ -360,6 +375,10 @@ def handle_events(t: float, dt: float, x: np.ndarray, u: np.ndarray, d: np.ndarr
             u[U_US_THROTTLE] = p[throttle.P_US_MAX]  # a throttled upper stage starts at its command
             if p[peg.P_FS_ON] != 0.0:  # PEG flew the first stage: the upper stage's burn is a new one
                 peg.restart(d)
+        elif k == EV_US_CUTOFF:
+            upper_stage_cutoff(t, x, u, d, p, tb)
+        elif k == EV_RESTART:
+            restart_upper_stage(t, u, d, p)
         else:
             next_configuration(x, u, p, tb)
     if int(u[U_ENGINE]) == ENGINE_UPPER:
@@ -375,6 +394,33 @@ def handle_events(t: float, dt: float, x: np.ndarray, u: np.ndarray, d: np.ndarr
                 events[EV_CUTOFF] = t
             return STOP_DEPLETION
     return RUNNING
+
+
+@njit(cache=True, error_model="numpy")
+def upper_stage_cutoff(t: float, x: np.ndarray, u: np.ndarray, d: np.ndarray, p: np.ndarray, tb: np.ndarray) -> None:
+    """The cutoff command of a restarting upper stage's first burn at ``t`` (s): its thrust
+    decays over the shutdown transient (``u[U_T_CUT]``), its impulse after the command is
+    tracked as the final cutoff's, and the coast's attitude hold starts afresh
+    (``peg.release_hold``)."""
+    u[U_T_CUT] = t
+    d[propulsion.D_US_SD_IMPULSE] = 0.0
+    d[propulsion.D_US_SD_LAST] = propulsion.upper_stage_thrust_vac(x, tb, p, t, u[U_T_IGN], t,
+                                                                   throttle.held_upper(u[U_US_THROTTLE], p))
+    peg.release_hold(d)
+
+
+@njit(cache=True, error_model="numpy")
+def restart_upper_stage(t: float, u: np.ndarray, d: np.ndarray, p: np.ndarray) -> None:
+    """The upper stage's second ignition command at ``t`` (s): its start-up transient from
+    ``t`` (``u[U_T_IGN]``: the flight control fades its gains in again), no cutoff
+    commanded, a throttled stage at its command, and PEG's burn a new one."""
+    u[U_T_IGN] = t
+    u[U_T_CUT] = 0.0
+    u[U_US_THROTTLE] = p[throttle.P_US_MAX]
+    d[propulsion.D_US_SD_IMPULSE] = 0.0
+    d[propulsion.D_US_SD_LAST] = 0.0
+    if p[peg.P_ON] != 0.0:
+        peg.restart(d)
 
 
 @njit(cache=True, error_model="numpy")
@@ -533,6 +579,7 @@ def _advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0
     perturbed = pert[loop_perturbation.AXIS] >= 0.0
     throttled = p[throttle.P_ON] != 0.0
     us_throttled = p[throttle.P_US_ON] != 0.0
+    restarts = p[propulsion.P_US_RESTARTS] != 0.0  # the upper stage's first cutoff is not the run's end
     for j in range(n_steps):
         k = k0 + j
         t = k * dt
@@ -547,7 +594,8 @@ def _advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0
             for i in range(3):
                 r_nav[i] = x[R + i]
                 v_nav[i] = x[V + i]
-        if int(u[U_ENGINE]) == ENGINE_UPPER:
+        coasting = restarts and not np.isnan(events[EV_US_CUTOFF]) and np.isnan(events[EV_RESTART])
+        if int(u[U_ENGINE]) == ENGINE_UPPER and not (restarts and np.isnan(events[EV_RESTART])):  # the last burn's
             status = cutoff_step(t, dt, x, r_nav, v_nav, u, d, events, sched, p, tb, peg_on)
             if status != RUNNING:
                 return status, j, log_row, ""
@@ -555,17 +603,25 @@ def _advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0
             return STOP_TIME, j, log_row, ""
         phase = fcs_phase(events)
 
-        if k % rates.n_guid == 0 and u[U_T_CUT] <= 0.0:  # guidance frozen after the cutoff command
+        # guidance frozen after the (last) cutoff command
+        if k % rates.n_guid == 0 and (u[U_T_CUT] <= 0.0 or coasting):
             steered = False
             period = rates.n_guid * dt
-            if peg_on and not np.isnan(events[EV_IGNITION]):
-                if fs_guided:  # the attitude held from the first stage's cutoff (here if no cycle fell between)
+            if peg_on and coasting:  # from the upper stage's first cutoff to its restart: the attitude held
+                steered = True
+                peg.hold_command(d, t)
+            elif peg_on and not np.isnan(events[EV_IGNITION]):
+                restarted = not np.isnan(events[EV_RESTART])
+                held = fs_guided or restarted  # the burn follows a coast with the attitude held
+                if held:  # the attitude held from the cutoff before it (here if no cycle fell between)
                     peg.hold_command(d, t)
-                code = peg.guidance_cycle(d, t, r_nav, v_nav, events[EV_IGNITION], period, p, p[P_RE])
+                burn = peg.BURN_UPPER_FIRST if restarts and not restarted else peg.BURN_UPPER_STAGE
+                code = peg.guidance_cycle(d, t, r_nav, v_nav, events[EV_RESTART] if restarted else events[EV_IGNITION],
+                                          period, p, p[P_RE], burn)
                 if code != peg.PEG_OK:
                     return GUIDANCE_FAILED, j, log_row, peg.failure_message(code)
-                steered = d[peg.D_ACTIVE] != 0.0 or fs_guided  # (the held attitude until PEG engages)
-                if fs_guided:  # blended from the attitude held since the first stage's cutoff
+                steered = d[peg.D_ACTIVE] != 0.0 or held  # (the held attitude until PEG engages)
+                if held:  # blended from the attitude held since the cutoff
                     peg.blend_with_hold(d, t, period, p)
                 else:
                     peg.blend_with_profile(d, t, t + d[D_PROFILE_OFFSET], period, p, gt.time, gt.quat, gt.rate)

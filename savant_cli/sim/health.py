@@ -121,9 +121,11 @@ def _stage_masks(t: np.ndarray, result: SimResult) -> list[np.ndarray]:
 def _quiet_pieces(t: np.ndarray, result: SimResult, quiet_s: float) -> list[tuple[str, np.ndarray]]:
     """(stage, sample indices) of each contiguous stretch of a stage that lies outside
     the ``quiet_s`` after liftoff, the boosters' jettison, a liquid first stage's cutoff,
-    separation, upper-stage ignition and each item's jettison."""
+    separation, upper-stage ignition, each item's jettison and a restarting upper stage's
+    first cutoff and restart."""
     starts = [float(t[0]), *(result.events[k] for k in (engine.EV_BOOSTER_JETTISON, engine.EV_FS_CUTOFF,
-                                                         engine.EV_SEPARATION, engine.EV_IGNITION, *engine.EV_ITEMS))]
+                                                         engine.EV_SEPARATION, engine.EV_IGNITION, *engine.EV_ITEMS,
+                                                         engine.EV_US_CUTOFF, engine.EV_RESTART))]
     quiet = np.ones(t.size, bool)
     for te in starts:
         if np.isfinite(te):

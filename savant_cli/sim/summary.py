@@ -213,20 +213,52 @@ FIRST_STAGE_BURN_KEYS = ("first_stage_burn_radius_error_m", "first_stage_burn_sp
                          "first_stage_burn_flight_path_angle_error_deg")
 
 
+#: The upper stage's first burn's keys (:func:`upper_stage_first_burn_errors`).
+UPPER_STAGE_FIRST_BURN_KEYS = ("upper_stage_first_burn_radius_error_m", "upper_stage_first_burn_speed_error_mps",
+                               "upper_stage_first_burn_flight_path_angle_error_deg")
+
+
 def first_stage_burn_errors(result: SimResult, sig: dict[str, Signal], p: np.ndarray) -> dict[str, float | None]:
     """A guided first-stage burn (``guidance.peg.first_stage_burn``) against its target: the
     radius, inertial speed and flight-path angle at the end of the stage's thrust (the
     first logged sample at or after its cutoff plus its shutdown transient) less the
     target's; None when the stage was not cut off, or the run ended before the transient
     did."""
-    t_cut = _event(result, engine.EV_FS_CUTOFF)
+    return _burn_errors(_event(result, engine.EV_FS_CUTOFF), p[propulsion.P_FS_SHUTDOWN_TIME], sig,
+                        p[peg.P_FS_TARGET:peg.P_FS_TARGET + 3], FIRST_STAGE_BURN_KEYS)
+
+
+def upper_stage_first_burn_errors(result: SimResult, sig: dict[str, Signal], p: np.ndarray) -> dict[str, float | None]:
+    """A restarting upper stage's first burn (``guidance.peg.upper_stage_first_burn``)
+    against its target, as :func:`first_stage_burn_errors`: at the end of its thrust after
+    its first cutoff."""
+    return _burn_errors(_event(result, engine.EV_US_CUTOFF), p[propulsion.P_US_SHUTDOWN_TIME], sig,
+                        p[peg.P_US1_TARGET:peg.P_US1_TARGET + 3], UPPER_STAGE_FIRST_BURN_KEYS)
+
+
+def _burn_errors(t_cut: float | None, shutdown_s: float, sig: dict[str, Signal], target: np.ndarray,
+                 keys: tuple[str, str, str]) -> dict[str, float | None]:
+    """Radius (m), inertial speed (m/s) and flight-path angle (deg) less ``target``'s (m,
+    m/s, rad) at the first logged sample at or after ``t_cut + shutdown_s`` (s); None
+    without a cutoff, or when the run ended before that."""
     t = sig["time"].data
-    if t_cut is None or t[-1] < t_cut + p[propulsion.P_FS_SHUTDOWN_TIME]:
-        return dict.fromkeys(FIRST_STAGE_BURN_KEYS)
-    i = int(np.searchsorted(t, t_cut + p[propulsion.P_FS_SHUTDOWN_TIME] - 1e-9))
+    if t_cut is None or t[-1] < t_cut + shutdown_s:
+        return dict.fromkeys(keys)
+    i = int(np.searchsorted(t, t_cut + shutdown_s - 1e-9))
     r, v, gamma = radius_speed_gamma(sig["position_eci"].data[i], sig["velocity_eci"].data[i])
-    r_d, v_d, gamma_d = p[peg.P_FS_TARGET:peg.P_FS_TARGET + 3]
-    return dict(zip(FIRST_STAGE_BURN_KEYS, (float(r - r_d), float(v - v_d), float(np.degrees(gamma - gamma_d)))))
+    r_d, v_d, gamma_d = target
+    return dict(zip(keys, (float(r - r_d), float(v - v_d), float(np.degrees(gamma - gamma_d)))))
+
+
+def upper_stage_restart_keys(result: SimResult) -> dict[str, float | str | None]:
+    """A restarting upper stage: ``time_upper_stage_cutoff_s`` (its first burn's cutoff
+    command), ``upper_stage_first_shutdown`` (``"guidance"``: PEG commanded it,
+    ``"commanded"``: the vehicle's backup event did, None: none) and
+    ``time_upper_stage_restart_s`` (None: not restarted by the end of the run)."""
+    t_cut = _event(result, engine.EV_US_CUTOFF)
+    how = None if t_cut is None else "guidance" if result.d[peg.D_US1_COMMANDED] != 0.0 else "commanded"
+    return {"time_upper_stage_cutoff_s": t_cut, "upper_stage_first_shutdown": how,
+            "time_upper_stage_restart_s": _event(result, engine.EV_RESTART)}
 
 
 def booster_keys(result: SimResult) -> dict[str, float | None]:
@@ -322,6 +354,10 @@ def summarize(result: SimResult, sig: dict[str, Signal], study_wall_s: float | N
             out.update(first_stage_cutoff_keys(result))
         if p[peg.P_ON] != 0.0 and p[peg.P_FS_ON] != 0.0:
             out.update(first_stage_burn_errors(result, sig, p))
+        if p[propulsion.P_US_RESTARTS] != 0.0:
+            out.update(upper_stage_restart_keys(result))
+        if p[peg.P_US1_ON] != 0.0:
+            out.update(upper_stage_first_burn_errors(result, sig, p))
         if p[boosters.P_N_BOOSTERS] > 0.0:
             out.update(booster_keys(result))
     if target is not None:

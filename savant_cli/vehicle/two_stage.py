@@ -244,9 +244,10 @@ class Trigger:
 #: The plant's events, in slot order (sim/engine.py: EVENT_NAMES): the ``cutoff`` is
 #: guidance's (no trigger of the vehicle's arms it), the ``first_stage_cutoff`` a liquid
 #: first stage's shutdown before its separation, the ``booster_jettison`` the strap-on
-#: boosters' before it.
+#: boosters' before it, the ``upper_stage_cutoff`` the end of a restarting upper stage's
+#: first burn and the ``upper_stage_restart`` its second ignition.
 EVENT_ORDER = ("separation", "upper_stage_ignition", "les_jettison", "cutoff", "first_stage_cutoff", "booster_jettison",
-               "item_jettison_2", "item_jettison_3", "item_jettison_4")
+               "item_jettison_2", "item_jettison_3", "item_jettison_4", "upper_stage_cutoff", "upper_stage_restart")
 #: The item jettisons' slots, in the order written (``sim/engine.py::EV_ITEMS``).
 ITEM_SLOTS = (2, 6, 7, 8)
 
@@ -289,6 +290,10 @@ class Events:
     def trigger(self, slot: int) -> Trigger:
         """Event ``slot``'s trigger."""
         return self.triggers[slot]
+
+    def has(self, slot_name: str) -> bool:
+        """Whether the vehicle has the event of slot ``slot_name`` (a name of :data:`EVENT_ORDER`)."""
+        return bool(self.names) and self.names[EVENT_ORDER.index(slot_name)] != ""
 
 
 @dataclass(frozen=True)
@@ -556,6 +561,31 @@ def _first_stage_cutoff(tree: VehicleTree, name: str, first, engines: tuple[Engi
     return ev
 
 
+def _upper_stage_restart(tree: VehicleTree, names: list[str], ign_name: str | None,
+                         engines: tuple[EngineSpec, ...]) -> tuple:
+    """A restarting upper stage's two events after its ignition (empty: it burns once): its
+    first burn's cutoff (shutting down all of its engines, a delay > 0 s after the
+    ignition, optionally when a condition holds: a backup of guidance's cutoff) and its
+    restart (igniting them all again, a delay after that cutoff, optionally when a
+    condition holds: ``radial_speed_mps`` below 0 waits for apogee)."""
+    if ign_name is None:
+        return ()
+    later = names[names.index(ign_name) + 1:]
+    cut_name = next((n for n in later if tree.events[n].shutdown), None)
+    if cut_name is None:
+        return ()
+    all_engines = tuple(e.name for e in engines)
+    cut = _event(tree, cut_name, (ign_name,), shutdown=all_engines)
+    if not cut.delay_s > 0.0:
+        _refuse(f"{cut.key}.delay_s", cut.delay_s, "an upper-stage cutoff armed after its ignition: a delay > 0 s "
+                                                   "(a condition then waits for its quantity)")
+    again = next((n for n in later if tree.events[n].ignite), None)
+    if again is None or later.index(again) < later.index(cut_name):
+        _refuse(cut.key, cut_name, "an upper-stage cutoff before its restart: an event igniting "
+                                   f"{list(all_engines)} again, written after it")
+    return cut, _event(tree, again, (cut_name,), ignite=all_engines)
+
+
 def _trigger(ev, slot_of: Mapping[str, int], tanks: tuple[str, ...]) -> Trigger:
     """The plant's trigger of a non-separation event: a delay after liftoff or an event
     (its slot in ``slot_of``), and optionally a condition on the vehicle or a tank (a
@@ -598,13 +628,15 @@ def two_stage_view(tree: VehicleTree) -> Vehicle:
         names.pop(0)
     sep_name = next((n for n in names if first.name in tree.events[n].jettison), None)
     ign_name = next((n for n in names if tree.events[n].ignite), None)
-    item_names = [n for n in names if n not in (sep_name, ign_name)]
+    restart = _upper_stage_restart(tree, names, ign_name, us_engines)
+    item_names = [n for n in names if n not in (sep_name, ign_name, *(ev.name for ev in restart))]
     if sep_name is None or ign_name is None or len(item_names) > len(ITEM_SLOTS) \
             or names.index(ign_name) < names.index(sep_name):
         _refuse("vehicle.events", list(tree.events),
                 ("the boosters' jettison, " if boosters is not None else "")
-                + "a liquid first stage's cutoff (optional), separation, the upper-stage ignition, and up to "
-                + f"{len(ITEM_SLOTS)} item jettisons (anywhere after the boosters' jettison and the cutoff)")
+                + "a liquid first stage's cutoff (optional), separation, the upper-stage ignition, its cutoff and "
+                + f"restart (optional), and up to {len(ITEM_SLOTS)} item jettisons (anywhere after the boosters' "
+                + "jettison and the cutoff)")
     sep = _event(tree, sep_name, (LIFTOFF,) if cut is None else (LIFTOFF, cut.name), jettison=(first.name,))
     if sep.when is None or sep.when.quantity != "thrust_fraction" \
             or sep.when.of not in (first.name, *(e.name for e in fs_engines)) \
@@ -618,7 +650,7 @@ def two_stage_view(tree: VehicleTree) -> Vehicle:
         ev = tree.events[name]
         if ev.ignite or ev.shutdown or not ev.jettison or any(tree.parts[j].kind != ITEM for j in ev.jettison):
             _refuse(ev.key, name, "an event after the first stage's cutoff is the separation, the upper-stage "
-                                  "ignition or an item's jettison (items only, no engine)")
+                                  "ignition, its cutoff and restart, or an item's jettison (items only, no engine)")
         jets.append(ev)
     configs = [tree.configurations[c] for _, c in tree.sequence]
     order = [e for e, _ in tree.sequence[1:]]  # the jettisons, in the order written
@@ -639,6 +671,8 @@ def two_stage_view(tree: VehicleTree) -> Vehicle:
     slot_of.update({sep.name: EVENT_ORDER.index("separation"), ign.name: EVENT_ORDER.index("upper_stage_ignition")})
     if cut is not None:
         slot_of[cut.name] = EVENT_ORDER.index("first_stage_cutoff")
+    for ev, slot in zip(restart, ("upper_stage_cutoff", "upper_stage_restart")):
+        slot_of[ev.name] = EVENT_ORDER.index(slot)
     if drop is not None:
         slot_of[drop.name] = EVENT_ORDER.index("booster_jettison")
     waits = {}  # each jettison waits for the one written before it (the separation takes the boosters along)
@@ -676,6 +710,8 @@ def two_stage_view(tree: VehicleTree) -> Vehicle:
                                                          waits_for=waits.get(ev.name, -1))
     if cut is not None:
         triggers[slot_of[cut.name]] = _trigger(cut, slot_of, all_tanks)
+    for ev in restart:
+        triggers[slot_of[ev.name]] = _trigger(ev, slot_of, all_tanks)
     if drop is not None:
         triggers[slot_of[drop.name]] = _booster_trigger(drop, boosters, all_tanks)
     first_item = jets[0] if jets else None
