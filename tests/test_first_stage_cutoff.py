@@ -21,7 +21,7 @@ from savant_cli.errors import ConfigError
 from savant_cli.io.guidance_file import read_guidance
 from savant_cli.models import layout, propulsion
 from savant_cli.paths import hydra_search_dirs, shipped_config_dir
-from savant_cli.sim import engine
+from savant_cli.sim import build, engine
 from savant_cli.sim.build import (
     build_model, event_schedule, first_stage_march, plant_data, predicted_separation_time, rates
 )
@@ -91,6 +91,41 @@ def test_a_tank_that_empties_during_the_decay_ends_the_trace_at_the_usable_load(
     burned = np.trapezoid(thrust[on], time_s[on]) / (constants.G0 * ISP)
     assert burned == pytest.approx(usable_load(MR, OX, FUEL), rel=1e-9)
     assert time_s[-2] < t_cut + T_SD and thrust[-2] > 0.0
+
+
+def _les_dropped_in_the_first_stage(cutoff_accel: float) -> dict:
+    """The page's vehicle at rated thrust, its LES jettisoned 50 s after liftoff (in the
+    first stage's flight: a configuration of the stage and the upper stage, composed from
+    their own tables) and its cutoff once the axial acceleration exceeds ``cutoff_accel``."""
+    node = _node(unthrottled=True, when={"quantity": "axial_acceleration_mps2", "above": cutoff_accel})
+    stack = node["configurations"]["stack"]
+    node["configurations"] = {"stack": stack, "stack_bare": {**stack, "parts": ["first_stage", "upper_stage"],
+                                                             "mass_table": None},
+                              "upper": node["configurations"]["upper"]}
+    events = node["events"]
+    node["events"] = {"meco": events["meco"], "les_jettison": {"delay_s": 50.0, "jettison": ["les"]},
+                      "separation": events["separation"], "upper_stage_ignition": events["upper_stage_ignition"]}
+    return node
+
+
+def test_the_trace_flies_the_items_dropped_in_the_first_stage():
+    """A drag-free rated burn to an acceleration: ``F / m = a`` at the mass of the
+    configuration flown, the stack less the LES from 50 s (its own mass tables)."""
+    accel = 30.0
+    vehicle = load_vehicle(_les_dropped_in_the_first_stage(accel), SHIPPED / "ares_i")
+    (time_s, thrust, t_cut), _ = _march(vehicle)
+    bare = vehicle.configurations["stack_2"].mass
+    rated = F_RATED * 1.0  # the start transient's last fraction is 1
+    # the propellant left when the bare stack weighs F / a (its mass rises with propellant)
+    left = np.interp(rated / accel, bare.mass_kg, bare.propellant_kg)
+    expected = (OX + FUEL - left) / FLOW
+    assert expected > 50.0  # the cutoff comes after the jettison
+    assert abs(t_cut - expected) <= build.TRACE_STEP_S
+    les = vehicle.jettisons[0].mass_kg
+    stack = vehicle.configurations["stack"].mass
+    with_les = (OX + FUEL - np.interp(rated / accel, stack.mass_kg, stack.propellant_kg)) / FLOW
+    # the LES kept aboard: the same weight reached once its mass more is burned (the old trace's 1.58 s error)
+    assert with_les - expected == pytest.approx(les / FLOW, rel=1e-6)
 
 
 # ------------------------------------------------------------- refusals

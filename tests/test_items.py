@@ -16,14 +16,14 @@ import copy
 import numpy as np
 import pytest
 
-from savant_cli.datagen.guidance_commands import event_times
+from savant_cli.datagen.guidance_commands import TIMED_SLOTS
 from savant_cli.errors import ConfigError
 from savant_cli.io.guidance_file import read_guidance
 from savant_cli.models import layout, quaternion as qt
 from savant_cli.montecarlo.targets import first_stage_configurations, upper_configurations
 from savant_cli.paths import hydra_search_dirs, shipped_config_dir
 from savant_cli.sim import engine
-from savant_cli.sim.build import build_model
+from savant_cli.sim.build import build_model, event_times
 from savant_cli.sim.plant import mass_state
 from savant_cli.sim.run import signals, simulate
 from savant_cli.sim.setup import prepare
@@ -151,16 +151,19 @@ def test_a_jettison_waits_for_the_one_written_before_it():
     assert vehicle.events.trigger(engine.EV_SEPARATION) == alone.events.trigger(engine.EV_SEPARATION)
 
 
+SLOTS = (engine.EV_SEPARATION, engine.EV_BOOSTER_JETTISON, *TIMED_SLOTS)  # the reference's
+
+
 def test_the_reference_places_each_jettison_at_its_delay():
     v = _vehicle(example_node("items-in-any-phase"))
-    times = event_times(v, 126.0, None)
+    times = event_times(v, SLOTS, 126.0, None)
     assert (times[0], times[1], times[engine.EV_ITEMS[0]], times[engine.EV_ITEMS[1]]) == (126.0, 127.5, 127.0, 157.5)
     late = copy.deepcopy(example_node("items-in-any-phase"))
     late["events"]["sm_fairing_jettison"]["delay_s"] = 40.0  # past the LES's, written after it: it waits for it
     late["events"] = {k: late["events"][k] for k in ("separation", "upper_stage_ignition", "les_jettison",
                                                      "sm_fairing_jettison")}
     late["configurations"]["upper_les"]["parts"] = ["upper_stage", "sm_fairings"]
-    times = event_times(_vehicle(late), 126.0, None)
+    times = event_times(_vehicle(late), SLOTS, 126.0, None)
     assert (times[engine.EV_ITEMS[0]], times[engine.EV_ITEMS[1]]) == (157.5, 166.0)
 
 

@@ -53,7 +53,7 @@ from savant_cli.models import aero, atmosphere as atm, earth, mass as mass_model
 from savant_cli.models.boosters import thrust_direction
 from savant_cli.models.gravity import gravity_zonal
 from savant_cli.models.peg import insertion_state
-from savant_cli.sim import build
+from savant_cli.sim import build, engine
 from savant_cli.sim.booster_trace import booster_trace
 from savant_cli.sim.plant import pack_tables
 from savant_cli.vehicle import Vehicle
@@ -101,12 +101,12 @@ def _cosine_ramp(t: float, start: float, duration: float) -> float:
 
 
 #: The events this reference places at their delays: the ignition and the items' jettisons.
-TIMED_SLOTS = (1, 2, 6, 7, 8)
+TIMED_SLOTS = (engine.EV_IGNITION, *engine.EV_ITEMS)
 
 
 def timed_events(vehicle: Vehicle) -> None:
     """Refuse a vehicle whose ignition or an item's jettison waits for a condition: this
-    reference places those events at their delays (:func:`event_times`)."""
+    reference places those events at their delays (``sim/build.py::event_times``)."""
     names = vehicle.events.names
     for slot in TIMED_SLOTS:
         if vehicle.events.trigger(slot).quantity is not None:
@@ -115,25 +115,6 @@ def timed_events(vehicle: Vehicle) -> None:
                               f"the reference ascent of this generator places the ignition and the jettisons at "
                               f"their delays: generate the command file without the condition, with a delay that "
                               f"stands for it ('~{key}' and {key[:-5]}.delay_s=...; docs/vehicles.md)")
-
-
-def event_times(vehicle: Vehicle, t_sep: float, t_fs_cut: float | None,
-                t_boosters: float = np.inf) -> dict[int, float]:
-    """The reference's time of each event slot (s from liftoff; ``inf``: none): the
-    predicted separation ``t_sep``, a liquid first stage's cutoff ``t_fs_cut`` and the
-    boosters' jettison ``t_boosters``, and the timed events (:data:`TIMED_SLOTS`) at
-    their delays after the event each counts from, a jettison not before the one written
-    before it (``Trigger.waits_for``)."""
-    times = {-1: 0.0, 0: t_sep, 4: np.inf if t_fs_cut is None else t_fs_cut, 5: t_boosters}
-
-    def time_of(slot: int) -> float:
-        if slot not in times:
-            trigger = vehicle.events.trigger(slot)
-            t = time_of(trigger.after) + trigger.delay_s
-            times[slot] = t if trigger.waits_for < 0 else max(t, time_of(trigger.waits_for))
-        return times[slot]
-
-    return {slot: time_of(slot) for slot in (0, 5, *TIMED_SLOTS)}
 
 
 class Reference:
@@ -161,11 +142,13 @@ class Reference:
         self.t_sep = build.separation_on_trace(vehicle, self.fs_time, self.fs_thrust, t_fs_cut)
         timed_events(vehicle)
         t_boosters = self.boosters.jettison_s if self.boosters is not None else np.inf
-        times = event_times(vehicle, self.t_sep, t_fs_cut, t_boosters)
-        self.t_ign = times[1]
+        times = build.event_times(vehicle, (engine.EV_SEPARATION, engine.EV_BOOSTER_JETTISON, *TIMED_SLOTS),
+                                  self.t_sep, t_fs_cut, t_boosters)
+        self.t_ign = times[engine.EV_IGNITION]
         #: each jettison's time (the boosters', the separation's and the items'), ascending:
         #: the k-th moves to configuration k (s)
-        self.jettison_times = np.sort([times[k] for k in (5, 0, 2, 6, 7, 8)])
+        self.jettison_times = np.sort([times[k] for k in (engine.EV_BOOSTER_JETTISON, engine.EV_SEPARATION,
+                                                          *engine.EV_ITEMS)])
         self.n_first_stage_configs = vehicle.first_stage_configurations
         self.energy_target = build.target_energy(cfg)
         tgt = cfg.guidance.target

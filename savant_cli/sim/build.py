@@ -7,6 +7,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 
@@ -146,6 +147,47 @@ def nominal_first_stage_trace(vehicle: Vehicle, p: np.ndarray | None = None,
     return time_s, thrust
 
 
+def event_times(vehicle: Vehicle, slots: tuple[int, ...], t_sep: float = np.inf, t_fs_cut: float | None = None,
+                t_boosters: float = np.inf) -> dict[int, float]:
+    """A prediction's time of each event slot in ``slots`` (s from liftoff; ``inf``: none,
+    or after an event the prediction does not reach): the separation ``t_sep``, a liquid
+    first stage's cutoff ``t_fs_cut`` and the boosters' jettison ``t_boosters`` as given,
+    every other event its delay after the event it counts from, a jettison not before
+    the one written before it (``Trigger.waits_for``); conditions are not waited for."""
+    times = {-1: 0.0, engine.EV_SEPARATION: t_sep, engine.EV_FS_CUTOFF: np.inf if t_fs_cut is None else t_fs_cut,
+             engine.EV_BOOSTER_JETTISON: t_boosters}
+
+    def time_of(slot: int) -> float:
+        if slot not in times:
+            trigger = vehicle.events.trigger(slot)
+            t = time_of(trigger.after) + trigger.delay_s
+            times[slot] = t if trigger.waits_for < 0 else max(t, time_of(trigger.waits_for))
+        return times[slot]
+
+    return {slot: time_of(slot) for slot in slots}
+
+
+def first_stage_mass(vehicle: Vehicle) -> Callable[[float, float], float]:
+    """The mass (kg) of the configuration flown with the first stage at ``t`` (s) with
+    ``left_kg`` of the stage's propellant, strap-on boosters apart: its mass table at that
+    propellant, each configuration from the jettison that starts it, the boosters' at
+    their predicted jettison, the items' at their delays (:func:`event_times`; a
+    condition is not waited for)."""
+    n_fs = vehicle.first_stage_configurations
+    tables = [c.mass for c in list(vehicle.configurations.values())[:n_fs]]
+    drops = [j.slot for j in vehicle.jettisons[:n_fs - 1]]
+    boosters = booster_trace(vehicle)
+    times = event_times(vehicle, tuple(drops), t_boosters=boosters.jettison_s if boosters is not None else np.inf)
+    starts = np.array([times[s] for s in drops])
+    first = 1 if boosters is not None else 0  # with boosters: the stack's table, the boosters' own mass apart
+
+    def mass(t: float, left_kg: float) -> float:
+        table = tables[max(int(np.searchsorted(starts, t, side="right")), first)]
+        return float(np.interp(left_kg, table.propellant_kg, table.mass_kg))
+
+    return mass
+
+
 def first_stage_march(vehicle: Vehicle, p: np.ndarray | None = None,
                       tb: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, float]:
     """The first stage's nominal vacuum thrust (N) against mission time (s), and its
@@ -156,8 +198,10 @@ def first_stage_march(vehicle: Vehicle, p: np.ndarray | None = None,
     thrust table. Otherwise the stage is marched at :data:`TRACE_STEP_S` with the
     flight's own throttle law (``models/throttle.py::cycle``, each step a cycle; an
     unthrottled stage at rated thrust), its sensed axial acceleration taken as the
-    vacuum thrust over the stack's mass at the propellant left, the strap-on boosters'
-    nominal thrust and mass added until their predicted jettison (``sim/booster_trace.py``;
+    vacuum thrust over the mass of the configuration flown at the propellant left
+    (:func:`first_stage_mass`: an item dropped in the stage's flight leaves at its delay),
+    the strap-on boosters' nominal thrust and mass added until their predicted jettison
+    (``sim/booster_trace.py``;
     no drag, no back-pressure loss: an acceleration a little high, so the predicted
     throttling comes a little early and the burn a little long), until the cutoff's trigger holds
     (``events.first_stage_cutoff``: its delay after liftoff is landed on; a tank's
@@ -175,7 +219,7 @@ def first_stage_march(vehicle: Vehicle, p: np.ndarray | None = None,
         return fs.thrust_time_s, fs.thrust_vac_N, float(fs.thrust_time_s[-2])
     if throttled and (p is None or tb is None):
         raise ValueError("a throttled first stage's trace needs the run's parameters and tables")
-    stack = vehicle.configurations["stack"].mass
+    stack_mass = first_stage_mass(vehicle)
     rated = fs.liquid.thrust_vac_N * float(fs.liquid.startup_fraction[-1])
     flow_per_thrust = 1.0 / (constants.G0 * fs.isp_vac_s)
     mr = fs.liquid.mixture_ratio
@@ -187,7 +231,7 @@ def first_stage_march(vehicle: Vehicle, p: np.ndarray | None = None,
         """The drag-free axial acceleration at ``t`` (s) with the stage's vacuum thrust ``f``
         (N) and ``left_kg`` of its propellant: the boosters' thrust and mass added while
         they are attached."""
-        mass = float(np.interp(left_kg, stack.propellant_kg, stack.mass_kg))
+        mass = stack_mass(t, left_kg)
         if boosters is None:
             return f / mass
         f_b, m_b = boosters.at(t)
