@@ -8,7 +8,10 @@ a step); the first burn's end state against its own target (the page's orbit, tw
 no thrust and no propellant used in the coast (the engine off: mass conserved to the
 last bit); the restart at the first step the radial speed ``r·v/|r|`` of the logged
 state turns negative (the condition, bracketed by the logged samples); the final orbit
-against ``guidance.target`` within its tolerance.
+against ``guidance.target`` within its tolerance. The coast's pitch and yaw jets: their
+accelerations against ``n F |l| / I`` and ``n F / m`` at the configuration's own mass
+properties, their commands against the phase plane's switching lines, and the coast's
+attitude held within the deadband.
 """
 
 from __future__ import annotations
@@ -20,10 +23,11 @@ from conftest import compose_config
 from savant_cli.config import validate
 from savant_cli.errors import ConfigError
 from savant_cli.io.guidance_file import read_guidance
-from savant_cli.models import peg, propulsion
+from savant_cli.models import fcs, layout, peg, propulsion, quaternion
 from savant_cli.paths import hydra_search_dirs, shipped_config_dir
 from savant_cli.sim import engine
 from savant_cli.sim.build import build_model
+from savant_cli.sim.plant import derivative, mass_state
 from savant_cli.sim.run import signals, simulate
 from savant_cli.sim.setup import prepare
 from savant_cli.sim.summary import orbit_elements, summarize
@@ -32,6 +36,8 @@ from test_boosters import _cfg
 from test_vehicle_examples import example_node
 
 FOLDER = shipped_config_dir() / "vehicle" / "ares_i"
+JET_FORCE_N = 2 * 445.0  # the page's pods: two jets of 445 N per direction
+DEADBAND_DEG = 1.0  # the shipped controller's roll phase plane (controller.roll.attitude_deadband_deg)
 #: The page's first burn (docs/models.md, "Two burns"): a suborbital cutoff at 175 km
 #: whose apogee is the final orbit's 185 km.
 FIRST_BURN = dict(perigee_altitude_km=-2500.0, apogee_altitude_km=185.0, cutoff_altitude_km=175.0,
@@ -123,6 +129,22 @@ def test_the_restarted_burn_inserts_on_target(flight):
         "start_after_restart_s"] + 2.0  # (a guidance cycle of 1 s for the sample, one to measure the thrust)
 
 
+def test_without_the_pitch_and_yaw_jets_the_coast_drifts_at_the_cutoffs_rate():
+    node = example_node("an-upper-stage-restart")
+    jets = node["stages"]["upper_stage"]["roll_jets"]
+    del jets["pitch_yaw_thrust_N"], jets["pitch_yaw_jets_per_direction"]
+    model = _model(_cfg(*_overrides()), node)
+    result = simulate(model, progress=False)
+    sig = signals(result, model)
+    t_cut, t_restart = result.events[engine.EV_US_CUTOFF], result.events[engine.EV_RESTART]
+    i_cut, i_restart = _at(sig, t_cut - 1.0), _at(sig, t_restart)
+    pitch_rate = sig["body_rate"].data[i_cut:i_restart, 1]
+    error = np.degrees(np.abs(sig["attitude_error"].data[i_restart, 1]))
+    # the rate the burn ended with, held through the coast: its angle against the held command
+    assert error == pytest.approx(np.degrees(abs(pitch_rate[-1])) * (t_restart - t_cut), rel=0.1)
+    assert error > 5.0 * DEADBAND_DEG and "pitch_yaw_jet_command" not in sig
+
+
 def test_a_restarting_vehicle_needs_the_first_burn_and_only_it_takes_one():
     with pytest.raises(ConfigError, match="guidance.peg.upper_stage_first_burn"):
         _model(_cfg("sim.max_time_s=1000", *TARGET))
@@ -158,3 +180,65 @@ def _events(**changes) -> dict:
 def test_a_restart_outside_the_shape_is_refused_naming_its_key(changes, key):
     with pytest.raises(ConfigError, match=key.split("|")[-1].replace(".", r"\.")):
         load_vehicle(_events(**changes), FOLDER)
+
+
+def test_the_pitch_and_yaw_jets_turn_the_vehicle_by_their_force_at_their_arm(flight):
+    """One plant evaluation at liftoff with each command on against none: the body-axis
+    angular acceleration ``I⁻¹ M`` with ``M = n F |x_j − x_cg|`` about the commanded
+    axis, the linear one ``n F / m`` across it (both linear in the command)."""
+    model = flight[0]
+    tb = model.packed_tables
+    x, u = model.x0.copy(), model.u0.copy()
+    aux = np.zeros(layout.N_AUX)
+    _, _, rigid = mass_state(x, model.p, tb, 0, aux)
+    mass, cgx = rigid[0], rigid[1]
+    ixx, iyy, izz, ixy, ixz, iyz = rigid[4:]
+    inertia = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
+    arm = 35.6 - cgx  # the pods' station (the shipped roll jets' location_m) from the CG, structure x
+    r = np.array([-arm, 0.0, 0.0])  # the pods from the CG, body axes (body x forward: −structure x)
+
+    def rates(pitch: float, yaw: float) -> np.ndarray:
+        u[layout.U_PY_JETS:layout.U_PY_JETS + 2] = pitch, yaw
+        xd = np.zeros_like(x)
+        derivative(0.0, x, u, model.p, tb, np.zeros(layout.N_AUX), xd)
+        return xd
+
+    rest = rates(0.0, 0.0)
+    for axis, (pitch, yaw) in ((1, (1.0, 0.0)), (2, (0.0, -1.0))):
+        d = rates(pitch, yaw) - rest
+        moment = np.zeros(3)
+        moment[axis] = (pitch + yaw) * JET_FORCE_N * abs(arm)
+        np.testing.assert_allclose(d[layout.W:layout.W + 3], np.linalg.solve(inertia, moment), rtol=1e-9,
+                                   atol=1e-15)
+        force = np.cross(moment, r) / np.dot(r, r)  # the lateral force whose r × F is that moment
+        np.testing.assert_allclose(np.linalg.norm(force), JET_FORCE_N, rtol=1e-12)
+        np.testing.assert_allclose(d[layout.V:layout.V + 3], quaternion.rotate(x[layout.Q:layout.Q + 4], force / mass),
+                                   rtol=1e-9, atol=1e-12)
+    assert arm < 0.0  # the pods sit forward of the stack's CG: the far side's jets fire
+
+
+@pytest.mark.parametrize("error_deg, rate_deg_s, expected", [
+    (2.0, 0.0, -1.0), (-2.0, 0.0, 1.0), (0.5, 0.0, 0.0), (0.0, 2.0, -1.0), (0.5, 0.3, -1.0)])
+def test_the_pitch_and_yaw_jets_fly_the_phase_plane_in_the_coast_only(flight, error_deg, rate_deg_s, expected):
+    """The shipped phase plane: a 1° deadband, a 1°/s rate deadband, a 2 s lead (the
+    switching function ``e + 2 ė`` against the deadband, the rate limits first)."""
+    ft = flight[0].fcs
+    for phase in (fcs.FCS_COAST, fcs.FCS_UPPER, fcs.FCS_STACK):
+        d = np.zeros(layout.N_DISC)
+        d[fcs.D_ERR + 1] = d[fcs.D_ERR + 2] = np.radians(error_deg)
+        d[fcs.D_RATE_ERR + 1] = d[fcs.D_RATE_ERR + 2] = np.radians(rate_deg_s)
+        fcs.pitch_yaw_jets_step(d, phase, ft)
+        assert tuple(d[fcs.D_CMD_PY:fcs.D_CMD_PY + 2]) == ((expected, expected) if phase == fcs.FCS_COAST
+                                                           else (0.0, 0.0))
+
+
+def test_the_coast_holds_its_attitude_on_the_jets(flight):
+    _, result, sig, s = flight
+    t = sig["time"].data
+    t_cut, t_restart = result.events[engine.EV_US_CUTOFF], result.events[engine.EV_RESTART]
+    coast = (t > t_cut + 10.0) & (t <= t_restart)  # after the cutoff's rate is taken out
+    error = np.degrees(np.abs(sig["attitude_error"].data[coast, 1:3]))
+    assert error.max() < 1.2 * DEADBAND_DEG
+    jets = sig["pitch_yaw_jet_command"].data
+    assert np.all(jets[~((t > t_cut) & (t <= t_restart + 0.1))] == 0.0)  # off in powered flight
+    assert s["pitch_yaw_jet_on_time_s"] > 0.0

@@ -191,6 +191,7 @@ def check_an_upper_stage_restart(vehicle):
         engine.EV_US_CUTOFF, 10.0, engine.WHEN_RADIAL_SPEED, False, 0.0)
     assert vehicle.events.names[-2:] == ("j2x_cutoff", "j2x_restart") and vehicle.events.has("upper_stage_restart")
     assert len(vehicle.configurations) == len(_loaded("a-throttled-upper-stage").configurations)  # no new part
+    assert (vehicle.rcs.pitch_yaw_thrust_N, vehicle.rcs.pitch_yaw_jets_per_direction) == (445.0, 2)
 
 
 CHECKS = {"jettison-on-a-condition": check_jettison_on_a_condition,

@@ -58,6 +58,7 @@ D_CMD_Y = _DISCRETE.scalar("yaw_command", "rad", "yaw gimbal command")
 D_CMD_RCS = _DISCRETE.scalar("roll_jet_command", "1", "roll jet command +1, 0, −1")
 D_RATE_CMD_B = _DISCRETE.array("rate_command_body", 3, "rad/s", "rate command in body axes")
 D_FLEX_NAV = _DISCRETE.array("flex_nav", 3, "rad", "flex rotation at the navigation unit, added to the errors")
+D_CMD_PY = _DISCRETE.array("pitch_yaw_jet_command", 2, "1", "pitch and yaw jet commands +1, 0, −1 (the coasts only)")
 
 # flight-control phases (also the gain-table index)
 FCS_STACK = 0
@@ -321,6 +322,18 @@ def flight_gains(ft: FcsTables, phase: int, schedule_var: float, since_ignition:
             coast = (1.0 - w) * ft.gain_data[FCS_COAST, i, k] + w * ft.gain_data[FCS_COAST, i + 1, k]
             out[k0 + k] = coast + phi * (out[k0 + k] - coast)
     return phi
+
+
+@njit(cache=True, error_model="numpy")
+def pitch_yaw_jets_step(d: np.ndarray, phase: int, ft: FcsTables) -> None:
+    """The pitch and yaw jets' commands into ``d`` after a flight-control cycle
+    (:func:`fcs_step`'s errors): in the coast phase each axis by the roll channel's phase
+    plane (:func:`roll_phase_plane`, its deadbands and lead time) on that axis's attitude
+    and blended rate errors; off in powered flight, where the gimbals steer."""
+    for c in range(2):
+        ax = c + 1
+        d[D_CMD_PY + c] = roll_phase_plane(d[D_ERR + ax], d[D_RATE_ERR + ax], ft.roll[0], ft.roll[1],
+                                           ft.roll[2]) if phase == FCS_COAST else 0.0
 
 
 @njit(cache=True, error_model="numpy")

@@ -233,6 +233,8 @@ class StructuralLoads(NamedTuple):
         The engine-inertia reaction torque about body y and z at the gimbal, N·m.
     rcs_torque_nm : float
         Roll-jet torque about body x at the jets, N·m.
+    rcs_force_n : tuple of 2 float
+        The pitch and yaw jets' force along body y and z at the jets, N.
 
     The slosh masses' forces on the structure are the slosh model's diagnostics
     (``slosh.A_FORCE``, one per sloshing tank), the boosters' nozzle loads the boosters'
@@ -242,6 +244,7 @@ class StructuralLoads(NamedTuple):
     gimbal_force_n: tuple[float, float, float]
     gimbal_torque_nm: tuple[float, float]
     rcs_torque_nm: float
+    rcs_force_n: tuple[float, float]
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -257,6 +260,7 @@ def modal_rates(x: np.ndarray, config: int, p: np.ndarray, tb: np.ndarray, gimba
     fgx, fgy, fgz = loads.gimbal_force_n
     tgy, tgz = loads.gimbal_torque_nm
     rcs_torque = loads.rcs_torque_nm
+    jet_fy, jet_fz = loads.rcs_force_n
     nmod = int(p[P_N_MODES])
     sa, sb, w = flex_sets(x, config, p)
     o_sh = tab_offset(tb, T_SHAPE)
@@ -271,7 +275,7 @@ def modal_rates(x: np.ndarray, config: int, p: np.ndarray, tb: np.ndarray, gimba
         base_b = o_sh + (sb * nd + i) * npt * N_SHAPE
         # generalized force over the loaded points, in point order (jets, gimbal, slosh masses)
         gen = 0.0
-        gen += point_work(tb, base_a, base_b, w, PT_RCS, 0.0, 0.0, 0.0, rcs_torque, 0.0, 0.0)
+        gen += point_work(tb, base_a, base_b, w, PT_RCS, 0.0, jet_fy, jet_fz, rcs_torque, 0.0, 0.0)
         gen += point_work(tb, base_a, base_b, w, gimbal_pt, fgx, fgy, fgz, 0.0, tgy, tgz)
         for j in range(n_slosh):
             k = slosh.A_FORCE + 3 * j

@@ -35,8 +35,8 @@ from savant_cli.models.configurations import (  # noqa: F401
     CONFIG_STACK, CONFIG_UPPER, CONFIG_UPPER_LES, ENGINE_FIRST, ENGINE_OFF, ENGINE_UPPER
 )
 from savant_cli.models.fcs import (  # noqa: F401  (discrete-state indices)
-    D_CMD_P, D_CMD_RCS, D_CMD_Y, D_ERR, D_FILT, D_FLEX_NAV, D_GAINS, D_INT_ATT, D_INT_RATE, D_RATE_CMD_B, D_RATE_ERR,
-    D_ROLL_FILT
+    D_CMD_P, D_CMD_PY, D_CMD_RCS, D_CMD_Y, D_ERR, D_FILT, D_FLEX_NAV, D_GAINS, D_INT_ATT, D_INT_RATE, D_RATE_CMD_B,
+    D_RATE_ERR, D_ROLL_FILT
 )
 from savant_cli.models.flex import (  # noqa: F401
     FIRST_STAGE_POINTS, N_POINTS, POINT_KEYS, PT_GIMBAL_FS, PT_GIMBAL_US, PT_GYRO_FS, PT_GYRO_US, PT_IMU, PT_RCS,
@@ -144,6 +144,8 @@ U_FS_T_CUT = _INPUTS.scalar("first_stage_cutoff_command_time", "s",
                             "a liquid first stage's cutoff command time, mission time (0: none yet; never at liftoff)")
 U_US_THROTTLE = _INPUTS.scalar("upper_stage_throttle", "1", "the upper stage's throttle setting, fraction of rated "
                               "thrust (read only when it is throttled: models/throttle.py)")
+U_PY_JETS = _INPUTS.array("pitch_yaw_jet_command", 2, "1", "the pitch and yaw jets' commands +1, 0, −1 (the coasts "
+                                                           "only: models/rcs.py)")
 N_INPUT = blocks.INPUTS.size
 
 

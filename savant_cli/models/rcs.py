@@ -8,6 +8,18 @@ thrust table against altitude. Roll torque about body X::
 
     L = (f₊ − f₋) n F_jet l
 
+The same pods may hold pitch and yaw jets, fired in the coasts (the flight control's
+coast phase: no thrust, no gimbal authority): ``n`` jets of vacuum thrust ``F`` per
+direction, their lateral force acting on the centerline at the pods' station ``x_j``
+(structure x; the pods' jets fire in pairs about it), the jets on the side that turns
+the vehicle the commanded way. With ``l = x_j − x_cg`` (structure axes: aft of the CG
+positive) and the commands ``c_p``, ``c_y`` (+1, 0, −1)::
+
+    F_z = c_p n F sgn(l),   F_y = −c_y n F sgn(l),   M_y = c_p n F |l|,   M_z = c_y n F |l|
+
+(``r × F`` with ``r = (−l, 0, 0)`` in body axes). Their propellant, as the roll jets', is
+not modelled.
+
 Source: SAVANT §III, "Roll control system".
 """
 
@@ -32,6 +44,8 @@ P_N = _PARAMS.scalar("jets_per_direction", "1", "jets firing together for one ro
 P_ARM = _PARAMS.scalar("moment_arm", "m", "roll moment arm of each jet")
 P_RAMP_UP = _PARAMS.scalar("ramp_up", "s", "time from closed to full thrust")
 P_RAMP_DOWN = _PARAMS.scalar("ramp_down", "s", "time from full thrust to closed")
+P_PY_FORCE = _PARAMS.scalar("pitch_yaw_force", "N", "the pitch and yaw jets' force per direction, n F (0: none)")
+P_PY_STATION = _PARAMS.scalar("pitch_yaw_station", "m", "structure x at which the pitch and yaw jets push")
 _TABLES = blocks.TABLES.block("rcs")
 T_ALT = _TABLES.table("rcs_alt", "m", "altitudes of the jet thrust table")
 T_THRUST = _TABLES.table("rcs_thrust", "N", "vacuum thrust of one jet at T_ALT")
@@ -54,6 +68,8 @@ def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarra
     p[P_ARM] = rcs.moment_arm_m
     p[P_RAMP_UP] = rcs.ramp_up_s
     p[P_RAMP_DOWN] = rcs.ramp_down_s
+    p[P_PY_FORCE] = rcs.pitch_yaw_jets_per_direction * rcs.pitch_yaw_thrust_N
+    p[P_PY_STATION] = rcs.location_m[0]
     tables.update(rcs_alt=rcs.altitude_m, rcs_thrust=rcs.thrust_vac_N)
 
 
@@ -97,3 +113,18 @@ def roll_torque(x: np.ndarray, tb: np.ndarray, p: np.ndarray, alt_m: float, pres
         f_jet = 0.0
     k = int(p[P_STATE_OFFSET])
     return (x[k] - x[k + 1]) * p[P_N] * f_jet * p[P_ARM]
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def pitch_yaw_loads(p: np.ndarray, command_pitch: float, command_yaw: float,
+                    cgx: float) -> tuple[float, float, float, float]:
+    """The pitch and yaw jets' lateral force (N, body y and z) and moment about the CG
+    (N·m, body y and z) for the commands ``command_pitch``, ``command_yaw`` (+1, 0, −1:
+    a positive moment about the axis, or none) with the CG at structure x ``cgx`` (m)
+    (module notes)."""
+    force = p[P_PY_FORCE]
+    arm = p[P_PY_STATION] - cgx
+    side = 1.0 if arm >= 0.0 else -1.0
+    fz = command_pitch * force * side
+    fy = -command_yaw * force * side
+    return fy, fz, arm * fz, -arm * fy

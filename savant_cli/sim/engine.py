@@ -58,12 +58,15 @@ from savant_cli.models import (
 )
 from savant_cli.models.command_schedule import BY_TIME, D_PROFILE_OFFSET, D_PROFILE_RATE, profile_time
 from savant_cli.models.earth import A_ALT, P_E2, P_OMEGA_E, P_RE
-from savant_cli.models.fcs import FCS_COAST, FCS_STACK, FCS_UPPER, FcsTables, fcs_step, reset_phase
+from savant_cli.models.fcs import (
+    D_CMD_PY, FCS_COAST, FCS_STACK, FCS_UPPER, FcsTables, fcs_step, pitch_yaw_jets_step, reset_phase
+)
 from savant_cli.models.gravity import P_MU
 from savant_cli.models.guidance import D_TG, D_VG, SmootherGains, guidance_sample, smoother_step
 from savant_cli.models.layout import (
     D_CMD_P, D_CMD_RCS, D_CMD_Y, D_FLEX_NAV, D_GYRO_X, D_GYRO_Y, ENGINE_FIRST, ENGINE_OFF, ENGINE_UPPER, N_AUX,
-    U_CONFIG, U_DPC, U_DYC, U_ENGINE, U_FS_T_CUT, U_RCS, U_ROLL, U_T_CUT, U_T_IGN, U_THROTTLE, U_US_THROTTLE, Q, R, V, W
+    U_CONFIG, U_DPC, U_DYC, U_ENGINE, U_FS_T_CUT, U_PY_JETS, U_RCS, U_ROLL, U_T_CUT, U_T_IGN, U_THROTTLE, U_US_THROTTLE,
+    Q, R, V, W
 )
 from savant_cli.models.sensors import (
     GYRO_MISALIGN, GYRO_POINTS, IMU_GYRO, N_GYROS, P_IMU_MISALIGN, GyroModel, gyro_step, misalignment
@@ -580,6 +583,7 @@ def _advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0
     throttled = p[throttle.P_ON] != 0.0
     us_throttled = p[throttle.P_US_ON] != 0.0
     restarts = p[propulsion.P_US_RESTARTS] != 0.0  # the upper stage's first cutoff is not the run's end
+    py_jets = p[rcs.P_PY_FORCE] > 0.0  # pitch and yaw jets for the coasts
     for j in range(n_steps):
         k = k0 + j
         t = k * dt
@@ -672,6 +676,8 @@ def _advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0
                 qt.qmul_into(x[Q:Q + 4], q_imu, q_nav)
             roll_rate_error, engagement = fcs_step(d, q_nav, phase, sched_var, t - u[U_T_IGN], dt_fcs, ft)
             roll_gimbal.roll_gimbal_step(d, ft.roll_gimbal[phase], engagement, roll_rate_error, dt_fcs)
+            if py_jets:
+                pitch_yaw_jets_step(d, phase, ft)
             if throttled and int(u[U_ENGINE]) == ENGINE_FIRST and not u[U_FS_T_CUT] > 0.0:  # its new setting, at once
                 accel = 0.0
                 if throttle.acceleration_limited(p):  # the accelerometer: specific force along body x
@@ -687,6 +693,9 @@ def _advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0
             u[U_DYC] = d[D_CMD_Y]
             u[U_RCS] = d[D_CMD_RCS]
             u[U_ROLL] = d[roll_gimbal.D_CMD_ROLL]
+            if py_jets:
+                u[U_PY_JETS] = d[D_CMD_PY]
+                u[U_PY_JETS + 1] = d[D_CMD_PY + 1]
             rcs.step_jets(x, p, u[U_RCS])  # jets without a ramp open and shut at once
         if perturbed:
             loop_perturbation.apply(pert, k, t, dt, command_update, u)

@@ -26,8 +26,8 @@ from savant_cli.models import (
 )
 from savant_cli.models.configurations import ENGINE_FIRST
 from savant_cli.models.layout import (
-    U_CONFIG, U_DPC, U_DYC, U_ENGINE, U_FS_T_CUT, U_GUST, U_RCS, U_ROLL, U_T_CUT, U_T_IGN, U_THROTTLE, U_US_THROTTLE, Q,
-    R, V, W
+    U_CONFIG, U_DPC, U_DYC, U_ENGINE, U_FS_T_CUT, U_GUST, U_PY_JETS, U_RCS, U_ROLL, U_T_CUT, U_T_IGN, U_THROTTLE,
+    U_US_THROTTLE, Q, R, V, W
 )
 
 #: Tabular data of the plant by name (SI, contiguous arrays); the fields are the tables
@@ -178,6 +178,10 @@ def compose(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarra
     fwx, fwy, fwz, twy, twz, mwx, mwy, mwz = twd_part
     rcs_torque = rcs.roll_torque(x, tb, p, alt, pres)
     fex, fey, fez = fax + ftx, fay + fty, faz + ftz  # external, non-gravitational
+    fjy = fjz = mjy = mjz = 0.0  # the pitch and yaw jets' force and moment (coasts)
+    if u[U_PY_JETS] != 0.0 or u[U_PY_JETS + 1] != 0.0:
+        fjy, fjz, mjy, mjz = rcs.pitch_yaw_loads(p, u[U_PY_JETS], u[U_PY_JETS + 1], cgx)
+        fey, fez = fey + fjy, fez + fjz
     booster_thrust = 0.0
     if p[boosters.P_N_BOOSTERS] > 0.0:  # strap-on boosters: their thrust, moment and nozzles' reaction join in
         booster_thrust, fbx, fby, fbz, mbx, mby, mbz, wbx, wby, wbz = boosters.loads(x, tb, p, t, pres, config == 0,
@@ -197,7 +201,7 @@ def compose(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarra
     dq0, dq1, dq2, dq3 = qt.rate_xyz(q0, q1, q2, q3, wx, wy, wz)
     alx, aly, alz = rigid_body.angular_acceleration(
         (ixx, iyy, izz, ixy, ixz, iyz), (wx, wy, wz),
-        (max_ + mtx + mwx + msx + rcs_torque, may + mty + mwy + msy, maz + mtz + mwz + msz))
+        (max_ + mtx + mwx + msx + rcs_torque, may + mty + mwy + msy + mjy, maz + mtz + mwz + msz + mjz))
     dm_fs, dm_fs_fuel, dm_lox, dm_lh2 = propulsion.propellant_rates(p, mdot_fs, mdot_us)
     # (one store per element: a tuple unpacked into array items compiles to slower code)
     xd[R] = vx
@@ -223,7 +227,7 @@ def compose(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarra
     if slosh.tank_count(p) > 0:
         motion = slosh.RigidMotion((cgx, cgy, cgz), (aby, abz), (wx, wy, wz), (alx, aly, alz))
         slosh.rates(x, p, aux, config, motion, xd)
-    loads = flex.StructuralLoads((ftx + fwx, fty + fwy, ftz + fwz), (twy, twz), rcs_torque)
+    loads = flex.StructuralLoads((ftx + fwx, fty + fwy, ftz + fwz), (twy, twz), rcs_torque, (fjy, fjz))
     flex.modal_rates(x, config, p, tb, gimbal_pt, loads, aux, boosters.A_NOZZLE_LOADS, xd)
 
     # ------------------------------------------------------------ diagnostics

@@ -11,7 +11,9 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
 from savant_cli import constants, lifecycle
 from savant_cli.io.record import Signal
-from savant_cli.models import blocks, earth, layout, navigation, peg, quaternion as qt, roll_gimbal, slosh, throttle
+from savant_cli.models import (
+    blocks, earth, layout, navigation, peg, quaternion as qt, rcs, roll_gimbal, slosh, throttle
+)
 from savant_cli.sim import compile_notice, engine, loop_perturbation
 from savant_cli.sim.build import SimModel
 from savant_cli.sim.plant import compose, derivative
@@ -335,6 +337,9 @@ def signals(result: SimResult, model: SimModel) -> dict[str, Signal]:
     if model.p[throttle.P_ON] != 0.0:
         s["throttle"] = Signal(aux[:, throttle.A_SETTING], "1", "the first stage's throttle setting, fraction of rated "
                                "vacuum thrust")
+    if model.p[rcs.P_PY_FORCE] > 0.0:  # pitch and yaw jets (the coasts)
+        s["pitch_yaw_jet_command"] = Signal(d[:, layout.D_CMD_PY:layout.D_CMD_PY + 2], "1", "pitch and yaw jet "
+                                            "commands (+1 a positive moment about the axis, 0, -1)", ("pitch", "yaw"))
     if n_ch > 2:  # a cluster: every engine's channels, and the roll command the mixer spreads over them
         s["gimbal_angle"] = Signal(x[:, [lay.channel(k) for k in range(n_ch)]], "rad",
                                    "each engine's gimbal angles (pitch, yaw: the first engine's; pitch2, yaw2: the "

@@ -363,6 +363,9 @@ def summarize(result: SimResult, sig: dict[str, Signal], study_wall_s: float | N
     if target is not None:
         cut = not np.isnan(result.events[engine.EV_CUTOFF])
         out.update(insertion_errors(r_f, v_f, target) if cut else dict.fromkeys(INSERTION_KEYS))
+    if "pitch_yaw_jet_command" in sig:  # a vehicle with pitch and yaw jets
+        jets = sig["pitch_yaw_jet_command"].data
+        out["pitch_yaw_jet_on_time_s"] = _on_time(t, jets[:, 0]) + _on_time(t, jets[:, 1])
     if "navigation_position_error" in sig:
         out.update(navigation_keys(r_f, v_f, sig))
     if "peg_time_to_go" in sig:

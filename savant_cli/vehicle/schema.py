@@ -50,7 +50,8 @@ SLOSH_KEYS = {"table": str, "radius_m": float, "bottom_station_m": float, "densi
               "reference_accel_mps2": float}
 TANK_KEYS = {"propellant_kg": float, "slosh": opt(SLOSH_KEYS)}
 ROLL_JET_KEYS = {"thrust_table": str, "exit_area_m2": float, "jets_per_direction": int, "moment_arm_m": float,
-                 "ramp_up_s": float, "ramp_down_s": float, "location_m": VEC3}
+                 "ramp_up_s": float, "ramp_down_s": float, "location_m": VEC3,
+                 "pitch_yaw_thrust_N": opt(float), "pitch_yaw_jets_per_direction": opt(int)}
 STAGE_KEYS = {"inert_mass_kg": opt(float), "tanks": NAMED, "engines": NAMED, "roll_jets": opt(ROLL_JET_KEYS),
               "mass_table": opt(str), "mixing_matrix": opt(ROWS3)}
 BOOSTER_KEYS = {"attached_to": str, "inert_mass_kg": float, "tanks": NAMED, "engines": NAMED,
@@ -258,7 +259,20 @@ class _Reader:
                         moment_arm_m=positive(f"{key}.moment_arm_m", rn["moment_arm_m"]),
                         ramp_up_s=non_negative(f"{key}.ramp_up_s", rn["ramp_up_s"]),
                         ramp_down_s=non_negative(f"{key}.ramp_down_s", rn["ramp_down_s"]),
-                        location_m=vec3(rn["location_m"]))
+                        location_m=vec3(rn["location_m"]), **self.pitch_yaw_jets(rn, key))
+
+    @staticmethod
+    def pitch_yaw_jets(rn: Mapping, key: str) -> dict:
+        """The roll-jet pods' pitch and yaw jets: both keys or neither."""
+        thrust, count = rn.get("pitch_yaw_thrust_N"), rn.get("pitch_yaw_jets_per_direction")
+        if (thrust is None) != (count is None):
+            missing = "pitch_yaw_jets_per_direction" if count is None else "pitch_yaw_thrust_N"
+            raise ConfigError(f"{key}.{missing}", None, "pitch and yaw jets need both pitch_yaw_thrust_N (vacuum "
+                                                        "thrust of one jet, N) and pitch_yaw_jets_per_direction")
+        if thrust is None:
+            return {}
+        return {"pitch_yaw_thrust_N": positive(f"{key}.pitch_yaw_thrust_N", thrust),
+                "pitch_yaw_jets_per_direction": int(positive(f"{key}.pitch_yaw_jets_per_direction", count))}
 
     # ----------------------------------------------------------------- events
     def event(self, name: str, section: Mapping, key: str, earlier: list[str]) -> EventSpec:

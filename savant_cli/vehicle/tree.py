@@ -179,7 +179,9 @@ class EngineSpec:
 class RollJets:
     """Roll-control jets: vacuum thrust per jet (N) vs altitude (m), exit area (m^2),
     number of jets per roll direction, moment arm (m), ramp times (s), location
-    (structure frame, m)."""
+    (structure frame, m); and the same pods' pitch and yaw jets (optional): vacuum
+    thrust per jet (N; 0: none) and jets firing together per direction, their lateral
+    force at the pods' station (``location_m``'s x), fired in the coasts only."""
 
     altitude_m: np.ndarray
     thrust_vac_N: np.ndarray
@@ -189,6 +191,8 @@ class RollJets:
     ramp_up_s: float
     ramp_down_s: float
     location_m: np.ndarray
+    pitch_yaw_thrust_N: float = 0.0
+    pitch_yaw_jets_per_direction: int = 0
 
 
 @dataclass(frozen=True)
