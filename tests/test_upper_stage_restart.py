@@ -242,3 +242,36 @@ def test_the_coast_holds_its_attitude_on_the_jets(flight):
     jets = sig["pitch_yaw_jet_command"].data
     assert np.all(jets[~((t > t_cut) & (t <= t_restart + 0.1))] == 0.0)  # off in powered flight
     assert s["pitch_yaw_jet_on_time_s"] > 0.0
+
+
+def _elevation_deg(sig, i: np.ndarray) -> np.ndarray:
+    """The commanded body x's elevation above the local horizontal (deg) at samples ``i``."""
+    x_cmd = np.array([quaternion.rotate(q, np.array([1.0, 0.0, 0.0])) for q in sig["quaternion_command"].data[i]])
+    r = sig["position_eci"].data[i]
+    return np.degrees(np.arcsin(np.einsum("ij,ij->i", x_cmd, r) / np.linalg.norm(r, axis=1)))
+
+
+def test_a_coast_held_in_the_local_horizontal_frame_turns_with_it(flight):
+    """``guidance.peg.coast_attitude: local_horizontal``: the held command keeps its
+    elevation above the local horizontal through the coast, where the inertial hold
+    loses the angle the orbit turns (the angle between the position vectors); PEG's turn
+    at the restart is that much smaller."""
+    model = _model(_cfg(*_overrides(), "guidance.peg.coast_attitude=local_horizontal"))
+    result = simulate(model, progress=False)
+    sig = signals(result, model)
+    turned = []
+    for s, events in ((flight[2], flight[1].events), (sig, result.events)):
+        t_cut, t_restart = events[engine.EV_US_CUTOFF], events[engine.EV_RESTART]
+        i = np.array([_at(s, t_cut + 2.0), _at(s, t_restart)])
+        r = s["position_eci"].data[i]
+        orbit_deg = np.degrees(np.arccos(np.dot(r[0], r[1]) / np.linalg.norm(r[0]) / np.linalg.norm(r[1])))
+        turned.append((np.diff(_elevation_deg(s, i))[0], orbit_deg))
+    (inertial, orbit_deg), (local, _) = turned
+    assert inertial == pytest.approx(orbit_deg, abs=0.2)  # the horizon turns down under a fixed direction
+    assert abs(local) < 0.05
+    assert orbit_deg > 4.0
+    summary = summarize(result, sig, target=peg.insertion_target(_cfg(*_overrides()).guidance), p=model.p)
+    assert summary["status"] == "complete" and abs(summary["insertion_apogee_error_km"]) < 10.0
+    coast = (sig["time"].data > result.events[engine.EV_US_CUTOFF] + 10.0) & (
+        sig["time"].data <= result.events[engine.EV_RESTART])
+    assert np.degrees(np.abs(sig["attitude_error"].data[coast, 1:3])).max() < 1.2 * DEADBAND_DEG  # the jets follow

@@ -114,6 +114,8 @@ class UpperStageFirstBurn:
     start_after_restart_s: float = MISSING
 
 
+#: ``guidance.peg.coast_attitude``'s choices.
+COAST_ATTITUDES = ("inertial", "local_horizontal")
 #: ``guidance.peg.first_stage_burn.plane``'s choices.
 FIRST_STAGE_PLANES = ("target", "engagement")
 
@@ -137,6 +139,9 @@ class PegConfig:
     shutdown_impulse_time_s: float = MISSING
     first_stage_burn: Optional[FirstStageBurn] = None  # None: PEG flies the upper stage's burn alone
     upper_stage_first_burn: Optional[UpperStageFirstBurn] = None  # None: the upper stage burns once
+    # the attitude a coast after a guided cutoff holds: "inertial", or "local_horizontal"
+    # (fixed in the local-horizontal frame, turning with it: a vehicle with pitch and yaw jets)
+    coast_attitude: str = "inertial"
 
 
 @dataclass
@@ -270,6 +275,9 @@ def check_peg(peg: PegConfig | None, sim: SimConfig) -> None:
             raise ConfigError(f"guidance.peg.{name}", getattr(peg, name), f"must be at least {low}")
     if peg.first_stage_burn is not None:
         check_first_stage_burn(peg.first_stage_burn)
+    if peg.coast_attitude not in COAST_ATTITUDES:
+        raise ConfigError("guidance.peg.coast_attitude", peg.coast_attitude,
+                          f"must be one of {', '.join(COAST_ATTITUDES)}")
     if peg.upper_stage_first_burn is not None:
         check_cutoff_orbit("guidance.peg.upper_stage_first_burn", peg.upper_stage_first_burn)
         non_negative("guidance.peg.upper_stage_first_burn.start_after_restart_s",

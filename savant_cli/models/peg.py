@@ -78,6 +78,9 @@ P_SHUTDOWN_LEAD = _PARAMS.scalar("shutdown_impulse_time", "s", "nominal shutdown
 P_BLEND = _PARAMS.scalar("blend_time", "s", "the command turns from the stored profile to PEG's over this time")
 P_ACCEL_LIMIT = _PARAMS.scalar("acceleration_limit", "m/s^2", "the thrust acceleration the upper stage's throttle "
                                "holds (0: constant thrust to cutoff)")
+P_COAST_LOCAL = _PARAMS.scalar("coast_local_horizontal", "1", "1: a coast holds the cutoff's attitude in the local-"
+                                                              "horizontal frame (guidance.peg.coast_attitude), 0: "
+                                                              "inertially")
 _FIRST = blocks.PARAMETERS.block("peg_first_stage")
 P_FS_ON = _FIRST.scalar("on", "1", "1: PEG flies the first stage's burn too (guidance.peg.first_stage_burn)")
 P_FS_START = _FIRST.scalar("start", "s", "mission time PEG engages in the first stage")
@@ -131,6 +134,8 @@ D_FS_IY = _DISCRETE.array("first_stage_plane", 3, "1", "i_y of the first stage's
                           "osculating plane's at its engagement (−unit(r × v)), ECI")
 D_HOLD_Q = _DISCRETE.array("hold_quaternion", 4, "1", "the attitude held from a cutoff before a coast until "
                            "PEG steers the next burn (q_c2i)")
+D_HOLD_LOCAL = _DISCRETE.array("hold_local", 4, "1", "the held attitude in the local-horizontal frame of the hold's "
+                                                      "moment (q_c2l: coast_attitude local_horizontal)")
 D_US1_COMMANDED = _DISCRETE.scalar("upper_stage_first_cutoff", "1", "1 once PEG commanded the cutoff of the upper "
                                                                      "stage's first burn")
 
@@ -174,6 +179,7 @@ def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarra
     p[P_GRAV_STEPS] = g.peg.gravity_steps
     p[P_STEER_TOL] = np.radians(g.peg.steering_tolerance_deg)
     p[P_BLEND] = g.peg.blend_s
+    p[P_COAST_LOCAL] = 1.0 if g.peg.coast_attitude == "local_horizontal" else 0.0
     p[P_SHUTDOWN_LEAD] = g.peg.shutdown_impulse_time_s
     upper = inputs.vehicle.upper_stage.throttle  # the flight software's own limit
     p[P_ACCEL_LIMIT] = upper.axial_acceleration_limit_mps2 if upper is not None else 0.0
@@ -525,9 +531,15 @@ def command_attitude(i_f: np.ndarray, r: np.ndarray) -> np.ndarray:
     the local down (the wings-level roll of the stored upper-stage commands)."""
     down = -_unit(r)
     z = _unit(down - np.dot(down, i_f) * i_f)
+    return _frame(i_f, np.cross(z, i_f), z)
+
+
+@njit(cache=True, error_model="numpy")
+def _frame(x: np.ndarray, y: np.ndarray, z: np.ndarray) -> np.ndarray:
+    """The quaternion of the frame whose axes are the orthonormal ``x, y, z`` (ECI)."""
     m = np.empty((3, 3))
-    m[:, 0] = i_f
-    m[:, 1] = np.cross(z, i_f)
+    m[:, 0] = x
+    m[:, 1] = y
     m[:, 2] = z
     return qt.from_dcm(m)
 
@@ -584,18 +596,37 @@ def restart(d: np.ndarray) -> None:
 
 
 @njit(cache=True, error_model="numpy")
-def hold_command(d: np.ndarray, t: float) -> None:
+def local_horizontal(r: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """``q_l2i`` of the local-horizontal frame at the ECI state ``r, v`` (m, m/s): its
+    axes up (``r̂``), downrange (``ĥ × r̂``) and along the orbit normal ``ĥ``."""
+    up = _unit(r)
+    normal = _unit(np.cross(r, v))
+    return _frame(up, np.cross(normal, up), normal)
+
+
+@njit(cache=True, error_model="numpy")
+def hold_command(d: np.ndarray, t: float, r: np.ndarray, v: np.ndarray, p: np.ndarray) -> None:
     """From a cutoff before a coast (a guided first stage's, or the upper stage's first):
-    hold the guidance command's attitude at ``t`` (s), at zero rate, and keep it
-    (``D_HOLD_Q``) for the next burn's engagement blend; once held, nothing more until
-    :func:`release_hold`."""
-    if np.dot(d[D_HOLD_Q:D_HOLD_Q + 4], d[D_HOLD_Q:D_HOLD_Q + 4]) > 0.0:
+    hold the guidance command's attitude at ``t`` (s) and keep it (``D_HOLD_Q``) for the
+    next burn's engagement blend; once held, nothing more until :func:`release_hold`.
+    Held inertially at zero rate, or (``P_COAST_LOCAL``) fixed in the local-horizontal
+    frame of the navigated state ``r, v`` (ECI, m, m/s): each call turns it with that
+    frame, at the frame's rate ``(r × v) / r²``."""
+    held = np.dot(d[D_HOLD_Q:D_HOLD_Q + 4], d[D_HOLD_Q:D_HOLD_Q + 4]) > 0.0
+    local = p[P_COAST_LOCAL] != 0.0
+    if held and not local:
         return
-    h = t - d[D_TG]
-    q = qt.qmul(d[D_QG:D_QG + 4], qt.from_rotation_vector(d[D_VG:D_VG + 3] * h))
+    if held:
+        q = qt.qmul(local_horizontal(r, v), d[D_HOLD_LOCAL:D_HOLD_LOCAL + 4])
+    else:
+        h = t - d[D_TG]
+        q = qt.qmul(d[D_QG:D_QG + 4], qt.from_rotation_vector(d[D_VG:D_VG + 3] * h))
+        d[D_HOLD_LOCAL:D_HOLD_LOCAL + 4] = qt.qmul(qt.qconj(local_horizontal(r, v)), q)
     d[D_QG:D_QG + 4] = q
     d[D_HOLD_Q:D_HOLD_Q + 4] = q
     d[D_VG:D_VG + 3] = 0.0
+    if local:  # the frame's inertial rate, in the commanded axes
+        d[D_VG:D_VG + 3] = qt.rotate_inverse(q, np.cross(r, v) / np.dot(r, r))
     d[D_TG] = t
 
 

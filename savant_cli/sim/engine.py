@@ -613,12 +613,12 @@ def _advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0
             period = rates.n_guid * dt
             if peg_on and coasting:  # from the upper stage's first cutoff to its restart: the attitude held
                 steered = True
-                peg.hold_command(d, t)
+                peg.hold_command(d, t, r_nav, v_nav, p)
             elif peg_on and not np.isnan(events[EV_IGNITION]):
                 restarted = not np.isnan(events[EV_RESTART])
                 held = fs_guided or restarted  # the burn follows a coast with the attitude held
                 if held:  # the attitude held from the cutoff before it (here if no cycle fell between)
-                    peg.hold_command(d, t)
+                    peg.hold_command(d, t, r_nav, v_nav, p)
                 burn = peg.BURN_UPPER_FIRST if restarts and not restarted else peg.BURN_UPPER_STAGE
                 code = peg.guidance_cycle(d, t, r_nav, v_nav, events[EV_RESTART] if restarted else events[EV_IGNITION],
                                           period, p, p[P_RE], burn)
@@ -637,7 +637,7 @@ def _advance(x: np.ndarray, d: np.ndarray, u: np.ndarray, events: np.ndarray, k0
                 peg.blend_with_profile(d, t, t + d[D_PROFILE_OFFSET], period, p, gt.time, gt.quat, gt.rate)
             elif fs_guided:  # from the first stage's cutoff to the upper stage's guidance: the attitude held
                 steered = True
-                peg.hold_command(d, t)
+                peg.hold_command(d, t, r_nav, v_nav, p)
             if not steered:
                 if sched.profile_schedule == BY_TIME:
                     guidance_sample(d, t, gt.time, gt.quat, gt.rate, k == 0)
