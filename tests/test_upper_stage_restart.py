@@ -173,12 +173,12 @@ def _events(**changes) -> dict:
 
 
 @pytest.mark.parametrize("changes, key", [
-    (dict(j2x_cutoff={"delay_s": 0.0}), "vehicle.stages|events.j2x_cutoff.delay_s"),
+    (dict(j2x_cutoff={"delay_s": 0.0}), "events.j2x_cutoff.delay_s"),
     (dict(j2x_restart=None), "events.j2x_cutoff"),
     (dict(j2x_cutoff={"after": "separation"}), "events.j2x_cutoff"),
 ])
 def test_a_restart_outside_the_shape_is_refused_naming_its_key(changes, key):
-    with pytest.raises(ConfigError, match=key.split("|")[-1].replace(".", r"\.")):
+    with pytest.raises(ConfigError, match=key.replace(".", r"\.")):
         load_vehicle(_events(**changes), FOLDER)
 
 

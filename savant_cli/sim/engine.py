@@ -374,8 +374,7 @@ def handle_events(t: float, dt: float, x: np.ndarray, u: np.ndarray, d: np.ndarr
             separate(x, u, d, p, tb)
         elif k == EV_IGNITION:
             u[U_ENGINE] = ENGINE_UPPER
-            u[U_T_IGN] = t  # the flight control fades its gains in from here (models/fcs.py)
-            u[U_US_THROTTLE] = p[throttle.P_US_MAX]  # a throttled upper stage starts at its command
+            ignite_upper_stage(t, u, p)
             if p[peg.P_FS_ON] != 0.0:  # PEG flew the first stage: the upper stage's burn is a new one
                 peg.restart(d)
         elif k == EV_US_CUTOFF:
@@ -405,11 +404,28 @@ def upper_stage_cutoff(t: float, x: np.ndarray, u: np.ndarray, d: np.ndarray, p:
     decays over the shutdown transient (``u[U_T_CUT]``), its impulse after the command is
     tracked as the final cutoff's, and the coast's attitude hold starts afresh
     (``peg.release_hold``)."""
-    u[U_T_CUT] = t
+    command_upper_cutoff(t, x, u, d, p, tb)
     d[propulsion.D_US_SD_IMPULSE] = 0.0
+    peg.release_hold(d)
+
+
+@njit(cache=True, error_model="numpy")
+def command_upper_cutoff(t: float, x: np.ndarray, u: np.ndarray, d: np.ndarray, p: np.ndarray,
+                         tb: np.ndarray) -> None:
+    """The upper stage's cutoff command at ``t`` (s): its thrust decays from here over the
+    shutdown transient, the thrust at the command kept for the impulse's trapezoid."""
+    u[U_T_CUT] = t
     d[propulsion.D_US_SD_LAST] = propulsion.upper_stage_thrust_vac(x, tb, p, t, u[U_T_IGN], t,
                                                                    throttle.held_upper(u[U_US_THROTTLE], p))
-    peg.release_hold(d)
+
+
+@njit(cache=True, error_model="numpy")
+def ignite_upper_stage(t: float, u: np.ndarray, p: np.ndarray) -> None:
+    """The upper stage's ignition command at ``t`` (s), first or restart: its start-up
+    transient from ``t`` (the flight control fades its gains in from here, models/fcs.py),
+    a throttled stage at its command."""
+    u[U_T_IGN] = t
+    u[U_US_THROTTLE] = p[throttle.P_US_MAX]
 
 
 @njit(cache=True, error_model="numpy")
@@ -417,9 +433,8 @@ def restart_upper_stage(t: float, u: np.ndarray, d: np.ndarray, p: np.ndarray) -
     """The upper stage's second ignition command at ``t`` (s): its start-up transient from
     ``t`` (``u[U_T_IGN]``: the flight control fades its gains in again), no cutoff
     commanded, a throttled stage at its command, and PEG's burn a new one."""
-    u[U_T_IGN] = t
+    ignite_upper_stage(t, u, p)
     u[U_T_CUT] = 0.0
-    u[U_US_THROTTLE] = p[throttle.P_US_MAX]
     d[propulsion.D_US_SD_IMPULSE] = 0.0
     d[propulsion.D_US_SD_LAST] = 0.0
     if p[peg.P_ON] != 0.0:
@@ -496,9 +511,7 @@ def cutoff_step(t: float, dt: float, x: np.ndarray, r_nav: np.ndarray, v_nav: np
         if not command:
             return RUNNING
         events[EV_CUTOFF] = t
-        u[U_T_CUT] = t
-        d[propulsion.D_US_SD_LAST] = propulsion.upper_stage_thrust_vac(x, tb, p, t, u[U_T_IGN], t,
-                                                                       throttle.held_upper(u[U_US_THROTTLE], p))
+        command_upper_cutoff(t, x, u, d, p, tb)
     if t + 0.5 * dt >= u[U_T_CUT] + p[propulsion.P_US_SHUTDOWN_TIME]:
         return STOP_GUIDANCE_CUTOFF if peg_on else STOP_CUTOFF
     return RUNNING
