@@ -37,6 +37,8 @@ source tree (or ``--out PATH``).
 from __future__ import annotations
 
 import argparse
+import bisect
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -89,6 +91,19 @@ def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     (so bit for bit ``np.cross``), without its general-shape overhead, which was a third
     of the reference ascent's integration time."""
     return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+
+
+def _norm(a: np.ndarray) -> float:
+    """Euclidean norm of a 3-vector: ``np.linalg.norm``'s own ``sqrt(a·a)`` (bit for bit),
+    without its general-shape overhead."""
+    return math.sqrt(a.dot(a))
+
+
+def _columns(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """The 3×3 matrix of columns ``a``, ``b``, ``c`` (``np.column_stack``'s, without its overhead)."""
+    m = np.empty((3, 3))
+    m[:, 0], m[:, 1], m[:, 2] = a, b, c
+    return m
 
 
 def _cosine_ramp(t: float, start: float, duration: float) -> float:
@@ -149,6 +164,12 @@ class Reference:
         #: the k-th moves to configuration k (s)
         self.jettison_times = np.sort([times[k] for k in (engine.EV_BOOSTER_JETTISON, engine.EV_SEPARATION,
                                                           *engine.EV_ITEMS)])
+        self._us_t_end = float(self.tb.us_start_time[-1])
+        self._us_frac_end = float(self.tb.us_start_frac[-1])
+        self._jettison_list = self.jettison_times.tolist()  # config_at's bisection (searchsorted's answer)
+        #: each configuration's aerodynamic reference area (m²)
+        self._ref_area = [float(aero.reference(self.packed, k)[aero.REF_AREA])
+                          for k in range(self.jettison_times.size + 1)]
         self.n_first_stage_configs = vehicle.first_stage_configurations
         self.energy_target = build.target_energy(cfg)
         tgt = cfg.guidance.target
@@ -185,10 +206,10 @@ class Reference:
     @staticmethod
     def _frame_from_x(x_b: np.ndarray, r: np.ndarray) -> np.ndarray:
         """Body→ECI DCM with body X along ``x_b`` and body Z toward local down (wings level)."""
-        down = -r / np.linalg.norm(r)
-        z = down - np.dot(down, x_b) * x_b
-        z /= np.linalg.norm(z)
-        return np.column_stack([x_b, _cross(z, x_b), z])
+        down = -r / _norm(r)
+        z = down - down.dot(x_b) * x_b
+        z /= _norm(z)
+        return _columns(x_b, _cross(z, x_b), z)
 
     def attitude(self, t: float, y: np.ndarray, azimuth: float, steer: tuple[float, float],
                  turn: dict) -> np.ndarray:
@@ -200,11 +221,11 @@ class Reference:
         r, v = y[0:3], y[3:6]
         if t < self.t_ign or "plane_normal" not in turn:
             v_rel = earth.velocity_relative_eci(r, v, constants.OMEGA_EARTH)
-            v_hat = v_rel / np.linalg.norm(v_rel)
+            v_hat = v_rel / _norm(v_rel)
             axis = turn["axis"]
             x_b = Rotation.from_rotvec(axis * turn["alpha0"] * np.exp(-(t - t_turn) / pr.alpha_fade_s)).apply(v_hat)
             return self._frame_from_x(x_b, r) @ self._residual_roll(t, azimuth)
-        r_hat = r / np.linalg.norm(r)
+        r_hat = r / _norm(r)
         h_hat = turn["plane_normal"]
         downrange = _cross(h_hat, r_hat)
         theta = np.arctan(steer[0] + steer[1] * (t - self.t_ign))
@@ -215,16 +236,16 @@ class Reference:
         if s < 1.0:
             x0 = turn["x_ignition"]
             axis = _cross(x0, x_b)
-            sin_a = np.linalg.norm(axis)
+            sin_a = _norm(axis)
             if sin_a > 1e-12:
-                ang = np.arctan2(sin_a, np.dot(x0, x_b))
+                ang = np.arctan2(sin_a, x0.dot(x_b))
                 x_b = Rotation.from_rotvec(axis / sin_a * ang * s).apply(x0)
         return self._frame_from_x(x_b, r)
 
     # ----------------------------------------------------------------- dynamics
     def config_at(self, t: float) -> int:
         """The configuration flown at ``t`` (s): its number, one more for each jettison."""
-        return int(np.searchsorted(self.jettison_times, t, side="right"))
+        return bisect.bisect_right(self._jettison_list, t)
 
     def rhs(self, t: float, y: np.ndarray, azimuth: float, steer, turn) -> np.ndarray:
         """3-DOF derivative of [r, v, m_fs, m_lox, m_lh2] (ECI, SI)."""
@@ -249,16 +270,16 @@ class Reference:
         v_rel = earth.velocity_relative_eci(r, v, constants.OMEGA_EARTH)
         f = np.zeros(3)
         mdot = np.zeros(3)
-        vv = np.linalg.norm(v_rel)
+        vv = _norm(v_rel)
         if vv > 1e-3:
             qbar = 0.5 * rho * vv * vv
-            cos_a = np.clip(np.dot(x_b, v_rel) / vv, -1.0, 1.0)
+            cos_a = min(max(x_b.dot(v_rel) / vv, -1.0), 1.0)
             alpha_t = np.arccos(cos_a)
             ca, _, cn, _, _, _ = aero.coefficients_at(self.packed, cfg_i, vv / sos, alpha_t, 0.0)
-            s_ref = aero.reference(self.packed, cfg_i)[aero.REF_AREA]
+            s_ref = self._ref_area[cfg_i]
             f += -qbar * s_ref * ca * x_b
             n_dir = v_rel / vv - cos_a * x_b  # normal force pushes against the crossflow
-            nn = np.linalg.norm(n_dir)
+            nn = _norm(n_dir)
             if nn > 1e-9:
                 f += -qbar * s_ref * cn * n_dir / nn
         fs, us = self.vehicle.first_stage, self.vehicle.upper_stage
@@ -270,7 +291,9 @@ class Reference:
             f += max(f_vac - pres * fs.nozzle_exit_area_m2, 0.0) * x_b
             mdot[0] = f_vac / (G0 * fs.isp_vac_s)
         elif t >= self.t_ign and y[7] > 0.0 and y[8] > 0.0:
-            f_vac = np.interp(t - self.t_ign, tb.us_start_time, tb.us_start_frac) * us.thrust_vac_N
+            dt = t - self.t_ign  # past the start transient: its table's last value (np.interp's answer)
+            frac = self._us_frac_end if dt >= self._us_t_end else np.interp(dt, tb.us_start_time, tb.us_start_frac)
+            f_vac = frac * us.thrust_vac_N
             th = us.throttle
             if th is not None:  # at its command, the maximum, down to its acceleration limit (in vacuum, no rate
                 # limit), not below its minimum: the flight's law (models/throttle.py) without its lag
@@ -320,7 +343,8 @@ class Reference:
     def fly_upper(self, y_ign: np.ndarray, azimuth: float, steer, turn, t_end: float | None = None):
         """Integrate ignition → target energy (or ``t_end``)."""
         def energy(t, y, *args):
-            return 0.5 * np.dot(y[3:6], y[3:6]) - constants.MU_EARTH / np.linalg.norm(y[0:3]) - self.energy_target
+            v = y[3:6]
+            return 0.5 * v.dot(v) - constants.MU_EARTH / _norm(y[0:3]) - self.energy_target
         energy.terminal = t_end is None
         energy.direction = 1.0
         t_stop = t_end if t_end is not None else self.t_ign + 900.0
