@@ -37,15 +37,130 @@ FLEX_SETS = ("first_stage_liftoff", "first_stage_burnout", "second_stage_ignitio
 BOOSTED_SETS = ("boosted_liftoff", "boosted_burnout")
 
 
+#: Modal sets one configuration may blend between (``vehicle.flex.sets``).
+MAX_SETS_PER_CONFIGURATION = 8
+#: The sets' roles: the stage a set's structure is (its points off that structure are zero).
+BOOSTED, FIRST_STAGE, UPPER_STAGE = "boosted", "first stage", "upper stage"
+
+
+@dataclass(frozen=True)
+class SetPlan:
+    """Which modal sets each configuration flies.
+
+    Attributes
+    ----------
+    names : tuple of str
+        The sets, in the order of the tables (each once).
+    roles : tuple of str
+        Each set's structure: :data:`BOOSTED` (the stack with the boosters),
+        :data:`FIRST_STAGE` or :data:`UPPER_STAGE`.
+    by_configuration : tuple of tuple of (int, float)
+        For each of the vehicle's configurations (in the plant's order), its sets as
+        ``(index in names, burned fraction)``, the fractions strictly increasing: the
+        fraction of the burning stage's propellant (the boosters' own while they are
+        attached) at which the set holds.
+    """
+
+    names: tuple[str, ...]
+    roles: tuple[str, ...]
+    by_configuration: tuple[tuple[tuple[int, float], ...], ...]
+
+    def table(self) -> np.ndarray:
+        """The plant's ``flex_set_map`` rows: ``count, (set, burned fraction) × count``,
+        zero-padded to :data:`MAX_SETS_PER_CONFIGURATION` pairs."""
+        rows = np.zeros((len(self.by_configuration), 1 + 2 * MAX_SETS_PER_CONFIGURATION))
+        for c, entries in enumerate(self.by_configuration):
+            rows[c, 0] = len(entries)
+            for k, (index, burned) in enumerate(entries):
+                rows[c, 1 + 2 * k], rows[c, 2 + 2 * k] = index, burned
+        return rows
+
+
+def _role(vehicle: Vehicle, configuration: int) -> str:
+    if vehicle.boosters is not None and configuration == 0:
+        return BOOSTED
+    return FIRST_STAGE if configuration < vehicle.first_stage_configurations else UPPER_STAGE
+
+
+#: The sets a configuration flies by default, by its role: the paper's two per stage.
+DEFAULT_SETS = {BOOSTED: BOOSTED_SETS, FIRST_STAGE: FLEX_SETS[:2], UPPER_STAGE: FLEX_SETS[2:]}
+
+
+def set_plan(vehicle: Vehicle) -> SetPlan:
+    """The modal sets of each configuration: ``vehicle.flex.sets`` (by the vehicle file's
+    configuration names: a list of ``{set, burned_fraction}``), or by default the
+    stage's liftoff (ignition) set at 0 and its burnout set at 1 (the boosted pair while
+    the boosters are attached). Refused naming the key: a configuration the sequence
+    reaches without sets, a name that is not a configuration, fractions outside 0 to 1
+    or not increasing, more than :data:`MAX_SETS_PER_CONFIGURATION` sets, or a set
+    flown by configurations of different structures (the stack with and without the
+    boosters, the first stage and the upper stage)."""
+    roles = [_role(vehicle, c) for c in range(len(vehicle.configurations))]
+    given = (vehicle.flex_spec or {}).get("sets")
+    key = "vehicle.flex.sets"
+    if given is None:
+        return default_plan(roles)
+    sources = vehicle.configuration_sources
+    if not isinstance(given, dict):
+        raise ConfigError(key, given, "a mapping of the vehicle's configurations to lists of {set, burned_fraction}")
+    for name in given:
+        if name not in sources:
+            raise ConfigError(f"{key}.{name}", given[name], f"not a configuration the sequence reaches; those are "
+                                                            f"{', '.join(dict.fromkeys(sources))}")
+    names: list[str] = []
+    set_roles: list[str] = []
+    by_configuration = []
+    for c, source in enumerate(sources):
+        listed = given.get(source)
+        ckey = f"{key}.{source}"
+        if not isinstance(listed, (list, tuple)) or not listed:
+            raise ConfigError(ckey, listed, "a non-empty list of {set: <modal set name>, burned_fraction: 0 to 1}")
+        if len(listed) > MAX_SETS_PER_CONFIGURATION:
+            raise ConfigError(ckey, len(listed), f"at most {MAX_SETS_PER_CONFIGURATION} sets per configuration")
+        entries = []
+        for k, item in enumerate(listed):
+            ikey = f"{ckey}[{k}]"
+            if not isinstance(item, dict) or set(item) != {"set", "burned_fraction"}:
+                raise ConfigError(ikey, item, "{set: <modal set name>, burned_fraction: 0 to 1}")
+            burned = float(item["burned_fraction"])
+            if not 0.0 <= burned <= 1.0 or entries and burned <= entries[-1][1]:
+                raise ConfigError(f"{ikey}.burned_fraction", item["burned_fraction"],
+                                  "0 to 1, increasing along the list (the fraction of the burning stage's "
+                                  "propellant burned)")
+            name = str(item["set"])
+            if name not in names:
+                names.append(name)
+                set_roles.append(roles[c])
+            index = names.index(name)
+            if set_roles[index] != roles[c]:
+                raise ConfigError(f"{ikey}.set", name, f"a set of one structure: it is flown by a configuration of the "
+                                                       f"{set_roles[index]} and by {source} of the {roles[c]}")
+            entries.append((index, burned))
+        by_configuration.append(tuple(entries))
+    return SetPlan(tuple(names), tuple(set_roles), tuple(by_configuration))
+
+
+def default_plan(roles: list[str] | tuple[str, ...]) -> SetPlan:
+    """The default :class:`SetPlan` of configurations of the given roles: each its
+    stage's :data:`DEFAULT_SETS` at 0 and 1 burned, the sets in the order
+    :data:`FLEX_SETS`, then :data:`BOOSTED_SETS` if a configuration carries the boosters."""
+    names = FLEX_SETS + (BOOSTED_SETS if BOOSTED in roles else ())
+    entries = tuple(((names.index(DEFAULT_SETS[r][0]), 0.0), (names.index(DEFAULT_SETS[r][1]), 1.0)) for r in roles)
+    set_roles = tuple(r for n in names for r, default in DEFAULT_SETS.items() if n in default)
+    return SetPlan(names, set_roles, entries)
+
+
 @dataclass(frozen=True)
 class FlexTables:
-    """Modal data at the plant's points, every set (:data:`FLEX_SETS`, then
-    :data:`BOOSTED_SETS` with boosters)."""
+    """Modal data at the plant's points, every set of the :class:`SetPlan` (by default
+    :data:`FLEX_SETS`, then :data:`BOOSTED_SETS` with boosters)."""
 
     frequency_rad_s: np.ndarray  # (sets, n_modes)
     damping: np.ndarray  # (n_modes,)
     shapes: np.ndarray  # (sets, n_modes, points, 6), body axes, SI
     sets: tuple[ModalSet, ...]
+    #: each configuration's sets and their burned fractions (:meth:`SetPlan.table`)
+    set_map: np.ndarray
 
 
 def point_keys(vehicle: Vehicle) -> tuple[str, ...]:
@@ -113,13 +228,15 @@ def _modal_set(folder: Path, name: str, units: tuple[str, str], key: str) -> Mod
 
 
 def load_flex(vehicle: Vehicle, fcfg: FlexOnConfig, plant_rate_hz: float) -> FlexTables:
-    """Read the modal sets (the four of :data:`FLEX_SETS`, and :data:`BOOSTED_SETS` with
-    strap-on boosters), keep ``fcfg.n_modes`` and evaluate them at the points."""
+    """Read the modal sets of the :func:`set_plan` (by default the four of
+    :data:`FLEX_SETS`, and :data:`BOOSTED_SETS` with strap-on boosters), keep
+    ``fcfg.n_modes`` and evaluate them at the points."""
     spec = _spec(vehicle, "flex")
     key = "vehicle.flex"
     for k in spec:
-        if k not in ("directory", "units", "nodes"):
-            raise ConfigError(f"{key}.{k}", spec[k], "unknown key; allowed: directory, units, nodes")
+        if k not in ("directory", "units", "nodes", "sets"):
+            raise ConfigError(f"{key}.{k}", spec[k], "unknown key; allowed: directory, units, nodes, sets")
+    plan = set_plan(vehicle)
     units = spec.get("units") or {}
     folder = Path(vehicle.data_dir or ".") / str(spec.get("directory", "flex"))
     if not folder.is_dir():
@@ -131,15 +248,15 @@ def load_flex(vehicle: Vehicle, fcfg: FlexOnConfig, plant_rate_hz: float) -> Fle
         if not isinstance(ids, (list, tuple)) or not ids or not all(isinstance(i, int) for i in ids):
             raise ConfigError(f"{key}.nodes.{pk}", ids, "must be a non-empty list of integer node ids")
     unit_pair = (str(units.get("length", "")), str(units.get("force", "")))
-    names = FLEX_SETS + (BOOSTED_SETS if vehicle.boosters is not None else ())
-    sets = tuple(_modal_set(folder, name, unit_pair, f"{key} set {name}") for name in names)
+    sets = tuple(_modal_set(folder, name, unit_pair, f"{key} set {name}") for name in plan.names)
     n = fcfg.n_modes
     for ms in sets:
         if ms.frequency_rad_s.size < n:
             raise ConfigError("flex.n_modes", n, f"modal set {ms.name!r} has only {ms.frequency_rad_s.size} modes")
     freq = np.array([ms.frequency_rad_s[:n] for ms in sets]) * fcfg.frequency_scale
     # RK4 resolves a mode well (numerical damping < 0.2 % of critical) below 1/8 of the step rate
-    in_use = freq if fcfg.switching == "propellant" else freq[0::2]  # burnout sets unused otherwise
+    # with event switching each configuration flies its first set only
+    in_use = freq if fcfg.switching == "propellant" else freq[sorted({e[0][0] for e in plan.by_configuration})]
     limit = 2.0 * np.pi * plant_rate_hz / 8.0
     if in_use.max() >= limit:
         raise ConfigError("flex.n_modes", n, f"the highest retained mode ({in_use.max() / 2 / np.pi:.1f} Hz) must stay "
@@ -148,14 +265,14 @@ def load_flex(vehicle: Vehicle, fcfg: FlexOnConfig, plant_rate_hz: float) -> Fle
     shapes = np.zeros((len(sets), n, len(keys), 6))
     nozzles = booster_keys(vehicle)
     for s, ms in enumerate(sets):
-        upper, boosted = s in (2, 3), s >= len(FLEX_SETS)
+        upper, boosted = plan.roles[s] == UPPER_STAGE, plan.roles[s] == BOOSTED
         for pt, pk in enumerate(keys):
             if upper and pk in first_keys or pk in nozzles and not boosted:
                 continue  # the first stage is gone in the upper-stage sets, the boosters in all but theirs
             shapes[s, :, pt, :] = ms.at_nodes(nodes[pk], f"{key}.nodes.{pk}")[:n]
     shapes *= fcfg.shape_scale
     zeta = np.asarray(fcfg.damping_per_mode[:n] if fcfg.damping_per_mode else [fcfg.damping] * n, float)
-    return FlexTables(frequency_rad_s=freq, damping=zeta, shapes=shapes, sets=sets)
+    return FlexTables(frequency_rad_s=freq, damping=zeta, shapes=shapes, sets=sets, set_map=plan.table())
 
 
 def _tank(name: str, key: str, node: dict, vdir: Path, load_kg: float, configurations: int) -> SloshTank:

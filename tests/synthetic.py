@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from savant_cli import constants
+from savant_cli.flex_slosh import FIRST_STAGE, UPPER_STAGE, default_plan
 from savant_cli.models import (
     actuator, aero as aero_model, cluster, earth, flex, gravity, layout, propulsion, rcs, slosh
 )
@@ -48,6 +49,7 @@ def tables(mass: float = 1000.0, inertia=(100.0, 400.0, 400.0, 0.0, 0.0, 0.0),
         rcs_alt=ax, rcs_thrust=np.zeros(2), atm_alt=atm_alt, atm_lnp=atm_lnp, atm_lnrho=atm_lnrho,
         wind_alt=ax, wind_north=np.zeros(2), wind_east=np.zeros(2),
         flex_freq=np.zeros((4, 1)), flex_zeta=np.zeros(1), flex_shape=np.zeros((4, 1, layout.N_POINTS, 6)),
+        flex_set_map=default_plan((FIRST_STAGE, UPPER_STAGE, UPPER_STAGE)).table(),  # the stack, upper_les, upper
         slosh_level=np.tile(ax, (2, 1)), slosh_data=np.zeros((2, 2, 4)), slosh_len=np.array([2, 2]),  # two tanks
         mounts=MOUNTS, booster_time=ax, booster_thrust=np.zeros(2), booster_mount=np.zeros((1, 6)),
         booster_mass_prop=np.zeros((1, 1)), booster_mass_data=np.zeros((1, 1, 10)), booster_mass_len=np.ones(1, int),

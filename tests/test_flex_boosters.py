@@ -102,8 +102,9 @@ def test_the_boosted_sets_fly_while_the_boosters_are_attached(boosted):
     x, p = model.x0.copy(), model.p
     tanks = [model.layout.tank(t) for t in ("booster_left_grain", "booster_right_grain")]
     x[tanks] *= 0.25  # three quarters of the boosters' propellant burned
-    assert flex.flex_sets(x, 0, p) == (4, 5, pytest.approx(0.75, rel=1e-12))
-    assert flex.flex_sets(x, 1, p)[:2] == (0, 1)  # jettisoned: the first stage's own pair
+    tb = model.packed_tables
+    assert flex.flex_sets(x, 0, p, tb) == (4, 5, pytest.approx(0.75, rel=1e-12))
+    assert flex.flex_sets(x, 1, p, tb)[:2] == (0, 1)  # jettisoned: the first stage's own pair
 
 
 def test_the_booster_nozzles_load_the_modes_with_their_thrust(boosted):

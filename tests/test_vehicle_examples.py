@@ -194,6 +194,23 @@ def check_an_upper_stage_restart(vehicle):
     assert (vehicle.rcs.pitch_yaw_thrust_N, vehicle.rcs.pitch_yaw_jets_per_direction) == (445.0, 2)
 
 
+def check_modal_sets_per_configuration(vehicle):
+    """The shipped four sets, the LES's configuration on its ignition set alone and the
+    upper configuration on the set without the LES, read into the plant's map; the
+    shipped four modes refused (the set without the LES has its second pair at 44 Hz),
+    two flown."""
+    from savant_cli.config import shipped_option
+    from savant_cli.errors import ConfigError
+    from savant_cli.flex_slosh import FLEX_SETS, load_flex
+
+    with pytest.raises(ConfigError) as exc:
+        load_flex(vehicle, shipped_option("flex", "on"), 200.0)
+    assert exc.value.key == "flex.n_modes" and "44.0 Hz" in exc.value.allowed
+    flex = load_flex(vehicle, dataclasses.replace(shipped_option("flex", "on"), n_modes=2), 200.0)
+    assert tuple(ms.name for ms in flex.sets) == FLEX_SETS
+    assert flex.set_map[:, :5].tolist() == [[2, 0, 0.0, 1, 1.0], [1, 2, 0.0, 0, 0.0], [1, 3, 0.0, 0, 0.0]]
+
+
 CHECKS = {"jettison-on-a-condition": check_jettison_on_a_condition,
           "a-delay-arms-a-condition": check_a_delay_arms_a_condition,
           "composed-mass-properties": check_composed_mass_properties,
@@ -207,7 +224,8 @@ CHECKS = {"jettison-on-a-condition": check_jettison_on_a_condition,
           "first-stage-slosh": check_first_stage_slosh,
           "booster-tvc": check_booster_tvc,
           "a-throttled-upper-stage": check_a_throttled_upper_stage,
-          "an-upper-stage-restart": check_an_upper_stage_restart}
+          "an-upper-stage-restart": check_an_upper_stage_restart,
+          "modal-sets-per-configuration": check_modal_sets_per_configuration}
 
 
 def test_every_example_on_the_page_has_a_check():

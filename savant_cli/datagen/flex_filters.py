@@ -28,6 +28,8 @@ from __future__ import annotations
 import numpy as np
 from scipy import signal
 
+from savant_cli.errors import ConfigError
+
 FCS_RATE_HZ = 50.0
 DESIGN = {
     "stack": {"lowpass_hz": 8.0, "notch_hz": (2.5, 4.5), "notch_q": 1.5},
@@ -58,15 +60,30 @@ def stack_blend(slope_upper: float, slope_first: float) -> list[float]:
     return [round(1.0 - w_first, 3), 0.0, w_first]
 
 
+def stack_liftoff_set(vehicle_cfg) -> str:
+    """The stack's liftoff modal set of a vehicle section: ``first_stage_liftoff``, or
+    with ``flex.sets`` the first set of the first configuration (in the file's order)
+    that carries no strap-on booster."""
+    sets = vehicle_cfg["flex"].get("sets")
+    if not sets:
+        return "first_stage_liftoff"
+    boosters = set(vehicle_cfg.get("boosters") or ())
+    for name, config in vehicle_cfg["configurations"].items():
+        if not boosters & set(config.get("parts") or ()) and name in sets:
+            return str(sets[name][0]["set"])
+    raise ConfigError("vehicle.flex.sets", list(sets), "the stack without boosters needs its sets")
+
+
 def vehicle_stack_blend(vehicle_cfg, vehicle_dir) -> list[float]:
-    """:func:`stack_blend` for a vehicle's first-stage-liftoff modal set (pitch plane)."""
+    """:func:`stack_blend` for a vehicle's stack liftoff modal set (pitch plane,
+    :func:`stack_liftoff_set`)."""
     from pathlib import Path
 
     from savant_cli.io.modal_data import read_modal_set
 
     spec = vehicle_cfg["flex"]
     units = (spec["units"]["length"], spec["units"]["force"])
-    ms = read_modal_set(Path(vehicle_dir) / spec["directory"], "first_stage_liftoff", units, "vehicle.flex")
+    ms = read_modal_set(Path(vehicle_dir) / spec["directory"], stack_liftoff_set(vehicle_cfg), units, "vehicle.flex")
     nodes = spec["nodes"]
     first_pitch_mode = ms.at_nodes(list(nodes["rate_gyro_upper_stage"]), "")[:, 4] != 0.0
     mode = int(np.argmax(first_pitch_mode))  # lowest mode with a pitch (body y) rotation

@@ -14,16 +14,19 @@ the displacement moves the point the thrust and the tail-wags-dog force act at (
 moment arm about the CG is ``r_g + Σ φ_i(g) q_i``); at the navigation unit and the rate
 gyros the rotation is what the sensors see on top of the rigid motion.
 
-Four modal sets, two per stage (first-stage liftoff and burnout, second-stage ignition
-and burnout), and with strap-on boosters two more for the configuration that carries
-them (``boosted_liftoff`` and ``boosted_burnout``, the latter at the boosters' burnout).
-With ``flex.switching: event`` (the paper's assumption) the liftoff set is used until
-separation (the boosted one while the boosters are attached, the first stage's after
-their jettison) and the ignition set after it; with ``propellant`` the frequencies and
-shapes are blended linearly with the stage's burned-propellant fraction (the boosters'
-own while they are attached). Each booster's nozzle is a point of its own (after the
-sloshing tanks'): its thrust and its moving nozzle's reaction load the modes there, and
-its thrust line turns with the structure's rotation there (``models/boosters.py``). Source:
+Each configuration flies its own modal sets (``flex_set_map``, from the vehicle's
+``flex.sets``; by default the paper's four, two per stage: first-stage liftoff and
+burnout, second-stage ignition and burnout, and with strap-on boosters two more for the
+configuration that carries them, ``boosted_liftoff`` and ``boosted_burnout``, the latter
+at the boosters' burnout), each set at a fraction of the burning stage's propellant
+burned. With ``flex.switching: separation`` (the paper's assumption) a configuration
+flies its first set throughout (by default the liftoff set until separation, the
+boosted one while the boosters are attached, and the ignition set after separation);
+with ``propellant`` the frequencies and shapes are blended linearly in the burned
+fraction between the two sets around it (the boosters' own while they are attached).
+Each booster's nozzle is a point of its own (after the sloshing tanks'): its thrust and
+its moving nozzle's reaction load the modes there, and its thrust line turns with the
+structure's rotation there (``models/boosters.py``). Source:
 SAVANT §III, "Flexible body"; the default modal data come from a beam model
 (``datagen/ares_i_flex.py``).
 """
@@ -35,7 +38,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from savant_cli.flex_slosh import FIRST_STAGE_KEYS, POINT_KEYS
+from savant_cli.flex_slosh import FIRST_STAGE_KEYS, MAX_SETS_PER_CONFIGURATION, POINT_KEYS
 from savant_cli.models import blocks, slosh
 from savant_cli.models.interp import tab, tab_offset
 from savant_cli.models.propulsion import (
@@ -78,12 +81,14 @@ P_BOOSTER_TANK = _PARAMS.scalar("booster_tank_state", "1", "index in x of the fi
 P_N_BOOSTERS = _PARAMS.scalar("boosters", "1", "boosters whose nozzles are flex points, whose boosted sets fly while "
                               "they are attached (0: none, or flex off)")
 P_BOOSTER_FULL = _PARAMS.scalar("booster_propellant_full", "kg", "the boosters' propellant at liftoff, summed")
-#: The modal sets of the configuration with the strap-on boosters (after FLEX_SETS).
-BOOSTED_SET = 4
 #: Boosters whose nozzles load the flexible body (flex on with more is refused).
 MAX_BOOSTERS = 8
 _TABLES = blocks.TABLES.block("flex")
-T_FREQ = _TABLES.table("flex_freq", "rad/s", "(sets: FLEX_SETS, then the boosted pair, n_modes) modal frequencies")
+T_FREQ = _TABLES.table("flex_freq", "rad/s", "(sets, n_modes) modal frequencies of the vehicle's sets (by default "
+                       "FLEX_SETS, then the boosted pair)")
+T_SET_MAP = _TABLES.table("flex_set_map", "1", "(configurations, 1 + 2 MAX_SETS_PER_CONFIGURATION) each "
+                          "configuration's modal sets: their count, then (set, burned fraction) pairs, the fractions "
+                          "increasing")
 T_ZETA = _TABLES.table("flex_zeta", "1", "(n_modes,) modal damping ratios")
 T_SHAPE = _TABLES.table("flex_shape", "SI", "(sets, n_modes, n_points, SHAPE) mode shapes at the points (N_POINTS, "
                          "then one per sloshing tank, then one per booster nozzle), body axes")
@@ -115,35 +120,48 @@ def build(inputs: blocks.ModelInputs, p: np.ndarray, tables: dict[str, np.ndarra
         p[P_BOOSTER_FULL] = b.count * b.propellant_kg
     if f.enabled:
         fx = inputs.flex
-        tables.update(flex_freq=fx.frequency_rad_s, flex_zeta=fx.damping, flex_shape=fx.shapes)
+        tables.update(flex_freq=fx.frequency_rad_s, flex_zeta=fx.damping, flex_shape=fx.shapes, flex_set_map=fx.set_map)
     else:
-        tables.update(flex_freq=np.zeros((4, 1)), flex_zeta=np.zeros(1), flex_shape=np.zeros((4, 1, N_POINTS, N_SHAPE)))
+        tables.update(flex_freq=np.zeros((4, 1)), flex_zeta=np.zeros(1), flex_shape=np.zeros((4, 1, N_POINTS, N_SHAPE)),
+                      flex_set_map=np.zeros((1, 1 + 2 * MAX_SETS_PER_CONFIGURATION)))
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def flex_sets(x: np.ndarray, config: int, p: np.ndarray) -> tuple[int, int, float]:
-    """The two modal sets of the current stage and the blend weight toward the second.
+def flex_sets(x: np.ndarray, config: int, p: np.ndarray, tb: np.ndarray) -> tuple[int, int, float]:
+    """The two modal sets of configuration ``config`` the structure is between, and the
+    blend weight toward the second.
 
-    Stack: first-stage liftoff → burnout (with boosters attached, the configuration 0:
-    boosted liftoff → burnout); upper stage: ignition → burnout. With ``switching:
-    event`` (the source paper's assumption) the weight is 0: the liftoff set until
-    separation, the ignition set after. With ``propellant`` the weight is the fraction of
-    the stage's propellant burned (the boosters' own while they are attached).
+    A configuration's sets (``flex_set_map``; by default its stage's liftoff or ignition
+    set at 0 and burnout set at 1, the boosted pair while the boosters are attached)
+    each hold at a fraction of the burning stage's propellant burned (the boosters' own
+    while they are attached). With ``switching: separation`` (the source paper's assumption)
+    the configuration's first set flies throughout (weight 0); with ``propellant`` the
+    shapes and frequencies are linear in the burned fraction between the two sets around
+    it (held at the first set before its fraction and at the last after its own).
     """
     if config == 0 and p[P_N_BOOSTERS] > 0.0:
         tank = int(p[P_BOOSTER_TANK])
         left = 0.0
         for i in range(tank, tank + int(p[P_N_BOOSTERS])):
             left += x[i]
-        a, frac = BOOSTED_SET, left / p[P_BOOSTER_FULL]
+        frac = left / p[P_BOOSTER_FULL]
     elif config < p[P_FS_CONFIGS]:
-        a, frac = 0, first_stage_propellant(x, p) / p[P_FS_PROP_FULL]
+        frac = first_stage_propellant(x, p) / p[P_FS_PROP_FULL]
     else:
         lox, lh2 = upper_stage_propellant(x, p)
-        a, frac = 2, (lox + lh2) / p[P_US_PROP_FULL]
-    if p[P_SWITCH] == 0.0:
-        return a, a + 1, 0.0
-    return a, a + 1, 1.0 - min(max(frac, 0.0), 1.0)
+        frac = (lox + lh2) / p[P_US_PROP_FULL]
+    row = tab_offset(tb, T_SET_MAP) + config * (1 + 2 * MAX_SETS_PER_CONFIGURATION)
+    count = int(tb[row])
+    first = int(tb[row + 1])
+    if p[P_SWITCH] == 0.0 or count == 1:
+        return first, int(tb[row + 1 + 2 * min(1, count - 1)]), 0.0
+    burned = 1.0 - min(max(frac, 0.0), 1.0)
+    k = 0  # the segment [k, k + 1] the burned fraction is in (the first or the last beyond the ends)
+    while k < count - 2 and burned > tb[row + 2 + 2 * (k + 1)]:
+        k += 1
+    f_a, f_b = tb[row + 2 + 2 * k], tb[row + 4 + 2 * k]
+    w = min(max((burned - f_a) / (f_b - f_a), 0.0), 1.0)
+    return int(tb[row + 1 + 2 * k]), int(tb[row + 3 + 2 * k]), w
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -170,7 +188,7 @@ def _shape_sum(x: np.ndarray, config: int, p: np.ndarray, tb: np.ndarray, pt: in
     if fo < 0:
         return rx, ry, rz
     nm = int(p[P_N_MODES])
-    sa, sb, w = flex_sets(x, config, p)
+    sa, sb, w = flex_sets(x, config, p, tb)
     o_sh = tab_offset(tb, T_SHAPE)
     nd = tab(tb, T_ZETA)[1]  # modes in the data
     npt = point_count(tb)
@@ -262,7 +280,7 @@ def modal_rates(x: np.ndarray, config: int, p: np.ndarray, tb: np.ndarray, gimba
     rcs_torque = loads.rcs_torque_nm
     jet_fy, jet_fz = loads.rcs_force_n
     nmod = int(p[P_N_MODES])
-    sa, sb, w = flex_sets(x, config, p)
+    sa, sb, w = flex_sets(x, config, p, tb)
     o_sh = tab_offset(tb, T_SHAPE)
     o_fz = tab_offset(tb, T_ZETA)
     o_ff = tab_offset(tb, T_FREQ)
@@ -280,7 +298,7 @@ def modal_rates(x: np.ndarray, config: int, p: np.ndarray, tb: np.ndarray, gimba
         for j in range(n_slosh):
             k = slosh.A_FORCE + 3 * j
             gen += point_work(tb, base_a, base_b, w, PT_SLOSH + j, aux[k], aux[k + 1], aux[k + 2], 0.0, 0.0, 0.0)
-        if sa == BOOSTED_SET:  # the boosters' nozzles
+        if config == 0 and p[P_N_BOOSTERS] > 0.0:  # the boosters' nozzles, while they are attached
             for j in range(int(p[P_N_BOOSTERS])):
                 k = nozzle_loads + 5 * j
                 gen += point_work(tb, base_a, base_b, w, npt - int(p[P_N_BOOSTERS]) + j, aux[k], aux[k + 1],

@@ -336,6 +336,16 @@ class Vehicle:
     jettisons: tuple[Jettison, ...] = ()
 
     @property
+    def configuration_sources(self) -> tuple[str, ...]:
+        """The vehicle file's configuration each of :attr:`configurations` is (one upper
+        configuration in the file stands for both ``upper_les`` and ``upper``); the slot
+        names when built without a tree."""
+        if self.tree is None:
+            return tuple(self.configurations)
+        names = [c for _, c in self.tree.sequence]
+        return tuple(names + names[-1:] * (len(self.configurations) - len(names)))
+
+    @property
     def first_stage_engine_count(self) -> int:
         """The first stage's engines (1 without a cluster)."""
         return max(len(self.first_stage.mounts), 1)
