@@ -22,7 +22,7 @@ from savant_cli import constants
 from savant_cli.config import validate
 from savant_cli.errors import ConfigError
 from savant_cli.io.guidance_file import read_guidance
-from savant_cli.models import layout, propulsion, throttle
+from savant_cli.models import earth, layout, propulsion, throttle
 from savant_cli.montecarlo.targets import _apply_table
 from savant_cli.paths import hydra_search_dirs, shipped_config_dir
 from savant_cli.sim import engine
@@ -150,6 +150,35 @@ def test_the_acceleration_limited_trace_burns_the_usable_load_at_the_limit():
     given_up = np.trapezoid(1.0 - thrust[on] / F_RATED, time_s[on])
     assert given_up > 1.0
     assert time_s[-2] - vehicle.first_stage.thrust_time_s[-2] == pytest.approx(given_up, rel=1e-9)
+
+
+def test_the_gain_design_sees_the_throttled_thrust():
+    """The flight-control design's μc (``fcs_gains.pitch_coefficients``) where the
+    acceleration limit throttles the stage is the throttled trace's delivered thrust at
+    the gimbal's arm over I_yy (hand-computed from the trace, the stack's mass table and
+    the US 1976 troposphere's back pressure on the pad), not the rated thrust's."""
+    from savant_cli.datagen import fcs_gains, guidance_commands as gc
+
+    vehicle = _vehicle()
+    cfg = validate(compose_config(["sim.progress=false"]))
+    ref = gc.Reference(cfg, vehicle, gc.Program.from_config(dict(cfg.guidance.generator)))
+    throttled = np.flatnonzero((ref.fs_time > 10.0) & (ref.fs_thrust < 0.9 * F_RATED))  # past the start
+    t = float(ref.fs_time[throttled[0]]) + 5.0
+    f_vac = float(np.interp(t, ref.fs_time, ref.fs_thrust))
+    assert f_vac < 0.9 * F_RATED
+    on = ref.fs_time <= t
+    burned = (np.trapezoid(ref.fs_thrust[on], ref.fs_time[on])
+              + 0.5 * (ref.fs_thrust[on][-1] + f_vac) * (t - ref.fs_time[on][-1])) / (constants.G0 * ISP)
+    y = ref.initial()
+    y[6] = vehicle.first_stage.propellant_kg - burned
+    stack = vehicle.configurations["stack"].mass
+    cg_x = np.interp(y[6], stack.propellant_kg, stack.cg_m[:, 0])
+    iyy = np.interp(y[6], stack.propellant_kg, stack.inertia_kgm2[:, 1])
+    c_i2e = earth.dcm_eci_to_ecef(t, constants.OMEGA_EARTH)
+    alt = earth.ecef_to_geodetic(c_i2e @ y[0:3], constants.WGS84_A, constants.WGS84_E2)[2]
+    pres = constants.P0 * (1.0 - 0.0065 * alt / 288.15) ** 5.255877  # US 1976 troposphere, closed form
+    expected = (f_vac - pres * EXIT_AREA) * (vehicle.first_stage.gimbal_m[0] - cg_x) / iyy
+    assert fcs_gains.pitch_coefficients(ref, t, y, 0)[1] == pytest.approx(expected, rel=1e-4)
 
 
 # ------------------------------------------------------------- refusals

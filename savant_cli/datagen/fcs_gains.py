@@ -134,13 +134,13 @@ def _boosted_control_moment(ref, t: float, pres: float, cg: np.ndarray) -> float
     command while gimbaled boosters are attached: the mixer's pitch column over the first
     stage's engines and the boosters' nozzles (``cluster.boosted_mixer``, at their rated
     thrusts) times each channel's moment effectiveness at the thrusts delivered at ``t``
-    (s; the stage's share per engine and each booster's on the reference's trace, less
+    (s; the stage's share per engine and each booster's, on the reference's traces, less
     its exit area's back pressure ``pres`` Pa)."""
     v = ref.vehicle
     fs, b = v.first_stage, v.boosters
     gimbal, offsets, cants, _, _ = cluster.stage_geometry(v, 0)
     n = offsets.shape[0]
-    f_stage = max(float(np.interp(t, ref.tb.fs_time, ref.tb.fs_thrust)) - pres * fs.nozzle_exit_area_m2, 0.0)
+    f_stage = max(float(np.interp(t, ref.fs_time, ref.fs_thrust)) - pres * fs.nozzle_exit_area_m2, 0.0)
     each_vac, _ = ref.boosters.each_at(t)
     thrust = np.concatenate([np.full(n, f_stage / n), np.maximum(each_vac - pres * b.nozzle_exit_area_m2, 0.0)])
     effect, _ = cluster.effectiveness(np.concatenate([gimbal + offsets, b.nozzle_m]),
@@ -157,7 +157,7 @@ def pitch_coefficients(ref, t: float, y: np.ndarray, config: int) -> tuple[float
     of the flight control's pitch command through the mixer over the stage's engines and
     the boosters' nozzles (:func:`_boosted_control_moment`); a booster without TVC adds
     no control moment."""
-    tb, packed = ref.tb, ref.packed
+    packed = ref.packed
     v = ref.vehicle
     first_stage = config < v.first_stage_configurations
     boosted = ref.boosters is not None and config == 0
@@ -186,7 +186,7 @@ def pitch_coefficients(ref, t: float, y: np.ndarray, config: int) -> tuple[float
     if boosted and v.boosters.tvc:
         return float(mu_alpha), _boosted_control_moment(ref, t, pres, cg) / iyy
     if first_stage:
-        f_vac = np.interp(t, tb.fs_time, tb.fs_thrust)
+        f_vac = np.interp(t, ref.fs_time, ref.fs_thrust)  # the reference's own trace (a throttled stage's law)
         thrust = f_vac - pres * v.first_stage.nozzle_exit_area_m2
         gimbal_x = v.first_stage.gimbal_m[0]
     else:
