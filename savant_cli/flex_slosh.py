@@ -122,7 +122,10 @@ def set_plan(vehicle: Vehicle) -> SetPlan:
             ikey = f"{ckey}[{k}]"
             if not isinstance(item, dict) or set(item) != {"set", "burned_fraction"}:
                 raise ConfigError(ikey, item, "{set: <modal set name>, burned_fraction: 0 to 1}")
-            burned = float(item["burned_fraction"])
+            try:
+                burned = float(item["burned_fraction"])
+            except (TypeError, ValueError):
+                burned = float("nan")
             if not 0.0 <= burned <= 1.0 or entries and burned <= entries[-1][1]:
                 raise ConfigError(f"{ikey}.burned_fraction", item["burned_fraction"],
                                   "0 to 1, increasing along the list (the fraction of the burning stage's "

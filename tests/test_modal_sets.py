@@ -154,6 +154,7 @@ def test_a_vehicle_with_its_own_sets_flies_to_orbit(data):
     (lambda s: s.pop("upper"), "vehicle.flex.sets.upper", "non-empty list"),
     (lambda s: s["stack"].reverse(), "vehicle.flex.sets.stack[1].burned_fraction", "increasing"),
     (lambda s: s["stack"][2].update(burned_fraction=1.2), "vehicle.flex.sets.stack[2].burned_fraction", "0 to 1"),
+    (lambda s: s["stack"][0].update(burned_fraction="start"), "vehicle.flex.sets.stack[0].burned_fraction", "0 to 1"),
     (lambda s: s["stack"][1].update(set="upper_ignition"), "vehicle.flex.sets.upper[0].set", "one structure"),
     (lambda s: s["stack"][1].update(fraction=0.5), "vehicle.flex.sets.stack[1]", "burned_fraction"),
     (lambda s: s.update(stack=[{"set": f"s{k}", "burned_fraction": k / 9} for k in range(9)]),
