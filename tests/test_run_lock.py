@@ -88,7 +88,10 @@ def test_forked_child_does_not_keep_the_lock(tmp_path):
         from savant_cli import run_lock
         run_lock.acquire({str(folder)!r})
         pid = os.fork()
-        if pid == 0:
+        if pid == 0:  # lives on, its output away from the pipes (the test does not wait for it)
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, 1)
+            os.dup2(devnull, 2)
             time.sleep(30)
             os._exit(0)
         print(pid, flush=True)
