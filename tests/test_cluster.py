@@ -76,9 +76,10 @@ def plant_loads(tb: np.ndarray, p: np.ndarray, x: np.ndarray, xd: np.ndarray, en
 def _reference_loads(mounts, thrust, pitch, yaw, dd, arm, moving):
     """Each engine's force and moment written out with numpy (body axes): the thrust
     along the canted line, and the moving mass's reaction ``m l δ̈`` at the gimbal with
-    the torque ``I δ̈``."""
+    the torque ``I δ̈``; and the engines' forces' couple about the stage's gimbal point."""
     m, l_cg, inertia = moving
     force, moment, twd_force, twd_moment = np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3)
+    couple = np.zeros(3)
     for stage, share, dx, dy, dz, cp, cy in mounts:
         if stage != 1.0:
             continue
@@ -90,7 +91,8 @@ def _reference_loads(mounts, thrust, pitch, yaw, dd, arm, moving):
         fw = m * l_cg * np.array([0.0, -dd[1], dd[0]])
         twd_force += fw
         twd_moment += np.cross(r, fw) + inertia * np.array([0.0, dd[0], dd[1]])
-    return force, moment, twd_force, twd_moment
+        couple += np.cross(np.array([-dx, dy, -dz]), f + fw)
+    return force, moment, twd_force, twd_moment, couple
 
 
 def test_an_asymmetric_canted_cluster_against_its_engines_written_out():
@@ -104,8 +106,11 @@ def test_an_asymmetric_canted_cluster_against_its_engines_written_out():
     p[cluster.P_UPPER_FIRST] = 1.0
     p[twd.P_ON] = 1.0
     p[twd.P_US_ENGINE:twd.P_US_ENGINE + twd.ENGINE.size] = moving
-    loads, reaction = plant_loads(_packed(mounts), p, x, xd, layout.ENGINE_UPPER, thrust, arm)
-    force, moment, twd_force, twd_moment = _reference_loads(mounts, thrust, pitch, yaw, dd, arm, moving)
+    loads, reaction, couple = plant_loads(_packed(mounts), p, x, xd, layout.ENGINE_UPPER, thrust, arm)
+    force, moment, twd_force, twd_moment, ref_couple = _reference_loads(mounts, thrust, pitch, yaw, dd, arm, moving)
+    # what the flexible body's gimbal node carries: the forces' couple about the stage's gimbal point
+    np.testing.assert_allclose(couple, ref_couple, rtol=1e-13, atol=1e-9 * thrust)
+    assert np.linalg.norm(ref_couple) > 1e-3 * thrust
     np.testing.assert_allclose(loads[:3], force, rtol=1e-14, atol=1e-9 * thrust)
     np.testing.assert_allclose(loads[3:], moment, rtol=1e-14, atol=1e-9 * thrust)
     np.testing.assert_allclose(np.take(reaction, [0, 1, 2, 5, 6, 7]), np.r_[twd_force, twd_moment], rtol=1e-13,
@@ -122,10 +127,11 @@ def test_a_symmetric_toed_in_pair_has_no_side_force_and_loses_cos_cant():
     mounts = np.array([[1.0, 0.5, 0.0, 1.5, 0.0, 0.0, cant], [1.0, 0.5, 0.0, -1.5, 0.0, 0.0, -cant]])
     thrust = 2.0e6
     p, x, xd = _plant_vectors(2)
-    loads, _ = plant_loads(_packed(mounts), p, x, xd, layout.ENGINE_UPPER, thrust, (-20.0, 0.0, 0.0))
+    loads, _, couple = plant_loads(_packed(mounts), p, x, xd, layout.ENGINE_UPPER, thrust, (-20.0, 0.0, 0.0))
     assert loads[0] == pytest.approx(thrust * np.cos(cant), rel=1e-15)
     assert abs(loads[1]) < 1e-9 * thrust and abs(loads[2]) < 1e-9 * thrust
     assert np.all(np.abs(loads[3:]) < 1e-9 * thrust)  # the lines cross on the axis: no moment either
+    assert np.all(np.abs(couple) < 1e-9 * thrust)  # nor about the gimbal point, on the axis
 
 
 def _two_engine_vehicle():

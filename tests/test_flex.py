@@ -58,6 +58,25 @@ def _random_shapes(rng, n_modes: int, scale_d: float = 1e-3, scale_r: float = 1e
     return s
 
 
+def test_a_clusters_couple_loads_the_modes_through_the_rotation_at_its_node():
+    """q = q̇ = 0 and a couple C about the upper stage's gimbal point alone (a cluster's
+    ``Σ Δ_i × F_i``, no net force): q̈_i = σ_i(gimbal) · C, the set flown by the upper
+    configuration (set 2 at weight 0); and no couple: no load."""
+    from savant_cli.models.flex import PT_GIMBAL_US, StructuralLoads, modal_rates
+
+    rng = np.random.default_rng(7)
+    shapes = _random_shapes(rng, 2)
+    tb = pack_tables(_flex_tables(np.ones((N_SETS, 2)), np.zeros(2), shapes))
+    p, lay = _flex_params(2)
+    x = _orbit_state(lay)
+    couple = np.array([3.0e4, -2.0e5, 1.5e5])
+    for c, expected in ((couple, shapes[2, :, PT_GIMBAL_US, 3:] @ couple), (np.zeros(3), np.zeros(2))):
+        xd = np.zeros(lay.n)
+        loads = StructuralLoads((0.0, 0.0, 0.0), (0.0, 0.0), 0.0, (0.0, 0.0), tuple(c))
+        modal_rates(x, layout.CONFIG_UPPER, p, tb, PT_GIMBAL_US, loads, np.zeros(layout.N_AUX), 0, xd)
+        np.testing.assert_allclose(xd[lay.flex + 2:lay.flex + 4], expected, rtol=1e-14, atol=0.0)
+
+
 # ----------------------------------------------------------------- free vibration
 
 

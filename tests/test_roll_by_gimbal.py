@@ -83,7 +83,7 @@ def _loads(coefficients: np.ndarray, offsets: np.ndarray, command: tuple[float, 
     channels = coefficients.reshape(2 * n, 3) @ np.asarray(command)
     x[::actuator.N_PER_CHANNEL] = channels
     arm = -(GIMBAL[0] - CG[0]), 0.0, 0.0
-    loads, _ = plant_loads(tb, p, x, np.zeros_like(x), layout.ENGINE_FIRST, thrust, arm)
+    loads, _, _ = plant_loads(tb, p, x, np.zeros_like(x), layout.ENGINE_FIRST, thrust, arm)
     return np.array(loads), channels
 
 

@@ -12,7 +12,8 @@ with ``δ_i`` engine ``i``'s own gimbal angles (its channel pair, ``models/actua
 and ``Δ_i`` its gimbal offset from the stage's mean gimbal point (structure frame). Each
 engine's moving mass reacts on the vehicle at its own gimbal with its own nozzle
 accelerations (``models/twd.py``). The flexible body sees the stage's engines at the
-stage's one gimbal node.
+stage's one gimbal node, through a rigid thrust structure: the engines' forces summed
+and their couple about the node, ``Σ Δ_i × F_i``.
 
 The control mixer (``models/mixer.py``) gives each channel its command from the flight
 control's three: the equivalent-engine pitch and yaw angles ``δp``, ``δy`` and the roll
@@ -370,14 +371,19 @@ def cluster_loads(tb: np.ndarray, p: np.ndarray, x: np.ndarray, xd: np.ndarray, 
     tuple of float
         ``(Fx, Fy, Fz, Mx, My, Mz)`` the thrust force (N) and its moment about the CG
         (N·m), then ``(Fx, Fy, Fz, Ty, Tz, Mx, My, Mz)`` the engines' tail-wags-dog force
-        and torque at the gimbal and moment about the CG (as ``twd.twd_loads``), body axes.
+        and torque at the gimbal and moment about the CG (as ``twd.twd_loads``), then
+        ``(Cx, Cy, Cz)`` the couple about the stage's gimbal point of the engines' forces
+        (thrust and tail-wags-dog) at their own gimbals, ``Σ Δ_i × F_i`` (N·m; zero for
+        one engine), body axes: with the forces' sum, the load a rigid thrust structure
+        hands the flexible body at the stage's gimbal node.
     """
     first, stop = stage_mounts(tb, p, engine, config)
     thrust_part, twd_part = engine_loads(tb, p, first, engine, thrust, pitch, yaw, ddp, ddy, rgx, rgy, rgz)
     if stop - first == MOUNT_SIZE:  # one engine: the compiled code keeps this path free of the loop
-        return thrust_part, twd_part
+        return thrust_part, twd_part, (0.0, 0.0, 0.0)
     ftx, fty, ftz, mtx, mty, mtz = thrust_part
     fwx, fwy, fwz, twy, twz, mwx, mwy, mwz = twd_part
+    cx, cy, cz = _couple(tb, first, ftx + fwx, fty + fwy, ftz + fwz)
     lim = p[actuator.gimbal_stage(engine) + actuator.G_LIMIT]
     k0 = int(p[actuator.P_CHANNEL_OFFSET])
     for b in range(first + MOUNT_SIZE, stop, MOUNT_SIZE):  # a cluster's other engines
@@ -388,6 +394,10 @@ def cluster_loads(tb: np.ndarray, p: np.ndarray, x: np.ndarray, xd: np.ndarray, 
         (fx, fy, fz, mx, my, mz), (wx, wy, wz, ty, tz, nx, ny, nz) = engine_loads(
             tb, p, b, engine, thrust, actuator.clip(x[kp], lim) + bias_p - flex_p,
             actuator.clip(x[ky], lim) + bias_y - flex_y, xd[kp + 1], xd[ky + 1], rgx, rgy, rgz)
+        ex, ey, ez = _couple(tb, b, fx + wx, fy + wy, fz + wz)
+        cx += ex
+        cy += ey
+        cz += ez
         ftx += fx
         fty += fy
         ftz += fz
@@ -402,7 +412,16 @@ def cluster_loads(tb: np.ndarray, p: np.ndarray, x: np.ndarray, xd: np.ndarray, 
         mwx += nx
         mwy += ny
         mwz += nz
-    return (ftx, fty, ftz, mtx, mty, mtz), (fwx, fwy, fwz, twy, twz, mwx, mwy, mwz)
+    return (ftx, fty, ftz, mtx, mty, mtz), (fwx, fwy, fwz, twy, twz, mwx, mwy, mwz), (cx, cy, cz)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _couple(tb: np.ndarray, b: int, fx: float, fy: float, fz: float) -> tuple[float, float, float]:
+    """``Δ × F`` (N·m, body axes) of the force ``F`` (N, body axes) at the gimbal of the
+    engine whose mount record is at ``tb[b]``, about its stage's gimbal point (``Δ``: its
+    gimbal offset, structure → body)."""
+    ox, oy, oz = -tb[b + M_DX], tb[b + M_DY], -tb[b + M_DZ]
+    return oy * fz - oz * fy, oz * fx - ox * fz, ox * fy - oy * fx
 
 
 @njit(cache=True, error_model="numpy", inline="always")

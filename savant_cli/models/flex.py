@@ -253,6 +253,10 @@ class StructuralLoads(NamedTuple):
         Roll-jet torque about body x at the jets, N·m.
     rcs_force_n : tuple of 2 float
         The pitch and yaw jets' force along body y and z at the jets, N.
+    gimbal_couple_nm : tuple of 3 float
+        A cluster's couple about its stage's gimbal point, ``Σ Δ_i × F_i`` of its
+        engines' forces at their own gimbals, N·m (zero for one engine:
+        ``cluster.cluster_loads``).
 
     The slosh masses' forces on the structure are the slosh model's diagnostics
     (``slosh.A_FORCE``, one per sloshing tank), the boosters' nozzle loads the boosters'
@@ -263,15 +267,17 @@ class StructuralLoads(NamedTuple):
     gimbal_torque_nm: tuple[float, float]
     rcs_torque_nm: float
     rcs_force_n: tuple[float, float]
+    gimbal_couple_nm: tuple[float, float, float]
 
 
 @njit(cache=True, error_model="numpy", inline="always")
 def modal_rates(x: np.ndarray, config: int, p: np.ndarray, tb: np.ndarray, gimbal_pt: int,
                 loads: StructuralLoads, aux: np.ndarray, nozzle_loads: int, xd: np.ndarray) -> None:
     """Modal equations into ``xd`` under the ``loads`` at the flex points (the active
-    gimbal point ``gimbal_pt``, the jets), the slosh masses' forces and, in the boosted
-    sets, the boosters' nozzle loads (both in ``aux``; the latter five per booster from
-    ``aux[nozzle_loads]``: force x, y, z, torque y, z). Nothing when flex is off."""
+    gimbal point ``gimbal_pt``, with a cluster's couple, the jets), the slosh masses'
+    forces and, in the boosted sets, the boosters' nozzle loads (both in ``aux``; the
+    latter five per booster from ``aux[nozzle_loads]``: force x, y, z, torque y, z).
+    Nothing when flex is off."""
     fo = int(p[P_OFFSET])
     if fo < 0:
         return
@@ -279,6 +285,8 @@ def modal_rates(x: np.ndarray, config: int, p: np.ndarray, tb: np.ndarray, gimba
     tgy, tgz = loads.gimbal_torque_nm
     rcs_torque = loads.rcs_torque_nm
     jet_fy, jet_fz = loads.rcs_force_n
+    cpx, cpy, cpz = loads.gimbal_couple_nm
+    couple = cpx != 0.0 or cpy != 0.0 or cpz != 0.0  # a cluster's (none for one engine: its sums kept as they were)
     nmod = int(p[P_N_MODES])
     sa, sb, w = flex_sets(x, config, p, tb)
     o_sh = tab_offset(tb, T_SHAPE)
@@ -295,6 +303,8 @@ def modal_rates(x: np.ndarray, config: int, p: np.ndarray, tb: np.ndarray, gimba
         gen = 0.0
         gen += point_work(tb, base_a, base_b, w, PT_RCS, 0.0, jet_fy, jet_fz, rcs_torque, 0.0, 0.0)
         gen += point_work(tb, base_a, base_b, w, gimbal_pt, fgx, fgy, fgz, 0.0, tgy, tgz)
+        if couple:
+            gen += point_work(tb, base_a, base_b, w, gimbal_pt, 0.0, 0.0, 0.0, cpx, cpy, cpz)
         for j in range(n_slosh):
             k = slosh.A_FORCE + 3 * j
             gen += point_work(tb, base_a, base_b, w, PT_SLOSH + j, aux[k], aux[k + 1], aux[k + 2], 0.0, 0.0, 0.0)

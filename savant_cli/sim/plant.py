@@ -172,7 +172,7 @@ def compose(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarra
     rgx, rgy, rgz = propulsion.gimbal_arm(p, engine, cgx, cgy, cgz)
     dgx, dgy, dgz = flex.displacement_at(x, config, p, tb, gimbal_pt)  # the structure moves the gimbal
     rgx, rgy, rgz = rgx + dgx, rgy + dgy, rgz + dgz
-    thrust_part, twd_part = cluster.cluster_loads(tb, p, x, xd, engine, config, thrust, dp + bias_p - tgy,
+    thrust_part, twd_part, couple = cluster.cluster_loads(tb, p, x, xd, engine, config, thrust, dp + bias_p - tgy,
                                                   dy + bias_y - tgz, ddp, ddy, bias_p, bias_y, tgy, tgz, rgx, rgy, rgz)
     ftx, fty, ftz, mtx, mty, mtz = thrust_part
     fwx, fwy, fwz, twy, twz, mwx, mwy, mwz = twd_part
@@ -227,7 +227,7 @@ def compose(t: float, x: np.ndarray, u: np.ndarray, p: np.ndarray, tb: np.ndarra
     if slosh.tank_count(p) > 0:
         motion = slosh.RigidMotion((cgx, cgy, cgz), (aby, abz), (wx, wy, wz), (alx, aly, alz))
         slosh.rates(x, p, aux, config, motion, xd)
-    loads = flex.StructuralLoads((ftx + fwx, fty + fwy, ftz + fwz), (twy, twz), rcs_torque, (fjy, fjz))
+    loads = flex.StructuralLoads((ftx + fwx, fty + fwy, ftz + fwz), (twy, twz), rcs_torque, (fjy, fjz), couple)
     flex.modal_rates(x, config, p, tb, gimbal_pt, loads, aux, boosters.A_NOZZLE_LOADS, xd)
 
     # ------------------------------------------------------------ diagnostics
