@@ -258,7 +258,7 @@ def load_flex(vehicle: Vehicle, fcfg: FlexOnConfig, plant_rate_hz: float) -> Fle
             raise ConfigError("flex.n_modes", n, f"modal set {ms.name!r} has only {ms.frequency_rad_s.size} modes")
     freq = np.array([ms.frequency_rad_s[:n] for ms in sets]) * fcfg.frequency_scale
     # RK4 resolves a mode well (numerical damping < 0.2 % of critical) below 1/8 of the step rate
-    # with event switching each configuration flies its first set only
+    # with separation switching each configuration flies its first set only
     in_use = freq if fcfg.switching == "propellant" else freq[sorted({e[0][0] for e in plan.by_configuration})]
     limit = 2.0 * np.pi * plant_rate_hz / 8.0
     if in_use.max() >= limit:
